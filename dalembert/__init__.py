@@ -1,0 +1,44 @@
+"""dalembert: constrained dynamical systems in redundant coordinates.
+
+Write ``T``, ``V``, forces and constraints in SymPy; get the constrained equations
+``M qdd = f + A^T lambda``, and simulate them with the multipliers, the constraint
+forces and the constraints held to rounding level.
+"""
+
+from .errors import (
+    ConstraintError,
+    DalembertError,
+    DoubleCountingWarning,
+    InitialConditionError,
+    InitialConditionsAdjusted,
+    IntegrationWarning,
+    ModelError,
+    ParameterError,
+    SingularSystemError,
+)
+from .model.constraints import Holonomic, Pfaffian
+from .model.coordinates import coordinates, t
+from .model.forces import PointForce
+from .system import System
+from .trajectory import Trajectory
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ConstraintError",
+    "DalembertError",
+    "DoubleCountingWarning",
+    "Holonomic",
+    "InitialConditionError",
+    "InitialConditionsAdjusted",
+    "IntegrationWarning",
+    "ModelError",
+    "ParameterError",
+    "Pfaffian",
+    "PointForce",
+    "SingularSystemError",
+    "System",
+    "Trajectory",
+    "coordinates",
+    "t",
+]

@@ -1,0 +1,109 @@
+"""Turn SymPy matrices into one NumPy function, with common subexpressions shared.
+
+All outputs of a function go through a single ``sympy.cse`` call, so a
+subexpression shared by ``M``, ``f`` and ``c`` is computed once. Only nonzero
+entries are assigned into preallocated arrays. The source is kept on the
+function (``__source__``) for inspection.
+"""
+
+from __future__ import annotations
+
+import linecache
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
+
+Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
+Outputs = Sequence[tuple[str, sp.Matrix]]
+
+
+def generate_function(name: str, arguments: Arguments, outputs: Outputs) -> Callable:
+    """Compile ``outputs`` (named matrices) into ``name(*arrays)`` returning arrays.
+
+    ``arguments`` lists ``(argument name, symbols)``: each argument is a 1-D array
+    (or a scalar for a single symbol named like the argument) unpacked into its
+    symbols. The function returns a tuple of arrays shaped like the matrices;
+    column vectors are returned as 1-D arrays.
+
+    >>> x, k = sp.symbols("x k")
+    >>> fn = generate_function("spring", [("q", [x]), ("p", [k])],
+    ...                        [("F", sp.Matrix([-k * x, sp.sin(x)]))])
+    >>> fn(np.array([0.5]), np.array([2.0]))[0]
+    array([-1.        ,  0.47942554])
+    """
+    renames = _argument_names(arguments)
+    matrices = [sp.Matrix(m).xreplace(renames) for _, m in outputs]
+    entries = [(k, i, j, e) for k, m in enumerate(matrices) for (i, j), e in _nonzero(m)]
+    replacements, reduced = sp.cse([e for *_, e in entries], symbols=_temporaries())
+    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True})
+    lines = [f"def {name}({', '.join(arg for arg, _ in arguments)}):"]
+    lines += _unpack_lines(arguments, renames)
+    lines += [f"    {tmp} = {printer.doprint(expr)}" for tmp, expr in replacements]
+    lines += [f"    {_array_name(k)} = zeros({_shape(m)})" for k, m in enumerate(matrices)]
+    for (k, i, j, _), expr in zip(entries, reduced):
+        index = f"{i}" if matrices[k].cols == 1 else f"{i}, {j}"
+        lines.append(f"    {_array_name(k)}[{index}] = {printer.doprint(expr)}")
+    lines.append(f"    return ({''.join(_array_name(k) + ', ' for k in range(len(matrices)))})")
+    return _compile("\n".join(lines) + "\n", name)
+
+
+def _argument_names(arguments: Arguments) -> dict[sp.Symbol, sp.Symbol]:
+    return {
+        s: sp.Symbol(f"{arg}_{i}") for arg, symbols in arguments for i, s in enumerate(symbols)
+    }
+
+
+def _unpack_lines(arguments: Arguments, renames: dict[sp.Symbol, sp.Symbol]) -> list[str]:
+    lines = []
+    for arg, symbols in arguments:
+        if len(symbols) == 1 and symbols[0].name == arg:
+            lines.append(f"    {renames[symbols[0]]} = {arg}")
+        elif symbols:
+            names = ", ".join(str(renames[s]) for s in symbols)
+            lines.append(f"    {names}, = {arg}")
+    return lines
+
+
+def _nonzero(m: sp.Matrix) -> list[tuple[tuple[int, int], sp.Expr]]:
+    return [((i, j), m[i, j]) for i in range(m.rows) for j in range(m.cols) if m[i, j] != 0]
+
+
+def _shape(m: sp.Matrix) -> str:
+    return f"{m.rows}" if m.cols == 1 else f"({m.rows}, {m.cols})"
+
+
+def _array_name(k: int) -> str:
+    return f"out{k}"
+
+
+def _temporaries():
+    k = 0
+    while True:
+        yield sp.Symbol(f"x{k}")
+        k += 1
+
+
+def _compile(source: str, name: str) -> Callable:
+    filename = f"<dalembert-generated {name} {abs(hash(source))}>"
+    # Registering the source lets tracebacks and inspect show generated lines.
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    namespace = {"zeros": np.zeros, **_numpy_namespace()}
+    exec(compile(source, filename, "exec"), namespace)
+    fn = namespace[name]
+    fn.__source__ = source
+    return fn
+
+
+def _numpy_namespace() -> dict[str, object]:
+    names = ("sin", "cos", "tan", "arcsin", "arccos", "arctan", "arctan2", "sinh", "cosh",
+             "tanh", "exp", "log", "sqrt", "abs", "sign", "pi", "e", "floor", "ceil",
+             "hypot", "select", "where", "heaviside", "amax", "amin", "logical_and",
+             "logical_or", "logical_not", "isnan", "inf", "nan", "power", "cbrt", "expm1",
+             "log1p", "arcsinh", "arccosh", "arctanh", "maximum", "minimum", "less",
+             "greater", "less_equal", "greater_equal", "equal", "not_equal", "array",
+             "float64", "exp2", "log2", "log10")
+    ns = {n: getattr(np, n) for n in names if hasattr(np, n)}
+    ns["numpy"] = np
+    return ns

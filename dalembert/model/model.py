@@ -1,0 +1,108 @@
+"""A validated symbolic model: coordinates, Lagrangian, forces and constraints."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import sympy as sp
+
+from ..errors import ConstraintError, ModelError
+from .constraints import ConstraintSet, build_constraints
+from .coordinates import Coordinates, build_coordinates, t
+from .forces import PointForce, generalized_forces, warn_double_counting
+
+
+@dataclass(frozen=True)
+class Model:
+    """Everything the equations of motion are derived from, in plain symbols.
+
+    ``kinetic`` and ``potential`` are ``None`` when the user gave only a
+    Lagrangian; ``Q`` is the total non-conservative generalized force.
+    """
+
+    coords: Coordinates
+    lagrangian: sp.Expr
+    kinetic: sp.Expr | None
+    potential: sp.Expr | None
+    Q: sp.Matrix
+    constraints: ConstraintSet
+    parameters: tuple[sp.Symbol, ...]
+    name: str
+
+    @property
+    def has_energy(self) -> bool:
+        return self.kinetic is not None and self.potential is not None
+
+
+def build_model(
+    coordinates: object,
+    *,
+    kinetic: object = None,
+    potential: object = None,
+    lagrangian: object = None,
+    constraints: object = (),
+    generalized_forces: Mapping[object, object] | Sequence[object] | None = None,
+    forces: Sequence[PointForce] = (),
+    velocities: Sequence[object] | None = None,
+    name: str = "system",
+) -> Model:
+    """Check the user's model and rewrite it in plain symbols."""
+    coords = build_coordinates(coordinates, velocities)
+    T, V, L = _energies(kinetic, potential, lagrangian, coords)
+    Q = _generalized_forces(generalized_forces, forces, coords)
+    if V is not None:
+        warn_double_counting(Q, V, coords)
+    cons = build_constraints(constraints, coords)
+    if cons.m >= coords.n:
+        raise ConstraintError(
+            f"{cons.m} constraints on {coords.n} coordinates leave no degree of freedom; "
+            "remove constraints or add coordinates"
+        )
+    params = _parameters(coords, L, Q, cons)
+    return Model(coords, L, T, V, Q, cons, params, name)
+
+
+def _energies(
+    kinetic: object, potential: object, lagrangian: object, coords: Coordinates
+) -> tuple[sp.Expr | None, sp.Expr | None, sp.Expr]:
+    if lagrangian is not None and (kinetic is not None or potential is not None):
+        raise ModelError("give either lagrangian=L or kinetic=T (and potential=V), not both")
+    if lagrangian is not None:
+        L = coords.to_plain(lagrangian, "the Lagrangian")
+        _require_velocities(L, "the Lagrangian", coords)
+        return None, None, L
+    if kinetic is None:
+        raise ModelError("a System needs kinetic=T (with potential=V) or lagrangian=L")
+    T = coords.to_plain(kinetic, "the kinetic energy")
+    _require_velocities(T, "the kinetic energy", coords)
+    V = coords.to_plain(0 if potential is None else potential, "the potential energy")
+    for v, n in zip(coords.qd, coords.names):
+        if V.has(v):
+            raise ModelError(
+                f"the potential energy depends on the velocity of {n!r}; velocity-dependent "
+                "forces go in generalized_forces or forces"
+            )
+    return T, V, T - V
+
+
+def _require_velocities(expr: sp.Expr, what: str, coords: Coordinates) -> None:
+    if not any(expr.has(v) for v in coords.qd):
+        raise ModelError(f"{what} contains no velocity: {expr}")
+
+
+def _generalized_forces(
+    per_coordinate: object, forces: Sequence[PointForce], coords: Coordinates
+) -> sp.Matrix:
+    if isinstance(forces, PointForce):
+        forces = [forces]
+    return generalized_forces(per_coordinate, list(forces or ()), coords)
+
+
+def _parameters(
+    coords: Coordinates, L: sp.Expr, Q: sp.Matrix, cons: ConstraintSet
+) -> tuple[sp.Symbol, ...]:
+    exprs = [L, *Q, *cons.exprs]
+    free = set().union(*(e.free_symbols for e in exprs))
+    free -= {t, *coords.q, *coords.qd}
+    return tuple(sorted(free, key=lambda s: s.name))

@@ -1,0 +1,276 @@
+"""Step-by-step integration with SciPy's solvers, projection after each step.
+
+This mirrors :func:`scipy.integrate.solve_ivp` (``t_span``, ``t_eval``,
+``dense_output``, ``events``, ``rtol``/``atol``, any ``OdeSolver`` method) and adds
+what constrained dynamics needs: after every accepted step the state is projected
+back onto the constraint manifold and the solver restarts from the projected
+state; output points between steps are interpolated and projected too. A failure
+or Ctrl-C ends the loop but keeps every step computed so far.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
+from scipy.optimize import brentq
+
+from ..errors import DalembertError
+
+METHODS: dict[str, type[OdeSolver]] = {
+    "RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA,
+}
+
+Projector = Callable[[float, np.ndarray], np.ndarray]
+
+
+@dataclass
+class IntegrationResult:
+    """Raw output of :func:`integrate`: states ``y`` (rows) at times ``t``."""
+
+    t: np.ndarray
+    y: np.ndarray
+    status: str
+    message: str
+    stats: dict[str, int]
+    t_events: list[np.ndarray] = field(default_factory=list)
+    y_events: list[np.ndarray] = field(default_factory=list)
+    sol: Callable | None = None
+
+    @property
+    def success(self) -> bool:
+        return self.status in ("finished", "event")
+
+
+def solver_class(method: str | type[OdeSolver]) -> type[OdeSolver]:
+    """The SciPy solver for a method name (or an ``OdeSolver`` subclass)."""
+    if isinstance(method, type) and issubclass(method, OdeSolver):
+        return method
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    return METHODS[method]
+
+
+def integrate(
+    fun: Callable,
+    t_span: Sequence[float],
+    y0: np.ndarray,
+    *,
+    method: str | type[OdeSolver] = "DOP853",
+    t_eval: np.ndarray | None = None,
+    dense_output: bool = False,
+    events: Sequence[Callable] = (),
+    project: Projector | None = None,
+    progress: bool = False,
+    **options: object,
+) -> IntegrationResult:
+    """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step."""
+    cls = solver_class(method)
+    if project is not None and cls is LSODA:
+        raise ValueError(
+            "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
+            "stiff problems, or stabilization='baumgarte'"
+        )
+    t0, tf = map(float, t_span)
+    solver = cls(fun, t0, np.asarray(y0, dtype=float), tf, **options)
+    run = _Run(solver, t_eval, events, project, dense_output)
+    bar = _progress_bar(t0, tf) if progress else None
+    try:
+        while run.status is None:
+            run.advance()
+            if bar is not None:
+                bar.update(abs(solver.t - bar.n_t))
+                bar.n_t = solver.t
+    except KeyboardInterrupt:
+        run.stop("interrupted", f"interrupted by the user at t={solver.t:.6g}")
+    finally:
+        if bar is not None:
+            bar.close()
+    return run.result(cls.__name__)
+
+
+class _Run:
+    """State of one integration: the solver, recorded outputs, events."""
+
+    def __init__(self, solver, t_eval, events, project, dense_output):
+        self.solver = solver
+        self.direction = solver.direction if solver.direction != 0 else 1.0
+        self.project = project
+        self.events = list(events or ())
+        self.dense_output = dense_output
+        self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
+        self.status: str | None = None
+        self.message = ""
+        self.n_projections = 0
+        self.ts: list[float] = []
+        self.ys: list[np.ndarray] = []
+        self.segments: list[tuple[float, float, Callable]] = []
+        self.t_events = [[] for _ in self.events]
+        self.y_events = [[] for _ in self.events]
+        self.g = [float(e(solver.t, solver.y)) for e in self.events]
+        self.event_counts = [0 for _ in self.events]
+        self._record_start()
+
+    def _record_start(self) -> None:
+        t0, y0 = self.solver.t, self.solver.y.copy()
+        if self.t_eval is None or np.any(self.t_eval == t0):
+            self.ts.append(t0)
+            self.ys.append(y0)
+
+    def stop(self, status: str, message: str) -> None:
+        self.status, self.message = status, message
+
+    def advance(self) -> None:
+        solver = self.solver
+        try:
+            message = solver.step()
+        except DalembertError as exc:
+            return self.stop("failed", f"integration failed at t={solver.t:.6g}: {exc}")
+        if solver.status == "failed":
+            return self.stop(
+                "failed",
+                f"integration failed at t={solver.t:.6g}: {message}. The problem may be "
+                "stiff (try method='Radau' or 'BDF') or the mechanism near a singular "
+                "configuration",
+            )
+        t_old, t_new = solver.t_old, solver.t
+        interpolant = solver.dense_output() if self._needs_interpolant() else None
+        try:
+            y_new = self._project_step(t_new)
+        except DalembertError as exc:
+            return self.stop("failed", f"projection failed at t={t_new:.6g}: {exc}")
+        state = self._interpolator(interpolant, t_new, y_new)
+        t_stop = self._handle_events(t_old, t_new, y_new, state)
+        if t_stop is not None:
+            t_new, y_new = t_stop, state(t_stop)
+        self._record(t_old, t_new, y_new, state)
+        if self.dense_output:
+            self.segments.append((t_old, t_new, state))
+        if self.status is None and solver.status == "finished":
+            self.stop("finished", "the integration reached the end of t_span")
+
+    def _needs_interpolant(self) -> bool:
+        return self.t_eval is not None or bool(self.events) or self.dense_output
+
+    def _project_step(self, t: float) -> np.ndarray:
+        solver = self.solver
+        if self.project is None:
+            return solver.y.copy()
+        y = self.project(t, solver.y)
+        self.n_projections += 1
+        _restart_from(solver, y)
+        return y.copy()
+
+    def _interpolator(self, interpolant, t_new: float, y_new: np.ndarray) -> Callable:
+        project = self.project
+
+        def state(s: float) -> np.ndarray:
+            if s == t_new or interpolant is None:
+                return y_new
+            y = interpolant(s)
+            return project(s, y) if project is not None else y
+
+        return state
+
+    def _handle_events(self, t_old, t_new, y_new, state) -> float | None:
+        """Locate sign changes of the event functions; return a terminal time if any."""
+        hits = []
+        for k, event in enumerate(self.events):
+            g_new = float(event(t_new, y_new))
+            if _crossed(self.g[k], g_new, getattr(event, "direction", 0)):
+                root = brentq(lambda s, e=event: float(e(s, state(s))), t_old, t_new,
+                              xtol=4 * np.finfo(float).eps)
+                hits.append((root, k))
+            self.g[k] = g_new
+        terminal_time = None
+        for root, k in sorted(hits, key=lambda h: self.direction * h[0]):
+            if terminal_time is not None:
+                break
+            self.t_events[k].append(root)
+            self.y_events[k].append(state(root))
+            self.event_counts[k] += 1
+            limit = int(getattr(self.events[k], "terminal", False))
+            if limit and self.event_counts[k] >= limit:
+                terminal_time = root
+                self.stop("event", f"a terminal event occurred at t={root:.6g}")
+        return terminal_time
+
+    def _record(self, t_old, t_new, y_new, state) -> None:
+        if self.t_eval is None:
+            self.ts.append(t_new)
+            self.ys.append(y_new)
+            return
+        d = self.direction
+        inside = (d * self.t_eval > d * t_old) & (d * self.t_eval <= d * t_new)
+        for s in self.t_eval[inside]:
+            self.ts.append(float(s))
+            self.ys.append(state(float(s)))
+
+    def result(self, method_name: str) -> IntegrationResult:
+        solver = self.solver
+        n_state = solver.y.size
+        stats = {"nfev": solver.nfev, "njev": solver.njev, "nlu": solver.nlu,
+                 "n_steps": len(self.segments) or None, "n_projections": self.n_projections}
+        stats = {k: int(v) for k, v in stats.items() if v is not None}
+        y = np.array(self.ys) if self.ys else np.empty((0, n_state))
+        return IntegrationResult(
+            t=np.array(self.ts), y=y, status=self.status or "failed",
+            message=self.message or f"{method_name} stopped", stats=stats,
+            t_events=[np.array(v) for v in self.t_events],
+            y_events=[np.array(v).reshape(-1, n_state) for v in self.y_events],
+            sol=_PiecewiseSolution(self.segments) if self.dense_output else None,
+        )
+
+
+def _restart_from(solver: OdeSolver, y: np.ndarray) -> None:
+    """Continue the solver from a projected state (the change is at tolerance level)."""
+    solver.y = y.copy()
+    if isinstance(solver, BDF):
+        solver.D[0] = y
+    elif hasattr(solver, "f"):
+        solver.f = solver.fun(solver.t, solver.y)
+
+
+def _crossed(g_old: float, g_new: float, direction: float) -> bool:
+    up = g_old < 0 <= g_new
+    down = g_old > 0 >= g_new
+    if direction > 0:
+        return up
+    if direction < 0:
+        return down
+    return up or down
+
+
+class _PiecewiseSolution:
+    """Dense output over all steps; ``sol(t)`` accepts a scalar or an array of times."""
+
+    def __init__(self, segments: list[tuple[float, float, Callable]]):
+        self.segments = segments
+        self.ends = np.array([max(a, b) for a, b, _ in segments])
+        self.t_min = min((min(a, b) for a, b, _ in segments), default=np.nan)
+        self.t_max = self.ends.max(initial=np.nan)
+        order = np.argsort(self.ends)
+        self.segments = [segments[i] for i in order]
+        self.ends = self.ends[order]
+
+    def __call__(self, t: float | np.ndarray) -> np.ndarray:
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.array([self._one(s) for s in times])
+        return out[0] if np.ndim(t) == 0 else out.T
+
+    def _one(self, s: float) -> np.ndarray:
+        if not self.segments or not (self.t_min <= s <= self.t_max):
+            raise ValueError(f"t={s} is outside the integrated interval")
+        k = min(np.searchsorted(self.ends, s), len(self.segments) - 1)
+        return self.segments[k][2](s)
+
+
+def _progress_bar(t0: float, tf: float):
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=abs(tf - t0), unit="s", desc="simulating", bar_format=(
+        "{desc}: {percentage:3.0f}%|{bar}| t={n:.3g}/{total:.3g} [{elapsed}<{remaining}]"))
+    bar.n_t = t0
+    return bar

@@ -1,0 +1,41 @@
+"""Derived quantities along a computed trajectory.
+
+At every output time: accelerations and multipliers from the (unstabilized) KKT
+system, the generalized constraint force ``A^T lambda``, the largest position and
+velocity constraint residuals, and the energies ``T``, ``V`` and the Jacobi
+integral ``h = qd . dL/dqd - L``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..codegen.compiled import NumericModel
+from .kkt import solve_kkt
+
+
+def evaluate_outputs(num: NumericModel, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+    """Arrays with one row per output time (see module docstring)."""
+    n, m, k = num.n, num.m, len(t)
+    out = {
+        "qdd": np.empty((k, n)),
+        "multipliers": np.empty((k, m)),
+        "constraint_forces": np.empty((k, n)),
+        "position_residual": np.zeros(k),
+        "velocity_residual": np.zeros(k),
+        "energies": np.empty((k, 3)),
+    }
+    for i, (ti, yi) in enumerate(zip(t, y)):
+        q, qd = yi[:n], yi[n:]
+        M, f, A, c = num.kkt_blocks(ti, q, qd)
+        qdd, lam = solve_kkt(M, f, A, c)
+        out["qdd"][i] = qdd
+        out["multipliers"][i] = lam
+        out["constraint_forces"][i] = A.T @ lam
+        if num.holonomic_rows:
+            out["position_residual"][i] = np.abs(num.position_constraint(ti, q)).max()
+        if m:
+            _, b = num.velocity_constraint(ti, q)
+            out["velocity_residual"][i] = np.abs(A @ qd + b).max()
+        out["energies"][i] = num.energies(ti, q, qd)
+    return out

@@ -1,0 +1,272 @@
+"""``System``: the one object a user builds, derives and simulates.
+
+It ties the layers together (model -> equations -> generated code -> solver ->
+trajectory) and caches each stage, so the equations are derived and the numeric
+code generated once per System however often it is simulated.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from functools import cached_property
+
+import numpy as np
+
+from .codegen.compiled import CompiledEquations, NumericModel, compile_equations
+from .equations.lagrange import Equations, derive_equations
+from .errors import InitialConditionsAdjusted, IntegrationWarning
+from .model.forces import PointForce
+from .model.model import Model, build_model
+from .model.parameters import parameter_values, resolve_parameters
+from .solvers.dynamics import first_order_rhs
+from .solvers.initialization import InitializationReport, consistent_state, state_vector
+from .solvers.integrate import IntegrationResult, integrate
+from .solvers.outputs import evaluate_outputs
+from .solvers.projection import project_state
+from .trajectory import Trajectory
+
+STABILIZATIONS = ("projection", "baumgarte", None)
+
+
+class System:
+    """A mechanical system in (possibly redundant) coordinates with constraints.
+
+    Sign convention, used everywhere: ``M qdd = f + A^T lambda`` with the
+    constraints ``A qd + b = 0``; ``A^T lambda`` is the generalized constraint force.
+
+    Parameters
+    ----------
+    coordinates
+        SymPy ``dynamicsymbols`` (or names / plain symbols, see ``velocities``).
+    kinetic, potential
+        Kinetic energy ``T(q, qd, t)`` and potential energy ``V(q, t)``.
+    lagrangian
+        ``L(q, qd, t)`` instead of ``T`` and ``V``.
+    constraints
+        :class:`~dalembert.Holonomic` and :class:`~dalembert.Pfaffian` constraints.
+    generalized_forces
+        Non-conservative generalized forces: a dict by coordinate or a sequence.
+    forces
+        :class:`~dalembert.PointForce` objects (forces applied at points).
+    parameters
+        Numeric values of the model's other symbols (can be overridden in
+        :meth:`simulate`).
+    velocities
+        With plain-symbol coordinates, the velocity symbols (default ``<name>_dot``).
+
+    Examples
+    --------
+    The Cartesian pendulum, ``x^2 + y^2 = l^2``:
+
+    >>> import sympy as sp
+    >>> from dalembert import System, Holonomic, coordinates
+    >>> x, y = coordinates("x y")
+    >>> m, g, l = sp.symbols("m g l", positive=True)
+    >>> pendulum = System(
+    ...     [x, y],
+    ...     kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2),
+    ...     potential=m * g * y,
+    ...     constraints=[Holonomic(x**2 + y**2 - l**2, name="rod")],
+    ...     parameters={m: 1.0, g: 9.81, l: 1.0},
+    ... )
+    >>> traj = pendulum.simulate((0, 1), q0={x: 1.0, y: 0.0})
+    >>> bool(traj.position_residual.max() < 1e-12)
+    True
+    """
+
+    def __init__(
+        self,
+        coordinates: object,
+        *,
+        kinetic: object = None,
+        potential: object = None,
+        lagrangian: object = None,
+        constraints: object = (),
+        generalized_forces: Mapping[object, object] | Sequence[object] | None = None,
+        forces: Sequence[PointForce] = (),
+        parameters: Mapping[object, object] | None = None,
+        velocities: Sequence[object] | None = None,
+        name: str = "system",
+    ) -> None:
+        self.model: Model = build_model(
+            coordinates, kinetic=kinetic, potential=potential, lagrangian=lagrangian,
+            constraints=constraints, generalized_forces=generalized_forces, forces=forces,
+            velocities=velocities, name=name,
+        )
+        self.parameter_values = parameter_values(self.model.parameters, parameters)
+
+    # -- description -----------------------------------------------------------------
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return self.model.coords.names
+
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        return self.model.constraints.names
+
+    @property
+    def parameters(self) -> tuple:
+        """The model's parameter symbols (sorted by name)."""
+        return self.model.parameters
+
+    @property
+    def degrees_of_freedom(self) -> int:
+        """Coordinates minus constraints (velocity-level degrees of freedom)."""
+        return self.model.coords.n - self.model.constraints.m
+
+    def __repr__(self) -> str:
+        return (f"System({self.model.name!r}, coordinates={list(self.coordinate_names)}, "
+                f"constraints={list(self.constraint_names)})")
+
+    # -- equations and code ----------------------------------------------------------
+    def equations(self) -> Equations:
+        """The symbolic constrained equations ``M qdd = f + A^T lambda``, ``A qdd = c``."""
+        return self._equations
+
+    @cached_property
+    def _equations(self) -> Equations:
+        return derive_equations(self.model)
+
+    @cached_property
+    def compiled(self) -> CompiledEquations:
+        """Generated numeric functions (made on first use, then reused)."""
+        return compile_equations(self._equations)
+
+    def numeric(self, parameters: Mapping[object, object] | None = None) -> NumericModel:
+        """The compiled equations bound to parameter values."""
+        p = resolve_parameters(self.model.parameters, self.parameter_values, parameters)
+        return self.compiled.bind(p)
+
+    # -- simulation ------------------------------------------------------------------
+    def consistent_initial_state(
+        self,
+        q0: object,
+        qd0: object = None,
+        *,
+        t0: float = 0.0,
+        fixed: Sequence[object] | None = None,
+        parameters: Mapping[object, object] | None = None,
+    ) -> InitializationReport:
+        """Project ``(q0, qd0)`` onto the constraints (least change); ``fixed`` stay put."""
+        names = self.coordinate_names
+        q = state_vector(q0, names, "q0")
+        qd = state_vector(qd0, names, "qd0")
+        cons = self.model.constraints
+        labels = [cons.describe(i) for i in range(cons.m)]
+        return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed)
+
+    def simulate(
+        self,
+        t_span: Sequence[float],
+        q0: object,
+        qd0: object = None,
+        *,
+        t_eval: Sequence[float] | None = None,
+        method: str = "DOP853",
+        rtol: float = 1e-11,
+        atol: float = 1e-13,
+        stabilization: str | None = "projection",
+        baumgarte_gain: float = 10.0,
+        parameters: Mapping[object, object] | None = None,
+        fixed: Sequence[object] | None = None,
+        events: Sequence[Callable] = (),
+        dense_output: bool = False,
+        progress: bool = False,
+        **options: object,
+    ) -> Trajectory:
+        """Integrate the constrained equations of motion over ``t_span``.
+
+        Like :func:`scipy.integrate.solve_ivp`: ``method`` is any of its solvers
+        (``"DOP853"`` default, ``"Radau"``/``"BDF"`` for stiff mechanisms), ``t_eval``
+        picks output times, ``events`` are functions ``event(t, q, qd)`` with optional
+        ``terminal``/``direction`` attributes, ``dense_output`` adds ``traj.sol(t)``;
+        other keywords (``max_step``, ``first_step``...) go to the solver.
+
+        Initial values are first projected onto the constraints (least change,
+        ``fixed`` coordinates held; a warning reports what changed).
+        ``stabilization`` is ``"projection"`` (positions and velocities projected after
+        every step: no tuning, residuals at rounding level), ``"baumgarte"`` (gain
+        ``baumgarte_gain``, see :mod:`dalembert.solvers.dynamics`) or ``None`` (raw
+        drift). A failure or Ctrl-C returns the part computed so far with
+        ``success=False`` and an :class:`~dalembert.errors.IntegrationWarning`.
+        """
+        if stabilization not in STABILIZATIONS:
+            raise ValueError(
+                f"stabilization must be one of {STABILIZATIONS}, not {stabilization!r}"
+            )
+        t_span = _check_span(t_span)
+        _check_tolerances(rtol, atol)
+        num = self.numeric(parameters)
+        report = self.consistent_initial_state(q0, qd0, t0=t_span[0], fixed=fixed,
+                                               parameters=parameters)
+        if report.changed:
+            warnings.warn(str(report), InitialConditionsAdjusted, stacklevel=2)
+        gain = baumgarte_gain if stabilization == "baumgarte" else 0.0
+        project = (lambda t, y: project_state(num, t, y)) if stabilization == "projection" \
+            else None
+        result = integrate(
+            first_order_rhs(num, gain), t_span, np.concatenate([report.q, report.qd]),
+            method=method, t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
+            events=[_state_event(e, num.n) for e in events], project=project,
+            progress=progress, rtol=rtol, atol=atol, **options,
+        )
+        if not result.success:
+            warnings.warn(f"{result.message}; returning the trajectory up to "
+                          f"t={result.t[-1] if len(result.t) else t_span[0]:.6g}",
+                          IntegrationWarning, stacklevel=2)
+        return self._trajectory(num, result, report)
+
+    def _trajectory(
+        self, num: NumericModel, result: IntegrationResult, report: InitializationReport
+    ) -> Trajectory:
+        n = num.n
+        derived = evaluate_outputs(num, result.t, result.y)
+        energies = derived.pop("energies")
+        return Trajectory(
+            t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,
+            kinetic_energy=energies[:, 0], potential_energy=energies[:, 1],
+            jacobi_integral=energies[:, 2], coordinate_names=self.coordinate_names,
+            constraint_names=self.constraint_names, status=result.status,
+            message=result.message, stats=result.stats, initialization=str(report),
+            t_events=result.t_events, y_events=result.y_events, sol=result.sol,
+        )
+
+
+def _check_span(t_span: Sequence[float]) -> tuple[float, float]:
+    try:
+        t0, tf = (float(v) for v in t_span)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"t_span must be two numbers (t0, tf), got {t_span!r}") from exc
+    if not (np.isfinite(t0) and np.isfinite(tf)) or t0 == tf:
+        raise ValueError(f"t_span must be two different finite times, got {t_span!r}")
+    return t0, tf
+
+
+def _check_tolerances(rtol: float, atol: float) -> None:
+    if not (np.all(np.asarray(rtol) > 0) and np.all(np.asarray(atol) > 0)):
+        raise ValueError(f"rtol and atol must be positive, got rtol={rtol}, atol={atol}")
+
+
+def _check_t_eval(t_eval: Sequence[float] | None, t_span: tuple[float, float]):
+    if t_eval is None:
+        return None
+    t_eval = np.asarray(t_eval, dtype=float)
+    lo, hi = min(t_span), max(t_span)
+    if t_eval.ndim != 1 or np.any((t_eval < lo) | (t_eval > hi)):
+        raise ValueError("t_eval must be a 1-D array of times inside t_span")
+    d = np.diff(t_eval) * np.sign(t_span[1] - t_span[0])
+    if np.any(d <= 0):
+        raise ValueError("t_eval must be strictly ordered in the direction of integration")
+    return t_eval
+
+
+def _state_event(event: Callable, n: int) -> Callable:
+    """Adapt ``event(t, q, qd)`` to SciPy's ``event(t, y)``, keeping its attributes."""
+
+    def wrapped(t: float, y: np.ndarray) -> float:
+        return event(t, y[:n], y[n:])
+
+    wrapped.terminal = getattr(event, "terminal", False)
+    wrapped.direction = getattr(event, "direction", 0)
+    return wrapped

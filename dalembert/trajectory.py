@@ -1,0 +1,159 @@
+"""The result of a simulation: states, multipliers, constraint forces and checks.
+
+A :class:`Trajectory` is plain NumPy data (one row per output time) with access
+by coordinate and constraint name, lossless ``save``/``load`` (``.npz``, written
+atomically) and ``to_dataframe`` when pandas is installed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+_ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_energy",
+           "potential_energy", "jacobi_integral", "position_residual", "velocity_residual")
+
+
+@dataclass(eq=False)
+class Trajectory:
+    """States and derived quantities at the output times ``t``.
+
+    Arrays have one row per time: ``q``, ``qd``, ``qdd`` (n columns),
+    ``multipliers`` (m columns, constraint order), ``constraint_forces``
+    (``A^T lambda``, n columns), energies, and the largest position and velocity
+    constraint residuals. ``traj["x"]``, ``traj["x_dot"]``, ``traj["x_ddot"]`` give
+    one coordinate's column; ``traj.multiplier("name")`` one constraint's.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    multipliers: np.ndarray
+    constraint_forces: np.ndarray
+    kinetic_energy: np.ndarray
+    potential_energy: np.ndarray
+    jacobi_integral: np.ndarray
+    position_residual: np.ndarray
+    velocity_residual: np.ndarray
+    coordinate_names: tuple[str, ...]
+    constraint_names: tuple[str, ...]
+    status: str = "finished"
+    message: str = ""
+    stats: dict[str, Any] = field(default_factory=dict)
+    initialization: str = ""
+    t_events: list[np.ndarray] = field(default_factory=list)
+    y_events: list[np.ndarray] = field(default_factory=list)
+    sol: Any = None
+
+    @property
+    def success(self) -> bool:
+        """True when the integration reached the end of ``t_span`` or a terminal event."""
+        return self.status in ("finished", "event")
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Total energy ``T + V`` (NaN when the model was given as a Lagrangian only)."""
+        return self.kinetic_energy + self.potential_energy
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        names = self.coordinate_names
+        for suffix, array in (("_ddot", self.qdd), ("_dot", self.qd), ("", self.q)):
+            base = name[: len(name) - len(suffix)] if suffix and name.endswith(suffix) else name
+            if (suffix == "" or name.endswith(suffix)) and base in names:
+                return array[:, names.index(base)]
+        raise KeyError(
+            f"{name!r} is not a coordinate; the coordinates are {', '.join(names)} "
+            "(append _dot or _ddot for velocity or acceleration)"
+        )
+
+    def multiplier(self, name: str) -> np.ndarray:
+        """The Lagrange multiplier of the constraint called ``name``."""
+        if name not in self.constraint_names:
+            raise KeyError(
+                f"{name!r} is not a constraint; the constraints are "
+                f"{', '.join(self.constraint_names) or 'none'}"
+            )
+        return self.multipliers[:, self.constraint_names.index(name)]
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __repr__(self) -> str:
+        span = f"t={self.t[0]:.4g}..{self.t[-1]:.4g}" if len(self.t) else "empty"
+        return (f"Trajectory({len(self.t)} points, {span}, status={self.status!r}, "
+                f"coordinates={list(self.coordinate_names)})")
+
+    def summary(self) -> str:
+        """A few lines with the measured drift and energy error."""
+        lines = [repr(self), f"  {self.message}"]
+        if len(self.t):
+            lines.append(f"  max position residual {self.position_residual.max():.2e}, "
+                         f"max velocity residual {self.velocity_residual.max():.2e}")
+            e = self.energy
+            if np.all(np.isfinite(e)):
+                rel = np.abs(e - e[0]).max() / max(abs(e[0]), 1e-300)
+                lines.append(f"  relative energy error {rel:.2e}")
+        return "\n".join(lines)
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write every array and name to ``path`` (``.npz``), atomically."""
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_suffix(".npz")
+        meta = {"coordinate_names": list(self.coordinate_names),
+                "constraint_names": list(self.constraint_names), "status": self.status,
+                "message": self.message, "stats": self.stats,
+                "initialization": self.initialization}
+        arrays = {name: getattr(self, name) for name in _ARRAYS}
+        arrays.update({f"t_events_{k}": v for k, v in enumerate(self.t_events)})
+        arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, meta=np.array(json.dumps(meta)), **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> Trajectory:
+        """Read a trajectory written by :meth:`save`."""
+        with np.load(Path(path), allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            arrays = {name: data[name] for name in _ARRAYS}
+            n_events = sum(1 for k in data.files if k.startswith("t_events_"))
+            t_events = [data[f"t_events_{k}"] for k in range(n_events)]
+            y_events = [data[f"y_events_{k}"] for k in range(n_events)]
+        meta["coordinate_names"] = tuple(meta["coordinate_names"])
+        meta["constraint_names"] = tuple(meta["constraint_names"])
+        return cls(**arrays, **meta, t_events=t_events, y_events=y_events)
+
+    def to_dataframe(self):
+        """A pandas DataFrame indexed by time: coordinates, velocities, multipliers, checks."""
+        try:
+            import pandas as pd
+        except ImportError as exc:
+            raise ImportError(
+                "to_dataframe() needs pandas: pip install 'dalembert[pandas]'"
+            ) from exc
+        columns: dict[str, np.ndarray] = {}
+        for i, name in enumerate(self.coordinate_names):
+            columns[name] = self.q[:, i]
+            columns[f"{name}_dot"] = self.qd[:, i]
+            columns[f"{name}_ddot"] = self.qdd[:, i]
+        for i, name in enumerate(self.constraint_names):
+            columns[f"lambda[{name}]"] = self.multipliers[:, i]
+        for name in ("kinetic_energy", "potential_energy", "jacobi_integral",
+                     "position_residual", "velocity_residual"):
+            columns[name] = getattr(self, name)
+        return pd.DataFrame(columns, index=pd.Index(self.t, name="t"))
+
