@@ -15,6 +15,12 @@ from types import ModuleType
 #: name -> module (in dalembert.examples), in gallery order.
 EXAMPLES: dict[str, str] = {
     "pendulum": "cartesian_pendulum",
+    "spherical-pendulum": "spherical_pendulum",
+    "hoop": "bead_on_hoop",
+    "dumbbell": "dumbbell",
+    "knife-edge": "knife_edge",
+    "rolling-disk": "rolling_disk",
+    "whirled-string": "whirled_string",
 }
 
 
