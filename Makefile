@@ -1,6 +1,7 @@
 # Two commands do all set-up on a fresh machine:
 #   make demo   simulate the gallery's demo systems, write plots and a report to out/demo
 #   make test   lint (ruff) and the whole test suite (unit, doctests, validation)
+#   make bench  the benchmark against the SymPy path (JSON in bench/results)
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -22,6 +23,9 @@ lint: $(STAMP)
 
 test: lint
 	$(BIN)/python -m pytest
+
+bench: $(STAMP)
+	$(BIN)/python bench/run.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .ruff_cache
