@@ -54,12 +54,12 @@ def solve(problem: Problem, z0: Array, tol: float, max_iter: int) -> Attempt:
     ExtremumConvergenceError
         No attempt converged.
     """
-    first = _newton(problem.kkt, z0, tol, max_iter, "newton")
+    first = newton_iterations(problem.kkt, z0, tol, max_iter, "newton")
     if first.converged:
         return first
     attempts = [first]
     for method in ("hybr", "lm"):
-        attempt = _root_then_newton(problem.kkt, z0, tol, max_iter, method)
+        attempt = root_then_newton(problem.kkt, z0, tol, max_iter, method)
         if attempt.converged:
             total = first.iterations + attempt.iterations
             return Attempt(attempt.z, attempt.residual, total, True, attempt.label)
@@ -76,7 +76,9 @@ def _accepted(residual: Array, matrix: Array, z: Array, tol: float) -> bool:
     return bool(np.all(np.abs(residual) <= np.maximum(tol, rounding)))
 
 
-def _newton(kkt: KKTFunction, z0: Array, tol: float, max_iter: int, label: str) -> Attempt:
+def newton_iterations(
+    kkt: KKTFunction, z0: Array, tol: float, max_iter: int, label: str
+) -> Attempt:
     z = np.array(z0, dtype=float)
     residual, matrix = kkt(z)
     if not all_finite(residual, matrix):
@@ -109,7 +111,7 @@ def _line_search(
     return None
 
 
-def _root_then_newton(
+def root_then_newton(
     kkt: KKTFunction, z0: Array, tol: float, max_iter: int, method: str
 ) -> Attempt:
     label = f"newton after scipy.optimize.root({method})"
@@ -121,7 +123,7 @@ def _root_then_newton(
         return Attempt(z0, math.inf, 0, False, label, f"scipy failed: {exc}")
     if not np.all(np.isfinite(solution.x)):
         return Attempt(z0, math.inf, 0, False, label, "scipy returned non-finite values")
-    return _newton(kkt, solution.x, tol, max_iter, label)
+    return newton_iterations(kkt, solution.x, tol, max_iter, label)
 
 
 def _convergence_message(
