@@ -1,0 +1,73 @@
+"""Multibody systems in redundant coordinates: rigid bodies with Euler parameters.
+
+Every body carries its full pose (particles ``x, y, z``; rigid bodies also the
+Euler parameters ``b0..b3``) and joints become named holonomic constraints, so
+:class:`Multibody` builds an ordinary :class:`dalembert.System`. See
+:mod:`~dalembert.multibody.rotations` for the quaternion convention,
+:mod:`~dalembert.multibody.bodies` for why the singular rotational mass block is
+harmless, :mod:`~dalembert.multibody.joints` for the joint equations and
+:mod:`~dalembert.multibody.outputs` for reactions, momenta and energy.
+"""
+
+from .bodies import Body, Ground, Particle, RigidBody
+from .builder import Multibody, chain
+from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
+from .loads import Force, SpringDamper, Torque
+from .outputs import (
+    JointReaction,
+    angular_momentum,
+    angular_velocities,
+    energy,
+    euler_angles,
+    joint_reactions,
+    kinetic_energy,
+    linear_momentum,
+    point_positions,
+    potential_energy,
+    rotation_matrices,
+)
+from .rotations import (
+    E_matrix,
+    G_matrix,
+    euler_from_matrix,
+    matrix_from_euler,
+    quaternion_from_matrix,
+    rotation_matrix,
+)
+
+__all__ = [
+    "Body",
+    "Distance",
+    "E_matrix",
+    "Fixed",
+    "Force",
+    "G_matrix",
+    "Ground",
+    "Joint",
+    "JointReaction",
+    "Multibody",
+    "Particle",
+    "PointOnPlane",
+    "Prismatic",
+    "Revolute",
+    "RigidBody",
+    "Spherical",
+    "SpringDamper",
+    "Torque",
+    "Universal",
+    "angular_momentum",
+    "angular_velocities",
+    "chain",
+    "energy",
+    "euler_angles",
+    "euler_from_matrix",
+    "joint_reactions",
+    "kinetic_energy",
+    "linear_momentum",
+    "matrix_from_euler",
+    "point_positions",
+    "potential_energy",
+    "quaternion_from_matrix",
+    "rotation_matrices",
+    "rotation_matrix",
+]

@@ -1,0 +1,231 @@
+"""Bodies: the fixed ``Ground``, point-mass ``Particle`` and ``RigidBody``.
+
+A rigid body's coordinates are its mass-center position ``x, y, z`` (world frame)
+and its Euler parameters ``b0..b3`` (see :mod:`dalembert.multibody.rotations`),
+seven ``dynamicsymbols`` named ``<body>_x`` ... ``<body>_b3``. Its kinetic energy
+
+    T = 1/2 m v.v + 1/2 w^T I w,    w = 2 E(b) bdot  (body frame)
+
+has the 4x4 block ``4 E^T I E`` in ``bdot``, which is singular: ``E b = 0``, so
+its null direction is ``b`` itself. The unit-norm constraint
+``b0^2 + b1^2 + b2^2 + b3^2 - 1 = 0`` (added automatically, named
+``<body>_unit_quaternion``) differentiates to ``b . bdot = 0``, which removes
+exactly that direction; the KKT matrix ``[[M, A^T], [A, 0]]`` is therefore
+nonsingular (``M`` is positive definite on the null space of ``A``) and the core
+solves it as a whole, never inverting ``M``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+from sympy.physics.vector import dynamicsymbols
+
+from ..errors import ModelError
+from ..model.constraints import Holonomic
+from ..model.coordinates import t
+from .rotations import E_matrix, rotation_matrix
+
+
+def _vector(v: object, what: str) -> sp.Matrix:
+    """A 3-vector as a SymPy column (numbers or expressions)."""
+    try:
+        comps = list(v)
+    except TypeError as exc:
+        raise ModelError(f"{what} must be a 3-vector, got {v!r}") from exc
+    if len(comps) != 3:
+        raise ModelError(f"{what} must have 3 components, got {len(comps)}")
+    vals = [sp.sympify(c) for c in comps]
+    # exact zeros (not Float(0.0)) so that their terms vanish from the equations
+    return sp.Matrix([sp.S.Zero if v.is_zero else v for v in vals])
+
+
+def _check_name(name: object) -> str:
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ModelError(f"a body name must be an identifier-like string, got {name!r}")
+    return name
+
+
+class Body:
+    """Common interface: coordinates, point positions, orientation, energy."""
+
+    name: str
+    mass: float
+    coordinates: tuple[sp.Function, ...] = ()
+    has_orientation = True
+
+    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+        """World position of a body-fixed point (given in the body frame)."""
+        raise NotImplementedError
+
+    def rotation(self) -> sp.Matrix:
+        """Rotation matrix body -> world as SymPy expressions."""
+        raise NotImplementedError
+
+    def kinetic_energy(self) -> sp.Expr:
+        return sp.S.Zero
+
+    def constraints(self) -> list[Holonomic]:
+        return []
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r})"
+
+
+class Ground(Body):
+    """The fixed world frame; its points are given in world coordinates.
+
+    >>> Ground().position((1, 2, 3)).T
+    Matrix([[1, 2, 3]])
+    """
+
+    def __init__(self, name: str = "ground") -> None:
+        self.name = _check_name(name)
+        self.mass = 0.0
+
+    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+        return _vector(point, f"a point of {self.name!r}")
+
+    def rotation(self) -> sp.Matrix:
+        return sp.eye(3)
+
+
+class Particle(Body):
+    """A point mass with coordinates ``<name>_x, <name>_y, <name>_z``.
+
+    >>> p = Particle("bob", 2.0)
+    >>> [str(c) for c in p.coordinates]
+    ['bob_x(t)', 'bob_y(t)', 'bob_z(t)']
+    """
+
+    has_orientation = False
+
+    def __init__(self, name: str, mass: float) -> None:
+        self.name = _check_name(name)
+        self.mass = _positive_mass(mass, name)
+        self.coordinates = tuple(dynamicsymbols(f"{name}_x {name}_y {name}_z"))
+
+    @property
+    def center(self) -> sp.Matrix:
+        return sp.Matrix(self.coordinates)
+
+    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+        s = _vector(point, f"a point of particle {self.name!r}")
+        if any(c != 0 for c in s):
+            raise ModelError(
+                f"particle {self.name!r} has no extent: its only point is (0, 0, 0), got "
+                f"{tuple(s)}"
+            )
+        return self.center
+
+    def rotation(self) -> sp.Matrix:
+        raise ModelError(f"particle {self.name!r} has no orientation (use a RigidBody)")
+
+    def kinetic_energy(self) -> sp.Expr:
+        v = self.center.diff(t)
+        return _number(self.mass) / 2 * v.dot(v)
+
+
+class RigidBody(Body):
+    """A rigid body: mass-center position and Euler parameters (7 coordinates).
+
+    Parameters
+    ----------
+    name
+        Prefix of the coordinate names ``<name>_x, _y, _z, _b0.._b3``.
+    mass
+        Positive mass.
+    inertia
+        Inertia tensor about the mass center in the body frame: a symmetric
+        positive-definite 3x3 matrix, or its 3 principal values.
+
+    >>> body = RigidBody("box", 1.0, (1.0, 2.0, 3.0))
+    >>> [c.name for c in body.constraints()]
+    ['box_unit_quaternion']
+    """
+
+    def __init__(self, name: str, mass: float, inertia: object) -> None:
+        self.name = _check_name(name)
+        self.mass = _positive_mass(mass, name)
+        self.inertia = _inertia_tensor(inertia, name)
+        self.coordinates = tuple(
+            dynamicsymbols(" ".join(f"{name}_{c}" for c in ("x", "y", "z", "b0", "b1", "b2", "b3")))
+        )
+
+    @property
+    def center(self) -> sp.Matrix:
+        return sp.Matrix(self.coordinates[:3])
+
+    @property
+    def quaternion(self) -> sp.Matrix:
+        return sp.Matrix(self.coordinates[3:])
+
+    def rotation(self) -> sp.Matrix:
+        return rotation_matrix(self.quaternion)
+
+    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+        s = _vector(point, f"a point of body {self.name!r}")
+        if all(c == 0 for c in s):
+            return self.center
+        return self.center + self.rotation() * s
+
+    def angular_velocity(self) -> sp.Matrix:
+        """Body-frame angular velocity ``2 E(b) bdot``."""
+        return 2 * E_matrix(self.quaternion) * self.quaternion.diff(t)
+
+    def kinetic_energy(self) -> sp.Expr:
+        v = self.center.diff(t)
+        w = self.angular_velocity()
+        inertia = sp.Matrix(3, 3, lambda i, j: _number(self.inertia[i, j]))
+        rot = (w.T * inertia * w)[0, 0]
+        # expanded: a sum of monomials differentiates much faster than nested products
+        return sp.expand(_number(self.mass) / 2 * v.dot(v) + rot / 2)
+
+    def constraints(self) -> list[Holonomic]:
+        b = self.quaternion
+        return [Holonomic(b.dot(b) - 1, name=f"{self.name}_unit_quaternion")]
+
+
+def _number(value: float) -> sp.Expr:
+    """A float as a SymPy number; exact zero stays exact so its terms vanish."""
+    return sp.S.Zero if value == 0 else sp.Float(value)
+
+
+def _positive_mass(mass: object, name: str) -> float:
+    try:
+        value = float(mass)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"the mass of {name!r} must be a number, got {mass!r}") from exc
+    if not (np.isfinite(value) and value > 0):
+        raise ModelError(f"the mass of {name!r} must be positive and finite, got {value}")
+    return value
+
+
+def _inertia_tensor(inertia: object, name: str) -> np.ndarray:
+    try:
+        I = np.asarray(inertia, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"the inertia of {name!r} must be numbers, got {inertia!r}") from exc
+    if I.shape == (3,):
+        I = np.diag(I)
+    if I.shape != (3, 3):
+        raise ModelError(
+            f"the inertia of {name!r} must be a 3x3 tensor or 3 principal values, got shape "
+            f"{I.shape}"
+        )
+    if not np.all(np.isfinite(I)) or np.abs(I - I.T).max() > 1e-12 * max(np.abs(I).max(), 1):
+        raise ModelError(f"the inertia tensor of {name!r} must be finite and symmetric:\n{I}")
+    eig = np.linalg.eigvalsh(I)
+    if eig[0] <= 1e-12 * max(eig[-1], 0.0) or eig[0] <= 0:
+        raise ModelError(
+            f"the inertia tensor of {name!r} is not positive definite (principal values "
+            f"{', '.join(f'{e:.6g}' for e in eig)}); a rigid body needs inertia about every "
+            "axis (use a Particle for a point mass)"
+        )
+    return I
+
+
+def body_names(bodies: Sequence[Body]) -> list[str]:
+    return [b.name for b in bodies]

@@ -1,0 +1,323 @@
+"""``Multibody``: bodies + joints + loads -> a :class:`dalembert.System`.
+
+The system is in redundant (absolute) coordinates: every particle carries its
+position and every rigid body its full pose (7 coordinates), so the kinetic
+energy is block-diagonal and each joint's equations involve only its two bodies.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping, Sequence
+from functools import cached_property
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ConstraintError, InitialConditionError, InitialConditionsAdjusted, ModelError
+from ..system import System
+from .bodies import Body, Ground, Particle, RigidBody
+from .joints import Joint, Revolute, Spherical
+from .loads import Force, SpringDamper, Torque
+from .rotations import E_matrix, check_rotation, quaternion_from_matrix, rotation_matrix
+
+
+class Multibody:
+    """A multibody system in redundant coordinates.
+
+    Parameters
+    ----------
+    bodies
+        The moving bodies (:class:`Particle`, :class:`RigidBody`). ``Ground`` is
+        implicit; any ``Ground`` instance may appear in joints and springs.
+    joints
+        :mod:`dalembert.multibody.joints` objects between listed bodies or ground.
+    gravity
+        Uniform field (world components), as the potential ``-sum m g . x``.
+    forces, torques, springs
+        :class:`Force`, :class:`Torque`, :class:`SpringDamper` loads.
+
+    Examples
+    --------
+    A particle on a massless rod hung from the origin (a spherical pendulum):
+
+    >>> from dalembert.multibody import Distance, Ground, Multibody, Particle
+    >>> bob = Particle("bob", 1.0)
+    >>> mb = Multibody([bob], [Distance("rod", Ground(), bob, length=1.0)])
+    >>> mb.system.degrees_of_freedom
+    2
+    """
+
+    def __init__(
+        self,
+        bodies: Sequence[Body],
+        joints: Sequence[Joint] = (),
+        gravity: Sequence[float] = (0.0, 0.0, -9.81),
+        forces: Sequence[Force] = (),
+        torques: Sequence[Torque] = (),
+        springs: Sequence[SpringDamper] = (),
+        name: str = "multibody",
+    ) -> None:
+        self.bodies = tuple(bodies)
+        self.joints = tuple(joints)
+        self.forces = tuple(forces)
+        self.torques = tuple(torques)
+        self.springs = tuple(springs)
+        self.name = name
+        self.gravity = _gravity(gravity)
+        self._check()
+
+    # -- validation ------------------------------------------------------------------
+    def _check(self) -> None:
+        if not self.bodies:
+            raise ModelError("a Multibody needs at least one moving body")
+        names = set()
+        for body in self.bodies:
+            if not isinstance(body, (Particle, RigidBody)):
+                raise ModelError(f"bodies must be Particle or RigidBody objects, got {body!r}")
+            if body.name in names:
+                raise ModelError(f"two bodies are named {body.name!r}; names must be distinct")
+            names.add(body.name)
+        joint_names = [j.name for j in self.joints]
+        for j in self.joints:
+            if not isinstance(j, Joint):
+                raise ModelError(f"joints must be Joint objects, got {j!r}")
+            if joint_names.count(j.name) > 1:
+                raise ModelError(f"two joints are named {j.name!r}; names must be distinct")
+            self._check_members(j.bodies, f"joint {j.name!r}")
+        for s in self.springs:
+            self._check_members(s.bodies, f"spring {s.name!r}")
+        for load in (*self.forces, *self.torques):
+            self._check_members((load.body,), load.name)
+        self._check_counts()
+
+    def _check_members(self, bodies: Sequence[Body], what: str) -> None:
+        for body in bodies:
+            if isinstance(body, Ground):
+                continue
+            if not any(body is b for b in self.bodies):
+                raise ModelError(
+                    f"{what} acts on body {body.name!r}, which is not in this system's bodies "
+                    f"({', '.join(b.name for b in self.bodies)})"
+                )
+
+    def _check_counts(self) -> None:
+        n = sum(len(b.coordinates) for b in self.bodies)
+        m = sum(len(b.constraints()) for b in self.bodies) + sum(
+            j.n_equations for j in self.joints)
+        if m >= n:
+            detail = ", ".join(f"{j.name} ({type(j).__name__}: {j.n_equations})"
+                               for j in self.joints)
+            raise ConstraintError(
+                f"{m} constraints (joints {detail}, plus one unit-quaternion row per rigid "
+                f"body) on {n} coordinates leave no degree of freedom; remove a joint or "
+                "use a joint with fewer equations"
+            )
+
+    # -- the System ------------------------------------------------------------------
+    @property
+    def coordinates(self) -> list[sp.Function]:
+        return [c for b in self.bodies for c in b.coordinates]
+
+    def constraints(self) -> list:
+        body_rows = [c for b in self.bodies for c in b.constraints()]
+        return body_rows + [c for j in self.joints for c in j.constraints()]
+
+    def kinetic_energy(self) -> sp.Expr:
+        return sp.Add(*(b.kinetic_energy() for b in self.bodies))
+
+    def potential_energy(self) -> sp.Expr:
+        g = sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in self.gravity])
+        V = sp.Add(*(-sp.Float(b.mass) * g.dot(b.center) for b in self.bodies))
+        return V + sp.Add(*(s.potential() for s in self.springs))
+
+    def _generalized_forces(self) -> dict[object, sp.Expr]:
+        Q: dict[object, sp.Expr] = {}
+        for torque in self.torques:
+            for coord, value in torque.generalized_forces().items():
+                Q[coord] = Q.get(coord, sp.S.Zero) + value
+        return Q
+
+    def _point_forces(self) -> list:
+        pfs = [f.point_force() for f in self.forces]
+        return pfs + [pf for s in self.springs for pf in s.point_forces()]
+
+    @cached_property
+    def system(self) -> System:
+        """The :class:`dalembert.System` (built once)."""
+        return System(
+            self.coordinates,
+            kinetic=self.kinetic_energy(),
+            potential=self.potential_energy(),
+            constraints=self.constraints(),
+            generalized_forces=self._generalized_forces() or None,
+            forces=self._point_forces(),
+            name=self.name,
+        )
+
+    def body(self, name: str) -> Body:
+        """The body called ``name``."""
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(f"no body {name!r}; the bodies are {', '.join(b.name for b in self.bodies)}")
+
+    def joint(self, name: str) -> Joint:
+        """The joint called ``name``."""
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(f"no joint {name!r}; the joints are "
+                       f"{', '.join(j.name for j in self.joints) or 'none'}")
+
+    def _resolve(self, key: object) -> Body:
+        if isinstance(key, Body):
+            self._check_members((key,), "initial state")
+            return key
+        return self.body(str(key))
+
+    # -- initial state ---------------------------------------------------------------
+    def initial_state(
+        self,
+        positions: Mapping[object, Sequence[float]] | None = None,
+        orientations: Mapping[object, object] | None = None,
+        velocities: Mapping[object, Sequence[float]] | None = None,
+        angular_velocities: Mapping[object, Sequence[float]] | None = None,
+        angular_velocity_frame: str = "world",
+    ) -> tuple[dict[str, float], dict[str, float]]:
+        """``(q0, qd0)`` dicts for :meth:`dalembert.System.simulate`.
+
+        Keys are bodies or body names. ``positions``/``velocities`` are of the mass
+        center (world); ``orientations`` are rotation matrices (body -> world) or
+        Euler parameters (a non-unit quaternion is normalized with an
+        :class:`~dalembert.InitialConditionsAdjusted` warning); angular velocities
+        are in world or body components (``angular_velocity_frame``). Unlisted
+        bodies start at the origin, unrotated, at rest. ``bdot = 1/2 E(b)^T w_body``.
+        """
+        if angular_velocity_frame not in ("world", "body"):
+            raise ValueError("angular_velocity_frame must be 'world' or 'body'")
+        q0: dict[str, float] = {}
+        qd0: dict[str, float] = {}
+        for body in self.bodies:
+            q0.update(dict.fromkeys(_names(body), 0.0))
+            qd0.update(dict.fromkeys(_names(body), 0.0))
+            if isinstance(body, RigidBody):
+                q0[f"{body.name}_b0"] = 1.0
+        for key, value in (positions or {}).items():
+            body = self._resolve(key)
+            q0.update(zip(_names(body)[:3], _triple(value, f"position of {body.name!r}")))
+        for key, value in (velocities or {}).items():
+            body = self._resolve(key)
+            qd0.update(zip(_names(body)[:3], _triple(value, f"velocity of {body.name!r}")))
+        quats = {}
+        for key, value in (orientations or {}).items():
+            body = self._rigid(key, "orientation")
+            quats[body.name] = _quaternion(value, body.name)
+            q0.update(zip(_names(body)[3:], quats[body.name]))
+        for key, value in (angular_velocities or {}).items():
+            body = self._rigid(key, "angular velocity")
+            b = quats.get(body.name, np.array([1.0, 0.0, 0.0, 0.0]))
+            w = _triple(value, f"angular velocity of {body.name!r}")
+            if angular_velocity_frame == "world":
+                w = rotation_matrix(b).T @ w
+            bdot = 0.5 * E_matrix(b).T @ w
+            qd0.update(zip(_names(body)[3:], bdot))
+        return q0, qd0
+
+    def _rigid(self, key: object, what: str) -> RigidBody:
+        body = self._resolve(key)
+        if not isinstance(body, RigidBody):
+            raise InitialConditionError(f"{body.name!r} is a particle; it has no {what}")
+        return body
+
+    # -- outputs (see dalembert.multibody.outputs) -----------------------------------
+    def simulate(self, *args, **kwargs):
+        """Shorthand for ``self.system.simulate(...)``."""
+        return self.system.simulate(*args, **kwargs)
+
+    def __repr__(self) -> str:
+        return (f"Multibody({self.name!r}, bodies={[b.name for b in self.bodies]}, "
+                f"joints={[j.name for j in self.joints]})")
+
+
+def _names(body: Body) -> list[str]:
+    return [c.name for c in body.coordinates]
+
+
+def _gravity(g: Sequence[float]) -> np.ndarray:
+    arr = np.asarray(g, dtype=float)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ModelError(f"gravity must be 3 finite numbers (world components), got {g!r}")
+    return arr
+
+
+def _triple(value: object, what: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise InitialConditionError(f"the {what} must be 3 finite numbers, got {value!r}")
+    return arr
+
+
+def _quaternion(value: object, name: str) -> np.ndarray:
+    """Euler parameters of an orientation given as a matrix or a quaternion."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape == (3, 3):
+        try:
+            R = check_rotation(arr, f"the orientation of {name!r}")
+        except ValueError as exc:
+            raise InitialConditionError(str(exc)) from exc
+        return quaternion_from_matrix(R)
+    if arr.shape != (4,) or not np.all(np.isfinite(arr)):
+        raise InitialConditionError(
+            f"the orientation of {name!r} must be a 3x3 rotation matrix or 4 Euler "
+            f"parameters, got {value!r}"
+        )
+    norm = np.linalg.norm(arr)
+    if norm == 0:
+        raise InitialConditionError(f"the quaternion of {name!r} is zero; it has no direction")
+    if abs(norm - 1.0) > 1e-12:
+        warnings.warn(
+            f"the quaternion of {name!r} had norm {norm:.12g}; normalized to "
+            f"{np.array2string(arr / norm, precision=12)}",
+            InitialConditionsAdjusted, stacklevel=3,
+        )
+    return arr / norm
+
+
+def chain(
+    n: int,
+    length: float,
+    mass: float,
+    radius: float,
+    joint: str = "spherical",
+    gravity: Sequence[float] = (0.0, 0.0, -9.81),
+) -> Multibody:
+    """An ``n``-link chain of uniform cylinders hung from the origin.
+
+    Link ``k`` (bodies ``link1..linkn``, top first) has its axis along its body
+    ``z``, joint points ``(0, 0, +-length/2)`` and, hanging straight down, its
+    center at ``(0, 0, -(k - 1/2) length)``. Joints ``joint1`` (ground to
+    ``link1``) ... ``jointn`` are spherical or revolute about the body ``y`` axes.
+
+    >>> chain(2, 1.0, 1.0, 0.05, joint="revolute").system.degrees_of_freedom
+    2
+    """
+    if int(n) != n or n < 1:
+        raise ModelError(f"a chain needs a positive whole number of links, got {n!r}")
+    if joint not in ("spherical", "revolute"):
+        raise ModelError(f"joint must be 'spherical' or 'revolute', got {joint!r}")
+    if not (length > 0 and radius > 0):
+        raise ModelError(f"length and radius must be positive, got {length}, {radius}")
+    transverse = mass * (3 * radius**2 + length**2) / 12
+    inertia = (transverse, transverse, mass * radius**2 / 2)
+    links = [RigidBody(f"link{k + 1}", mass, inertia) for k in range(int(n))]
+    top, bottom = (0.0, 0.0, length / 2), (0.0, 0.0, -length / 2)
+    joints = []
+    parents = [Ground(), *links[:-1]]
+    for k, (parent, child) in enumerate(zip(parents, links)):
+        pa = (0.0, 0.0, 0.0) if k == 0 else bottom
+        if joint == "spherical":
+            joints.append(Spherical(f"joint{k + 1}", parent, child, pa, top))
+        else:
+            joints.append(Revolute(f"joint{k + 1}", parent, child, pa, top, axis_a=(0, 1, 0)))
+    return Multibody(links, joints, gravity=gravity, name=f"{n}-link {joint} chain")

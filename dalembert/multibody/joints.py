@@ -1,0 +1,274 @@
+"""Joints between two bodies (or a body and ``Ground``) as holonomic constraints.
+
+Each side of a joint has a point (body frame; world frame on ``Ground``) and a
+joint frame ``(u, v, w)``: ``w`` is the joint ``axis``, ``u`` the reference
+direction ``ref`` (perpendicular to ``w``; by default the coordinate axis least
+aligned with ``w``, made perpendicular) and ``v = w x u``. With ``d`` the vector
+from point ``a`` to point ``b`` and all vectors in world components:
+
+============  =====  ===========================================================
+joint         rows   equations
+============  =====  ===========================================================
+Spherical     3      ``d = 0``
+Universal     4      ``d = 0``, ``w_a . w_b = 0`` (cross axes)
+Revolute      5      ``d = 0``, ``u_a . w_b = 0``, ``v_a . w_b = 0``
+Prismatic     5      ``u_a . w_b = v_a . w_b = u_a . v_b = 0``, ``u_a . d = v_a . d = 0``
+Fixed         6      ``d = 0``, ``u_a . w_b = v_a . w_b = u_a . v_b = 0``
+Distance      1      ``d . d - length^2 = 0`` (massless rod)
+PointOnPlane  1      ``n_a . d = 0`` (point ``b`` on the plane through ``a``)
+============  =====  ===========================================================
+
+``Prismatic`` and ``Fixed`` lock the two joint frames parallel, so give each
+side's ``axis``/``ref`` as they are when the bodies are assembled. The rows of
+joint ``J`` are the constraints ``J_1, J_2, ...``. Every joint's equations are
+invariant under a common rigid motion of both bodies, so its constraint forces
+on ``a`` and ``b`` are equal and opposite (see
+:func:`dalembert.multibody.outputs.joint_reactions`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ModelError
+from ..model.constraints import Holonomic
+from .bodies import Body
+
+
+def _unit(v: object, what: str) -> np.ndarray:
+    try:
+        arr = np.asarray(v, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"{what} must be 3 numbers, got {v!r}") from exc
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ModelError(f"{what} must be 3 finite numbers, got {v!r}")
+    norm = np.linalg.norm(arr)
+    if norm == 0:
+        raise ModelError(f"{what} is the zero vector; give a direction")
+    return arr / norm
+
+
+def _perpendicular(w: np.ndarray, ref: object, what: str) -> np.ndarray:
+    """``ref`` made perpendicular to ``w`` (default: the axis least aligned with ``w``)."""
+    if ref is None:
+        ref = np.eye(3)[int(np.argmin(np.abs(w)))]
+    u = _unit(ref, what)
+    u = u - u.dot(w) * w
+    if np.linalg.norm(u) < 1e-8:
+        raise ModelError(f"{what} is parallel to the joint axis; give a perpendicular direction")
+    return u / np.linalg.norm(u)
+
+
+def _point(p: object, what: str) -> np.ndarray:
+    try:
+        arr = np.asarray(p, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"{what} must be 3 numbers, got {p!r}") from exc
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ModelError(f"{what} must be 3 finite numbers, got {p!r}")
+    return arr
+
+
+def _sym(v: np.ndarray) -> sp.Matrix:
+    return sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in v])
+
+
+class Joint:
+    """Base class: two bodies, a point and a joint frame on each.
+
+    Parameters
+    ----------
+    name
+        Constraint names are ``<name>_1``, ``<name>_2``, ...
+    body_a, body_b
+        The joined bodies; either may be a :class:`~dalembert.multibody.Ground`.
+    point_a, point_b
+        The joint point on each body, in that body's frame.
+    axis_a, axis_b
+        Joint axis on each body (body frame); ``axis_b`` defaults to ``axis_a``.
+    ref_a, ref_b
+        Reference directions perpendicular to the axes (see the module docstring).
+    """
+
+    n_equations = 0
+    uses_orientation = True
+
+    def __init__(
+        self,
+        name: str,
+        body_a: Body,
+        body_b: Body,
+        point_a: object = (0, 0, 0),
+        point_b: object = (0, 0, 0),
+        axis_a: object = (0, 0, 1),
+        axis_b: object = None,
+        ref_a: object = None,
+        ref_b: object = None,
+    ) -> None:
+        if not isinstance(name, str) or not name.isidentifier():
+            raise ModelError(f"a joint name must be an identifier-like string, got {name!r}")
+        self.name = name
+        for label, body in (("body_a", body_a), ("body_b", body_b)):
+            if not isinstance(body, Body):
+                raise ModelError(f"joint {name!r}: {label} is {body!r}, not a body")
+        if body_a is body_b:
+            raise ModelError(f"joint {name!r} joins body {body_a.name!r} to itself")
+        self.body_a, self.body_b = body_a, body_b
+        self.point_a = _point(point_a, f"joint {name!r}: point_a")
+        self.point_b = _point(point_b, f"joint {name!r}: point_b")
+        self.axis_a = _unit(axis_a, f"joint {name!r}: axis_a")
+        self.axis_b = _unit(self.axis_a if axis_b is None else axis_b,
+                            f"joint {name!r}: axis_b")
+        self.ref_a = _perpendicular(self.axis_a, ref_a, f"joint {name!r}: ref_a")
+        self.ref_b = _perpendicular(self.axis_b, ref_b, f"joint {name!r}: ref_b")
+        self._check_bodies()
+
+    @property
+    def bodies(self) -> tuple[Body, Body]:
+        return self.body_a, self.body_b
+
+    def _check_bodies(self) -> None:
+        if not self.uses_orientation:
+            return
+        for body in self.bodies:
+            if not body.has_orientation:
+                raise ModelError(
+                    f"joint {self.name!r} ({type(self).__name__}) constrains the orientation "
+                    f"of {body.name!r}, but a particle has none; use a RigidBody"
+                )
+
+    # -- geometry in world components ------------------------------------------------
+    def separation(self) -> sp.Matrix:
+        """``d``: from point ``a`` to point ``b``."""
+        return self.body_b.position(self.point_b) - self.body_a.position(self.point_a)
+
+    def frame(self, side: str) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
+        """World components of ``(u, v, w)`` on side ``"a"`` or ``"b"``."""
+        body = self.body_a if side == "a" else self.body_b
+        w = self.axis_a if side == "a" else self.axis_b
+        u = self.ref_a if side == "a" else self.ref_b
+        R = body.rotation()
+        return R * _sym(u), R * _sym(np.cross(w, u)), R * _sym(w)
+
+    def _orientation_lock(self) -> list[sp.Expr]:
+        ua, va, _ = self.frame("a")
+        _, vb, wb = self.frame("b")
+        return [ua.dot(wb), va.dot(wb), ua.dot(vb)]
+
+    # -- constraints -----------------------------------------------------------------
+    def equations(self) -> list[sp.Expr]:
+        raise NotImplementedError
+
+    def constraints(self) -> list[Holonomic]:
+        """The joint's equations as named ``Holonomic`` constraints ``<name>_<k>``."""
+        eqs = self.equations()
+        return [Holonomic(e, name=f"{self.name}_{k + 1}") for k, e in enumerate(eqs)]
+
+    @property
+    def constraint_names(self) -> list[str]:
+        return [f"{self.name}_{k + 1}" for k in range(self.n_equations)]
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}({self.name!r}, {self.body_a.name!r}, "
+                f"{self.body_b.name!r})")
+
+
+class Spherical(Joint):
+    """Ball joint: the two points coincide (3 equations).
+
+    >>> from dalembert.multibody import Ground, Particle
+    >>> len(Spherical("ball", Ground(), Particle("p", 1.0)).constraints())
+    3
+    """
+
+    n_equations = 3
+    uses_orientation = False
+
+    def equations(self) -> list[sp.Expr]:
+        return list(self.separation())
+
+
+class Universal(Joint):
+    """Cardan joint: points coincide and the two axes stay perpendicular (4)."""
+
+    n_equations = 4
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, point_a: object = (0, 0, 0),
+                 point_b: object = (0, 0, 0), axis_a: object = (1, 0, 0),
+                 axis_b: object = (0, 1, 0)) -> None:
+        super().__init__(name, body_a, body_b, point_a, point_b, axis_a, axis_b)
+
+    def equations(self) -> list[sp.Expr]:
+        wa = self.frame("a")[2]
+        wb = self.frame("b")[2]
+        return [*self.separation(), wa.dot(wb)]
+
+
+class Revolute(Joint):
+    """Hinge: points coincide, axes stay parallel (5 equations)."""
+
+    n_equations = 5
+
+    def equations(self) -> list[sp.Expr]:
+        ua, va, _ = self.frame("a")
+        wb = self.frame("b")[2]
+        return [*self.separation(), ua.dot(wb), va.dot(wb)]
+
+
+class Prismatic(Joint):
+    """Slider: frames locked parallel, point ``b`` moves along the axis of ``a`` (5)."""
+
+    n_equations = 5
+
+    def equations(self) -> list[sp.Expr]:
+        ua, va, _ = self.frame("a")
+        d = self.separation()
+        return [*self._orientation_lock(), ua.dot(d), va.dot(d)]
+
+
+class Fixed(Joint):
+    """Weld: points coincide and frames locked parallel (6 equations)."""
+
+    n_equations = 6
+
+    def equations(self) -> list[sp.Expr]:
+        return [*self.separation(), *self._orientation_lock()]
+
+
+class Distance(Joint):
+    """Massless rod of length ``length`` between the two points (1 equation)."""
+
+    n_equations = 1
+    uses_orientation = False
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, length: float,
+                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+        length = float(length)
+        if not (np.isfinite(length) and length > 0):
+            raise ModelError(f"joint {name!r}: the length must be positive, got {length}")
+        self.length = length
+        super().__init__(name, body_a, body_b, point_a, point_b)
+
+    def equations(self) -> list[sp.Expr]:
+        d = self.separation()
+        return [d.dot(d) - sp.Float(self.length) ** 2]
+
+
+class PointOnPlane(Joint):
+    """Point ``b`` stays on the plane through point ``a`` with normal ``normal`` (1)."""
+
+    n_equations = 1
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, normal: object = (0, 0, 1),
+                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+        super().__init__(name, body_a, body_b, point_a, point_b, axis_a=normal)
+
+    def _check_bodies(self) -> None:
+        if not self.body_a.has_orientation:
+            raise ModelError(f"joint {self.name!r}: the plane's body {self.body_a.name!r} is "
+                             "a particle, which has no orientation")
+
+    def equations(self) -> list[sp.Expr]:
+        n = self.frame("a")[2]
+        return [n.dot(self.separation())]

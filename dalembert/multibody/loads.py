@@ -1,0 +1,127 @@
+"""Applied loads: forces at body points, torques on bodies, spring-dampers.
+
+Forces become :class:`dalembert.PointForce` (generalized force by virtual work,
+``Q = (dr/dq)^T F``). A torque on a rigid body does the virtual work
+``tau . dtheta`` with ``dtheta_body = 2 E(b) db``, so its generalized force on the
+Euler parameters is ``2 E(b)^T tau_body = 2 G(b)^T tau_world`` (nothing on the
+position coordinates). A spring's elastic force is conservative and goes into
+the potential ``1/2 k (L - L0)^2``; its damper ``-c Ldot`` along the spring is a
+pair of opposite point forces. Loads may depend on the coordinates (as the
+bodies' ``dynamicsymbols``), their time derivatives and the time ``dalembert.t``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ModelError
+from ..model.coordinates import t
+from ..model.forces import PointForce
+from .bodies import Body, RigidBody, _vector
+from .joints import _point
+from .rotations import E_matrix, G_matrix
+
+FRAMES = ("world", "body")
+
+
+def _frame(frame: str, what: str) -> str:
+    if frame not in FRAMES:
+        raise ModelError(f"{what}: frame must be 'world' or 'body', got {frame!r}")
+    return frame
+
+
+class Force:
+    """A force on ``body`` at the body-fixed ``point`` (body frame).
+
+    ``frame="world"`` gives the force in world components, ``"body"`` in body
+    components (a follower force that turns with the body).
+    """
+
+    def __init__(self, body: Body, force: object, point: object = (0, 0, 0),
+                 frame: str = "world", name: str | None = None) -> None:
+        self.body = body
+        self.name = name or f"force_on_{getattr(body, 'name', '?')}"
+        self.force = _vector(force, f"{self.name}: force")
+        self.point = _point(point, f"{self.name}: point")
+        self.frame = _frame(frame, self.name)
+        if frame == "body" and not body.has_orientation:
+            raise ModelError(f"{self.name}: {body.name!r} is a particle, it has no body frame")
+
+    def point_force(self) -> PointForce:
+        F = self.force if self.frame == "world" else self.body.rotation() * self.force
+        return PointForce(force=list(F), point=list(self.body.position(self.point)),
+                          name=self.name)
+
+
+class Torque:
+    """A torque on a rigid body, in world (``frame="world"``) or body components."""
+
+    def __init__(self, body: Body, torque: object, frame: str = "world",
+                 name: str | None = None) -> None:
+        self.body = body
+        self.name = name or f"torque_on_{getattr(body, 'name', '?')}"
+        if not isinstance(body, RigidBody):
+            raise ModelError(f"{self.name}: a torque needs a RigidBody, got {body!r}")
+        self.torque = _vector(torque, f"{self.name}: torque")
+        self.frame = _frame(frame, self.name)
+
+    def generalized_forces(self) -> dict[object, sp.Expr]:
+        """``{b_k: Q_k}`` with ``Q = 2 E^T tau_body`` (or ``2 G^T tau_world``)."""
+        b = self.body.quaternion
+        P = E_matrix(b) if self.frame == "body" else G_matrix(b)
+        Q = 2 * P.T * self.torque
+        return dict(zip(self.body.coordinates[3:], Q))
+
+
+class SpringDamper:
+    """Linear spring (stiffness ``k``, rest length ``rest_length``) and damper ``c``
+    between ``point_a`` on ``body_a`` and ``point_b`` on ``body_b`` (body frames)."""
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, stiffness: float,
+                 rest_length: float = 0.0, damping: float = 0.0,
+                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+        self.name = name
+        self.body_a, self.body_b = body_a, body_b
+        self.stiffness = _nonnegative(stiffness, f"spring {name!r}: stiffness")
+        self.rest_length = _nonnegative(rest_length, f"spring {name!r}: rest_length")
+        self.damping = _nonnegative(damping, f"spring {name!r}: damping")
+        self.point_a = _point(point_a, f"spring {name!r}: point_a")
+        self.point_b = _point(point_b, f"spring {name!r}: point_b")
+
+    @property
+    def bodies(self) -> tuple[Body, Body]:
+        return self.body_a, self.body_b
+
+    def _geometry(self) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Expr]:
+        ra = self.body_a.position(self.point_a)
+        rb = self.body_b.position(self.point_b)
+        d = rb - ra
+        return ra, rb, d, sp.sqrt(d.dot(d))
+
+    def potential(self) -> sp.Expr:
+        *_, L = self._geometry()
+        if self.rest_length == 0:
+            # (L - 0)^2 = d.d: no square root, smooth through L = 0
+            d = self._geometry()[2]
+            return sp.Float(self.stiffness) / 2 * d.dot(d)
+        return sp.Float(self.stiffness) / 2 * (L - sp.Float(self.rest_length)) ** 2
+
+    def point_forces(self) -> list[PointForce]:
+        if self.damping == 0:
+            return []
+        ra, rb, d, _ = self._geometry()
+        # c Ldot along the unit vector, written as c (d.ddot) d / L^2 (one sqrt less)
+        F_b = -sp.Float(self.damping) * d.dot(d.diff(t)) / d.dot(d) * d
+        return [PointForce(force=list(F_b), point=list(rb), name=f"{self.name}_damper_b"),
+                PointForce(force=list(-F_b), point=list(ra), name=f"{self.name}_damper_a")]
+
+
+def _nonnegative(value: object, what: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"{what} must be a number, got {value!r}") from exc
+    if not (np.isfinite(v) and v >= 0):
+        raise ModelError(f"{what} must be finite and >= 0, got {v}")
+    return v

@@ -1,0 +1,207 @@
+"""Body-level quantities along a :class:`dalembert.Trajectory` of a ``Multibody``.
+
+Positions of body points, rotation matrices, Euler angles, angular velocities,
+momenta, energy (evaluated numerically from the states, independently of the
+symbolic energy expressions) and joint reactions from the multipliers.
+
+Joint reactions: the rows of joint ``J`` give the generalized constraint force
+``Q = A_J^T lambda_J``. On a body's position coordinates it is the force ``F``
+(world) the joint exerts on the body; on its Euler parameters it is
+``Q_b = 2 E(b)^T tau_body``, so ``tau_body = 1/2 E(b) Q_b`` (``E E^T = I``) is
+the torque about the mass center. The torque about the joint point ``P`` is
+``tau_P = tau_cm - (r_P - x) x F``; it vanishes for a spherical joint.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..trajectory import Trajectory
+from .bodies import Body, Ground, RigidBody
+from .builder import Multibody
+from .rotations import E_matrix, euler_from_matrix, rotation_matrix
+
+
+def _columns(traj: Trajectory, body: Body, suffix: str = "") -> np.ndarray:
+    return np.column_stack([traj[f"{c.name}{suffix}"] for c in body.coordinates])
+
+
+def _body(mb: Multibody, body: Body | str) -> Body:
+    return mb.body(body) if isinstance(body, str) else body
+
+
+def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> np.ndarray:
+    """``R(b)`` (body -> world) at every time, shape ``(k, 3, 3)``; identity for particles."""
+    body = _body(mb, body)
+    if not isinstance(body, RigidBody):
+        return np.broadcast_to(np.eye(3), (len(traj), 3, 3)).copy()
+    return rotation_matrix(_columns(traj, body)[:, 3:])
+
+
+def euler_angles(mb: Multibody, traj: Trajectory, body: Body | str,
+                 sequence: str = "ZYX") -> np.ndarray:
+    """Euler angles of a body along the trajectory, shape ``(k, 3)`` (see
+    :func:`~dalembert.multibody.rotations.euler_from_matrix`)."""
+    return euler_from_matrix(rotation_matrices(mb, traj, body), sequence)
+
+
+def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
+                    point: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """World positions of a body-fixed point (body frame), shape ``(k, 3)``."""
+    body = _body(mb, body)
+    if isinstance(body, Ground):
+        return np.broadcast_to(np.asarray(point, float), (len(traj), 3)).copy()
+    x = _columns(traj, body)[:, :3]
+    return x + rotation_matrices(mb, traj, body) @ np.asarray(point, dtype=float)
+
+
+def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
+                       frame: str = "world") -> np.ndarray:
+    """Angular velocity ``2 E(b) bdot`` (body) or ``R`` times it (world), shape ``(k, 3)``."""
+    body = _body(mb, body)
+    if not isinstance(body, RigidBody):
+        return np.zeros((len(traj), 3))
+    b = _columns(traj, body)[:, 3:]
+    w = 2 * np.einsum("kij,kj->ki", E_matrix(b), _columns(traj, body, "_dot")[:, 3:])
+    if frame == "body":
+        return w
+    if frame != "world":
+        raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
+    return np.einsum("kij,kj->ki", rotation_matrix(b), w)
+
+
+def linear_momentum(mb: Multibody, traj: Trajectory) -> np.ndarray:
+    """Total ``sum m v`` (world), shape ``(k, 3)``."""
+    return sum(b.mass * _columns(traj, b, "_dot")[:, :3] for b in mb.bodies)
+
+
+def angular_momentum(mb: Multibody, traj: Trajectory,
+                     about: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """Total angular momentum about a fixed world point, shape ``(k, 3)``:
+    ``sum (x - about) x m v + R I w_body``."""
+    H = np.zeros((len(traj), 3))
+    for b in mb.bodies:
+        x = _columns(traj, b)[:, :3] - np.asarray(about, dtype=float)
+        H += np.cross(x, b.mass * _columns(traj, b, "_dot")[:, :3])
+        if isinstance(b, RigidBody):
+            w = angular_velocities(mb, traj, b, "body")
+            spin = np.einsum("kij,jl,kl->ki", rotation_matrices(mb, traj, b), b.inertia, w)
+            H += spin
+    return H
+
+
+def kinetic_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
+    """``sum 1/2 m v.v + 1/2 w.I w``."""
+    T = np.zeros(len(traj))
+    for b in mb.bodies:
+        v = _columns(traj, b, "_dot")[:, :3]
+        T += 0.5 * b.mass * np.einsum("ki,ki->k", v, v)
+        if isinstance(b, RigidBody):
+            w = angular_velocities(mb, traj, b, "body")
+            T += 0.5 * np.einsum("ki,ij,kj->k", w, b.inertia, w)
+    return T
+
+
+def potential_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
+    """Gravity ``-sum m g.x`` plus the springs' ``1/2 k (L - L0)^2``."""
+    V = np.zeros(len(traj))
+    for b in mb.bodies:
+        V -= b.mass * _columns(traj, b)[:, :3] @ mb.gravity
+    for s in mb.springs:
+        d = (point_positions(mb, traj, s.body_b, s.point_b)
+             - point_positions(mb, traj, s.body_a, s.point_a))
+        V += 0.5 * s.stiffness * (np.linalg.norm(d, axis=1) - s.rest_length) ** 2
+    return V
+
+
+def energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
+    """Total mechanical energy ``T + V`` along the trajectory."""
+    return kinetic_energy(mb, traj) + potential_energy(mb, traj)
+
+
+@dataclass(frozen=True)
+class JointReaction:
+    """What joint ``joint`` exerts on ``body``, one row per output time.
+
+    ``force_world``/``force_body``: the force; ``torque_world``/``torque_body``:
+    the torque about the joint point ``point_world`` (``torque_cm_world``: about
+    the mass center). Body-frame values are in the body's own frame.
+    """
+
+    joint: str
+    body: str
+    point_world: np.ndarray
+    force_world: np.ndarray
+    torque_world: np.ndarray
+    torque_cm_world: np.ndarray
+    force_body: np.ndarray
+    torque_body: np.ndarray
+
+
+def joint_reactions(
+    mb: Multibody, traj: Trajectory, parameters: dict | None = None
+) -> dict[str, dict[str, JointReaction]]:
+    """Constraint force and torque of every joint on each of its two bodies.
+
+    Returns ``{joint name: {body name: JointReaction}}``. Moving bodies' values
+    come from the multipliers; the reaction on ``Ground`` is the opposite wrench
+    of the other body's (a joint's equations are invariant under a common rigid
+    motion, so its constraint wrench on the pair is self-equilibrated).
+    """
+    system = mb.system
+    num = system.numeric(parameters)
+    names = system.constraint_names
+    k = len(traj)
+    Q_all = {j.name: np.zeros((k, num.n)) for j in mb.joints}
+    rows = {j.name: [names.index(c) for c in j.constraint_names] for j in mb.joints}
+    for i in range(k):
+        A, _ = num.velocity_constraint(traj.t[i], traj.q[i])
+        for j in mb.joints:
+            r = rows[j.name]
+            Q_all[j.name][i] = A[r].T @ traj.multipliers[i, r]
+    coord_index = {c: system.coordinate_names.index(c) for c in system.coordinate_names}
+    out: dict[str, dict[str, JointReaction]] = {}
+    for j in mb.joints:
+        sides = {}
+        for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
+            if not isinstance(body, Ground):
+                idx = [coord_index[c.name] for c in body.coordinates]
+                sides[body.name] = _reaction(mb, traj, j.name, body, point, Q_all[j.name][:, idx])
+        for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
+            if isinstance(body, Ground):
+                other = next(iter(sides.values()))
+                sides[body.name] = _ground_reaction(j.name, body, point, other)
+        out[j.name] = sides
+    return out
+
+
+def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
+              point: np.ndarray, Q: np.ndarray) -> JointReaction:
+    F = Q[:, :3]
+    R = rotation_matrices(mb, traj, body)
+    P = point_positions(mb, traj, body, point)
+    if isinstance(body, RigidBody):
+        b = _columns(traj, body)[:, 3:]
+        tau_cm_body = 0.5 * np.einsum("kij,kj->ki", E_matrix(b), Q[:, 3:])
+        tau_cm = np.einsum("kij,kj->ki", R, tau_cm_body)
+    else:
+        tau_cm = np.zeros_like(F)
+    arm = P - _columns(traj, body)[:, :3]
+    tau_P = tau_cm - np.cross(arm, F)
+    to_body = np.transpose(R, (0, 2, 1))
+    return JointReaction(
+        joint, body.name, P, F, tau_P, tau_cm,
+        np.einsum("kij,kj->ki", to_body, F), np.einsum("kij,kj->ki", to_body, tau_P),
+    )
+
+
+def _ground_reaction(joint: str, ground: Ground, point: np.ndarray,
+                     other: JointReaction) -> JointReaction:
+    P = np.broadcast_to(np.asarray(point, dtype=float), other.force_world.shape).copy()
+    F = -other.force_world
+    # the other body's wrench moved to the ground's joint point, then negated
+    tau = -(other.torque_world + np.cross(other.point_world - P, other.force_world))
+    return JointReaction(joint, ground.name, P, F, tau, tau, F.copy(), tau.copy())

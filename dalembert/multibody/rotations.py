@@ -1,0 +1,184 @@
+"""Euler parameters (unit quaternions) ``b = (b0, b1, b2, b3)``, scalar first.
+
+Convention (Nikravesh / Haug, with the body-frame matrix called ``E`` here)::
+
+    E(b) = [[-b1,  b0,  b3, -b2],        G(b) = [[-b1,  b0, -b3,  b2],
+            [-b2, -b3,  b0,  b1],                [-b2,  b3,  b0, -b1],
+            [-b3,  b2, -b1,  b0]]                [-b3, -b2,  b1,  b0]]
+
+    w_body  = 2 E(b) bdot        w_world = 2 G(b) bdot        R(b) = G(b) E(b)^T
+
+``R`` maps body-frame components to world components (``r_world = R r_body``) and
+equals ``(2 b0^2 - 1) I + 2 (v v^T + b0 [v]x)`` with ``v = (b1, b2, b3)``. For a
+unit ``b``: ``E E^T = G G^T = I3``, ``E b = G b = 0`` and ``E^T E = I4 - b b^T``,
+so ``bdot = 1/2 E^T w_body = 1/2 G^T w_world`` and a body torque ``tau`` does the
+virtual work of the generalized force ``2 E^T tau_body = 2 G^T tau_world`` on ``b``.
+
+Every function takes SymPy input (returning ``sympy.Matrix``) or NumPy input of
+shape ``(..., 4)`` (returning arrays of shape ``(..., 3, 4)`` or ``(..., 3, 3)``).
+
+>>> import numpy as np
+>>> b = quaternion_from_matrix(rotation_matrix(np.array([0.5, 0.5, 0.5, 0.5])))
+>>> np.allclose(b, 0.5)
+True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def _is_symbolic(b: object) -> bool:
+    return isinstance(b, sp.MatrixBase) or any(isinstance(v, sp.Basic) for v in b)
+
+
+def _assemble(rows: list[list[object]], symbolic: bool):
+    if symbolic:
+        return sp.Matrix(rows)
+    return np.moveaxis(np.array([[np.asarray(v, dtype=float) for v in r] for r in rows]),
+                       (0, 1), (-2, -1))
+
+
+def _split(b: object) -> tuple[object, object, object, object]:
+    if _is_symbolic(b):
+        return tuple(b)
+    b = np.asarray(b, dtype=float)
+    if b.shape[-1] != 4:
+        raise ValueError(f"Euler parameters need 4 components, got shape {b.shape}")
+    return b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+
+
+def E_matrix(b: object):
+    """Body-frame matrix: ``w_body = 2 E(b) bdot``."""
+    b0, b1, b2, b3 = _split(b)
+    rows = [[-b1, b0, b3, -b2], [-b2, -b3, b0, b1], [-b3, b2, -b1, b0]]
+    return _assemble(rows, _is_symbolic(b))
+
+
+def G_matrix(b: object):
+    """World-frame matrix: ``w_world = 2 G(b) bdot``."""
+    b0, b1, b2, b3 = _split(b)
+    rows = [[-b1, b0, -b3, b2], [-b2, b3, b0, -b1], [-b3, -b2, b1, b0]]
+    return _assemble(rows, _is_symbolic(b))
+
+
+def rotation_matrix(b: object):
+    """``R(b) = G(b) E(b)^T`` (body to world), written out as quadratic polynomials."""
+    b0, b1, b2, b3 = _split(b)
+    rows = [
+        [b0**2 + b1**2 - b2**2 - b3**2, 2 * (b1 * b2 - b0 * b3), 2 * (b1 * b3 + b0 * b2)],
+        [2 * (b1 * b2 + b0 * b3), b0**2 - b1**2 + b2**2 - b3**2, 2 * (b2 * b3 - b0 * b1)],
+        [2 * (b1 * b3 - b0 * b2), 2 * (b2 * b3 + b0 * b1), b0**2 - b1**2 - b2**2 + b3**2],
+    ]
+    return _assemble(rows, _is_symbolic(b))
+
+
+def quaternion_from_matrix(R: object) -> np.ndarray:
+    """Unit Euler parameters with ``b0 >= 0`` of a rotation matrix (Shepperd's method).
+
+    The largest of ``b0^2..b3^2`` is taken from the trace and diagonal, the others
+    from off-diagonal sums, so no division by a small number occurs.
+    """
+    R = np.asarray(R, dtype=float)
+    if R.shape[-2:] != (3, 3):
+        raise ValueError(f"a rotation matrix is 3x3, got shape {R.shape}")
+    flat = R.reshape(-1, 3, 3)
+    out = np.array([_shepperd(m) for m in flat])
+    return out.reshape((*R.shape[:-2], 4))
+
+
+def _shepperd(R: np.ndarray) -> np.ndarray:
+    tr = np.trace(R)
+    d = [tr, R[0, 0], R[1, 1], R[2, 2]]
+    k = int(np.argmax(d))
+    if k == 0:
+        b0 = 0.5 * np.sqrt(1.0 + tr)
+        b = [b0, (R[2, 1] - R[1, 2]) / (4 * b0), (R[0, 2] - R[2, 0]) / (4 * b0),
+             (R[1, 0] - R[0, 1]) / (4 * b0)]
+    else:
+        i = k - 1
+        j, l = (i + 1) % 3, (i + 2) % 3
+        bi = 0.5 * np.sqrt(1.0 + 2 * R[i, i] - tr)
+        v = np.zeros(3)
+        v[i] = bi
+        v[j] = (R[j, i] + R[i, j]) / (4 * bi)
+        v[l] = (R[l, i] + R[i, l]) / (4 * bi)
+        b0 = (R[l, j] - R[j, l]) / (4 * bi)
+        b = [b0, *v]
+    b = np.array(b)
+    b /= np.linalg.norm(b)
+    return -b if b[0] < 0 else b
+
+
+def elementary_rotation(axis: str, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` about the coordinate axis ``"x"``, ``"y"`` or ``"z"``."""
+    c, s = np.cos(angle), np.sin(angle)
+    i = _AXES[axis.lower()]
+    j, k = (i + 1) % 3, (i + 2) % 3
+    R = np.eye(3)
+    R[j, j], R[j, k], R[k, j], R[k, k] = c, -s, s, c
+    return R
+
+
+def matrix_from_euler(angles: Sequence[float], sequence: str = "ZYX") -> np.ndarray:
+    """Rotation matrix of Euler angles, SciPy's naming of ``sequence``.
+
+    Upper case (``"ZYX"``) is intrinsic (rotations about the moving axes, so
+    ``R = R1 R2 R3``), lower case (``"xyz"``) extrinsic (fixed axes, ``R = R3 R2 R1``).
+
+    >>> np.allclose(matrix_from_euler([np.pi / 2, 0, 0], "ZYX") @ [1, 0, 0], [0, 1, 0])
+    True
+    """
+    _check_sequence(sequence)
+    mats = [elementary_rotation(a, x) for a, x in zip(sequence, angles)]
+    if sequence.isupper():
+        return mats[0] @ mats[1] @ mats[2]
+    return mats[2] @ mats[1] @ mats[0]
+
+
+def euler_from_matrix(R: object, sequence: str = "ZYX") -> np.ndarray:
+    """Euler angles (radians) of rotation matrices ``(..., 3, 3)``; inverse of
+    :func:`matrix_from_euler` (SciPy's conventions and gimbal-lock handling)."""
+    from scipy.spatial.transform import Rotation
+
+    _check_sequence(sequence)
+    R = np.asarray(R, dtype=float)
+    flat = R.reshape(-1, 3, 3)
+    angles = Rotation.from_matrix(flat).as_euler(sequence)
+    return angles.reshape((*R.shape[:-2], 3))
+
+
+def _check_sequence(sequence: str) -> None:
+    if (len(sequence) != 3 or not (sequence.isupper() or sequence.islower())
+            or any(a.lower() not in _AXES for a in sequence)
+            or sequence[0].lower() == sequence[1].lower()
+            or sequence[1].lower() == sequence[2].lower()):
+        raise ValueError(
+            f"Euler sequence {sequence!r}: give three axes from x, y, z, no two neighbours "
+            "equal, all upper case (intrinsic) or all lower case (extrinsic)"
+        )
+
+
+def skew(v: object):
+    """The cross-product matrix ``[v]x`` with ``[v]x u = v x u``."""
+    x, y, z = v
+    rows = [[0, -z, y], [z, 0, -x], [-y, x, 0]]
+    return sp.Matrix(rows) if _is_symbolic(v) else np.array(rows, dtype=float)
+
+
+def check_rotation(R: object, what: str, tol: float = 1e-9) -> np.ndarray:
+    """``R`` as a float array after checking it is a proper rotation; errors name ``what``."""
+    R = np.asarray(R, dtype=float)
+    if R.shape != (3, 3):
+        raise ValueError(f"{what}: a rotation matrix is 3x3, got shape {R.shape}")
+    err = np.abs(R.T @ R - np.eye(3)).max()
+    if err > tol:
+        raise ValueError(f"{what}: the matrix is not orthonormal (|R^T R - I| = {err:.2e})")
+    if np.linalg.det(R) < 0:
+        raise ValueError(f"{what}: det R = -1, a reflection, not a rotation")
+    return R
