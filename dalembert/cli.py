@@ -1,0 +1,173 @@
+"""The ``dalembert`` command: list, run and print the gallery examples, and the demo.
+
+    dalembert list
+    dalembert run EXAMPLE [--t-end T] [--out DIR] [--points N] [--energy auto|energy|jacobi]
+    dalembert equations EXAMPLE [--latex]
+    dalembert demo [--out DIR] [--t-end T] [--points N]
+
+Errors raised by dalembert (:class:`~dalembert.errors.DalembertError`) and unknown
+example names print one line on stderr and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from types import ModuleType
+
+from . import examples
+from .errors import DalembertError
+from .report import DEFAULT_POINTS
+
+EXIT_ERROR = 2
+EXIT_IMPORT = 1
+
+
+class _CommandError(Exception):
+    """A user-facing failure: printed as one line, exit status attached."""
+
+    def __init__(self, message: str, status: int = EXIT_ERROR) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); return the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help or a usage error: keep main() returning an int
+        return exc.code if isinstance(exc.code, int) else 0
+    try:
+        return args.handler(args)
+    except DalembertError as exc:
+        return _fail(f"{type(exc).__name__}: {exc}", EXIT_ERROR)
+    except _CommandError as exc:
+        return _fail(str(exc), exc.status)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with its four sub-commands."""
+    parser = argparse.ArgumentParser(
+        prog="dalembert",
+        description="Constrained dynamics in redundant coordinates: the example gallery.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("list", help="list the gallery examples")
+    p.set_defaults(handler=cmd_list)
+
+    p = sub.add_parser("run", help="simulate one example, write plots and trajectory.npz")
+    p.add_argument("example", help="example name (see `dalembert list`)")
+    p.add_argument("--t-end", type=_positive_float, default=None,
+                   help="simulated time (default: the example's T_END)")
+    p.add_argument("--out", default=None, help="output folder (default: out/EXAMPLE)")
+    _add_points(p)
+    p.add_argument("--energy", choices=("auto", "energy", "jacobi"), default="auto",
+                   help="quantity of the energy plot: T + V or the Jacobi integral (default: "
+                        "auto, the Jacobi integral when T has terms linear in the velocities)")
+    p.set_defaults(handler=cmd_run)
+
+    p = sub.add_parser("equations", help="print an example's equations of motion")
+    p.add_argument("example", help="example name (see `dalembert list`)")
+    p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
+    p.set_defaults(handler=cmd_equations)
+
+    p = sub.add_parser("demo", help="simulate the demo examples, write plots and summary.md")
+    p.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
+    p.add_argument("--t-end", type=_positive_float, default=None,
+                   help="simulated time of every example (default: each example's T_END)")
+    _add_points(p)
+    p.set_defaults(handler=cmd_demo)
+    return parser
+
+
+# -- commands ------------------------------------------------------------------------
+def cmd_list(args: argparse.Namespace) -> int:
+    """Print ``name  TITLE`` per example; note on stderr the ones that do not import."""
+    width = max(len(name) for name in examples.EXAMPLES)
+    for name in examples.EXAMPLES:
+        try:
+            module = examples.load(name)
+        except Exception as exc:  # modules in progress may fail in any way on import
+            print(f"note: skipping example {name!r}: {type(exc).__name__}: {exc}",
+                  file=sys.stderr)
+            continue
+        print(f"{name:<{width}}  {module.TITLE}")
+    return 0
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Simulate, write the files, print the summary and the measured errors."""
+    from .report import format_checks, run_example
+
+    _load(args.example)
+    out = args.out if args.out is not None else f"out/{args.example}"
+    run = run_example(args.example, out, t_end=args.t_end, points=args.points,
+                      energy=args.energy)
+    print(f"{args.example}: {run.title}")
+    print(run.trajectory.summary())
+    print(f"equations and code in {run.setup_seconds:.2f} s, simulated in {run.seconds:.2f} s")
+    print("checks (measured errors):")
+    print(format_checks(run.checks))
+    print("wrote " + ", ".join(str(p) for p in run.files))
+    return 0
+
+
+def cmd_equations(args: argparse.Namespace) -> int:
+    """Print the equations of motion as text or LaTeX."""
+    equations = _load(args.example).build().equations()
+    print(equations.latex() if args.latex else str(equations))
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """Run the demo examples and print the summary that is written to summary.md."""
+    from .report import demo
+
+    print(demo(args.out, t_end=args.t_end, points=args.points), end="")
+    print(f"\n(wrote {args.out}/summary.md)")
+    return 0
+
+
+# -- helpers -------------------------------------------------------------------------
+def _load(name: str) -> ModuleType:
+    if name not in examples.EXAMPLES:
+        raise _CommandError(
+            f"unknown example {name!r}; the examples are {', '.join(examples.EXAMPLES)}"
+        )
+    try:
+        return examples.load(name)
+    except ImportError as exc:
+        raise _CommandError(f"example {name!r} does not import: {exc}", EXIT_IMPORT) from exc
+
+
+def _fail(message: str, status: int) -> int:
+    print("dalembert: error: " + " ".join(message.split()), file=sys.stderr)
+    return status
+
+
+def _add_points(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--points", type=_points, default=DEFAULT_POINTS,
+                        help=f"number of output times (default: {DEFAULT_POINTS})")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number, not {text}")
+    return value
+
+
+def _points(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"need at least 2 points, not {value}")
+    return value

@@ -1,0 +1,240 @@
+"""PNG plots of a :class:`~dalembert.Trajectory`, drawn off-screen.
+
+Each function takes a trajectory, writes one PNG and returns its path. Figures are
+built as :class:`matplotlib.figure.Figure` objects, never through pyplot: no
+screen is needed, the user's pyplot backend is left alone, and plotting in a loop
+leaks nothing.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..trajectory import Trajectory
+
+#: Exact zeros are drawn at this value on log axes (a residual of exactly 0.0).
+LOG_FLOOR = 1e-18
+ENERGY_QUANTITIES = ("energy", "jacobi")
+_DPI = 110
+
+
+def plot_coordinates(
+    traj: Trajectory, path: str | os.PathLike, *, system: object = None,
+    title: str | None = None,
+) -> Path:
+    """Every coordinate against time, one line each.
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        The PNG to write (parent folders are created).
+    system
+        Optional :class:`~dalembert.System`, used for the default title.
+    title
+        Figure title (default: the system's name).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    fig, ax = _figure()
+    for i, name in enumerate(traj.coordinate_names):
+        ax.plot(traj.t, traj.q[:, i], label=name)
+    ax.set_xlabel("t")
+    ax.set_ylabel("q")
+    _finish(ax, _title(title, system, "coordinates"), legend=bool(traj.coordinate_names))
+    return _save(fig, path)
+
+
+def relative_drift(values: np.ndarray) -> np.ndarray:
+    """``|e(t) - e(0)| / |e(0)|`` (absolute change when ``e(0) == 0``).
+
+    >>> relative_drift(np.array([2.0, 2.0, 2.5]))
+    array([0.  , 0.  , 0.25])
+    """
+    values = np.asarray(values, dtype=float)
+    scale = abs(values[0]) if len(values) and values[0] != 0 else 1.0
+    return np.abs(values - values[0]) / scale
+
+
+def plot_energy_error(
+    traj: Trajectory, path: str | os.PathLike, *, quantity: str = "energy",
+    system: object = None, title: str | None = None,
+) -> Path:
+    """Relative drift of a conserved quantity against time (log scale).
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        The PNG to write.
+    quantity
+        ``"energy"`` for ``T + V`` or ``"jacobi"`` for the Jacobi integral
+        ``qd . dL/dqd - L`` (conserved when ``T + V`` is not, e.g. with a moving
+        frame built into ``L``). The caller knows which one the system conserves.
+    system, title
+        As in :func:`plot_coordinates`.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    if quantity not in ENERGY_QUANTITIES:
+        raise ValueError(f"quantity must be one of {ENERGY_QUANTITIES}, not {quantity!r}")
+    values = traj.energy if quantity == "energy" else traj.jacobi_integral
+    label = "T + V" if quantity == "energy" else "Jacobi integral"
+    fig, ax = _figure()
+    if len(values) and np.all(np.isfinite(values)):
+        ax.semilogy(traj.t, _floored(relative_drift(values)), label=label)
+    else:
+        _note(ax, f"{label} is not available for this model (NaN)")
+    ax.set_xlabel("t")
+    ax.set_ylabel(f"relative change of {label}")
+    _finish(ax, _title(title, system, f"relative change of {label}"), legend=False)
+    return _save(fig, path)
+
+
+def plot_residuals(
+    traj: Trajectory, path: str | os.PathLike, *, system: object = None,
+    title: str | None = None,
+) -> Path:
+    """Largest position and velocity constraint residuals against time (log scale).
+
+    Exact zeros are drawn at :data:`LOG_FLOOR`. With a ``system`` that has only
+    Pfaffian constraints the (identically zero) position residual is left out.
+    Arguments as in :func:`plot_coordinates`.
+    """
+    fig, ax = _figure()
+    if traj.constraint_names:
+        if _has_holonomic(system):
+            ax.semilogy(traj.t, _floored(traj.position_residual), label="position |psi|")
+        ax.semilogy(traj.t, _floored(traj.velocity_residual), label="velocity |A qd + b|")
+    else:
+        _note(ax, "no constraints")
+    ax.set_xlabel("t")
+    ax.set_ylabel("max constraint residual")
+    _finish(ax, _title(title, system, "constraint residuals"),
+            legend=bool(traj.constraint_names))
+    return _save(fig, path)
+
+
+def plot_multipliers(
+    traj: Trajectory, path: str | os.PathLike, *, system: object = None,
+    title: str | None = None,
+) -> Path:
+    """Each constraint's Lagrange multiplier against time, labelled by constraint name.
+
+    Arguments as in :func:`plot_coordinates`.
+    """
+    fig, ax = _figure()
+    for name in traj.constraint_names:
+        ax.plot(traj.t, traj.multiplier(name), label=f"lambda[{name}]")
+    if not traj.constraint_names:
+        _note(ax, "no constraints, no multipliers")
+    ax.set_xlabel("t")
+    ax.set_ylabel("lambda")
+    _finish(ax, _title(title, system, "Lagrange multipliers"),
+            legend=bool(traj.constraint_names))
+    return _save(fig, path)
+
+
+def plot_path(
+    traj: Trajectory, path: str | os.PathLike, *, x: str = "x", y: str = "y",
+    system: object = None, title: str | None = None,
+) -> Path:
+    """The path ``(x(t), y(t))`` of two coordinates, with equal axis scales.
+
+    Parameters
+    ----------
+    x, y
+        Coordinate names (velocities such as ``"x_dot"`` work too).
+
+    Other arguments as in :func:`plot_coordinates`.
+    """
+    xs, ys = traj[x], traj[y]
+    fig, ax = _figure()
+    ax.plot(xs, ys, lw=1.0)
+    if len(xs):
+        ax.plot(xs[:1], ys[:1], "o", label="start")
+        ax.plot(xs[-1:], ys[-1:], "s", label="end")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
+    _finish(ax, _title(title, system, f"path {y} vs {x}"), legend=bool(len(xs)))
+    return _save(fig, path)
+
+
+def plot_all(
+    traj: Trajectory, out_dir: str | os.PathLike, *, system: object = None,
+    energy: str = "energy", path_xy: Sequence[str] | None = None,
+) -> list[Path]:
+    """The standard set of plots in ``out_dir``; returns their paths.
+
+    Writes ``coordinates.png``, ``energy.png`` (drift of ``energy``, see
+    :func:`plot_energy_error`), ``residuals.png``, ``multipliers.png`` and, when
+    ``path_xy = (x, y)`` is given, ``path.png``.
+    """
+    out = Path(out_dir)
+    paths = [
+        plot_coordinates(traj, out / "coordinates.png", system=system),
+        plot_energy_error(traj, out / "energy.png", quantity=energy, system=system),
+        plot_residuals(traj, out / "residuals.png", system=system),
+        plot_multipliers(traj, out / "multipliers.png", system=system),
+    ]
+    if path_xy is not None:
+        x, y = path_xy
+        paths.append(plot_path(traj, out / "path.png", x=x, y=y, system=system))
+    return paths
+
+
+# -- helpers -------------------------------------------------------------------------
+def _figure():
+    fig = Figure(figsize=(7.0, 4.2), dpi=_DPI)
+    # fixed margins (room for 1e-15 tick labels): tight_layout would draw twice
+    fig.subplots_adjust(left=0.13, right=0.97, bottom=0.12, top=0.91)
+    return fig, fig.add_subplot()
+
+
+def _title(title: str | None, system: object, what: str) -> str:
+    if title is not None:
+        return title
+    name = getattr(getattr(system, "model", None), "name", None)
+    return f"{name}: {what}" if name else what
+
+
+def _finish(ax, title: str, *, legend: bool) -> None:
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    if legend:
+        ax.legend(loc="best", fontsize="small")
+
+
+def _has_holonomic(system: object) -> bool:
+    model = getattr(system, "model", None)
+    return model is None or bool(model.constraints.holonomic_rows)
+
+
+def _note(ax, text: str) -> None:
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes)
+
+
+def _floored(values: np.ndarray) -> np.ndarray:
+    # log axes cannot show 0; a residual of exactly 0.0 is drawn at the floor
+    return np.maximum(np.asarray(values, dtype=float), LOG_FLOOR)
+
+
+def _save(fig: Figure, path: str | os.PathLike) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path

@@ -1,0 +1,153 @@
+"""The ``dalembert`` command line, run in-process through ``main(argv)``."""
+
+from __future__ import annotations
+
+import re
+import types
+
+import numpy as np
+import pytest
+
+from dalembert import cli, examples
+from dalembert.errors import ModelError
+from dalembert.examples import cartesian_pendulum
+from dalembert.trajectory import Trajectory
+
+SHORT = ["--t-end", "0.5", "--points", "26"]
+
+
+def check_value(text: str, name: str) -> float:
+    """The number in the ``| name | value |`` row of a printed checks table."""
+    match = re.search(rf"\| {re.escape(name)} \| ([-+0-9.e]+) \|", text)
+    assert match, f"{name!r} not in:\n{text}"
+    return float(match.group(1))
+
+
+def test_list_names_every_importable_example(capsys):
+    assert cli.main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^pendulum\s+" + re.escape(cartesian_pendulum.TITLE) + "$", out, re.M)
+
+
+def test_list_skips_an_example_that_does_not_import(monkeypatch, capsys):
+    monkeypatch.setitem(examples.EXAMPLES, "broken", "no_such_module")
+    assert cli.main(["list"]) == 0
+    captured = capsys.readouterr()
+    assert "skipping example 'broken'" in captured.err
+    assert "pendulum" in captured.out
+    assert "broken" not in captured.out
+
+
+def test_equations_text_and_latex(capsys):
+    assert cli.main(["equations", "pendulum"]) == 0
+    text = capsys.readouterr().out
+    assert "M qdd = f + A^T lambda" in text
+    assert "rod" in text
+    assert cli.main(["equations", "pendulum", "--latex"]) == 0
+    assert capsys.readouterr().out.startswith(r"\begin{aligned}")
+
+
+def test_run_pendulum_writes_files_and_prints_checks(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert cli.main(["run", "pendulum", *SHORT, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "relative energy error" in printed
+    # the rod tension from the multiplier against m v^2/l + m g cos(theta)
+    assert check_value(printed, "tension relative error") < 1e-12
+    for name in ("coordinates", "energy", "residuals", "multipliers", "path"):
+        assert (out / f"{name}.png").stat().st_size > 0
+    traj = Trajectory.load(out / "trajectory.npz")
+    assert len(traj) == 26 and traj.t[-1] == pytest.approx(0.5)
+    # independent check of the saved data: the bob stays on the circle of radius l = 1
+    assert np.abs(np.hypot(traj["x"], traj["y"]) - 1.0).max() < 1e-12
+
+
+def test_demo_writes_plots_and_summary(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert cli.main(["demo", "--out", str(out), *SHORT]) == 0
+    printed = capsys.readouterr().out
+    summary = (out / "summary.md").read_text()
+    assert summary in printed
+    assert check_value(summary, "tension relative error") < 1e-12
+    assert (out / "pendulum" / "multipliers.png").stat().st_size > 0
+    try:
+        examples.load("knife-edge")
+    except ImportError:
+        assert "`knife-edge` skipped" in summary
+    else:
+        assert "## knife-edge" in summary
+        assert (out / "knife-edge" / "path.png").stat().st_size > 0
+
+
+def test_demo_falls_back_to_the_pendulum(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(examples.EXAMPLES, "knife-edge", "no_such_module")
+    assert cli.main(["demo", "--out", str(tmp_path), *SHORT]) == 0
+    summary = (tmp_path / "summary.md").read_text()
+    assert "## pendulum" in summary
+    assert "`knife-edge` skipped" in summary
+    assert not (tmp_path / "knife-edge").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "equations"])
+def test_unknown_example_exits_2_and_names_it(command, capsys):
+    assert cli.main([command, "no-such-example"]) == 2
+    err = capsys.readouterr().err
+    assert "no-such-example" in err and "pendulum" in err
+    assert "Traceback" not in err
+
+
+def test_dalembert_error_is_one_line_exit_2(monkeypatch, capsys):
+    def build():
+        raise ModelError("kinetic energy is not quadratic\nin the velocities")
+
+    fake = types.SimpleNamespace(build=build, TITLE="broken")
+    monkeypatch.setattr(examples, "load", lambda name: fake)
+    assert cli.main(["equations", "pendulum"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "ModelError" in err and "not quadratic in the velocities" in err
+
+
+@pytest.mark.parametrize("argv", [[], ["run", "pendulum", "--t-end", "-1"],
+                                  ["run", "pendulum", "--points", "1"]])
+def test_usage_errors_return_2(argv, capsys):
+    assert cli.main(argv) == 2
+    assert "usage" in capsys.readouterr().err
+
+
+def test_help_returns_0(capsys):
+    assert cli.main(["--help"]) == 0
+    assert "demo" in capsys.readouterr().out
+
+
+def test_energy_plot_quantity_follows_the_kinetic_energy():
+    import sympy as sp
+
+    from dalembert import System, coordinates
+    from dalembert.report import conserved, energy_quantity
+
+    assert energy_quantity(cartesian_pendulum.build()) == "energy"
+    assert conserved(cartesian_pendulum.build())
+    # a rotating frame puts terms linear in th_dot into T: T + V differs from the
+    # Jacobi integral, and only the latter is conserved
+    r, th = coordinates("r th")
+    w = sp.Symbol("w")
+    rotating = System([r, th], kinetic=(r.diff() ** 2 + r**2 * (th.diff() + w) ** 2) / 2,
+                      potential=0 * r, parameters={w: 1.0})
+    assert energy_quantity(rotating) == "jacobi"
+    assert conserved(rotating)
+
+
+def test_moving_constraint_is_not_conservative():
+    import sympy as sp
+
+    from dalembert import Holonomic, System, coordinates, t
+    from dalembert.report import conserved
+
+    x, y = coordinates("x y")
+    w = sp.Symbol("w")
+    # a bead on a rod turning at the rate w: the rod does work on the bead
+    bead = System([x, y], kinetic=(x.diff() ** 2 + y.diff() ** 2) / 2, potential=0 * x,
+                  constraints=[Holonomic(y * sp.cos(w * t) - x * sp.sin(w * t), name="rod")],
+                  parameters={w: 1.0})
+    assert not conserved(bead)
