@@ -13,7 +13,8 @@ from functools import cached_property
 
 import numpy as np
 
-from .codegen.compiled import CompiledEquations, NumericModel, compile_equations
+from .codegen import compiled as codegen
+from .codegen.compiled import CompiledEquations, NumericModel
 from .equations.lagrange import Equations, derive_equations
 from .errors import InitialConditionsAdjusted, IntegrationWarning
 from .model.forces import PointForce
@@ -131,7 +132,8 @@ class System:
     @cached_property
     def compiled(self) -> CompiledEquations:
         """Generated numeric functions (made on first use, then reused)."""
-        return compile_equations(self._equations)
+        # Looked up on the module so that tests (and profilers) can wrap it.
+        return codegen.compile_equations(self._equations)
 
     def numeric(self, parameters: Mapping[object, object] | None = None) -> NumericModel:
         """The compiled equations bound to parameter values."""

@@ -62,12 +62,21 @@ class Trajectory:
         """Total energy ``T + V`` (NaN when the model was given as a Lagrangian only)."""
         return self.kinetic_energy + self.potential_energy
 
-    def __getitem__(self, name: str) -> np.ndarray:
+    def __getitem__(self, key: object) -> np.ndarray:
+        name, order = _coordinate_key(key)
         names = self.coordinate_names
-        for suffix, array in (("_ddot", self.qdd), ("_dot", self.qd), ("", self.q)):
-            base = name[: len(name) - len(suffix)] if suffix and name.endswith(suffix) else name
-            if (suffix == "" or name.endswith(suffix)) and base in names:
-                return array[:, names.index(base)]
+        arrays = (self.q, self.qd, self.qdd)
+        # An exact coordinate name wins over reading a suffix (a coordinate may
+        # itself be called "u_dot").
+        if order is not None and name in names:
+            return arrays[order][:, names.index(name)]
+        if order is None:
+            if name in names:
+                return self.q[:, names.index(name)]
+            for suffix, k in (("_ddot", 2), ("_dot", 1)):
+                base = name[: -len(suffix)]
+                if name.endswith(suffix) and base in names:
+                    return arrays[k][:, names.index(base)]
         raise KeyError(
             f"{name!r} is not a coordinate; the coordinates are {', '.join(names)} "
             "(append _dot or _ddot for velocity or acceleration)"
@@ -156,4 +165,26 @@ class Trajectory:
                      "position_residual", "velocity_residual"):
             columns[name] = getattr(self, name)
         return pd.DataFrame(columns, index=pd.Index(self.t, name="t"))
+
+
+def _coordinate_key(key: object) -> tuple[str, int | None]:
+    """A key's name and derivative order (``None``: read it from a name suffix).
+
+    Strings are names (``"x"``, ``"x_dot"``); SymPy keys are the coordinate
+    ``x(t)`` or a plain symbol (order 0) or a derivative ``x(t).diff(t, k)``.
+    """
+    if isinstance(key, str):
+        return key, None
+    import sympy as sp  # only SymPy keys need it
+
+    if isinstance(key, sp.Derivative):
+        order = sum(count for _, count in key.variable_count)
+        if order > 2:
+            raise KeyError(f"{key} is a derivative of order {order}; only q, qd, qdd are kept")
+        return _coordinate_key(key.expr)[0], order
+    if isinstance(key, sp.Symbol):
+        return key.name, None
+    if isinstance(key, sp.Expr) and key.is_Function:
+        return key.func.__name__, 0
+    raise KeyError(f"{key!r} is not a coordinate name")
 

@@ -81,12 +81,18 @@ def compile_equations(eqs: Equations) -> CompiledEquations:
     state = [*time, ("qd", coords.qd), ("p", model.parameters)]
     static = [*time, ("p", model.parameters)]
     cons = model.constraints
+    vectors = ("f", "c", "b", "psi", "E")
     kkt = generate_function(
-        "kkt_blocks", state, [("M", eqs.M), ("f", eqs.f), ("A", eqs.A), ("c", eqs.c)]
+        "kkt_blocks", state, [("M", eqs.M), ("f", eqs.f), ("A", eqs.A), ("c", eqs.c)],
+        vectors=vectors,
     )
-    velocity = generate_function("velocity_constraint", static, [("A", eqs.A), ("b", eqs.b)])
-    position = generate_function("position_constraint", static, [("psi", cons.psi)])
-    energies = generate_function("energies", state, [("E", _energy_vector(eqs))])
+    velocity = generate_function(
+        "velocity_constraint", static, [("A", eqs.A), ("b", eqs.b)], vectors=vectors
+    )
+    position = generate_function("position_constraint", static, [("psi", cons.psi)],
+                                 vectors=vectors)
+    energies = generate_function("energies", state, [("E", _energy_vector(eqs))],
+                                 vectors=vectors)
     return CompiledEquations(
         kkt, velocity, position, energies, coords.n, cons.m, cons.holonomic_rows
     )

@@ -9,7 +9,7 @@ function (``__source__``) for inspection.
 from __future__ import annotations
 
 import linecache
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 
 import numpy as np
 import sympy as sp
@@ -19,13 +19,17 @@ Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
 Outputs = Sequence[tuple[str, sp.Matrix]]
 
 
-def generate_function(name: str, arguments: Arguments, outputs: Outputs) -> Callable:
+def generate_function(
+    name: str, arguments: Arguments, outputs: Outputs, *, vectors: Collection[str] | None = None
+) -> Callable:
     """Compile ``outputs`` (named matrices) into ``name(*arrays)`` returning arrays.
 
     ``arguments`` lists ``(argument name, symbols)``: each argument is a 1-D array
-    (or a scalar for a single symbol named like the argument) unpacked into its
-    symbols. The function returns a tuple of arrays shaped like the matrices;
-    column vectors are returned as 1-D arrays.
+    (or a scalar for a single symbol) unpacked into its symbols. The function
+    returns a tuple of arrays shaped like the matrices; column vectors are
+    returned as 1-D arrays. ``vectors`` names the outputs that
+    are vectors; the others stay 2-D even with one column (a 1 x 1 mass matrix, or
+    a 0 x 1 constraint matrix). By default every one-column matrix is a vector.
 
     >>> x, k = sp.symbols("x k")
     >>> fn = generate_function("spring", [("q", [x]), ("p", [k])],
@@ -35,15 +39,17 @@ def generate_function(name: str, arguments: Arguments, outputs: Outputs) -> Call
     """
     renames = _argument_names(arguments)
     matrices = [sp.Matrix(m).xreplace(renames) for _, m in outputs]
+    flat = [m.cols == 1 and (vectors is None or out in vectors)
+            for (out, _), m in zip(outputs, matrices)]
     entries = [(k, i, j, e) for k, m in enumerate(matrices) for (i, j), e in _nonzero(m)]
     replacements, reduced = sp.cse([e for *_, e in entries], symbols=_temporaries())
     printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True})
     lines = [f"def {name}({', '.join(arg for arg, _ in arguments)}):"]
     lines += _unpack_lines(arguments, renames)
     lines += [f"    {tmp} = {printer.doprint(expr)}" for tmp, expr in replacements]
-    lines += [f"    {_array_name(k)} = zeros({_shape(m)})" for k, m in enumerate(matrices)]
+    lines += [f"    {_array_name(k)} = zeros({_shape(m, flat[k])})" for k, m in enumerate(matrices)]
     for (k, i, j, _), expr in zip(entries, reduced):
-        index = f"{i}" if matrices[k].cols == 1 else f"{i}, {j}"
+        index = f"{i}" if flat[k] else f"{i}, {j}"
         lines.append(f"    {_array_name(k)}[{index}] = {printer.doprint(expr)}")
     lines.append(f"    return ({''.join(_array_name(k) + ', ' for k in range(len(matrices)))})")
     return _compile("\n".join(lines) + "\n", name)
@@ -58,8 +64,10 @@ def _argument_names(arguments: Arguments) -> dict[sp.Symbol, sp.Symbol]:
 def _unpack_lines(arguments: Arguments, renames: dict[sp.Symbol, sp.Symbol]) -> list[str]:
     lines = []
     for arg, symbols in arguments:
-        if len(symbols) == 1 and symbols[0].name == arg:
-            lines.append(f"    {renames[symbols[0]]} = {arg}")
+        if len(symbols) == 1:
+            # A scalar (time) or a one-element array (a model with one parameter
+            # called "p", or one coordinate called "q") both unpack through ravel.
+            lines.append(f"    {renames[symbols[0]]}, = ravel({arg})")
         elif symbols:
             names = ", ".join(str(renames[s]) for s in symbols)
             lines.append(f"    {names}, = {arg}")
@@ -70,8 +78,8 @@ def _nonzero(m: sp.Matrix) -> list[tuple[tuple[int, int], sp.Expr]]:
     return [((i, j), m[i, j]) for i in range(m.rows) for j in range(m.cols) if m[i, j] != 0]
 
 
-def _shape(m: sp.Matrix) -> str:
-    return f"{m.rows}" if m.cols == 1 else f"({m.rows}, {m.cols})"
+def _shape(m: sp.Matrix, flat: bool) -> str:
+    return f"{m.rows}" if flat else f"({m.rows}, {m.cols})"
 
 
 def _array_name(k: int) -> str:
@@ -89,7 +97,7 @@ def _compile(source: str, name: str) -> Callable:
     filename = f"<dalembert-generated {name} {abs(hash(source))}>"
     # Registering the source lets tracebacks and inspect show generated lines.
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    namespace = {"zeros": np.zeros, **_numpy_namespace()}
+    namespace = {"zeros": np.zeros, "ravel": np.ravel, **_numpy_namespace()}
     exec(compile(source, filename, "exec"), namespace)
     fn = namespace[name]
     fn.__source__ = source

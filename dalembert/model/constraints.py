@@ -23,7 +23,7 @@ class Holonomic:
     >>> import sympy as sp
     >>> x, y, l = sp.symbols("x y l")
     >>> Holonomic(x**2 + y**2 - l**2, name="string")
-    Holonomic(x**2 + y**2 - l**2 = 0, name='string')
+    Holonomic(-l**2 + x**2 + y**2 = 0, name='string')
     """
 
     expr: object

@@ -124,6 +124,7 @@ def build_coordinates(
         for i, n in enumerate(names)
     )
     qdd = tuple(sp.Symbol(f"{n}_ddot") for n in names)
+    _reject_clashes(q, qd, qdd)
     forms: list[tuple[sp.Expr, sp.Symbol]] = []
     for name, qi, qdi, qddi in zip(names, q, qd, qdd):
         fn = sp.Function(name)(t)
@@ -137,6 +138,18 @@ def _reject_duplicates(names: tuple[str, ...]) -> None:
         if name in seen:
             raise ModelError(f"coordinate {name!r} is listed twice")
         seen.add(name)
+
+
+def _reject_clashes(*groups: tuple[sp.Symbol, ...]) -> None:
+    """A coordinate called ``x_dot`` next to ``x`` would be x's velocity too."""
+    seen: set[str] = set()
+    for s in (s for group in groups for s in group):
+        if s.name in seen:
+            raise ModelError(
+                f"the name {s.name!r} is both a coordinate and a velocity (or acceleration) "
+                "symbol; rename the coordinate or pass distinct velocities="
+            )
+        seen.add(s.name)
 
 
 def _reject_leftover_functions(expr: sp.Expr, what: str) -> None:

@@ -74,6 +74,8 @@ def integrate(
             "stiff problems, or stabilization='baumgarte'"
         )
     t0, tf = map(float, t_span)
+    if cls in (Radau, BDF) and options.get("jac") is None:
+        options["jac"] = finite_difference_jacobian(fun)
     solver = cls(fun, t0, np.asarray(y0, dtype=float), tf, **options)
     run = _Run(solver, t_eval, events, project, dense_output)
     bar = _progress_bar(t0, tf) if progress else None
@@ -81,14 +83,40 @@ def integrate(
         while run.status is None:
             run.advance()
             if bar is not None:
-                bar.update(abs(solver.t - bar.n_t))
-                bar.n_t = solver.t
+                bar.update(abs(run.t_reached - bar.n_t))
+                bar.n_t = run.t_reached
     except KeyboardInterrupt:
         run.stop("interrupted", f"interrupted by the user at t={solver.t:.6g}")
     finally:
         if bar is not None:
             bar.close()
     return run.result(cls.__name__)
+
+
+def finite_difference_jacobian(fun: Callable) -> Callable:
+    """Forward-difference Jacobian with a fixed relative step, for Radau and BDF.
+
+    SciPy's own ``num_jac`` grows its step by 10x at every call for a column that
+    does not change ``fun`` (a position entering only through a linear constraint).
+    After ~300 Jacobians the step overflows, and BDF then crawls with tiny steps.
+
+    >>> jac = finite_difference_jacobian(lambda t, y: np.array([y[1], -4.0 * y[0]]))
+    >>> np.round(jac(0.0, np.array([1.0, 0.0])), 6)
+    array([[ 0.,  1.],
+           [-4.,  0.]])
+    """
+
+    def jac(t: float, y: np.ndarray) -> np.ndarray:
+        f0 = np.asarray(fun(t, y), dtype=float)
+        J = np.empty((f0.size, y.size))
+        for j in range(y.size):
+            h = np.sqrt(np.finfo(float).eps) * max(1.0, abs(y[j]))
+            shifted = y.copy()
+            shifted[j] += h
+            J[:, j] = (np.asarray(fun(t, shifted), dtype=float) - f0) / (shifted[j] - y[j])
+        return J
+
+    return jac
 
 
 class _Run:
@@ -104,6 +132,9 @@ class _Run:
         self.status: str | None = None
         self.message = ""
         self.n_projections = 0
+        self.n_steps = 0
+        #: The time the recorded solution reaches (a terminal event stops before solver.t).
+        self.t_reached = solver.t
         self.ts: list[float] = []
         self.ys: list[np.ndarray] = []
         self.segments: list[tuple[float, float, Callable]] = []
@@ -131,11 +162,13 @@ class _Run:
         if solver.status == "failed":
             return self.stop(
                 "failed",
-                f"integration failed at t={solver.t:.6g}: {message}. The problem may be "
+                f"integration failed at t={solver.t:.6g}: {str(message).rstrip('.')}. "
+                "The problem may be "
                 "stiff (try method='Radau' or 'BDF') or the mechanism near a singular "
                 "configuration",
             )
         t_old, t_new = solver.t_old, solver.t
+        self.n_steps += 1
         interpolant = solver.dense_output() if self._needs_interpolant() else None
         try:
             y_new = self._project_step(t_new)
@@ -146,6 +179,7 @@ class _Run:
         if t_stop is not None:
             t_new, y_new = t_stop, state(t_stop)
         self._record(t_old, t_new, y_new, state)
+        self.t_reached = t_new
         if self.dense_output:
             self.segments.append((t_old, t_new, state))
         if self.status is None and solver.status == "finished":
@@ -212,7 +246,7 @@ class _Run:
         solver = self.solver
         n_state = solver.y.size
         stats = {"nfev": solver.nfev, "njev": solver.njev, "nlu": solver.nlu,
-                 "n_steps": len(self.segments) or None, "n_projections": self.n_projections}
+                 "n_steps": self.n_steps, "n_projections": self.n_projections}
         stats = {k: int(v) for k, v in stats.items() if v is not None}
         y = np.array(self.ys) if self.ys else np.empty((0, n_state))
         return IntegrationResult(
@@ -250,7 +284,8 @@ class _PiecewiseSolution:
         self.segments = segments
         self.ends = np.array([max(a, b) for a, b, _ in segments])
         self.t_min = min((min(a, b) for a, b, _ in segments), default=np.nan)
-        self.t_max = self.ends.max(initial=np.nan)
+        # Not ``ends.max(initial=nan)``: that is always NaN, rejecting every time.
+        self.t_max = max(self.ends, default=np.nan)
         order = np.argsort(self.ends)
         self.segments = [segments[i] for i in order]
         self.ends = self.ends[order]

@@ -1,0 +1,345 @@
+"""Bad input gets a clear error that names the problem (one test per situation).
+
+Each situation here is a row of the table in ``docs/errors.md``.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from dalembert import (
+    ConstraintError,
+    DoubleCountingWarning,
+    Holonomic,
+    InitialConditionError,
+    IntegrationWarning,
+    ModelError,
+    ParameterError,
+    Pfaffian,
+    PointForce,
+    SingularSystemError,
+    System,
+    coordinates,
+    t,
+)
+
+x, y, z = coordinates("x y z")
+m, g, l = sp.symbols("m g l", positive=True)
+T2 = m / 2 * (x.diff() ** 2 + y.diff() ** 2)
+T3 = m / 2 * (x.diff() ** 2 + y.diff() ** 2 + z.diff() ** 2)
+ROD = Holonomic(x**2 + y**2 - l**2, name="rod")
+
+
+def pendulum(**changes: object) -> System:
+    """The Cartesian pendulum; ``changes`` replace its constructor arguments."""
+    kwargs: dict[str, object] = dict(kinetic=T2, potential=m * g * y, constraints=[ROD],
+                                     parameters={m: 1.0, g: 9.81, l: 1.0})
+    kwargs.update(changes)
+    return System([x, y], **kwargs)
+
+
+@pytest.fixture(scope="module")
+def pend() -> System:
+    return pendulum()
+
+
+# -- initial conditions ----------------------------------------------------------------
+def test_unknown_coordinate_in_initial_conditions(pend):
+    with pytest.raises(InitialConditionError, match=r"q0 names 'z'.*coordinates are x, y"):
+        pend.simulate((0, 1), q0={"z": 1.0})
+
+
+def test_unknown_coordinate_in_initial_velocities(pend):
+    with pytest.raises(InitialConditionError, match=r"qd0 names 'w'"):
+        pend.simulate((0, 1), q0={x: 1.0}, qd0={"w": 1.0})
+
+
+def test_wrong_length_array(pend):
+    with pytest.raises(InitialConditionError, match=r"q0 has 3 values for 2 coordinates"):
+        pend.simulate((0, 1), q0=[1.0, 0.0, 0.0])
+
+
+def test_non_finite_initial_value(pend):
+    with pytest.raises(InitialConditionError, match=r"qd0 is not finite for y"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], qd0=[0.0, np.nan])
+
+
+def test_unknown_fixed_coordinate(pend):
+    with pytest.raises(InitialConditionError, match=r"fixed names 'z'"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], fixed=["z"])
+
+
+# -- parameters ------------------------------------------------------------------------
+def test_parameter_without_value_is_named():
+    system = pendulum(parameters={m: 1.0, g: 9.81})
+    with pytest.raises(ParameterError, match=r"no numeric value for parameter\(s\) l"):
+        system.simulate((0, 1), q0=[1.0, 0.0])
+
+
+def test_unknown_parameter_name():
+    with pytest.raises(ParameterError, match=r"'k' is not a parameter.*g, l, m"):
+        pendulum(parameters={m: 1.0, g: 9.81, l: 1.0, "k": 2.0})
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_non_finite_parameter(value):
+    with pytest.raises(ParameterError, match=r"parameter 'g' = .* is not finite"):
+        pendulum(parameters={m: 1.0, g: value, l: 1.0})
+
+
+def test_non_finite_parameter_override(pend):
+    with pytest.raises(ParameterError, match=r"parameter 'l' = inf is not finite"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], parameters={"l": np.inf})
+
+
+def test_non_numeric_parameter():
+    with pytest.raises(ParameterError, match=r"parameter 'm' = 'heavy' is not a number"):
+        pendulum(parameters={m: "heavy", g: 9.81, l: 1.0})
+
+
+# -- constraints -----------------------------------------------------------------------
+@pytest.mark.parametrize("term", [x.diff() ** 2, sp.sin(x.diff())])
+def test_pfaffian_not_linear_names_the_term(term):
+    constraint = Pfaffian(term + y.diff(), name="skid")
+    plain = str(term.subs(x.diff(), sp.Symbol("x_dot")))
+    with pytest.raises(ConstraintError, match=r"'skid' is not linear") as info:
+        pendulum(constraints=[constraint])
+    assert plain in str(info.value)
+
+
+def test_pfaffian_without_velocity():
+    with pytest.raises(ConstraintError, match=r"contains no velocity.*Holonomic"):
+        pendulum(constraints=[Pfaffian(x - y, name="p")])
+
+
+def test_holonomic_containing_velocities():
+    with pytest.raises(ConstraintError, match=r"holonomic constraint 'h' contains velocities"):
+        pendulum(constraints=[Holonomic(x.diff() + y, name="h")])
+
+
+def test_as_many_constraints_as_coordinates():
+    with pytest.raises(ConstraintError, match=r"2 constraints on 2 coordinates"):
+        pendulum(constraints=[Holonomic(x - 1), Holonomic(y - 1)])
+
+
+def test_more_constraints_than_coordinates():
+    with pytest.raises(ConstraintError, match=r"3 constraints on 2 coordinates"):
+        pendulum(constraints=[Holonomic(x - 1), Holonomic(y - 1), Holonomic(x + y)])
+
+
+def test_same_circle_constraint_twice_is_named():
+    circle = x**2 + y**2 - l**2
+    system = System([x, y, z], kinetic=T3,
+                    constraints=[Holonomic(circle, name="c1"), Holonomic(circle, name="c2")],
+                    parameters={m: 1.0, l: 1.0})
+    with pytest.raises(ConstraintError, match=r"dependent \(redundant\).*'c2'") as info:
+        system.simulate((0, 1), q0=[1.0, 0.0, 0.0])
+    assert "'c1'" not in str(info.value)
+
+
+def test_proportional_linear_constraints_are_named():
+    system = System([x, y, z], kinetic=T3,
+                    constraints=[Holonomic(x - y, name="a"), Holonomic(2 * x - 2 * y, name="b")],
+                    parameters={m: 1.0})
+    with pytest.raises(ConstraintError, match=r"constraint 'b' \(holonomic: 2\*x - 2\*y = 0\)"):
+        system.simulate((0, 1), q0=[0.0, 0.0, 0.0])
+
+
+def test_constraint_not_wrapped():
+    with pytest.raises(ConstraintError, match=r"wrap it as dalembert.Holonomic"):
+        pendulum(constraints=[x**2 + y**2 - l**2])
+
+
+def test_duplicate_constraint_names():
+    with pytest.raises(ConstraintError, match=r"two constraints are named 'c'"):
+        System([x, y, z], kinetic=T3, constraints=[Holonomic(x, name="c"), Holonomic(y, name="c")])
+
+
+# -- singular systems and inconsistent initial values ----------------------------------
+def test_singular_kkt_names_the_massless_coordinate():
+    system = System([x, y], kinetic=m / 2 * x.diff() ** 2, parameters={m: 1.0})
+    with pytest.raises(SingularSystemError, match=r"singular at the initial state.*motion of y "):
+        system.simulate((0, 1), q0=[0.0, 0.0])
+
+
+def test_constraint_positions_fixed_inconsistently(pend):
+    with pytest.raises(InitialConditionError, match=r"cannot be made consistent with x, y held"):
+        pend.simulate((0, 1), q0=[0.0, 0.0], fixed=["x", "y"])
+
+
+def test_constraint_without_real_solution():
+    system = pendulum(constraints=[Holonomic(x**2 + y**2 + l**2, name="imaginary")])
+    with pytest.raises(InitialConditionError, match=r"cannot be made consistent.*residual"):
+        system.simulate((0, 1), q0=[0.1, 0.1])
+
+
+def test_velocities_cannot_be_made_consistent():
+    # Both coordinates the constraint x_dot = y_dot involves are held at speeds breaking it.
+    system = System([x, y, z], kinetic=T3, constraints=[Pfaffian(x.diff() - y.diff(), name="p")],
+                    parameters={m: 1.0})
+    with pytest.raises(InitialConditionError, match=r"velocities cannot satisfy.*x, y held"):
+        system.simulate((0, 1), q0=[0, 0, 0], qd0=[1.0, 0.0, 0.0], fixed=["x", "y"])
+
+
+# -- integration failures --------------------------------------------------------------
+def test_kkt_singular_during_the_run_returns_the_part_computed():
+    # y = x^3 with no inertia in x: A = [3x^2, -1] leaves x undetermined when x reaches 0,
+    # which happens when y(t) = -1 + t^2/2 reaches 0, at t = sqrt(2).
+    system = System([x, y], kinetic=m / 2 * y.diff() ** 2, potential=-m * g * y,
+                    constraints=[Holonomic(y - x**3, name="cubic")],
+                    parameters={m: 1.0, g: 1.0})
+    with pytest.warns(IntegrationWarning, match=r"returning the trajectory up to t=1\.41"):
+        traj = system.simulate((0, 5), q0=[-1.0, -1.0])
+    assert not traj.success
+    assert traj.status == "failed"
+    assert abs(traj.t[-1] - np.sqrt(2)) < 1e-3
+    assert "t=1.41" in traj.message
+    assert len(traj) > 10 and np.all(np.isfinite(traj.q))
+
+
+def test_finite_time_blow_up_says_when():
+    # x'' = x^3 with zero energy: x = 1 / (1 - t/sqrt(2)), infinite at t = sqrt(2).
+    system = System([x], kinetic=x.diff() ** 2 / 2, potential=-(x**4) / 4)
+    with pytest.warns(IntegrationWarning, match=r"failed at t=1\.41"):
+        traj = system.simulate((0, 10), q0=[1.0], qd0=[1 / np.sqrt(2)])
+    assert not traj.success
+    assert abs(traj.t[-1] - np.sqrt(2)) < 1e-3
+    assert "step size" in traj.message
+    exact = 1 / (1 - traj.t[:50] / np.sqrt(2))
+    assert np.allclose(traj["x"][:50], exact, rtol=1e-9)
+
+
+def test_keyboard_interrupt_returns_the_part_computed(pend):
+    calls = {"n": 0}
+
+    def impatient(t_, q, qd):
+        calls["n"] += 1
+        if calls["n"] > 40:
+            raise KeyboardInterrupt
+        return 1.0
+
+    with pytest.warns(IntegrationWarning, match=r"interrupted by the user at t="):
+        traj = pend.simulate((0, 10), q0=[1.0, 0.0], events=[impatient])
+    assert traj.status == "interrupted" and not traj.success
+    assert len(traj) > 5 and traj.t[-1] < 10
+    assert traj.position_residual.max() < 1e-12
+
+
+def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch):
+    import dalembert.system as system_module
+
+    real = system_module.first_order_rhs
+
+    def counting_rhs(num, gain=0.0):
+        rhs = real(num, gain)
+        calls = {"n": 0}
+
+        def wrapped(t_, y_):
+            calls["n"] += 1
+            if calls["n"] > 200:
+                raise KeyboardInterrupt
+            return rhs(t_, y_)
+
+        return wrapped
+
+    monkeypatch.setattr(system_module, "first_order_rhs", counting_rhs)
+    with pytest.warns(IntegrationWarning, match=r"interrupted"):
+        traj = pend.simulate((0, 10), q0=[1.0, 0.0])
+    assert traj.status == "interrupted" and 0 < traj.t[-1] < 10 and len(traj) > 2
+
+
+# -- model ------------------------------------------------------------------------------
+def test_kinetic_energy_not_quadratic():
+    system = System([x], kinetic=x.diff() ** 4)
+    with pytest.raises(ModelError, match=r"not quadratic in the velocities.*12\*x_dot\*\*2"):
+        system.equations()
+
+
+def test_acceleration_in_kinetic_energy():
+    with pytest.raises(ModelError, match=r"kinetic energy contains the acceleration of 'x'"):
+        System([x], kinetic=x.diff(t, 2) ** 2)
+
+
+def test_function_of_time_that_is_not_a_coordinate():
+    f = sp.Function("f")(t)
+    with pytest.raises(ModelError, match=r"depends on f\(t\), which is not one of the coord"):
+        System([x], kinetic=x.diff() ** 2 + f)
+
+
+def test_kinetic_energy_without_velocity():
+    with pytest.raises(ModelError, match=r"kinetic energy contains no velocity"):
+        System([x], kinetic=x**2)
+
+
+def test_both_lagrangian_and_energies():
+    with pytest.raises(ModelError, match=r"either lagrangian=L or kinetic=T"):
+        System([x], kinetic=x.diff() ** 2, lagrangian=x.diff() ** 2)
+
+
+def test_duplicate_coordinate():
+    with pytest.raises(ModelError, match=r"coordinate 'x' is listed twice"):
+        System([x, x], kinetic=x.diff() ** 2)
+
+
+def test_unknown_coordinate_in_generalized_forces():
+    with pytest.raises(ModelError, match=r"unknown coordinate 'w'"):
+        System([x], kinetic=x.diff() ** 2, generalized_forces={"w": 1})
+
+
+def test_double_counting_generalized_force():
+    with pytest.warns(DoubleCountingWarning, match=r"force on 'y' contains -g\*m"):
+        System([x, y], kinetic=T2, potential=m * g * y, generalized_forces={y: -m * g})
+
+
+def test_double_counting_point_force():
+    gravity = PointForce(force=[0, -m * g, 0], point=[x, y, 0], name="weight")
+    with pytest.warns(DoubleCountingWarning, match=r"'y'.*counted twice"):
+        System([x, y], kinetic=T2, potential=m * g * y, forces=[gravity])
+
+
+def test_no_double_counting_warning_for_a_different_force():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DoubleCountingWarning)
+        System([x, y], kinetic=T2, potential=m * g * y, generalized_forces={y: -y.diff()})
+
+
+# -- simulate() options ----------------------------------------------------------------
+def test_invalid_method(pend):
+    with pytest.raises(ValueError, match=r"unknown method 'Euler'; choose one of .*Radau"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], method="Euler")
+
+
+def test_lsoda_with_projection(pend):
+    with pytest.raises(ValueError, match=r"LSODA cannot be restarted.*'baumgarte'"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], method="LSODA")
+
+
+def test_invalid_stabilization(pend):
+    with pytest.raises(ValueError, match=r"stabilization must be one of"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], stabilization="magic")
+
+
+@pytest.mark.parametrize("t_span", [(0, 0), (0, np.inf), (0,), "ab", (0, np.nan)])
+def test_bad_t_span(pend, t_span):
+    with pytest.raises(ValueError, match=r"t_span must be"):
+        pend.simulate(t_span, q0=[1.0, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("t_eval", "match"),
+    [([0.5, 2.0], "inside t_span"), ([[0.1, 0.2]], "1-D"), ([0.5, 0.2], "strictly ordered"),
+     ([0.2, 0.2], "strictly ordered")],
+)
+def test_bad_t_eval(pend, t_eval, match):
+    with pytest.raises(ValueError, match=match):
+        pend.simulate((0, 1), q0=[1.0, 0.0], t_eval=t_eval)
+
+
+@pytest.mark.parametrize(("rtol", "atol"), [(-1.0, 1e-12), (1e-9, 0.0), (0.0, 1e-12)])
+def test_bad_tolerances(pend, rtol, atol):
+    with pytest.raises(ValueError, match=r"rtol and atol must be positive"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], rtol=rtol, atol=atol)

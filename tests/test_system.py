@@ -1,0 +1,101 @@
+"""The System facade: caching, description, parameters, Lagrangian-only models."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import dalembert.codegen.compiled as compiled_module
+from dalembert import Holonomic, System, coordinates, t
+
+x, y = coordinates("x y")
+m, g, l = sp.symbols("m g l", positive=True)
+
+
+def pendulum() -> System:
+    return System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2), potential=m * g * y,
+                  constraints=[Holonomic(x**2 + y**2 - l**2, name="rod")],
+                  parameters={m: 1.0, g: 9.81, l: 1.0}, name="pend")
+
+
+def test_second_simulate_regenerates_nothing(monkeypatch):
+    calls = []
+    real = compiled_module.compile_equations
+
+    def counting(eqs):
+        calls.append(eqs)
+        return real(eqs)
+
+    monkeypatch.setattr(compiled_module, "compile_equations", counting)
+    system = pendulum()
+    first = system.simulate((0, 0.2), q0=[0.0, -1.0], qd0=[1.0, 0.0])
+    compiled, eqs = system.compiled, system.equations()
+    second = system.simulate((0, 0.2), q0=[0.0, -1.0], qd0=[1.0, 0.0], parameters={"g": 1.0})
+    assert len(calls) == 1 and calls[0] is eqs
+    assert system.compiled is compiled and system.equations() is eqs
+    assert not np.allclose(first.q[-1], second.q[-1])  # the new g was used
+
+
+def test_description():
+    system = pendulum()
+    assert system.coordinate_names == ("x", "y") and system.constraint_names == ("rod",)
+    assert system.degrees_of_freedom == 1
+    assert [s.name for s in system.parameters] == ["g", "l", "m"]
+    assert repr(system) == "System('pend', coordinates=['x', 'y'], constraints=['rod'])"
+
+
+def test_small_oscillation_period_matches_closed_form():
+    # Released at 0.01 rad: period 2 pi sqrt(l/g) (1 + theta0^2/16) to 1e-8 relative.
+    system = pendulum()
+    th0 = 0.01
+    period = 2 * np.pi * np.sqrt(1 / 9.81) * (1 + th0**2 / 16)
+
+    def upward(t_, q, qd):
+        return q[0]
+
+    upward.direction = 1
+    traj = system.simulate((0, 3), q0=[np.sin(th0), -np.cos(th0)], events=[upward])
+    assert abs(traj.t_events[0][0] - 0.75 * period) < 1e-8
+
+
+def test_lagrangian_only_model_conserves_jacobi_integral():
+    # Charged particle in a uniform field B along z: circular motion of radius v m / (qB).
+    q, B = sp.symbols("q B")
+    L = m / 2 * (x.diff() ** 2 + y.diff() ** 2) + q * B / 2 * (x * y.diff() - y * x.diff())
+    system = System([x, y], lagrangian=L, parameters={m: 2.0, q: 1.0, B: 4.0})
+    s = np.linspace(0, 3, 31)
+    traj = system.simulate((0, 3), q0=[0.0, 0.0], qd0=[1.0, 0.0], t_eval=s)
+    omega = 4.0 / 2.0  # qB/m, clockwise for positive qB
+    np.testing.assert_allclose(traj["x"], np.sin(omega * s) / omega, atol=1e-11)
+    np.testing.assert_allclose(traj["y"], (np.cos(omega * s) - 1) / omega, atol=1e-11)
+    assert np.all(np.isnan(traj.energy))
+    assert np.abs(traj.jacobi_integral - 1.0).max() < 1e-10  # h = T = m v^2 / 2
+
+
+def test_rotating_frame_jacobi_integral():
+    # A bead on a rod spinning at Omega: r'' = Omega^2 r; h = T2 - T0 is conserved, E is not.
+    W = 2.0
+    T = (x.diff() ** 2 + (W * x) ** 2) / 2
+    system = System([x], kinetic=T)
+    s = np.linspace(0, 1, 11)
+    traj = system.simulate((0, 1), q0=[0.1], t_eval=s)
+    np.testing.assert_allclose(traj["x"], 0.1 * np.cosh(W * s), rtol=1e-10)
+    assert np.abs(traj.jacobi_integral - traj.jacobi_integral[0]).max() < 1e-11
+    assert np.ptp(traj.energy) > 0.1
+
+
+def test_time_dependent_parameters_of_constraint():
+    # A bead driven along x = t^2 / 2: A = [1, 0], so A^T lambda = m x'' gives lambda = m.
+    system = System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2),
+                    constraints=[Holonomic(x - t**2 / 2, name="track")], parameters={m: 3.0})
+    traj = system.simulate((0, 1), q0=[0.0, 0.0], qd0=[0.0, 0.5])
+    assert np.abs(traj.multiplier("track") - 3.0).max() < 1e-12
+    assert np.abs(traj["y"] - 0.5 * traj.t).max() < 1e-13
+
+
+@pytest.mark.parametrize("stabilization", ["projection", "baumgarte", None])
+def test_all_stabilizations_record_residuals(stabilization):
+    traj = pendulum().simulate((0, 0.5), q0=[1.0, 0.0], stabilization=stabilization)
+    assert traj.position_residual.shape == traj.t.shape
+    assert traj.position_residual.max() < 1e-9
