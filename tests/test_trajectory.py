@@ -121,4 +121,4 @@ def test_to_dataframe(traj):
 def test_summary_and_repr(traj):
     assert repr(traj).startswith(f"Trajectory({len(traj)} points, t=0..2, status='finished'")
     text = traj.summary()
-    assert "max position residual" in text and "relative energy error" in text
+    assert "max position residual" in text and "relative change of T + V" in text

@@ -13,7 +13,8 @@ import numpy as np
 from ..codegen.compiled import NumericModel
 from ..errors import InitialConditionError
 
-#: Target for the constraint residual, relative to the size of the coordinates.
+#: Target for the constraint residual. Where rounding keeps a constraint above it
+#: (large coordinates), Newton stops once it no longer halves the residual.
 POSITION_TOL = 1e-14
 MAX_NEWTON = 50
 #: A residual Newton cannot reduce further is accepted below this (rounding floor).
@@ -35,7 +36,7 @@ def project_positions(
     scale = max(1.0, np.abs(q).max())
     residual = np.abs(num.position_constraint(t, q)).max()
     for _ in range(MAX_NEWTON):
-        if residual <= POSITION_TOL * scale:
+        if residual <= POSITION_TOL:
             return q
         psi = num.position_constraint(t, q)
         J = num.velocity_constraint(t, q)[0][rows][:, cols]
@@ -43,7 +44,7 @@ def project_positions(
         trial = q.copy()
         trial[cols] -= step
         new_residual = np.abs(num.position_constraint(t, trial)).max()
-        if not new_residual < residual:
+        if not new_residual < 0.5 * residual:
             break  # rounding floor reached (or divergence, judged below)
         q, residual = trial, new_residual
     if residual <= ACCEPT_TOL * scale:
