@@ -19,6 +19,7 @@ from .errors import (
 from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
 from .model.forces import PointForce
+from .statics import all_extrema, extremum, stationarity_conditions
 from .system import System
 from .trajectory import Trajectory
 
@@ -39,6 +40,9 @@ __all__ = [
     "SingularSystemError",
     "System",
     "Trajectory",
+    "all_extrema",
     "coordinates",
+    "extremum",
+    "stationarity_conditions",
     "t",
 ]

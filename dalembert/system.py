@@ -25,6 +25,9 @@ from .solvers.initialization import InitializationReport, consistent_state, stat
 from .solvers.integrate import IntegrationResult, integrate
 from .solvers.outputs import evaluate_outputs
 from .solvers.projection import project_state
+from .statics import Equilibrium, Linearization
+from .statics import equilibrium as _equilibrium
+from .statics import linearize as _linearize
 from .trajectory import Trajectory
 
 STABILIZATIONS = ("projection", "baumgarte", None)
@@ -218,6 +221,23 @@ class System:
                           f"t={result.t[-1] if len(result.t) else t_span[0]:.6g}",
                           IntegrationWarning, stacklevel=2)
         return self._trajectory(num, result, report)
+
+    # -- rest and small oscillations -------------------------------------------------
+    def equilibrium(self, guess: object, **options: object) -> Equilibrium:
+        """Static equilibrium near ``guess``: ``f(q, 0, t) + A^T lambda = 0``, ``psi(q) = 0``.
+
+        Returns the configuration, the multipliers, the reactions at rest
+        ``A^T lambda`` and the stability; see :func:`dalembert.statics.equilibrium`.
+        """
+        return _equilibrium(self, guess, **options)
+
+    def linearize(self, q_eq: object, **options: object) -> Linearization:
+        """Small oscillations about an equilibrium, on the constraint manifold.
+
+        Natural frequencies, mode shapes in the original coordinates and a
+        state-space form; see :func:`dalembert.statics.linearize`.
+        """
+        return _linearize(self, q_eq, **options)
 
     def _trajectory(
         self, num: NumericModel, result: IntegrationResult, report: InitializationReport

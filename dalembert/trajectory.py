@@ -108,7 +108,9 @@ class Trajectory:
             e = self.energy
             if np.all(np.isfinite(e)):
                 rel = np.abs(e - e[0]).max() / max(abs(e[0]), 1e-300)
-                lines.append(f"  relative change of T + V {rel:.2e} (an error where energy is conserved)")
+                lines.append(
+                    f"  relative change of T + V {rel:.2e} (an error where energy is conserved)"
+                )
         return "\n".join(lines)
 
     def save(self, path: str | os.PathLike) -> Path:
