@@ -14,6 +14,7 @@ from .errors import (
     IntegrationWarning,
     ModelError,
     ParameterError,
+    RedundantConstraintsWarning,
     SingularSystemError,
 )
 from .model.constraints import Holonomic, Pfaffian
@@ -37,6 +38,7 @@ __all__ = [
     "ParameterError",
     "Pfaffian",
     "PointForce",
+    "RedundantConstraintsWarning",
     "SingularSystemError",
     "System",
     "Trajectory",

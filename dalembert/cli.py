@@ -3,6 +3,8 @@
     dalembert list
     dalembert run EXAMPLE [--t-end T] [--out DIR] [--points N] [--energy auto|energy|jacobi]
     dalembert equations EXAMPLE [--latex]
+    dalembert equilibrium EXAMPLE [--out DIR]
+    dalembert modes EXAMPLE [--out DIR] [--count K]
     dalembert demo [--out DIR] [--t-end T] [--points N]
 
 Errors raised by dalembert (:class:`~dalembert.errors.DalembertError`) and unknown
@@ -12,8 +14,10 @@ example names print one line on stderr and exit with status 2.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from types import ModuleType
 
 from . import examples
@@ -22,6 +26,8 @@ from .report import DEFAULT_POINTS
 
 EXIT_ERROR = 2
 EXIT_IMPORT = 1
+#: Modes printed and drawn by ``dalembert modes`` unless ``--count`` says otherwise.
+DEFAULT_MODES = 3
 
 
 class _CommandError(Exception):
@@ -48,7 +54,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with its four sub-commands."""
+    """The argument parser with its six sub-commands."""
     parser = argparse.ArgumentParser(
         prog="dalembert",
         description="Constrained dynamics in redundant coordinates: the example gallery.",
@@ -73,6 +79,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("example", help="example name (see `dalembert list`)")
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
     p.set_defaults(handler=cmd_equations)
+
+    p = sub.add_parser("equilibrium", help="static equilibrium of an example, drawn as a PNG")
+    p.add_argument("example", help="example name (one with EQUILIBRIUM_GUESS)")
+    p.add_argument("--out", default=None, help="output folder (default: out/EXAMPLE)")
+    p.set_defaults(handler=cmd_equilibrium)
+
+    p = sub.add_parser("modes", help="natural frequencies and mode shapes about the equilibrium")
+    p.add_argument("example", help="example name (one with EQUILIBRIUM_GUESS)")
+    p.add_argument("--out", default=None, help="output folder (default: out/EXAMPLE)")
+    p.add_argument("--count", type=_count, default=DEFAULT_MODES,
+                   help=f"number of modes, lowest first (default: {DEFAULT_MODES})")
+    p.set_defaults(handler=cmd_modes)
 
     p = sub.add_parser("demo", help="simulate the demo examples, write plots and summary.md")
     p.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
@@ -122,6 +140,43 @@ def cmd_equations(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_equilibrium(args: argparse.Namespace) -> int:
+    """Find the example's equilibrium, print it, draw it if the example has ``draw``."""
+    from .plotting import plot_mechanism
+
+    module, system, eq = _equilibrium(args.example)
+    print(f"{args.example}: {module.TITLE}")
+    print(eq)
+    draw = getattr(module, "draw", None)
+    if draw is not None:
+        out = Path(args.out if args.out is not None else f"out/{args.example}")
+        print(f"wrote {plot_mechanism(draw, system, eq.q, out / 'equilibrium.png')}")
+    return 0
+
+
+def cmd_modes(args: argparse.Namespace) -> int:
+    """Equilibrium, then small oscillations: print frequencies and shapes, draw each mode."""
+    from .plotting import plot_mode_shapes
+
+    module, system, eq = _equilibrium(args.example)
+    lin = system.linearize(eq)
+    count = min(args.count, lin.degrees_of_freedom)
+    print(f"{args.example}: {module.TITLE}")
+    print(f"{eq.stability} equilibrium at "
+          + ", ".join(f"{n} = {v:.10g}" for n, v in eq.by_name().items()))
+    print(f"{lin.degrees_of_freedom} degrees of freedom; the lowest {count} modes "
+          "(shapes mass-normalized, in the original coordinates):")
+    for k in range(count):
+        print(_mode_line(lin, k))
+    draw = getattr(module, "draw", None)
+    if draw is not None and count:
+        out = Path(args.out if args.out is not None else f"out/{args.example}")
+        files = [plot_mode_shapes(draw, system, lin, eq, out / f"mode_{k + 1}.png", mode=k)
+                 for k in range(count)]
+        print("wrote " + ", ".join(str(p) for p in files))
+    return 0
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     """Run the demo examples and print the summary that is written to summary.md."""
     from .report import demo
@@ -143,6 +198,45 @@ def _load(name: str) -> ModuleType:
         raise _CommandError(f"example {name!r} does not import: {exc}", EXIT_IMPORT) from exc
 
 
+def _equilibrium(name: str) -> tuple[ModuleType, object, object]:
+    """The example module, its System and its equilibrium from ``EQUILIBRIUM_GUESS``."""
+    module = _load(name)
+    guess = getattr(module, "EQUILIBRIUM_GUESS", None)
+    if guess is None:
+        raise _CommandError(
+            f"example {name!r} has no EQUILIBRIUM_GUESS, so there is no equilibrium to start "
+            f"from; the examples with one are {', '.join(_with_guess()) or 'none'}"
+        )
+    system = module.build()
+    return module, system, system.equilibrium(guess)
+
+
+def _with_guess() -> list[str]:
+    names = []
+    for name in examples.EXAMPLES:
+        try:
+            module = examples.load(name)
+        except Exception:  # an example in progress must not hide the others
+            continue
+        if getattr(module, "EQUILIBRIUM_GUESS", None) is not None:
+            names.append(name)
+    return names
+
+
+def _mode_line(lin: object, k: int) -> str:
+    """``mode k: f = ... Hz, omega = ... rad/s`` (or the growth rate) and the shape."""
+    w = complex(lin.natural_frequencies[k])
+    if abs(w.imag) <= 1e-12 * abs(w.real):
+        what = f"f = {w.real / (2 * math.pi):.10g} Hz, omega = {w.real:.10g} rad/s"
+    else:
+        what = f"unstable: growth rate {abs(w.imag):.10g} 1/s"
+    values = lin.mode(k)
+    # entries at the rounding level of the largest one print as 0
+    tiny = 1e-12 * max(abs(v) for v in values.values())
+    shape = ", ".join(f"{n}: {v if abs(v) > tiny else 0.0:+.6g}" for n, v in values.items())
+    return f"  mode {k + 1}: {what}\n    shape: {shape}"
+
+
 def _fail(message: str, status: int) -> int:
     print("dalembert: error: " + " ".join(message.split()), file=sys.stderr)
     return status
@@ -160,6 +254,16 @@ def _positive_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a positive finite number, not {text}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"need at least 1 mode, not {value}")
     return value
 
 

@@ -43,3 +43,7 @@ class InitialConditionsAdjusted(UserWarning):
 
 class IntegrationWarning(UserWarning):
     """Integration stopped early; the trajectory holds the part computed so far."""
+
+
+class RedundantConstraintsWarning(UserWarning):
+    """Dependent constraints: the motion is unique, their multipliers are not."""

@@ -16,13 +16,14 @@ import numpy as np
 from .codegen import compiled as codegen
 from .codegen.compiled import CompiledEquations, NumericModel
 from .equations.lagrange import Equations, derive_equations
-from .errors import InitialConditionsAdjusted, IntegrationWarning
+from .errors import InitialConditionsAdjusted, IntegrationWarning, RedundantConstraintsWarning
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
 from .solvers.dynamics import first_order_rhs
 from .solvers.initialization import InitializationReport, consistent_state, state_vector
 from .solvers.integrate import IntegrationResult, integrate
+from .solvers.kkt import REDUNDANT_MODES
 from .solvers.outputs import evaluate_outputs
 from .solvers.projection import project_state
 from .statics import Equilibrium, Linearization
@@ -58,6 +59,13 @@ class System:
         :meth:`simulate`).
     velocities
         With plain-symbol coordinates, the velocity symbols (default ``<name>_dot``).
+    redundant_constraints
+        Dependent (redundant) constraints, detected at the initial state:
+        ``"minimum-norm"`` (default) proceeds with a
+        :class:`~dalembert.solvers.kkt.RedundantConstraintsWarning` naming them; the
+        motion is unique, the multipliers are the minimum-norm ones (not unique).
+        ``"error"`` raises a :class:`~dalembert.ConstraintError` naming them.
+        :meth:`simulate` accepts the same keyword to override it.
 
     Examples
     --------
@@ -92,7 +100,9 @@ class System:
         parameters: Mapping[object, object] | None = None,
         velocities: Sequence[object] | None = None,
         name: str = "system",
+        redundant_constraints: str = "minimum-norm",
     ) -> None:
+        self.redundant_constraints = _check_redundant(redundant_constraints)
         self.model: Model = build_model(
             coordinates, kinetic=kinetic, potential=potential, lagrangian=lagrangian,
             constraints=constraints, generalized_forces=generalized_forces, forces=forces,
@@ -116,7 +126,11 @@ class System:
 
     @property
     def degrees_of_freedom(self) -> int:
-        """Coordinates minus constraints (velocity-level degrees of freedom)."""
+        """Coordinates minus constraint rows.
+
+        With dependent (redundant) constraints this undercounts; the true number,
+        ``n - rank(A)`` at a state, is ``consistent_initial_state(q0).degrees_of_freedom``.
+        """
         return self.model.coords.n - self.model.constraints.m
 
     def __repr__(self) -> str:
@@ -152,14 +166,23 @@ class System:
         t0: float = 0.0,
         fixed: Sequence[object] | None = None,
         parameters: Mapping[object, object] | None = None,
+        redundant_constraints: str | None = None,
     ) -> InitializationReport:
-        """Project ``(q0, qd0)`` onto the constraints (least change); ``fixed`` stay put."""
+        """Project ``(q0, qd0)`` onto the constraints (least change); ``fixed`` stay put.
+
+        The report also gives the true degrees of freedom ``n - rank(A)`` there
+        (``report.degrees_of_freedom``) and the dependent constraints
+        (``report.dependent_constraints``).
+        """
         names = self.coordinate_names
         q = state_vector(q0, names, "q0")
         qd = state_vector(qd0, names, "qd0")
         cons = self.model.constraints
         labels = [cons.describe(i) for i in range(cons.m)]
-        return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed)
+        mode = self.redundant_constraints if redundant_constraints is None \
+            else _check_redundant(redundant_constraints)
+        return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed,
+                                constraint_names=cons.names, redundant_constraints=mode)
 
     def simulate(
         self,
@@ -178,6 +201,7 @@ class System:
         events: Sequence[Callable] = (),
         dense_output: bool = False,
         progress: bool = False,
+        redundant_constraints: str | None = None,
         **options: object,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
@@ -195,6 +219,7 @@ class System:
         ``baumgarte_gain``, see :mod:`dalembert.solvers.dynamics`) or ``None`` (raw
         drift). A failure or Ctrl-C returns the part computed so far with
         ``success=False`` and an :class:`~dalembert.errors.IntegrationWarning`.
+        ``redundant_constraints`` overrides the System's option of that name.
         """
         if stabilization not in STABILIZATIONS:
             raise ValueError(
@@ -204,14 +229,18 @@ class System:
         _check_tolerances(rtol, atol)
         num = self.numeric(parameters)
         report = self.consistent_initial_state(q0, qd0, t0=t_span[0], fixed=fixed,
-                                               parameters=parameters)
+                                               parameters=parameters,
+                                               redundant_constraints=redundant_constraints)
         if report.changed:
-            warnings.warn(str(report), InitialConditionsAdjusted, stacklevel=2)
+            warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=2)
+        if report.dependent_constraints:
+            warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=2)
+        kept = report.rank.kept if report.rank is not None else None
         gain = baumgarte_gain if stabilization == "baumgarte" else 0.0
         project = (lambda t, y: project_state(num, t, y)) if stabilization == "projection" \
             else None
         result = integrate(
-            first_order_rhs(num, gain), t_span, np.concatenate([report.q, report.qd]),
+            first_order_rhs(num, gain, kept), t_span, np.concatenate([report.q, report.qd]),
             method=method, t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
             events=[_state_event(e, num.n) for e in events], project=project,
             progress=progress, rtol=rtol, atol=atol, **options,
@@ -220,7 +249,7 @@ class System:
             warnings.warn(f"{result.message}; returning the trajectory up to "
                           f"t={result.t[-1] if len(result.t) else t_span[0]:.6g}",
                           IntegrationWarning, stacklevel=2)
-        return self._trajectory(num, result, report)
+        return self._trajectory(num, result, report, kept)
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: object, **options: object) -> Equilibrium:
@@ -240,10 +269,11 @@ class System:
         return _linearize(self, q_eq, **options)
 
     def _trajectory(
-        self, num: NumericModel, result: IntegrationResult, report: InitializationReport
+        self, num: NumericModel, result: IntegrationResult, report: InitializationReport,
+        kept: np.ndarray | None = None,
     ) -> Trajectory:
         n = num.n
-        derived = evaluate_outputs(num, result.t, result.y)
+        derived = evaluate_outputs(num, result.t, result.y, kept)
         energies = derived.pop("energies")
         return Trajectory(
             t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,
@@ -253,6 +283,12 @@ class System:
             message=result.message, stats=result.stats, initialization=str(report),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
         )
+
+
+def _check_redundant(mode: str) -> str:
+    if mode not in REDUNDANT_MODES:
+        raise ValueError(f"redundant_constraints must be one of {REDUNDANT_MODES}, not {mode!r}")
+    return mode
 
 
 def _check_span(t_span: Sequence[float]) -> tuple[float, float]:

@@ -88,7 +88,7 @@ def test_demo_falls_back_to_the_pendulum(monkeypatch, tmp_path, capsys):
     assert not (tmp_path / "knife-edge").exists()
 
 
-@pytest.mark.parametrize("command", ["run", "equations"])
+@pytest.mark.parametrize("command", ["run", "equations", "equilibrium", "modes"])
 def test_unknown_example_exits_2_and_names_it(command, capsys):
     assert cli.main([command, "no-such-example"]) == 2
     err = capsys.readouterr().err
@@ -109,7 +109,8 @@ def test_dalembert_error_is_one_line_exit_2(monkeypatch, capsys):
 
 
 @pytest.mark.parametrize("argv", [[], ["run", "pendulum", "--t-end", "-1"],
-                                  ["run", "pendulum", "--points", "1"]])
+                                  ["run", "pendulum", "--points", "1"],
+                                  ["modes", "pendulum", "--count", "0"]])
 def test_usage_errors_return_2(argv, capsys):
     assert cli.main(argv) == 2
     assert "usage" in capsys.readouterr().err
@@ -151,3 +152,81 @@ def test_moving_constraint_is_not_conservative():
                   constraints=[Holonomic(y * sp.cos(w * t) - x * sp.sin(w * t), name="rod")],
                   parameters={w: 1.0})
     assert not conserved(bead)
+
+
+# -- statics: equilibrium and modes ------------------------------------------------------
+def printed_numbers(text: str, pattern: str) -> list[float]:
+    """Every number captured by ``pattern`` (one group) in ``text``."""
+    return [float(v) for v in re.findall(pattern, text)]
+
+
+def test_equilibrium_pendulum_prints_and_draws(tmp_path, capsys):
+    assert cli.main(["equilibrium", "pendulum", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert "stable equilibrium" in printed
+    # hanging straight down, and the rod holds the weight: -2 lambda l = m g
+    (y,) = printed_numbers(printed, r"at x = \S+ y = ([-+0-9.e]+)")
+    assert y == pytest.approx(-1.0, abs=1e-12)
+    (lam,) = printed_numbers(printed, r"rod = ([-+0-9.e]+)")
+    assert -2 * lam * 1.0 == pytest.approx(1.0 * 9.81, rel=1e-12)
+    assert (tmp_path / "equilibrium.png").stat().st_size > 0
+
+
+def test_modes_pendulum_frequency_is_sqrt_g_over_l(tmp_path, capsys):
+    assert cli.main(["modes", "pendulum", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    (omega,) = printed_numbers(printed, r"omega = ([-+0-9.e]+) rad/s")
+    (hz,) = printed_numbers(printed, r"f = ([-+0-9.e]+) Hz")
+    assert omega == pytest.approx(np.sqrt(9.81 / 1.0), rel=1e-9)
+    assert hz == pytest.approx(np.sqrt(9.81) / (2 * np.pi), rel=1e-9)
+    assert (tmp_path / "mode_1.png").stat().st_size > 0
+    assert not (tmp_path / "mode_2.png").exists()  # one degree of freedom
+
+
+def test_modes_double_pendulum_two_closed_form_frequencies(tmp_path, capsys):
+    assert cli.main(["modes", "double-pendulum", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    omegas = printed_numbers(printed, r"omega = ([-+0-9.e]+) rad/s")
+    expected = np.sqrt(np.array([2 - np.sqrt(2), 2 + np.sqrt(2)]) * 9.81 / 1.0)
+    np.testing.assert_allclose(omegas, expected, rtol=1e-9)
+    assert printed.count("shape:") == 2
+    for k in (1, 2):
+        assert (tmp_path / f"mode_{k}.png").stat().st_size > 0
+
+
+def test_modes_count_limits_the_output(tmp_path, capsys):
+    assert cli.main(["modes", "double-pendulum", "--out", str(tmp_path), "--count", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert len(printed_numbers(printed, r"omega = ([-+0-9.e]+) rad/s")) == 1
+    assert not (tmp_path / "mode_2.png").exists()
+
+
+@pytest.mark.parametrize("command", ["equilibrium", "modes"])
+def test_example_without_guess_is_one_line_exit_2(command, tmp_path, capsys):
+    assert cli.main([command, "knife-edge", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert "'knife-edge' has no EQUILIBRIUM_GUESS" in err
+    assert "pendulum" in err  # names the examples that have one
+    assert not any(tmp_path.iterdir())
+
+
+def test_modes_of_a_nonholonomic_example_with_a_guess_is_one_line(monkeypatch, capsys):
+    from dalembert.examples import knife_edge
+
+    monkeypatch.setattr(knife_edge, "EQUILIBRIUM_GUESS", {}, raising=False)
+    assert cli.main(["modes", "knife-edge"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "NonholonomicLinearizationError" in err
+
+
+def test_equilibrium_without_draw_prints_but_writes_nothing(monkeypatch, tmp_path, capsys):
+    from dalembert.examples import spherical_pendulum
+
+    monkeypatch.setattr(spherical_pendulum, "EQUILIBRIUM_GUESS", {"x": 0.1, "z": -0.9},
+                        raising=False)
+    assert not hasattr(spherical_pendulum, "draw")
+    assert cli.main(["equilibrium", "spherical-pendulum", "--out", str(tmp_path)]) == 0
+    assert "stable equilibrium" in capsys.readouterr().out
+    assert not any(tmp_path.iterdir())

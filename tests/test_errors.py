@@ -26,6 +26,7 @@ from dalembert import (
     coordinates,
     t,
 )
+from dalembert.errors import RedundantConstraintsWarning
 
 x, y, z = coordinates("x y z")
 m, g, l = sp.symbols("m g l", positive=True)
@@ -122,29 +123,61 @@ def test_holonomic_containing_velocities():
 
 
 def test_as_many_constraints_as_coordinates():
-    with pytest.raises(ConstraintError, match=r"2 constraints on 2 coordinates"):
-        pendulum(constraints=[Holonomic(x - 1), Holonomic(y - 1)])
+    system = pendulum(constraints=[Holonomic(x - 1), Holonomic(y - 1)],  # judged numerically
+                      parameters={m: 1.0, g: 9.81})
+    with pytest.raises(ConstraintError, match=r"no degree of freedom at the initial state: "
+                       r"rank\(A\) = 2 independent constraints \(2 given\) on 2 coordinates"):
+        system.simulate((0, 1), q0=[1.0, 1.0])
 
 
-def test_more_constraints_than_coordinates():
-    with pytest.raises(ConstraintError, match=r"3 constraints on 2 coordinates"):
-        pendulum(constraints=[Holonomic(x - 1), Holonomic(y - 1), Holonomic(x + y)])
+def test_more_constraints_than_coordinates_leaving_no_freedom():
+    system = pendulum(constraints=[Holonomic(x - 1), Holonomic(y - 1), Holonomic(x - y)],
+                      parameters={m: 1.0, g: 9.81})
+    with pytest.raises(ConstraintError, match=r"rank\(A\) = 2 independent constraints "
+                       r"\(3 given\) on 2 coordinates \(x, y\)"):
+        system.consistent_initial_state([1.0, 1.0])
 
 
-def test_same_circle_constraint_twice_is_named():
+def circle_twice(**options: object) -> System:
     circle = x**2 + y**2 - l**2
-    system = System([x, y, z], kinetic=T3,
-                    constraints=[Holonomic(circle, name="c1"), Holonomic(circle, name="c2")],
-                    parameters={m: 1.0, l: 1.0})
+    return System([x, y, z], kinetic=T3, parameters={m: 1.0, l: 1.0}, **options,
+                  constraints=[Holonomic(circle, name="c1"), Holonomic(circle, name="c2")])
+
+
+def test_same_circle_constraint_twice_is_named_with_error_option():
     with pytest.raises(ConstraintError, match=r"dependent \(redundant\).*'c2'") as info:
-        system.simulate((0, 1), q0=[1.0, 0.0, 0.0])
+        circle_twice(redundant_constraints="error").simulate((0, 1), q0=[1.0, 0.0, 0.0])
     assert "'c1'" not in str(info.value)
+    assert "redundant_constraints='minimum-norm'" in str(info.value)
+
+
+def test_same_circle_twice_proceeds_with_a_warning_and_minimum_norm_multipliers():
+    v = 2.0
+    with pytest.warns(RedundantConstraintsWarning, match=r"2 degree\(s\) of freedom.*"
+                      r"1 dependent on those listed before: c2\)"):
+        traj = circle_twice().simulate((0, 1), q0=[1.0, 0.0, 0.0], qd0=[0.0, v, 0.5],
+                                       t_eval=np.linspace(0, 1, 11))
+    # Uniform circular motion: the total pull 2 (l1 + l2) l = -m v^2 / l, split evenly.
+    np.testing.assert_allclose(traj.multipliers, -v**2 / 4, rtol=1e-10)
+    assert np.abs(np.hypot(traj["x"], traj["y"]) - 1).max() < 1e-13
+    assert "dependent on those listed before: c2" in traj.initialization
+
+
+def test_simulate_option_overrides_the_system_option():
+    with pytest.raises(ConstraintError, match=r"dependent \(redundant\).*'c2'"):
+        circle_twice().simulate((0, 1), q0=[1.0, 0.0, 0.0], redundant_constraints="error")
+
+
+def test_invalid_redundant_constraints_option():
+    with pytest.raises(ValueError, match=r"redundant_constraints must be one of "
+                       r"\('minimum-norm', 'error'\), not 'ignore'"):
+        circle_twice(redundant_constraints="ignore")
 
 
 def test_proportional_linear_constraints_are_named():
     system = System([x, y, z], kinetic=T3,
                     constraints=[Holonomic(x - y, name="a"), Holonomic(2 * x - 2 * y, name="b")],
-                    parameters={m: 1.0})
+                    parameters={m: 1.0}, redundant_constraints="error")
     with pytest.raises(ConstraintError, match=r"constraint 'b' \(holonomic: 2\*x - 2\*y = 0\)"):
         system.simulate((0, 1), q0=[0.0, 0.0, 0.0])
 
@@ -234,8 +267,8 @@ def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch):
 
     real = system_module.first_order_rhs
 
-    def counting_rhs(num, gain=0.0):
-        rhs = real(num, gain)
+    def counting_rhs(num, gain=0.0, kept=None):
+        rhs = real(num, gain, kept)
         calls = {"n": 0}
 
         def wrapped(t_, y_):

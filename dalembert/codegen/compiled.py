@@ -15,6 +15,7 @@ import numpy as np
 import sympy as sp
 
 from ..equations.lagrange import Equations
+from ..equations.sparse import gradient
 from ..model.coordinates import t
 from .numpy_printer import generate_function
 
@@ -102,7 +103,8 @@ def _energy_vector(eqs: Equations) -> sp.Matrix:
     """``[T, V, h]``; ``T`` and ``V`` are NaN when only a Lagrangian was given."""
     model = eqs.model
     L = model.lagrangian
-    jacobi = sum(v * L.diff(v) for v in model.coords.qd) - L
+    qd = model.coords.qd
+    jacobi = sp.Add(*(qd[k] * p for k, p in gradient(L, qd).items())) - L
     T = model.kinetic if model.kinetic is not None else sp.nan
     V = model.potential if model.potential is not None else sp.nan
     return sp.Matrix([T, V, jacobi])

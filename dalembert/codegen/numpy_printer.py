@@ -15,6 +15,8 @@ import numpy as np
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
+from ..equations.sparse import nonzero_entries
+
 Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
 Outputs = Sequence[tuple[str, sp.Matrix]]
 
@@ -37,16 +39,19 @@ def generate_function(
     >>> fn(np.array([0.5]), np.array([2.0]))[0]
     array([-1.        ,  0.47942554])
     """
-    renames = _argument_names(arguments)
-    matrices = [sp.Matrix(m).xreplace(renames) for _, m in outputs]
+    names = _argument_names(arguments)
+    matrices = [sp.Matrix(m) for _, m in outputs]
     flat = [m.cols == 1 and (vectors is None or out in vectors)
             for (out, _), m in zip(outputs, matrices)]
-    entries = [(k, i, j, e) for k, m in enumerate(matrices) for (i, j), e in _nonzero(m)]
-    replacements, reduced = sp.cse([e for *_, e in entries], symbols=_temporaries())
-    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True})
+    entries = [(k, i, j, e) for k, m in enumerate(matrices)
+               for (i, j), e in nonzero_entries(m).items()]
+    # Dummy temporaries cannot clash with a user symbol called x0; symbols are
+    # renamed only when printed (an xreplace would rebuild every expression).
+    replacements, reduced = sp.cse([e for *_, e in entries], symbols=_temporaries(names))
+    printer = _NamedPrinter(names)
     lines = [f"def {name}({', '.join(arg for arg, _ in arguments)}):"]
-    lines += _unpack_lines(arguments, renames)
-    lines += [f"    {tmp} = {printer.doprint(expr)}" for tmp, expr in replacements]
+    lines += _unpack_lines(arguments, names)
+    lines += [f"    {names[tmp]} = {printer.doprint(expr)}" for tmp, expr in replacements]
     lines += [f"    {_array_name(k)} = zeros({_shape(m, flat[k])})" for k, m in enumerate(matrices)]
     for (k, i, j, _), expr in zip(entries, reduced):
         index = f"{i}" if flat[k] else f"{i}, {j}"
@@ -55,13 +60,24 @@ def generate_function(
     return _compile("\n".join(lines) + "\n", name)
 
 
-def _argument_names(arguments: Arguments) -> dict[sp.Symbol, sp.Symbol]:
-    return {
-        s: sp.Symbol(f"{arg}_{i}") for arg, symbols in arguments for i, s in enumerate(symbols)
-    }
+def _argument_names(arguments: Arguments) -> dict[sp.Symbol, str]:
+    return {s: f"{arg}_{i}" for arg, symbols in arguments for i, s in enumerate(symbols)}
 
 
-def _unpack_lines(arguments: Arguments, renames: dict[sp.Symbol, sp.Symbol]) -> list[str]:
+class _NamedPrinter(NumPyPrinter):
+    """Prints each symbol under its generated name (``q_0``, ``x3``)."""
+
+    def __init__(self, names: dict[sp.Symbol, str]) -> None:
+        super().__init__({"fully_qualified_modules": False, "inline": True})
+        self._names = names
+
+    def _print_Symbol(self, expr: sp.Symbol) -> str:
+        return self._names.get(expr) or super()._print_Symbol(expr)
+
+    _print_Dummy = _print_Symbol
+
+
+def _unpack_lines(arguments: Arguments, renames: dict[sp.Symbol, str]) -> list[str]:
     lines = []
     for arg, symbols in arguments:
         if len(symbols) == 1:
@@ -74,10 +90,6 @@ def _unpack_lines(arguments: Arguments, renames: dict[sp.Symbol, sp.Symbol]) -> 
     return lines
 
 
-def _nonzero(m: sp.Matrix) -> list[tuple[tuple[int, int], sp.Expr]]:
-    return [((i, j), m[i, j]) for i in range(m.rows) for j in range(m.cols) if m[i, j] != 0]
-
-
 def _shape(m: sp.Matrix, flat: bool) -> str:
     return f"{m.rows}" if flat else f"({m.rows}, {m.cols})"
 
@@ -86,10 +98,13 @@ def _array_name(k: int) -> str:
     return f"out{k}"
 
 
-def _temporaries():
+def _temporaries(names: dict[sp.Symbol, str]):
+    """Fresh symbols for ``cse``, each recorded in ``names`` as ``x<k>``."""
     k = 0
     while True:
-        yield sp.Symbol(f"x{k}")
+        tmp = sp.Dummy(f"x{k}")
+        names[tmp] = f"x{k}"
+        yield tmp
         k += 1
 
 

@@ -18,9 +18,10 @@ from dataclasses import dataclass
 import sympy as sp
 
 from ..errors import ModelError
-from ..model.coordinates import t
+from ..model.coordinates import Coordinates, t
 from ..model.model import Model
 from .printing import equations_latex, equations_text
+from .sparse import SparseEntries, dense, gradient, nonzero_entries, rate
 
 
 @dataclass(frozen=True)
@@ -64,35 +65,66 @@ class Equations:
 
 
 def derive_equations(model: Model) -> Equations:
-    """Derive ``M``, ``f``, ``A``, ``b`` and ``c`` from a model."""
+    """Derive ``M``, ``f``, ``A``, ``b`` and ``c`` from a model.
+
+    Every derivative is taken term by term and only by the symbols a term
+    contains (:mod:`dalembert.equations.sparse`), so the cost grows with the
+    size of the Lagrangian and the constraints, not with ``n^2``.
+
+    >>> from dalembert import System, coordinates
+    >>> x, = coordinates("x")
+    >>> m, k = sp.symbols("m k")
+    >>> eqs = derive_equations(System([x], kinetic=m / 2 * x.diff()**2,
+    ...                               potential=k / 2 * x**2).model)
+    >>> eqs.M, eqs.f
+    (Matrix([[m]]), Matrix([[-k*x]]))
+    """
     coords = model.coords
-    q, qd = sp.Matrix(coords.q), sp.Matrix(coords.qd)
-    momenta = sp.Matrix([model.lagrangian]).jacobian(qd).T
-    M = momenta.jacobian(qd)
+    n = coords.n
+    M, f = _dynamics(model)
     _require_quadratic(M, model)
-    f = (
-        sp.Matrix([model.lagrangian]).jacobian(q).T
-        - momenta.jacobian(q) * qd
-        - momenta.diff(t)
-        + model.Q
-    )
     cons = model.constraints
-    g = cons.A * qd + cons.b
-    c = -(g.jacobian(q) * qd + g.diff(t)) if cons.m else sp.zeros(0, 1)
+    c = _constraint_rates(cons.A, cons.b, coords)
     lam = tuple(sp.Symbol(f"lambda_{i + 1}") for i in range(cons.m))
-    return Equations(model, M, f, cons.A, cons.b, c, lam)
+    return Equations(model, dense(M, n, n), sp.Matrix(n, 1, f), cons.A, cons.b, c, lam)
 
 
-def _require_quadratic(M: sp.Matrix, model: Model) -> None:
+def _dynamics(model: Model) -> tuple[SparseEntries, list[sp.Expr]]:
+    """``M`` (nonzero entries) and ``f`` from ``p = dL/dqd``, row by row."""
     coords = model.coords
-    for (i, j), entry in zip(_indices(M), M):
-        if any(entry.has(v) for v in coords.qd):
+    q, qd = coords.q, coords.qd
+    momenta = gradient(model.lagrangian, qd)
+    forces = gradient(model.lagrangian, q)
+    M: SparseEntries = {}
+    f = []
+    for j in range(coords.n):
+        p = momenta.get(j, sp.S.Zero)
+        M.update({(j, k): e for k, e in gradient(p, qd).items()})
+        convective, explicit = rate(p, q, qd, t)
+        f.append(forces.get(j, sp.S.Zero) - convective - explicit + model.Q[j])
+    return M, f
+
+
+def _constraint_rates(A: sp.Matrix, b: sp.Matrix, coords: Coordinates) -> sp.Matrix:
+    """``c = -(d/dq (A qd + b)) qd - d/dt (A qd + b)``, each row from its own symbols."""
+    rows: dict[int, list[sp.Expr]] = {i: [] for i in range(A.rows)}
+    for (i, j), a in nonzero_entries(A).items():
+        rows[i].append(a * coords.qd[j])
+    c = []
+    for i, products in rows.items():
+        g = sp.Add(*products) + b[i]
+        convective, explicit = rate(g, coords.q, coords.qd, t)
+        c.append(-(convective + explicit))
+    return sp.Matrix(A.rows, 1, c)
+
+
+def _require_quadratic(M: SparseEntries, model: Model) -> None:
+    coords = model.coords
+    velocities = set(coords.qd)
+    for (i, j), entry in M.items():
+        if entry.free_symbols & velocities:
             raise ModelError(
                 "the kinetic energy is not quadratic in the velocities: its second "
                 f"derivative by {coords.names[i]}_dot and {coords.names[j]}_dot is {entry}, "
                 "which still depends on velocities"
             )
-
-
-def _indices(M: sp.Matrix) -> list[tuple[int, int]]:
-    return [(i, j) for i in range(M.rows) for j in range(M.cols)]

@@ -21,6 +21,8 @@ x, y = coordinates("x y")
 THETA0 = 1.0
 INITIAL = {"q0": {"x": np.sin(THETA0), "y": -np.cos(THETA0)}, "qd0": {"x": 0.0, "y": 0.0}}
 T_END = 10.0
+#: Near the bottom (off the circle: equilibrium() projects it).
+EQUILIBRIUM_GUESS = {"x": 0.1, "y": -0.9}
 
 
 def build(m_value: float = 1.0, g_value: float = 9.81, l_value: float = 1.0) -> System:
@@ -37,6 +39,16 @@ def build(m_value: float = 1.0, g_value: float = 9.81, l_value: float = 1.0) -> 
         parameters={m: m_value, g: g_value, l: l_value},
         name="cartesian pendulum",
     )
+
+
+def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
+    """The rod as a polyline pivot -> bob (``q`` in coordinate order).
+
+    >>> draw(build(), np.array([0.6, -0.8]))[0].tolist()
+    [[0.0, 0.0], [0.6, -0.8]]
+    """
+    q = np.asarray(q, dtype=float)
+    return [np.array([[0.0, 0.0], [q[0], q[1]]])]
 
 
 def tension(system: System, traj) -> np.ndarray:

@@ -122,23 +122,27 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
 def _differentiate_holonomic(
     expr: sp.Expr, name: str, coords: Coordinates
 ) -> tuple[list[sp.Expr], sp.Expr]:
-    if any(expr.has(v) for v in coords.qd):
+    free = expr.free_symbols
+    if free.intersection(coords.qd):
         raise ConstraintError(
             f"holonomic constraint {name!r} contains velocities: {expr}; "
             "a constraint linear in velocities is dalembert.Pfaffian(expr)"
         )
-    if not any(expr.has(q) for q in coords.q):
+    if not free.intersection(coords.q):
         raise ConstraintError(
             f"holonomic constraint {name!r} does not involve any coordinate: {expr} = 0"
         )
-    return [expr.diff(q) for q in coords.q], expr.diff(t)
+    # Only the coordinates present are differentiated by: the row is sparse.
+    return [expr.diff(q) if q in free else sp.S.Zero for q in coords.q], _d(expr, t, free)
 
 
 def _split_pfaffian(
     expr: sp.Expr, name: str, coords: Coordinates
 ) -> tuple[list[sp.Expr], sp.Expr]:
-    row = [expr.diff(v) for v in coords.qd]
-    if any(entry.has(v) for entry in row for v in coords.qd):
+    free = expr.free_symbols
+    row = [expr.diff(v) if v in free else sp.S.Zero for v in coords.qd]
+    velocities = set(coords.qd)
+    if any(entry.free_symbols & velocities for entry in row if entry != 0):
         term = _first_nonlinear_term(expr, coords.qd)
         raise ConstraintError(
             f"Pfaffian constraint {name!r} is not linear in the velocities: the term "
@@ -151,6 +155,10 @@ def _split_pfaffian(
         )
     b = expr.xreplace({v: 0 for v in coords.qd})
     return row, b
+
+
+def _d(expr: sp.Expr, v: sp.Symbol, free: set[sp.Symbol]) -> sp.Expr:
+    return expr.diff(v) if v in free else sp.S.Zero
 
 
 def _first_nonlinear_term(expr: sp.Expr, velocities: tuple[sp.Symbol, ...]) -> sp.Expr:

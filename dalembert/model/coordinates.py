@@ -65,10 +65,11 @@ class Coordinates:
         expr = sympify_checked(expr, what)
         expr = expr.xreplace(dict(self.user_forms))
         _reject_leftover_functions(expr, what)
-        for qdd, name in zip(self.qdd, self.names):
-            if expr.has(qdd):
-                raise ModelError(f"{what} contains the acceleration of {name!r}; "
-                                 "model expressions may hold positions and velocities only")
+        accelerations = expr.free_symbols.intersection(self.qdd)
+        if accelerations:
+            name = self.names[self.qdd.index(min(accelerations, key=self.qdd.index))]
+            raise ModelError(f"{what} contains the acceleration of {name!r}; "
+                             "model expressions may hold positions and velocities only")
         return expr
 
 

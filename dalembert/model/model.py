@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..errors import ConstraintError, ModelError
+from ..errors import ModelError
 from .constraints import ConstraintSet, build_constraints
 from .coordinates import Coordinates, build_coordinates, t
 from .forces import PointForce, generalized_forces, warn_double_counting
@@ -53,12 +53,10 @@ def build_model(
     Q = _generalized_forces(generalized_forces, forces, coords)
     if V is not None:
         warn_double_counting(Q, V, coords)
+    # m >= n is allowed: dependent constraints (closed loops) can still leave freedom.
+    # Whether the independent ones leave any depends on the state, so it is judged
+    # numerically at the initial state (dalembert.solvers.initialization).
     cons = build_constraints(constraints, coords)
-    if cons.m >= coords.n:
-        raise ConstraintError(
-            f"{cons.m} constraints on {coords.n} coordinates leave no degree of freedom; "
-            "remove constraints or add coordinates"
-        )
     params = _parameters(coords, L, Q, cons)
     return Model(coords, L, T, V, Q, cons, params, name)
 

@@ -5,12 +5,14 @@ Euler parameters ``b0..b3``) and joints become named holonomic constraints, so
 :class:`Multibody` builds an ordinary :class:`dalembert.System`. See
 :mod:`~dalembert.multibody.rotations` for the quaternion convention,
 :mod:`~dalembert.multibody.bodies` for why the singular rotational mass block is
-harmless, :mod:`~dalembert.multibody.joints` for the joint equations and
+harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
+:mod:`~dalembert.multibody.rolling` for rolling contact and
 :mod:`~dalembert.multibody.outputs` for reactions, momenta and energy.
 """
 
 from .bodies import Body, Ground, Particle, RigidBody
-from .builder import Multibody, chain
+from .builder import Multibody, chain, multibody_of
+from .diagnostics import JointPointWarning, check_mobility
 from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
 from .loads import Force, SpringDamper, Torque
 from .outputs import (
@@ -26,6 +28,7 @@ from .outputs import (
     potential_energy,
     rotation_matrices,
 )
+from .rolling import Rolling
 from .rotations import (
     E_matrix,
     G_matrix,
@@ -44,6 +47,7 @@ __all__ = [
     "G_matrix",
     "Ground",
     "Joint",
+    "JointPointWarning",
     "JointReaction",
     "Multibody",
     "Particle",
@@ -51,6 +55,7 @@ __all__ = [
     "Prismatic",
     "Revolute",
     "RigidBody",
+    "Rolling",
     "Spherical",
     "SpringDamper",
     "Torque",
@@ -58,6 +63,7 @@ __all__ = [
     "angular_momentum",
     "angular_velocities",
     "chain",
+    "check_mobility",
     "energy",
     "euler_angles",
     "euler_from_matrix",
@@ -65,6 +71,7 @@ __all__ = [
     "kinetic_energy",
     "linear_momentum",
     "matrix_from_euler",
+    "multibody_of",
     "point_positions",
     "potential_energy",
     "quaternion_from_matrix",

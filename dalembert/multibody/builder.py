@@ -17,6 +17,8 @@ import sympy as sp
 from ..errors import ConstraintError, InitialConditionError, InitialConditionsAdjusted, ModelError
 from ..system import System
 from .bodies import Body, Ground, Particle, RigidBody
+from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
+from .drawing import stick_figure
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
 from .rotations import E_matrix, check_rotation, quaternion_from_matrix, rotation_matrix
@@ -89,7 +91,8 @@ class Multibody:
             self._check_members(s.bodies, f"spring {s.name!r}")
         for load in (*self.forces, *self.torques):
             self._check_members((load.body,), load.name)
-        self._check_counts()
+        for j in self.joints:
+            check_joint_points(j)
 
     def _check_members(self, bodies: Sequence[Body], what: str) -> None:
         for body in bodies:
@@ -100,19 +103,6 @@ class Multibody:
                     f"{what} acts on body {body.name!r}, which is not in this system's bodies "
                     f"({', '.join(b.name for b in self.bodies)})"
                 )
-
-    def _check_counts(self) -> None:
-        n = sum(len(b.coordinates) for b in self.bodies)
-        m = sum(len(b.constraints()) for b in self.bodies) + sum(
-            j.n_equations for j in self.joints)
-        if m >= n:
-            detail = ", ".join(f"{j.name} ({type(j).__name__}: {j.n_equations})"
-                               for j in self.joints)
-            raise ConstraintError(
-                f"{m} constraints (joints {detail}, plus one unit-quaternion row per rigid "
-                f"body) on {n} coordinates leave no degree of freedom; remove a joint or "
-                "use a joint with fewer equations"
-            )
 
     # -- the System ------------------------------------------------------------------
     @property
@@ -144,8 +134,8 @@ class Multibody:
 
     @cached_property
     def system(self) -> System:
-        """The :class:`dalembert.System` (built once)."""
-        return System(
+        """The :class:`dalembert.System` (built once; :func:`multibody_of` finds ``self``)."""
+        system = System(
             self.coordinates,
             kinetic=self.kinetic_energy(),
             potential=self.potential_energy(),
@@ -154,6 +144,8 @@ class Multibody:
             forces=self._point_forces(),
             name=self.name,
         )
+        system._multibody = self
+        return system
 
     def body(self, name: str) -> Body:
         """The body called ``name``."""
@@ -222,6 +214,7 @@ class Multibody:
                 w = rotation_matrix(b).T @ w
             bdot = 0.5 * E_matrix(b).T @ w
             qd0.update(zip(_names(body)[3:], bdot))
+        check_initial_joint_points(self, q0)
         return q0, qd0
 
     def _rigid(self, key: object, what: str) -> RigidBody:
@@ -231,13 +224,51 @@ class Multibody:
         return body
 
     # -- outputs (see dalembert.multibody.outputs) -----------------------------------
-    def simulate(self, *args, **kwargs):
-        """Shorthand for ``self.system.simulate(...)``."""
-        return self.system.simulate(*args, **kwargs)
+    def simulate(self, t_span, q0, qd0=None, **kwargs):
+        """``self.system.simulate(...)``, with errors about immobility naming the joints.
+
+        Joints that leave no degree of freedom at the initial state raise a
+        :class:`~dalembert.ConstraintError` listing every joint, its rows and those
+        rows that depend on the others (see :func:`check_mobility`).
+        """
+        try:
+            return self.system.simulate(t_span, q0, qd0, **kwargs)
+        except (ConstraintError, InitialConditionError) as exc:
+            self._explain_immobility(q0, t_span, kwargs.get("parameters"), exc)
+            raise
+
+    def stick_figure(self, q: Sequence[float]) -> list[np.ndarray]:
+        """Polylines ``(k, 3)`` drawing the system at ``q`` (see
+        :mod:`dalembert.multibody.drawing`); used by :func:`dalembert.plotting.animate`."""
+        return stick_figure(self, np.asarray(q, dtype=float))
+
+    def _explain_immobility(self, q0, t_span, parameters, exc: Exception) -> None:
+        """Raise the joint-naming error if the failure was a mechanism without freedom."""
+        try:
+            t0 = float(t_span[0])
+            check_mobility(self, q0, t0, parameters, cause=exc)
+        except ConstraintError:
+            raise
+        except Exception:  # the original error is the better report then
+            return
 
     def __repr__(self) -> str:
         return (f"Multibody({self.name!r}, bodies={[b.name for b in self.bodies]}, "
                 f"joints={[j.name for j in self.joints]})")
+
+
+def multibody_of(system: System) -> Multibody:
+    """The :class:`Multibody` whose ``.system`` is ``system``.
+
+    >>> from dalembert.multibody import chain
+    >>> mb = chain(1, 1.0, 1.0, 0.1)
+    >>> multibody_of(mb.system) is mb
+    True
+    """
+    mb = getattr(system, "_multibody", None)
+    if not isinstance(mb, Multibody):
+        raise ModelError(f"{system!r} was not built by a dalembert.multibody.Multibody")
+    return mb
 
 
 def _names(body: Body) -> list[str]:

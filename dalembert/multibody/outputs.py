@@ -9,7 +9,8 @@ Joint reactions: the rows of joint ``J`` give the generalized constraint force
 (world) the joint exerts on the body; on its Euler parameters it is
 ``Q_b = 2 E(b)^T tau_body``, so ``tau_body = 1/2 E(b) Q_b`` (``E E^T = I``) is
 the torque about the mass center. The torque about the joint point ``P`` is
-``tau_P = tau_cm - (r_P - x) x F``; it vanishes for a spherical joint.
+``tau_P = tau_cm - (r_P - x) x F``; it vanishes for a spherical joint. For a
+:class:`~dalembert.multibody.rolling.Rolling` joint ``P`` is the moving contact point.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ import numpy as np
 from ..trajectory import Trajectory
 from .bodies import Body, Ground, RigidBody
 from .builder import Multibody
+from .joints import Joint
+from .rolling import Rolling
 from .rotations import E_matrix, euler_from_matrix, rotation_matrix
 
 
@@ -169,20 +172,31 @@ def joint_reactions(
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if not isinstance(body, Ground):
                 idx = [coord_index[c.name] for c in body.coordinates]
-                sides[body.name] = _reaction(mb, traj, j.name, body, point, Q_all[j.name][:, idx])
+                P = _application_points(mb, traj, j, body, point)
+                sides[body.name] = _reaction(mb, traj, j.name, body, P, Q_all[j.name][:, idx])
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if isinstance(body, Ground):
                 other = next(iter(sides.values()))
-                sides[body.name] = _ground_reaction(j.name, body, point, other)
+                # a rolling contact acts on the ground where it acts on the body
+                P = other.point_world if isinstance(j, Rolling) else point
+                sides[body.name] = _ground_reaction(j.name, body, P, other)
         out[j.name] = sides
     return out
 
 
+def _application_points(mb: Multibody, traj: Trajectory, joint: Joint, body: Body,
+                        point: np.ndarray) -> np.ndarray:
+    """Where the joint acts on ``body``: its joint point, or a rolling body's contact point."""
+    if isinstance(joint, Rolling):
+        x = _columns(traj, body)[:, :3]
+        return joint.contact_points(x, rotation_matrices(mb, traj, body))
+    return point_positions(mb, traj, body, point)
+
+
 def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
-              point: np.ndarray, Q: np.ndarray) -> JointReaction:
+              P: np.ndarray, Q: np.ndarray) -> JointReaction:
     F = Q[:, :3]
     R = rotation_matrices(mb, traj, body)
-    P = point_positions(mb, traj, body, point)
     if isinstance(body, RigidBody):
         b = _columns(traj, body)[:, 3:]
         tau_cm_body = 0.5 * np.einsum("kij,kj->ki", E_matrix(b), Q[:, 3:])

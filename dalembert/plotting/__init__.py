@@ -1,6 +1,10 @@
 """Off-screen (Agg) PNG plots of trajectories: coordinates, energy drift, residuals,
-multipliers and 2D paths. Importing this package selects matplotlib's Agg backend."""
+multipliers and 2D paths; drawings of a mechanism at rest and of its mode shapes.
+Figures are matplotlib ``Figure`` objects saved directly, never pyplot: no backend is
+selected or needed."""
 
+from .animation import animate
+from .modes import plot_mechanism, plot_mode_shapes
 from .trajectory_plots import (
     plot_all,
     plot_coordinates,
@@ -12,9 +16,12 @@ from .trajectory_plots import (
 )
 
 __all__ = [
+    "animate",
     "plot_all",
     "plot_coordinates",
     "plot_energy_error",
+    "plot_mechanism",
+    "plot_mode_shapes",
     "plot_multipliers",
     "plot_path",
     "plot_residuals",

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from ..errors import InitialConditionError
+from ..errors import ConstraintError, InitialConditionError
 from ..model.coordinates import key_name
-from .kkt import check_constraint_rank, check_kkt
+from .kkt import REDUNDANT_MODES, ConstraintRank, check_kkt, constraint_rank, dependent_error
 from .projection import project_positions, project_velocities
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
@@ -19,13 +19,28 @@ REPORT_TOL = 1e-10
 
 @dataclass(frozen=True)
 class InitializationReport:
-    """What consistent initialization changed: per-coordinate position and velocity changes."""
+    """What consistent initialization changed: per-coordinate position and velocity changes.
+
+    ``rank`` describes the constraints at the consistent state: the true degrees of
+    freedom ``n - rank(A)`` and the dependent (redundant) constraints, if any.
+    """
 
     names: tuple[str, ...]
     q_given: np.ndarray
     qd_given: np.ndarray
     q: np.ndarray
     qd: np.ndarray
+    rank: ConstraintRank | None = field(default=None, compare=False)
+
+    @property
+    def degrees_of_freedom(self) -> int:
+        """``n - rank(A)`` at the initial state."""
+        return len(self.names) if self.rank is None else self.rank.degrees_of_freedom
+
+    @property
+    def dependent_constraints(self) -> list[str]:
+        """Names of the constraints that are combinations of those listed before them."""
+        return [] if self.rank is None else self.rank.dependent_names
 
     @property
     def changed(self) -> bool:
@@ -38,6 +53,12 @@ class InitializationReport:
         return _changed(self.names, self.qd_given, self.qd)
 
     def __str__(self) -> str:
+        text = self.describe_changes()
+        if self.rank is not None and self.rank.dependent:
+            text += "\n" + str(self.rank)
+        return text
+
+    def describe_changes(self) -> str:
         if not self.changed:
             return "initial conditions satisfy the constraints; nothing changed"
         lines = ["initial conditions were projected onto the constraints:"]
@@ -115,14 +136,26 @@ def consistent_state(
     names: Sequence[str],
     constraint_labels: Sequence[str],
     fixed: Sequence[object] | None = None,
+    constraint_names: Sequence[str] | None = None,
+    redundant_constraints: str = "minimum-norm",
 ) -> InitializationReport:
-    """Project ``(q0, qd0)`` onto the constraints and check the KKT matrix there."""
+    """Project ``(q0, qd0)`` onto the constraints and check the KKT matrix there.
+
+    The rank of ``A`` is measured at the projected positions. Dependent constraints
+    raise a :class:`ConstraintError` naming them with ``redundant_constraints="error"``;
+    with ``"minimum-norm"`` they are recorded in the report (``report.rank``).
+    Constraints that leave no degree of freedom always raise.
+    """
+    if redundant_constraints not in REDUNDANT_MODES:
+        raise ValueError(f"redundant_constraints must be one of {REDUNDANT_MODES}, "
+                         f"not {redundant_constraints!r}")
     free = free_mask(fixed, names)
+    rank = None
     try:
         q = project_positions(num, t0, q0, free)
         if num.m:
-            A, _ = num.velocity_constraint(t0, q)
-            check_constraint_rank(A, constraint_labels, "at the initial state")
+            rank = _rank_at(num, t0, q, names, constraint_labels, constraint_names,
+                            redundant_constraints)
         qd = project_velocities(num, t0, q, qd0, free)
     except np.linalg.LinAlgError as exc:
         raise InitialConditionError(f"could not project the initial state: {exc}") from exc
@@ -136,8 +169,28 @@ def consistent_state(
         ) from exc
     _check_consistent(num, t0, q, qd, free, names)
     M, *_ = num.kkt_blocks(t0, q, qd)
-    check_kkt(M, num.velocity_constraint(t0, q)[0], names, "at the initial state")
-    return InitializationReport(tuple(names), q0, qd0, q, qd)
+    A = num.velocity_constraint(t0, q)[0]
+    kept = None if rank is None else rank.kept
+    check_kkt(M, A if kept is None else A[kept], names, "at the initial state")
+    return InitializationReport(tuple(names), q0, qd0, q, qd, rank)
+
+
+def _rank_at(
+    num: NumericModel, t0: float, q: np.ndarray, names: Sequence[str],
+    labels: Sequence[str], constraint_names: Sequence[str] | None, mode: str,
+) -> ConstraintRank:
+    """Measure the rank of ``A`` once; refuse no freedom, and dependence if asked to."""
+    A, _ = num.velocity_constraint(t0, q)
+    rank = constraint_rank(A, labels if constraint_names is None else constraint_names)
+    if rank.degrees_of_freedom == 0:
+        raise ConstraintError(
+            f"the constraints leave no degree of freedom at the initial state: rank(A) = "
+            f"{rank.rank} independent constraints ({A.shape[0]} given) on {num.n} coordinates "
+            f"({', '.join(names)}); remove constraints or add coordinates"
+        )
+    if rank.dependent and mode == "error":
+        raise dependent_error([labels[i] for i in rank.dependent], "at the initial state")
+    return rank
 
 
 def _check_consistent(

@@ -4,6 +4,10 @@ At every output time: accelerations and multipliers from the (unstabilized) KKT
 system, the generalized constraint force ``A^T lambda``, the largest position and
 velocity constraint residuals, and the energies ``T``, ``V`` and the Jacobi
 integral ``h = qd . dL/dqd - L``.
+
+With dependent constraints (``kept`` given) the multipliers are the minimum-norm
+solution of ``A^T lambda = M qdd - f``: one choice among infinitely many, while
+``qdd`` and the constraint force ``A^T lambda`` are unique.
 """
 
 from __future__ import annotations
@@ -14,7 +18,9 @@ from ..codegen.compiled import NumericModel
 from .kkt import solve_kkt
 
 
-def evaluate_outputs(num: NumericModel, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+def evaluate_outputs(
+    num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
     """Arrays with one row per output time (see module docstring)."""
     n, m, k = num.n, num.m, len(t)
     out = {
@@ -28,7 +34,7 @@ def evaluate_outputs(num: NumericModel, t: np.ndarray, y: np.ndarray) -> dict[st
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
         M, f, A, c = num.kkt_blocks(ti, q, qd)
-        qdd, lam = solve_kkt(M, f, A, c)
+        qdd, lam = solve_kkt(M, f, A, c, kept)
         out["qdd"][i] = qdd
         out["multipliers"][i] = lam
         out["constraint_forces"][i] = A.T @ lam

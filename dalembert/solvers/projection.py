@@ -4,6 +4,11 @@ Positions: Gauss-Newton on ``psi(q, t) = 0`` with the minimum-norm step
 ``dq = -J^+ psi``, ``J = dpsi/dq`` restricted to the coordinates allowed to move.
 Velocities: the linear projection onto ``A qd + b = 0``, again minimum norm.
 Used for consistent initial values and, after every step, to remove drift.
+
+Both least-squares solves cut singular values below ``RCOND`` times the largest:
+with dependent constraints ``J`` has singular values at rounding level, and
+LAPACK's default cut-off (``eps * max(shape)``) can keep them and divide rounding
+noise by them.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ POSITION_TOL = 1e-14
 MAX_NEWTON = 50
 #: A residual Newton cannot reduce further is accepted below this (rounding floor).
 ACCEPT_TOL = 1e-10
+#: Relative cut-off for singular values of the constraint Jacobian (see above).
+RCOND = 1e-10
 
 
 def project_positions(
@@ -40,7 +47,7 @@ def project_positions(
             return q
         psi = num.position_constraint(t, q)
         J = num.velocity_constraint(t, q)[0][rows][:, cols]
-        step = np.linalg.lstsq(J, psi, rcond=None)[0]
+        step = np.linalg.lstsq(J, psi, rcond=RCOND)[0]
         trial = q.copy()
         trial[cols] -= step
         new_residual = np.abs(num.position_constraint(t, trial)).max()
@@ -65,7 +72,7 @@ def project_velocities(
     qd = np.array(qd, dtype=float)
     cols = np.arange(num.n) if free is None else np.flatnonzero(free)
     residual = A @ qd + b
-    qd[cols] -= np.linalg.lstsq(A[:, cols], residual, rcond=None)[0]
+    qd[cols] -= np.linalg.lstsq(A[:, cols], residual, rcond=RCOND)[0]
     return qd
 
 

@@ -115,3 +115,27 @@ def test_one_coordinate_named_q_and_one_parameter_named_p():
     system = System([q], kinetic=q.diff() ** 2 / 2, potential=p * q**2 / 2, parameters={p: 1.0})
     traj = system.simulate((0, np.pi), q0=[1.0])
     assert abs(traj["q"][-1] + 1.0) < 1e-10  # cos(pi)
+
+
+def test_user_symbols_named_like_temporaries_do_not_clash():
+    # cse temporaries print as x0, x1...; coordinates called x0, x1 must stay distinct.
+    x0, x1, p0 = sp.symbols("x0 x1 x2")
+    shared = sp.sin(x0 + x1)
+    exprs = sp.Matrix([shared * x1 + p0, shared**2 - x0, sp.cos(x0 + x1) * shared])
+    fn = generate_function("f", [("q", [x0, x1]), ("p", [p0])], [("v", exprs)])
+    q, pv = np.array([0.3, -1.1]), np.array([2.5])
+    want = np.array(exprs.subs({x0: q[0], x1: q[1], p0: pv[0]}).evalf(), dtype=float).ravel()
+    np.testing.assert_allclose(fn(q, pv)[0], want, rtol=1e-15, atol=1e-15)
+
+
+def test_chain_kkt_blocks_match_direct_evaluation():
+    from dalembert.multibody import chain
+
+    system = chain(2, 1.0, 1.0, 0.05).system
+    eqs = system.equations()
+    blocks = [sp.lambdify([*eqs.q, *eqs.qd], mat) for mat in (eqs.M, eqs.f, eqs.A, eqs.c)]
+    rng = np.random.default_rng(5)
+    q, qd = rng.normal(size=14), rng.normal(size=14)
+    for got, fn in zip(system.numeric().kkt_blocks(0.0, q, qd), blocks):
+        want = np.asarray(fn(*q, *qd), dtype=float)
+        np.testing.assert_allclose(got, want.reshape(got.shape), rtol=1e-13, atol=1e-13)

@@ -1,0 +1,172 @@
+"""Checks of a multibody model that name the joint and body at fault.
+
+Joint points in the wrong frame. A joint point on a rigid body is given in that
+body's frame, relative to its mass center. Two checks catch a world-frame point
+given by mistake:
+
+- at construction (:func:`check_joint_points`): a point farther from the mass
+  center than ``FAR_FACTOR`` (10) times the body's largest radius of gyration
+  ``sqrt(I_max / m)`` raises a :class:`JointPointWarning`. A warning, not an
+  error: a heavy small ball on a long massless rod is legitimate (a
+  :class:`~dalembert.multibody.Particle` models it better);
+- at the initial state (:func:`check_initial_joint_points`, called by
+  ``Multibody.initial_state``): a joint whose points do not meet at the given
+  poses, but would if one point were read as a world point, raises a
+  :class:`JointPointWarning` giving the body-frame point to use instead.
+
+Immobility. Dependent constraints are legitimate (a closed loop of hinges), so a
+count of equations decides nothing; :func:`check_mobility` measures
+``rank(A)`` at the initial state and, when it leaves no degree of freedom,
+raises a :class:`~dalembert.ConstraintError` naming every joint, its rows and
+which of them depend on the others.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import ConstraintError
+from .bodies import Ground, RigidBody
+from .joints import Fixed, Joint, Revolute, Spherical, Universal
+from .rotations import rotation_matrix
+
+if TYPE_CHECKING:
+    from .builder import Multibody
+
+#: A body-frame joint point farther than this many radii of gyration is suspicious.
+FAR_FACTOR = 10.0
+#: Joints whose two points must coincide (the frame check at the initial state applies).
+_COINCIDENT = (Spherical, Universal, Revolute, Fixed)
+_RANK_RTOL = 1e-10
+
+
+class JointPointWarning(UserWarning):
+    """A joint point looks as if it were given in the wrong frame."""
+
+
+def radius_of_gyration(body: RigidBody) -> float:
+    """``sqrt(I_max / m)``: the body's size as seen by its inertia.
+
+    >>> radius_of_gyration(RigidBody("b", 2.0, (0.02, 0.08, 0.08)))
+    0.2
+    """
+    return float(np.sqrt(np.linalg.eigvalsh(body.inertia)[-1] / body.mass))
+
+
+def check_joint_points(joint: Joint) -> None:
+    """Warn when a body-frame joint point is implausibly far from the mass center."""
+    for side, body, point in (("a", joint.body_a, joint.point_a),
+                              ("b", joint.body_b, joint.point_b)):
+        if not isinstance(body, RigidBody):
+            continue
+        size = radius_of_gyration(body)
+        dist = float(np.linalg.norm(point))
+        if dist > FAR_FACTOR * size:
+            warnings.warn(
+                f"joint {joint.name!r}: point_{side} {tuple(point.tolist())} is {dist:.3g} from "
+                f"the mass center of body {body.name!r}, {dist / size:.0f} times its radius of "
+                f"gyration {size:.3g}. Joint points are in the body frame, relative to the mass "
+                "center: convert a world point p with R^T (p - x). (A point mass on a long "
+                "massless rod is better a Particle.)",
+                JointPointWarning, stacklevel=4,
+            )
+
+
+def _pose(q0: Mapping[str, float], body: RigidBody) -> tuple[np.ndarray, np.ndarray]:
+    names = [c.name for c in body.coordinates]
+    x = np.array([q0[n] for n in names[:3]])
+    return x, rotation_matrix(np.array([q0[n] for n in names[3:]]))
+
+
+def _world(q0: Mapping[str, float], body, point: np.ndarray) -> np.ndarray:
+    if isinstance(body, Ground):
+        return point
+    names = [c.name for c in body.coordinates]
+    x = np.array([q0[n] for n in names[:3]])
+    if not isinstance(body, RigidBody):
+        return x
+    return x + _pose(q0, body)[1] @ point
+
+
+def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
+    """Warn when a joint's points do not meet at ``q0`` but would with one read as world."""
+    for j in mb.joints:
+        if not isinstance(j, _COINCIDENT):
+            continue
+        pa, pb = _world(q0, j.body_a, j.point_a), _world(q0, j.body_b, j.point_b)
+        gap = float(np.linalg.norm(pb - pa))
+        scale = max(np.linalg.norm(pa), np.linalg.norm(pb), 1e-3)
+        if gap <= 1e-6 * scale:
+            continue
+        for side, body, point, other in (("a", j.body_a, j.point_a, pb),
+                                         ("b", j.body_b, j.point_b, pa)):
+            if not isinstance(body, RigidBody) or np.linalg.norm(point - other) > 1e-9 * scale:
+                continue
+            x, R = _pose(q0, body)
+            fixed = R.T @ (point - x)
+            warnings.warn(
+                f"joint {j.name!r}: its points are {gap:.3g} apart at the initial state, but "
+                f"point_{side} {tuple(point.tolist())} is where the joint is in world "
+                f"coordinates; joint points are in the body frame of {body.name!r}: use "
+                f"point_{side}={tuple(np.round(fixed, 12).tolist())}",
+                JointPointWarning, stacklevel=3,
+            )
+
+
+def dependent_rows(A: np.ndarray) -> list[int]:
+    """Rows of ``A`` that are combinations of earlier rows.
+
+    >>> dependent_rows(np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0]]))
+    [1]
+    """
+    tol = _RANK_RTOL * max(np.abs(A).max(initial=0.0), 1.0)
+    kept: list[int] = []
+    out = []
+    for i in range(A.shape[0]):
+        if np.linalg.matrix_rank(A[[*kept, i]], tol=tol) > len(kept):
+            kept.append(i)
+        else:
+            out.append(i)
+    return out
+
+
+def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
+                   parameters: Mapping | None = None, cause: BaseException | None = None) -> int:
+    """Degrees of freedom ``n - rank(A)`` at ``q0``; raise naming the joints when none.
+
+    ``q0`` is a dict by coordinate name or an array in coordinate order.
+
+    >>> from dalembert.multibody import chain
+    >>> mb = chain(1, 1.0, 1.0, 0.1)
+    >>> check_mobility(mb, mb.initial_state(positions={"link1": (0, 0, -0.5)})[0])
+    3
+    """
+    system = mb.system
+    names = system.coordinate_names
+    if isinstance(q0, Mapping):
+        q = np.array([float(q0.get(n, 0.0)) for n in names])
+    else:
+        q = np.asarray(q0, dtype=float)
+    A, _ = system.numeric(parameters).velocity_constraint(t0, q)
+    dependent = dependent_rows(A)
+    dof = len(names) - (A.shape[0] - len(dependent))
+    if dof > 0:
+        return dof
+    rows = system.constraint_names
+    dep = {rows[i] for i in dependent}
+    parts = []
+    for j in mb.joints:
+        extra = [c for c in j.constraint_names if c in dep]
+        note = f"; rows {', '.join(extra)} depend on the others" if extra else ""
+        parts.append(f"{j.name} ({type(j).__name__}: {j.n_equations} rows{note})")
+    raise ConstraintError(
+        f"the joints leave the mechanism no degree of freedom at the initial state: rank(A) "
+        f"= {A.shape[0] - len(dependent)} independent rows on {len(names)} coordinates of "
+        f"bodies {', '.join(b.name for b in mb.bodies)} (one unit-quaternion row per rigid "
+        f"body). Joints: {'; '.join(parts) or 'none'}. Remove a joint or use one with fewer "
+        "equations"
+    ) from cause

@@ -1,0 +1,96 @@
+"""A stick figure of a multibody system at one configuration, as 3D polylines.
+
+Used by :func:`dalembert.plotting.animate` (through ``Multibody.stick_figure``)
+and by the multibody gallery examples' ``draw(system, q)``. Drawn, all in world
+coordinates:
+
+- every joint: a line from each moving body's mass center to its joint point,
+  so a chain shows as its links, and a ground joint point as a single point;
+- a rolling joint: center -> contact point, and a disk's rim;
+- every spring: a line between its two points;
+- every rigid body: its body axes through the mass center, each of half-length
+  the body's radius of gyration (so the rotation is visible);
+- a particle: a single point.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .bodies import Body, Ground, RigidBody
+from .rolling import Rolling
+from .rotations import rotation_matrix
+
+if TYPE_CHECKING:
+    from .builder import Multibody
+
+_RIM_POINTS = 25
+
+
+def _poses(mb: Multibody, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``{body name: (center, R)}`` from a state vector in coordinate order."""
+    out, k = {}, 0
+    for body in mb.bodies:
+        n = len(body.coordinates)
+        c = q[k:k + n]
+        R = rotation_matrix(c[3:]) if isinstance(body, RigidBody) else np.eye(3)
+        out[body.name] = (c[:3].copy(), R)
+        k += n
+    return out
+
+
+def _point(poses: dict, body: Body, point: np.ndarray) -> np.ndarray:
+    if isinstance(body, Ground):
+        return np.asarray(point, dtype=float)
+    x, R = poses[body.name]
+    return x + R @ point
+
+
+def _rim(joint: Rolling, x: np.ndarray, R: np.ndarray) -> np.ndarray:
+    a = R @ joint.axis_b
+    e1 = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    ang = np.linspace(0.0, 2 * np.pi, _RIM_POINTS)
+    return x + joint.radius * (np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2))
+
+
+def stick_figure(mb: Multibody, q: np.ndarray) -> list[np.ndarray]:
+    """Polylines ``(k, 3)`` (world) of ``mb`` at the configuration ``q``.
+
+    >>> from dalembert.multibody import chain
+    >>> mb = chain(2, 1.0, 1.0, 0.1)
+    >>> q0, _ = mb.initial_state(positions={"link1": (0, 0, -0.5), "link2": (0, 0, -1.5)})
+    >>> lines = stick_figure(mb, [q0[n] for n in mb.system.coordinate_names])
+    >>> lines[1].tolist()
+    [[0.0, 0.0, -0.5], [0.0, 0.0, 0.0]]
+    """
+    q = np.asarray(q, dtype=float)
+    poses = _poses(mb, q)
+    lines: list[np.ndarray] = []
+    for j in mb.joints:
+        if isinstance(j, Rolling):
+            x, R = poses[j.body_b.name]
+            contact = j.contact_points(x[None], R[None])[0]
+            lines.append(np.array([x, contact]))
+            if j.is_disk:
+                lines.append(_rim(j, x, R))
+            continue
+        for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
+            if isinstance(body, Ground):
+                lines.append(np.asarray(point, dtype=float)[None].copy())
+            else:
+                lines.append(np.array([poses[body.name][0], _point(poses, body, point)]))
+    for s in mb.springs:
+        lines.append(np.array([_point(poses, s.body_a, s.point_a),
+                               _point(poses, s.body_b, s.point_b)]))
+    for body in mb.bodies:
+        x, R = poses[body.name]
+        if not isinstance(body, RigidBody):
+            lines.append(x[None].copy())
+            continue
+        k = np.sqrt(np.linalg.eigvalsh(body.inertia)[-1] / body.mass)
+        lines.extend(np.array([x - k * R[:, i], x + k * R[:, i]]) for i in range(3))
+    return lines

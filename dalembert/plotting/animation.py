@@ -1,0 +1,195 @@
+"""Animations of a mechanism along a :class:`~dalembert.Trajectory`, as GIF or HTML.
+
+The mechanism is drawn as polylines at each frame's configuration ``q``:
+
+- ``draw(system, q)``, when given (the gallery examples define one): a list of
+  ``(k, 2)`` or ``(k, 3)`` arrays;
+- otherwise, for a system built by :class:`dalembert.multibody.Multibody` (or the
+  ``Multibody`` itself), its stick figure: links from mass centers to joint
+  points, rolling contacts, springs and body axes (3D).
+
+3D drawings are shown in a 3D axes, or projected on a coordinate plane with
+``plane="xz"`` (``"xy"``, ``"yz"``). The file type follows the suffix: ``.gif``
+(matplotlib's ``PillowWriter``) or ``.html`` (``Animation.to_jshtml``, a
+self-contained page with play controls). Figures are plain
+:class:`matplotlib.figure.Figure` objects on an Agg canvas: no pyplot, no
+backend switching, no screen.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from matplotlib.animation import FuncAnimation, PillowWriter
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ..trajectory import Trajectory
+
+PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+SUFFIXES = (".gif", ".html")
+
+
+def frame_indices(n_points: int, frames: int) -> np.ndarray:
+    """At most ``frames`` evenly spread output indices, first and last included.
+
+    >>> frame_indices(11, 3).tolist()
+    [0, 5, 10]
+    """
+    if frames < 1:
+        raise ValueError(f"frames must be at least 1, got {frames}")
+    return np.unique(np.linspace(0, n_points - 1, min(frames, n_points)).round().astype(int))
+
+
+def _drawer(system: object, draw: Callable | None) -> Callable[[np.ndarray], list]:
+    if draw is not None:
+        return lambda q: draw(system, q)
+    mb = system if hasattr(system, "stick_figure") else getattr(system, "_multibody", None)
+    if mb is None:
+        raise ValueError(
+            "nothing to draw: give draw=draw(system, q) returning polylines, or a system "
+            "built by dalembert.multibody.Multibody (or the Multibody itself)"
+        )
+    return mb.stick_figure
+
+
+def mechanism_frames(traj: Trajectory, system: object = None, draw: Callable | None = None,
+                     frames: int = 40, plane: str | None = None) -> tuple[np.ndarray, list]:
+    """The output indices and, for each, the polylines (2 or 3 columns each).
+
+    Only ``traj.t`` and ``traj.q`` are used:
+
+    >>> from types import SimpleNamespace
+    >>> traj = SimpleNamespace(t=np.arange(3.0), q=np.ones((3, 2)))
+    >>> idx, lines = mechanism_frames(traj, draw=lambda s, q: [np.array([[0, 0], q])])
+    >>> idx.tolist(), lines[0][0].tolist()
+    ([0, 1, 2], [[0.0, 0.0], [1.0, 1.0]])
+    """
+    if plane is not None and plane not in PLANES:
+        raise ValueError(f"plane must be one of {', '.join(PLANES)} or None, got {plane!r}")
+    if len(traj.t) == 0:
+        raise ValueError("the trajectory has no points to animate")
+    render = _drawer(system, draw)
+    idx = frame_indices(len(traj.t), frames)
+    out = []
+    for i in idx:
+        lines = [np.atleast_2d(np.asarray(p, dtype=float)) for p in render(traj.q[i])]
+        if plane is not None:
+            lines = [p[:, PLANES[plane]] if p.shape[1] == 3 else p for p in lines]
+        out.append(lines)
+    return idx, out
+
+
+def _limits(all_lines: list) -> np.ndarray:
+    pts = np.vstack([p for lines in all_lines for p in lines])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    half = max(float((hi - lo).max()) / 2, 1e-9) * 1.1
+    mid = (lo + hi) / 2
+    return np.column_stack([mid - half, mid + half])   # equal scale on every axis
+
+
+def _figure(dim: int, limits: np.ndarray, plane: str | None):
+    fig = Figure(figsize=(4.8, 4.8), dpi=80)
+    FigureCanvasAgg(fig)
+    if dim == 3:
+        ax = fig.add_subplot(projection="3d")
+        ax.set_xlim(*limits[0])
+        ax.set_ylim(*limits[1])
+        ax.set_zlim(*limits[2])
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_zlabel("z")
+    else:
+        ax = fig.add_subplot()
+        ax.set_xlim(*limits[0])
+        ax.set_ylim(*limits[1])
+        ax.set_aspect("equal")
+        labels = plane or "xy"
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
+        ax.grid(True, alpha=0.3)
+    return fig, ax
+
+
+def animate(
+    traj: Trajectory,
+    path: str | os.PathLike,
+    *,
+    system: object = None,
+    draw: Callable | None = None,
+    frames: int = 40,
+    fps: float = 15.0,
+    plane: str | None = None,
+    title: str | None = None,
+) -> Path:
+    """Write an animation of the mechanism along ``traj`` to ``path`` (``.gif``/``.html``).
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        Output file; its suffix picks the format. Parent folders are created.
+    system
+        The :class:`~dalembert.System` (passed to ``draw``), or a ``Multibody``.
+    draw
+        ``draw(system, q) -> list of (k, 2) or (k, 3) arrays``; default: the
+        multibody stick figure.
+    frames, fps
+        At most ``frames`` evenly spread outputs, played at ``fps``.
+    plane
+        Project 3D drawings on ``"xy"``, ``"xz"`` or ``"yz"`` (default: 3D axes).
+    title
+        Figure title (the time is appended).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from types import SimpleNamespace
+    >>> t = np.linspace(0, 1, 5)
+    >>> traj = SimpleNamespace(t=t, q=np.column_stack([np.sin(t), -np.cos(t)]))
+    >>> out = animate(traj, tempfile.mkdtemp() + "/swing.gif",
+    ...               draw=lambda s, q: [np.array([[0.0, 0.0], q])])
+    >>> out.stat().st_size > 0
+    True
+    """
+    path = Path(path)
+    if path.suffix.lower() not in SUFFIXES:
+        raise ValueError(f"{path}: the animation is written as .gif or .html, "
+                         f"not {path.suffix or 'no suffix'!r}")
+    idx, all_lines = mechanism_frames(traj, system, draw, frames, plane)
+    dims = {p.shape[1] for lines in all_lines for p in lines}
+    if not dims <= {2, 3} or len(dims) != 1:
+        raise ValueError(f"draw must return polylines with 2 or 3 columns, all alike; got {dims}")
+    dim = dims.pop()
+    fig, ax = _figure(dim, _limits(all_lines), plane)
+    n_lines = max(len(lines) for lines in all_lines)
+    artists = [ax.plot(*([[]] * dim), "o-", lw=2, ms=3)[0] for _ in range(n_lines)]
+    label = ax.set_title("")
+
+    def update(k: int) -> list:
+        lines = all_lines[k]
+        for j, artist in enumerate(artists):
+            p = lines[j] if j < len(lines) else np.empty((0, dim))
+            if dim == 3:
+                artist.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
+            else:
+                artist.set_data(p[:, 0], p[:, 1])
+        label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}")
+        return [*artists, label]
+
+    anim = FuncAnimation(fig, update, frames=len(idx), interval=1000.0 / fps, blit=False)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() == ".gif":
+        anim.save(path, writer=PillowWriter(fps=fps))
+    else:
+        path.write_text(anim.to_jshtml(fps=fps), encoding="utf-8")
+    return path

@@ -1,0 +1,100 @@
+"""Bad multibody input: joint points in the wrong frame, joints that lock the mechanism.
+
+A dependent but mobile mechanism (a door on two coaxial hinges, 10 hinge rows on
+7 coordinates) must still be accepted: it swings exactly like the same door on one
+hinge.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from dalembert import ConstraintError
+from dalembert.multibody import (
+    Distance,
+    Fixed,
+    Ground,
+    JointPointWarning,
+    Multibody,
+    Particle,
+    Revolute,
+    RigidBody,
+    Spherical,
+    check_mobility,
+    point_positions,
+)
+from dalembert.multibody.rotations import elementary_rotation
+
+ROD = (0.01, 0.01, 0.0002)   # a slender rod of length ~0.35 and mass 1: gyration radius 0.1
+
+
+def test_far_body_point_warns_naming_joint_and_body():
+    rod = RigidBody("rod", 1.0, ROD)
+    with pytest.warns(JointPointWarning, match=r"joint 'pin': point_b .* body 'rod', 50 times"):
+        Multibody([rod], [Spherical("pin", Ground(), rod, point_b=(0.0, 0.0, 5.0))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", JointPointWarning)   # a point at the rod's end is fine
+        Multibody([rod], [Spherical("pin", Ground(), rod, point_b=(0.0, 0.0, 0.17))])
+
+
+def test_world_point_given_for_a_body_point_is_diagnosed_at_the_initial_state():
+    rod = RigidBody("rod", 1.0, ROD)
+    # the pin is at world (0, 0, 1); the rod hangs below it, center at (0, 0, 0.8), turned
+    R = elementary_rotation("x", np.pi)   # body z points down
+    pin = Spherical("pin", Ground(), rod, point_a=(0.0, 0.0, 1.0), point_b=(0.0, 0.0, 1.0))
+    mb = Multibody([rod], [pin])
+    with pytest.warns(JointPointWarning, match=r"'pin'.*point_b \(0.0, 0.0, 1.0\) is where the "
+                      r"joint is in world coordinates.*'rod': use point_b=\(0.0, 0.0, -0.2\)"):
+        mb.initial_state(positions={rod: (0.0, 0.0, 0.8)}, orientations={rod: R})
+    # the suggested point closes the joint
+    ok = Multibody([rod], [Spherical("pin", Ground(), rod, (0.0, 0.0, 1.0), (0.0, 0.0, -0.2))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", JointPointWarning)
+        ok.initial_state(positions={rod: (0.0, 0.0, 0.8)}, orientations={rod: R})
+
+
+def test_zero_freedom_names_every_joint():
+    p = Particle("p", 1.0)
+    rods = [Distance(f"rod{k}", Ground(), p, 1.0, point_a=a)
+            for k, a in enumerate([(1, 0, 0), (0, 1, 0), (0, 0, 1)])]
+    mb = Multibody([p], rods)
+    q0, _ = mb.initial_state()
+    with pytest.raises(ConstraintError, match=r"no degree of freedom.*rod0 \(Distance: 1 rows\);"
+                       r" rod1 .*; rod2 "):
+        check_mobility(mb, q0)
+
+
+@pytest.mark.validation
+def test_door_on_two_coaxial_hinges_is_accepted_and_swings_like_one_hinge():
+    def door(hinges):
+        body = RigidBody("door", 2.0, (0.2, 0.3, 0.1))
+        joints = [Revolute(f"hinge{k}", Ground(), body, point_a=(0.0, 0.0, z),
+                           point_b=(-0.4, 0.0, z), axis_a=(0.0, 0.0, 1.0))
+                  for k, z in enumerate(hinges)]
+        # gravity tilted off the hinge axis so the door swings
+        return Multibody([body], joints, gravity=(0.0, -3.0, -9.81))
+
+    t = np.linspace(0.0, 1.0, 21)
+    paths = []
+    for hinges in ([0.0], [-0.3, 0.3]):
+        mb = door(hinges)
+        q0, qd0 = mb.initial_state(positions={"door": (0.4, 0.0, 0.0)})
+        assert check_mobility(mb, q0) == 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # the minimum-norm multipliers are reported
+            traj = mb.simulate((0.0, 1.0), q0, qd0, t_eval=t)
+        paths.append(point_positions(mb, traj, "door"))
+    assert np.ptp(paths[0][:, 1]) > 0.1
+    assert np.abs(paths[0] - paths[1]).max() < 1e-9
+
+
+def test_fixed_body_elsewhere_still_builds():
+    # a weld alone leaves zero freedom for its body, but a second free body keeps the system
+    # mobile: no error
+    a, b = RigidBody("a", 1.0, (1, 1, 1)), RigidBody("b", 1.0, (1, 1, 1))
+    mb = Multibody([a, b], [Fixed("weld", Ground(), a)])
+    q0, _ = mb.initial_state()
+    assert check_mobility(mb, q0) == 6
