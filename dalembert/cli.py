@@ -2,13 +2,16 @@
 
     dalembert list
     dalembert run EXAMPLE [--t-end T] [--out DIR] [--points N] [--energy auto|energy|jacobi]
+                  [--no-animation] [--html]
     dalembert equations EXAMPLE [--latex]
     dalembert equilibrium EXAMPLE [--out DIR]
     dalembert modes EXAMPLE [--out DIR] [--count K]
     dalembert demo [--out DIR] [--t-end T] [--points N]
+    dalembert gallery [EXAMPLE ...] [--out DIR] [--t-end T] [--points N]
 
 Errors raised by dalembert (:class:`~dalembert.errors.DalembertError`) and unknown
-example names print one line on stderr and exit with status 2.
+example names print one line on stderr and exit with status 2; ``gallery`` exits with
+status 1 when an example failed (its error is in ``index.md``, the others are written).
 """
 
 from __future__ import annotations
@@ -22,10 +25,12 @@ from types import ModuleType
 
 from . import examples
 from .errors import DalembertError
-from .report import DEFAULT_POINTS
+from .report import DEFAULT_POINTS, GALLERY_POINTS, GALLERY_T_END
 
 EXIT_ERROR = 2
 EXIT_IMPORT = 1
+#: ``dalembert gallery`` when some example failed (the others are written).
+EXIT_GALLERY_FAILED = 1
 #: Modes printed and drawn by ``dalembert modes`` unless ``--count`` says otherwise.
 DEFAULT_MODES = 3
 
@@ -54,7 +59,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with its six sub-commands."""
+    """The argument parser with its seven sub-commands."""
     parser = argparse.ArgumentParser(
         prog="dalembert",
         description="Constrained dynamics in redundant coordinates: the example gallery.",
@@ -73,6 +78,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--energy", choices=("auto", "energy", "jacobi"), default="auto",
                    help="quantity of the energy plot: T + V or the Jacobi integral (default: "
                         "auto, the Jacobi integral when T has terms linear in the velocities)")
+    p.add_argument("--no-animation", dest="animation", action="store_false",
+                   help="do not write animation.gif")
+    p.add_argument("--html", action="store_true",
+                   help="also write animation.html (a page with play controls)")
     p.set_defaults(handler=cmd_run)
 
     p = sub.add_parser("equations", help="print an example's equations of motion")
@@ -98,6 +107,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="simulated time of every example (default: each example's T_END)")
     _add_points(p)
     p.set_defaults(handler=cmd_demo)
+
+    p = sub.add_parser("gallery", help="run every example briefly; write plots, animations, "
+                                       "index.md and index.html")
+    p.add_argument("examples", nargs="*", metavar="EXAMPLE",
+                   help="examples to run (default: all, see `dalembert list`)")
+    p.add_argument("--out", default="out/gallery", help="output folder (default: out/gallery)")
+    p.add_argument("--t-end", type=_positive_float, default=None,
+                   help=f"simulated time of every example (default: each example's T_END, "
+                        f"at most {GALLERY_T_END:g})")
+    p.add_argument("--points", type=_points, default=GALLERY_POINTS,
+                   help=f"number of output times (default: {GALLERY_POINTS})")
+    p.set_defaults(handler=cmd_gallery)
     return parser
 
 
@@ -123,12 +144,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     _load(args.example)
     out = args.out if args.out is not None else f"out/{args.example}"
     run = run_example(args.example, out, t_end=args.t_end, points=args.points,
-                      energy=args.energy)
+                      energy=args.energy, animation=args.animation, html=args.html)
     print(f"{args.example}: {run.title}")
     print(run.trajectory.summary())
     print(f"equations and code in {run.setup_seconds:.2f} s, simulated in {run.seconds:.2f} s")
     print("checks (measured errors):")
     print(format_checks(run.checks))
+    for note in run.notes:
+        print(note)
     print("wrote " + ", ".join(str(p) for p in run.files))
     return 0
 
@@ -183,6 +206,25 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     print(demo(args.out, t_end=args.t_end, points=args.points), end="")
     print(f"\n(wrote {args.out}/summary.md)")
+    return 0
+
+
+def cmd_gallery(args: argparse.Namespace) -> int:
+    """Run the examples into ``--out``; print one line each and where the index is."""
+    from .report import gallery
+
+    for name in args.examples:
+        if name not in examples.EXAMPLES:
+            _load(name)  # raises the unknown-example error
+    text, failed = gallery(args.out, args.examples or None, t_end=args.t_end,
+                           points=args.points)
+    for line in text.splitlines():
+        if line.startswith("## "):
+            print(line[3:])
+    print(f"wrote {args.out}/index.md and {args.out}/index.html")
+    if failed:
+        return _fail(f"{len(failed)} example(s) failed: {', '.join(failed)} "
+                     f"(their errors are in {args.out}/index.md)", EXIT_GALLERY_FAILED)
     return 0
 
 

@@ -1,19 +1,28 @@
 """Simulate gallery examples, write their plots and a Markdown summary of measured errors.
 
-This is what ``dalembert run`` and ``dalembert demo`` do, as plain functions:
-:func:`run_example` simulates one example from :mod:`dalembert.examples` with its
-``INITIAL`` state and writes ``trajectory.npz`` and the PNGs of
-:func:`dalembert.plotting.plot_all`; :func:`demo` does this for
-:data:`DEMO_EXAMPLES` and writes ``summary.md``.
+This is what ``dalembert run``, ``dalembert demo`` and ``dalembert gallery`` do, as
+plain functions: :func:`run_example` simulates one example from
+:mod:`dalembert.examples` with its ``INITIAL`` state and writes ``trajectory.npz``,
+the PNGs of :func:`dalembert.plotting.plot_all` and ``animation.gif`` (and
+``animation.html``); :func:`demo` does this for :data:`DEMO_EXAMPLES` and writes
+``summary.md``; :func:`gallery` does it for every example over a short span and
+writes ``index.md`` and ``index.html``.
 
 An example module may set ``PATH = ("x", "y")`` to name the coordinates of its
 path plot; otherwise a path plot is drawn when it has coordinates ``x`` and ``y``.
+The animation draws the mechanism with :func:`mechanism_drawer`: the example's
+``draw(system, q)``, else the stick figure of a multibody system, else one point
+per particle found in the coordinate names (``x, y[, z]`` with a common suffix).
 """
 
 from __future__ import annotations
 
+import html
 import os
+import re
 import time
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -22,14 +31,22 @@ import numpy as np
 import sympy as sp
 
 from . import examples
+from .errors import DalembertError
 from .model.coordinates import t as time_symbol
+from .multibody.builder import multibody_of
 from .system import System
 from .trajectory import Trajectory
 
-#: The demo's examples: a holonomic and a nonholonomic one.
-DEMO_EXAMPLES = ("pendulum", "knife-edge")
+#: The demo's examples: a holonomic, a nonholonomic and a multibody one (the whole demo,
+#: animations included, takes ~18 s on 2 cores).
+DEMO_EXAMPLES = ("pendulum", "knife-edge", "heavy-top")
 DEFAULT_POINTS = 1001
 ENERGY_CHOICES = ("auto", "energy", "jacobi")
+#: Frames of an animation: enough to follow the motion, few enough to write in seconds.
+ANIMATION_FRAMES = 60
+#: The gallery's default span (each example's ``T_END`` if shorter) and output points.
+GALLERY_T_END = 3.0
+GALLERY_POINTS = 301
 
 
 @dataclass
@@ -49,6 +66,7 @@ class ExampleRun:
     setup_seconds: float
     energy: str
     files: list[Path] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
 
 def energy_quantity(system: System) -> str:
@@ -89,6 +107,79 @@ def path_coordinates(module: ModuleType, system: System) -> tuple[str, str] | No
     return ("x", "y") if "x" in names and "y" in names else None
 
 
+def particle_points(names: tuple[str, ...] | list[str]) -> list[tuple[int, ...]]:
+    """Indices ``(ix, iy)`` or ``(ix, iy, iz)`` of each particle among coordinate names.
+
+    A particle is a set ``x<s>``, ``y<s>`` (and ``z<s>``) with a common suffix ``<s>``;
+    other coordinates (angles) are ignored.
+
+    >>> particle_points(["x1", "y1", "x2", "y2", "theta"])
+    [(0, 1), (2, 3)]
+    >>> particle_points(["x", "y", "z", "psi"])
+    [(0, 1, 2)]
+    """
+    groups: dict[str, dict[str, int]] = {}
+    for i, name in enumerate(names):
+        match = re.fullmatch(r"([xyz])(.*)", name)
+        if match:
+            groups.setdefault(match.group(2), {})[match.group(1)] = i
+    return [tuple(g[a] for a in "xyz" if a in g)
+            for g in groups.values() if "x" in g and "y" in g]
+
+
+def mechanism_drawer(module: ModuleType, system: System) -> tuple[Callable | None, str]:
+    """``(draw, how)``: what the animation draws, or ``(None, why not)``.
+
+    In order: the example's ``draw(system, q)``; the stick figure of a system built
+    by :class:`dalembert.multibody.Multibody`; one point per particle of
+    :func:`particle_points` (in 3D if any particle has a ``z``).
+
+    >>> from types import SimpleNamespace
+    >>> draw, how = mechanism_drawer(SimpleNamespace(),
+    ...                              SimpleNamespace(coordinate_names=("x", "y", "phi")))
+    >>> how, [p.tolist() for p in draw(None, np.array([1.0, 2.0, 3.0]))]
+    ('the particles as points', [[[1.0, 2.0]]])
+    """
+    draw = getattr(module, "draw", None)
+    if draw is not None:
+        return draw, "the example's draw(system, q)"
+    try:
+        mb = multibody_of(system)
+    except DalembertError:
+        mb = None
+    if mb is not None:
+        return (lambda s, q: mb.stick_figure(q)), "the multibody stick figure"
+    particles = particle_points(list(system.coordinate_names))
+    if not particles:
+        return None, ("no animation: the example has no draw(system, q), is not a multibody "
+                      "system and has no x, y (z) coordinates of a particle")
+    dim = max(len(p) for p in particles)
+
+    def draw_points(_system: object, q: np.ndarray) -> list[np.ndarray]:
+        return [np.array([[*q[list(p)], *[0.0] * (dim - len(p))]]) for p in particles]
+
+    return draw_points, "the particles as points"
+
+
+def write_animation(run: ExampleRun, module: ModuleType, out: Path, *, html: bool = False,
+                    frames: int = ANIMATION_FRAMES) -> list[Path]:
+    """Write ``animation.gif`` (and ``animation.html``) of ``run`` into ``out``.
+
+    Returns the files written; when there is nothing to draw, none, and a note in
+    ``run.notes`` says why.
+    """
+    from .plotting import animate
+
+    draw, how = mechanism_drawer(module, run.system)
+    if draw is None:
+        run.notes.append(how)
+        return []
+    run.notes.append(f"animation: {how}, {frames} frames at most")
+    names = ["animation.gif", "animation.html"] if html else ["animation.gif"]
+    return [animate(run.trajectory, out / n, system=run.system, draw=draw, frames=frames,
+                    title=run.name) for n in names]
+
+
 def run_example(
     name: str,
     out_dir: str | os.PathLike | None = None,
@@ -96,6 +187,9 @@ def run_example(
     t_end: float | None = None,
     points: int = DEFAULT_POINTS,
     energy: str = "auto",
+    animation: bool = True,
+    html: bool = False,
+    frames: int = ANIMATION_FRAMES,
 ) -> ExampleRun:
     """Simulate the example ``name`` from ``INITIAL`` over ``[0, t_end]``.
 
@@ -111,6 +205,9 @@ def run_example(
         Number of equally spaced output times.
     energy
         ``"energy"``, ``"jacobi"`` or ``"auto"`` (see :func:`energy_quantity`).
+    animation, html, frames
+        Write ``animation.gif`` (and ``animation.html`` if ``html``) of at most
+        ``frames`` frames when ``out_dir`` is given (see :func:`write_animation`).
 
     Returns
     -------
@@ -140,6 +237,8 @@ def run_example(
         run.files.append(traj.save(out / "trajectory.npz"))
         run.files += plot_all(traj, out, system=system, energy=quantity,
                               path_xy=path_coordinates(module, system))
+        if animation:
+            run.files += write_animation(run, module, out, html=html, frames=frames)
     return run
 
 
@@ -177,6 +276,7 @@ def format_run(run: ExampleRun, base: Path | None = None) -> str:
         "```",
         "",
         f"Files: {files}",
+        *[f"\n{note}" for note in run.notes],
         "",
     ])
 
@@ -210,6 +310,98 @@ def demo(
     ]).rstrip() + "\n"
     (out / "summary.md").write_text(text, encoding="utf-8")
     return text
+
+
+def gallery(
+    out_dir: str | os.PathLike,
+    names: list[str] | tuple[str, ...] | None = None,
+    *,
+    t_end: float | None = None,
+    points: int = GALLERY_POINTS,
+    frames: int = ANIMATION_FRAMES,
+) -> tuple[str, list[str]]:
+    """Run every example (or ``names``) into ``out_dir/<name>/``; write the indexes.
+
+    Each example runs over ``t_end`` (default: its ``T_END``, at most
+    :data:`GALLERY_T_END`) with plots and ``animation.gif``. ``index.md`` holds
+    each example's measured checks and files, ``index.html`` the same with the
+    PNGs and GIFs shown. Warnings (dependent constraints, adjusted initial values)
+    become notes of the example. An example that fails is listed with its error,
+    and the others still run.
+
+    Returns
+    -------
+    tuple
+        The text of ``index.md`` and the names of the examples that failed.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    names = list(examples.EXAMPLES if names is None else names)
+    runs, failed = [], {}
+    for name in names:
+        try:
+            module = examples.load(name)
+            span = min(float(module.T_END), GALLERY_T_END) if t_end is None else t_end
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                run = run_example(name, out / name, t_end=span, points=points, frames=frames)
+            run.notes += [f"{w.category.__name__}: {w.message}" for w in caught]
+            runs.append(run)
+        except Exception as exc:  # one broken example must not hide the others
+            failed[name] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+    text = "\n".join([
+        "# dalembert gallery",
+        "",
+        "Every example simulated in redundant coordinates with Lagrange multipliers; the "
+        "tables give the errors measured against independent answers (closed forms, "
+        "minimal-coordinate models, conservation laws). Pictures: `index.html`.",
+        "",
+        *[format_run(run, base=out) for run in runs],
+        *[f"## {name}: failed\n\n`{error}`\n" for name, error in failed.items()],
+    ]).rstrip() + "\n"
+    (out / "index.md").write_text(text, encoding="utf-8")
+    (out / "index.html").write_text(gallery_html(runs, failed, out), encoding="utf-8")
+    return text, list(failed)
+
+
+_HTML_HEAD = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>dalembert gallery</title>
+<style>body{font-family:sans-serif;max-width:1100px;margin:auto}
+img{max-width:360px;margin:4px;border:1px solid #ddd}
+table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 8px}
+pre{background:#f6f6f6;padding:6px}</style></head><body>
+<h1>dalembert gallery</h1>
+<p>Every example simulated in redundant coordinates with Lagrange multipliers, with the
+errors measured against independent answers.</p>
+"""
+
+
+def gallery_html(runs: list[ExampleRun], failed: dict[str, str], base: Path) -> str:
+    """The gallery page: per example its checks, summary, animation and plots.
+
+    >>> print(gallery_html([], {"x": "Error: <no>"}, Path(".")).splitlines()[-2])
+    <h2>x: failed</h2><p><code>Error: &lt;no&gt;</code></p>
+    """
+    parts = [_HTML_HEAD, "<ul>"]
+    parts += [f'<li><a href="#{run.name}">{run.name}</a>: {html.escape(run.title)}</li>'
+              for run in runs]
+    parts.append("</ul>")
+    for run in runs:
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v:.2e}</td></tr>"
+                       for k, v in run.checks.items())
+        images = "".join(
+            f'<img src="{html.escape(_relative(p, base))}" alt="{p.stem}">'
+            for p in sorted(run.files, key=lambda p: p.suffix != ".gif")
+            if p.suffix in (".png", ".gif"))
+        notes = "".join(f"<p>{html.escape(n)}</p>" for n in run.notes)
+        parts.append(
+            f'<h2 id="{run.name}">{run.name}: {html.escape(run.title)}</h2>'
+            f"<table><tr><th>check</th><th>value</th></tr>{rows}</table>"
+            f"<pre>{html.escape(run.trajectory.summary())}</pre>{notes}<div>{images}</div>")
+    parts += [f"<h2>{html.escape(name)}: failed</h2><p><code>{html.escape(err)}</code></p>"
+              for name, err in failed.items()]
+    parts.append("</body></html>\n")
+    return "\n".join(parts)
 
 
 def _energy_label(run: ExampleRun) -> str:

@@ -7,6 +7,7 @@ import types
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from dalembert import cli, examples
 from dalembert.errors import ModelError
@@ -60,6 +61,43 @@ def test_run_pendulum_writes_files_and_prints_checks(tmp_path, capsys):
     assert len(traj) == 26 and traj.t[-1] == pytest.approx(0.5)
     # independent check of the saved data: the bob stays on the circle of radius l = 1
     assert np.abs(np.hypot(traj["x"], traj["y"]) - 1.0).max() < 1e-12
+    with Image.open(out / "animation.gif") as gif:   # one frame per output point (26 < 60)
+        assert gif.n_frames == 26
+    assert "animation: the example's draw(system, q)" in printed
+    assert not (out / "animation.html").exists()
+
+
+def test_run_html_and_no_animation(tmp_path, capsys):
+    assert cli.main(["run", "heavy-top", *SHORT, "--out", str(tmp_path / "a"),
+                     "--html"]) == 0
+    page = (tmp_path / "a" / "animation.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and "<script>" in page
+    assert page.count("data:image/png;base64") == 26
+    assert (tmp_path / "a" / "animation.gif").exists()
+    assert cli.main(["run", "pendulum", *SHORT, "--out", str(tmp_path / "b"),
+                     "--no-animation"]) == 0
+    printed = capsys.readouterr().out.split("pendulum:")[-1]
+    assert "animation:" not in printed and "animation.gif" not in printed
+    assert not list((tmp_path / "b").glob("animation.*"))
+    assert (tmp_path / "b" / "path.png").exists()
+
+
+def test_gallery_lists_a_failing_example_and_writes_the_others(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(examples.EXAMPLES, "broken", "no_such_module")
+    assert cli.main(["gallery", "pendulum", "broken", "--out", str(tmp_path), *SHORT]) == 1
+    captured = capsys.readouterr()
+    assert "1 example(s) failed: broken" in captured.err
+    assert "pendulum: " + cartesian_pendulum.TITLE in captured.out
+    index = (tmp_path / "index.md").read_text()
+    assert "## broken: failed" in index and "ModuleNotFoundError" in index
+    assert (tmp_path / "pendulum" / "animation.gif").exists()
+    assert 'src="pendulum/animation.gif"' in (tmp_path / "index.html").read_text()
+
+
+def test_gallery_unknown_example_exits_2(tmp_path, capsys):
+    assert cli.main(["gallery", "no-such-example", "--out", str(tmp_path)]) == 2
+    assert "no-such-example" in capsys.readouterr().err
+    assert not (tmp_path / "index.md").exists()
 
 
 def test_demo_writes_plots_and_summary(tmp_path, capsys):
@@ -77,6 +115,8 @@ def test_demo_writes_plots_and_summary(tmp_path, capsys):
     else:
         assert "## knife-edge" in summary
         assert (out / "knife-edge" / "path.png").stat().st_size > 0
+    assert "## heavy-top" in summary   # the multibody example, with its animation
+    assert (out / "heavy-top" / "animation.gif").stat().st_size > 0
 
 
 def test_demo_falls_back_to_the_pendulum(monkeypatch, tmp_path, capsys):

@@ -18,7 +18,8 @@ Immobility. Dependent constraints are legitimate (a closed loop of hinges), so a
 count of equations decides nothing; :func:`check_mobility` measures
 ``rank(A)`` at the initial state and, when it leaves no degree of freedom,
 raises a :class:`~dalembert.ConstraintError` naming every joint, its rows and
-which of them depend on the others.
+which of them depend on the others (the rank and the dependent rows are those of
+:func:`dalembert.solvers.kkt.constraint_rank`, as in the solver).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConstraintError
+from ..solvers.kkt import constraint_rank
 from .bodies import Ground, RigidBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
 from .rotations import rotation_matrix
@@ -41,7 +43,6 @@ if TYPE_CHECKING:
 FAR_FACTOR = 10.0
 #: Joints whose two points must coincide (the frame check at the initial state applies).
 _COINCIDENT = (Spherical, Universal, Revolute, Fixed)
-_RANK_RTOL = 1e-10
 
 
 class JointPointWarning(UserWarning):
@@ -117,23 +118,6 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
             )
 
 
-def dependent_rows(A: np.ndarray) -> list[int]:
-    """Rows of ``A`` that are combinations of earlier rows.
-
-    >>> dependent_rows(np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0]]))
-    [1]
-    """
-    tol = _RANK_RTOL * max(np.abs(A).max(initial=0.0), 1.0)
-    kept: list[int] = []
-    out = []
-    for i in range(A.shape[0]):
-        if np.linalg.matrix_rank(A[[*kept, i]], tol=tol) > len(kept):
-            kept.append(i)
-        else:
-            out.append(i)
-    return out
-
-
 def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
                    parameters: Mapping | None = None, cause: BaseException | None = None) -> int:
     """Degrees of freedom ``n - rank(A)`` at ``q0``; raise naming the joints when none.
@@ -152,12 +136,10 @@ def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
     else:
         q = np.asarray(q0, dtype=float)
     A, _ = system.numeric(parameters).velocity_constraint(t0, q)
-    dependent = dependent_rows(A)
-    dof = len(names) - (A.shape[0] - len(dependent))
-    if dof > 0:
-        return dof
-    rows = system.constraint_names
-    dep = {rows[i] for i in dependent}
+    rank = constraint_rank(A, system.constraint_names, len(names))
+    if rank.degrees_of_freedom > 0:
+        return rank.degrees_of_freedom
+    dep = set(rank.dependent_names)
     parts = []
     for j in mb.joints:
         extra = [c for c in j.constraint_names if c in dep]
@@ -165,7 +147,7 @@ def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
         parts.append(f"{j.name} ({type(j).__name__}: {j.n_equations} rows{note})")
     raise ConstraintError(
         f"the joints leave the mechanism no degree of freedom at the initial state: rank(A) "
-        f"= {A.shape[0] - len(dependent)} independent rows on {len(names)} coordinates of "
+        f"= {rank.rank} independent rows on {len(names)} coordinates of "
         f"bodies {', '.join(b.name for b in mb.bodies)} (one unit-quaternion row per rigid "
         f"body). Joints: {'; '.join(parts) or 'none'}. Remove a joint or use one with fewer "
         "equations"

@@ -10,22 +10,25 @@ The mechanism is drawn as polylines at each frame's configuration ``q``:
 
 3D drawings are shown in a 3D axes, or projected on a coordinate plane with
 ``plane="xz"`` (``"xy"``, ``"yz"``). The file type follows the suffix: ``.gif``
-(matplotlib's ``PillowWriter``) or ``.html`` (``Animation.to_jshtml``, a
-self-contained page with play controls). Figures are plain
-:class:`matplotlib.figure.Figure` objects on an Agg canvas: no pyplot, no
-backend switching, no screen.
+(written by Pillow) or ``.html`` (a self-contained page of PNG frames with play,
+pause and a slider). Figures are plain :class:`matplotlib.figure.Figure` objects
+on an Agg canvas: no pyplot, no backend switching, no screen. The axes, grid and
+labels are drawn once and only the mechanism and the time are redrawn per frame
+(blitting): about ten times faster than redrawing the figure.
 """
 
 from __future__ import annotations
 
+import base64
+import io
 import os
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from matplotlib.animation import FuncAnimation, PillowWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from PIL import Image
 
 from ..trajectory import Trajectory
 
@@ -107,6 +110,7 @@ def _figure(dim: int, limits: np.ndarray, plane: str | None):
         ax.set_xlim(*limits[0])
         ax.set_ylim(*limits[1])
         ax.set_aspect("equal")
+        fig.subplots_adjust(left=0.16)   # room for the y label
         labels = plane or "xy"
         ax.set_xlabel(labels[0])
         ax.set_ylabel(labels[1])
@@ -186,10 +190,63 @@ def animate(
         label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}")
         return [*artists, label]
 
-    anim = FuncAnimation(fig, update, frames=len(idx), interval=1000.0 / fps, blit=False)
+    images = _render(fig, [*artists, label], update, len(idx))
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
-        anim.save(path, writer=PillowWriter(fps=fps))
+        # one palette, from the first frame, for all: quantizing each frame anew is
+        # most of the time of a GIF
+        palette = images[0].quantize(colors=128)
+        frames_p = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
+        frames_p[0].save(path, save_all=True, append_images=frames_p[1:], loop=0,
+                         duration=round(1000.0 / fps))
     else:
-        path.write_text(anim.to_jshtml(fps=fps), encoding="utf-8")
+        path.write_text(_html_player(images, fps, title or "animation"), encoding="utf-8")
     return path
+
+
+def _render(fig: Figure, animated: list, update: Callable, n: int) -> list:
+    """The ``n`` frames as RGB images: the static figure once, the ``animated`` artists
+    drawn over a copy of it per frame."""
+    for artist in animated:
+        artist.set_animated(True)   # left out of the full draw below
+    canvas = fig.canvas
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    images = []
+    for k in range(n):
+        canvas.restore_region(background)
+        for artist in update(k):
+            fig.draw_artist(artist)
+        rgba = np.asarray(canvas.buffer_rgba())
+        images.append(Image.fromarray(rgba[..., :3].copy()))
+    return images
+
+
+_PLAYER = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{title}</title></head>
+<body style="font-family:sans-serif">
+<img id="frame" alt="{title}"><br>
+<button id="play">pause</button> <input id="slider" type="range" min="0" max="{last}" value="0">
+<script>
+const frames = [{frames}];
+const img = document.getElementById("frame"), slider = document.getElementById("slider");
+const button = document.getElementById("play");
+let k = 0, playing = true;
+function show(i) {{ k = i; img.src = frames[i]; slider.value = i; }}
+slider.oninput = () => {{ playing = false; button.textContent = "play"; show(+slider.value); }};
+button.onclick = () => {{ playing = !playing; button.textContent = playing ? "pause" : "play"; }};
+setInterval(() => {{ if (playing) show((k + 1) % frames.length); }}, {interval});
+show(0);
+</script></body></html>
+"""
+
+
+def _html_player(images: list, fps: float, title: str) -> str:
+    """A self-contained page: the frames as base64 PNGs and a few lines of JavaScript."""
+    urls = []
+    for image in images:
+        buf = io.BytesIO()
+        image.save(buf, format="PNG")
+        urls.append('"data:image/png;base64,' + base64.b64encode(buf.getvalue()).decode() + '"')
+    return _PLAYER.format(title=title.replace("<", "&lt;"), last=len(images) - 1,
+                          frames=",\n".join(urls), interval=round(1000.0 / fps))

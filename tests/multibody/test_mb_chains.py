@@ -161,8 +161,11 @@ def rigid_chain_initial(mb, ref, n, y0):
     )
 
 
+# n = 3 (measured: 5.7 s spherical, 3.9 s revolute on 2 cores; errors over 2 s: positions
+# 2.0e-12 / 1.3e-12, rotation matrices 4.3e-12 / 4.2e-12)
 @pytest.mark.validation
-@pytest.mark.parametrize(("n", "kind"), [(2, "spherical"), (2, "revolute")])
+@pytest.mark.parametrize(("n", "kind"), [(2, "spherical"), (2, "revolute"),
+                                         (3, "spherical"), (3, "revolute")])
 def test_rigid_chain_matches_minimal_coordinates(n, kind):
     mass, length, radius = 1.3, 0.8, 0.06
     ref = rigid_chain_reference(n, mass, length, radius, kind)
