@@ -1,13 +1,14 @@
 # Two commands do all set-up on a fresh machine:
 #   make demo   simulate the gallery's demo systems, write plots and a report to out/demo
 #   make test   lint (ruff) and the whole test suite (unit, doctests, validation)
-#   make bench  the benchmark against the SymPy path (JSON in bench/results)
+#   make bench  the benchmark suite against SymPy, MuJoCo and Exudyn (JSON + PNG in bench/results)
+#   make bench-quick  the same at small n with short caps (under 5 minutes)
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,8 +25,19 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest
 
-bench: $(STAMP)
-	$(BIN)/python bench/run.py
+BENCH_STAMP := $(VENV)/.bench-installed
+
+$(BENCH_STAMP): $(STAMP)
+	$(BIN)/pip install --quiet -e '.[dev,bench]'
+	touch $(BENCH_STAMP)
+
+bench: $(BENCH_STAMP)
+	$(BIN)/python bench/suite.py
+	$(BIN)/python bench/plot.py bench/results/suite.json
+
+bench-quick: $(BENCH_STAMP)
+	$(BIN)/python bench/suite.py --quick --out bench/results/suite_quick.json
+	$(BIN)/python bench/plot.py bench/results/suite_quick.json
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .ruff_cache

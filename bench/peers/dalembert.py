@@ -1,0 +1,89 @@
+"""dalembert: the chain in redundant coordinates (7 per link: center + Euler parameters).
+
+Build = ``chain(...)`` + derivation + code generation (``system.compiled``). The
+simulation is ``Multibody.simulate`` with DOP853 and projection, tolerances
+tightened until the target is met. One evaluation = the KKT solve for the
+accelerations and multipliers at the initial state.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from .common import T_END, centers, energy_error, omega, tilt, time_call, warm_allowed
+from .ladder import climb
+
+TOOL = "dalembert"
+#: DOP853 relative tolerances tried in turn (atol = rtol / 100).
+RTOLS = (1e-6, 1e-8, 1e-10, 1e-12)
+
+
+def versions() -> dict:
+    import scipy
+    import sympy
+
+    import dalembert
+
+    return {"dalembert": dalembert.__version__, "sympy": sympy.__version__,
+            "numpy": np.__version__, "scipy": scipy.__version__}
+
+
+def build(workload: str, n: int):
+    from dalembert.multibody import chain
+
+    start = time.perf_counter()
+    mb = chain(n, 1.0, 1.0, 0.05, joint=workload)
+    mb.system.compiled  # derive and generate code now  # noqa: B018
+    return mb, time.perf_counter() - start
+
+
+def initial_state(mb, workload: str, n: int):
+    names = [b.name for b in mb.bodies]
+    rot, w, c = tilt(), omega(workload), centers(n)
+    return mb.initial_state(
+        positions=dict(zip(names, c)), orientations=dict.fromkeys(names, rot),
+        velocities={k: np.cross(w, ck) for k, ck in zip(names, c)},
+        angular_velocities=dict.fromkeys(names, w),
+    )
+
+
+def run(workload: str, n: int) -> dict:
+    from dalembert.solvers.dynamics import accelerations
+
+    mb, cold = build(workload, n)
+    warm = build(workload, n)[1] if warm_allowed(cold) else None
+    q0, qd0 = initial_state(mb, workload, n)
+    num = mb.system.numeric()
+    q = np.array([q0[k] for k in mb.system.coordinate_names])
+    qd = np.array([qd0[k] for k in mb.system.coordinate_names])
+    eval_s = time_call(lambda: accelerations(num, 0.0, q, qd))
+
+    def attempt(rtol: float) -> dict:
+        start = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # rounding-level projection of q0
+            traj = mb.simulate((0.0, T_END), q0, qd0, rtol=rtol, atol=rtol / 100,
+                               t_eval=np.linspace(0.0, T_END, 101))
+        simulate_s = time.perf_counter() - start
+        return {
+            "setting": {"method": "DOP853", "rtol": rtol, "atol": rtol / 100,
+                        "stabilization": "projection"},
+            "simulate_s": simulate_s, "evaluations": int(traj.stats["nfev"]),
+            "energy_error": energy_error(traj.energy[0], traj.energy[-1], n),
+            "initial_energy": float(traj.energy[0]),
+            "residual": float(traj.position_residual.max()),
+            "velocity_residual": float(traj.velocity_residual.max()),
+            "finished": traj.status == "finished" if isinstance(traj.status, str)
+            else bool(traj.status == 0),
+        }
+
+    record = climb(attempt, RTOLS)
+    coords = len(mb.system.coordinate_names)
+    record.update(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=coords,
+                  constraints=len(mb.system.constraint_names),
+                  build_note="no on-disk cache: the warm build re-derives in the same "
+                             "process (only SymPy's in-memory caches are warm)")
+    return record
