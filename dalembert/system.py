@@ -25,7 +25,7 @@ from .solvers.initialization import InitializationReport, consistent_state, stat
 from .solvers.integrate import IntegrationResult, integrate
 from .solvers.kkt import REDUNDANT_MODES
 from .solvers.outputs import evaluate_outputs
-from .solvers.projection import project_state
+from .solvers.projection import StepProjector
 from .statics import Equilibrium, Linearization
 from .statics import equilibrium as _equilibrium
 from .statics import linearize as _linearize
@@ -178,7 +178,7 @@ class System:
         q = state_vector(q0, names, "q0")
         qd = state_vector(qd0, names, "qd0")
         cons = self.model.constraints
-        labels = [cons.describe(i) for i in range(cons.m)]
+        labels = _LazyLabels(cons.describe, cons.m)  # printed only for an error message
         mode = self.redundant_constraints if redundant_constraints is None \
             else _check_redundant(redundant_constraints)
         return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed,
@@ -237,8 +237,7 @@ class System:
             warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=2)
         kept = report.rank.kept if report.rank is not None else None
         gain = baumgarte_gain if stabilization == "baumgarte" else 0.0
-        project = (lambda t, y: project_state(num, t, y)) if stabilization == "projection" \
-            else None
+        project = StepProjector(num, kept) if stabilization == "projection" else None
         result = integrate(
             first_order_rhs(num, gain, kept), t_span, np.concatenate([report.q, report.qd]),
             method=method, t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
@@ -283,6 +282,23 @@ class System:
             message=result.message, stats=result.stats, initialization=str(report),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
         )
+
+
+class _LazyLabels(Sequence):
+    """``describe(i)`` for ``i < size``, each made on first access (printing is slow)."""
+
+    def __init__(self, describe: Callable[[int], str], size: int) -> None:
+        self._describe, self._size = describe, size
+
+    def __len__(self) -> int:
+        return self._size
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(self._size))]
+        if not -self._size <= i < self._size:
+            raise IndexError(i)
+        return self._describe(i % self._size)
 
 
 def _check_redundant(mode: str) -> str:

@@ -1,9 +1,13 @@
 """Numeric functions of a model, generated once and bound to parameter values.
 
-:func:`compile_equations` turns the symbolic equations into four NumPy functions
-(KKT blocks, velocity-level constraint, position-level constraint, energies).
-They take the parameter values as an array, so a :class:`CompiledEquations` is
-generated once per System and re-bound to new values at no cost.
+:func:`compile_equations` turns the symbolic equations into four flat functions
+(KKT blocks, velocity-level constraint, position-level constraint, energies),
+compiled C when a compiler exists, else NumPy (:mod:`.c_backend` says why, with
+numbers). ``M`` and ``A`` come out as the values of a fixed sparsity pattern
+(:class:`SparsePattern`, computed once), so an evaluation costs time in
+proportion to the nonzeros; dense views are built on request. The functions take
+the parameter values as an array, so a :class:`CompiledEquations` is generated
+once per System and re-bound to new values at no cost.
 """
 
 from __future__ import annotations
@@ -15,22 +19,80 @@ import numpy as np
 import sympy as sp
 
 from ..equations.lagrange import Equations
-from ..equations.sparse import gradient
+from ..equations.sparse import gradient, nonzero_entries
 from ..model.coordinates import t
-from .numpy_printer import generate_function
+from . import c_backend
+
+
+@dataclass(frozen=True)
+class SparsePattern:
+    """Fixed sparsity of ``M`` (``n x n``) and ``A`` (``m x n``): row and column of each value.
+
+    The generated functions return only these entries, in this order; the pattern
+    is computed once from the symbolic matrices (an entry that is zero symbolically
+    is zero at every state).
+    """
+
+    n: int
+    m: int
+    M_rows: np.ndarray
+    M_cols: np.ndarray
+    A_rows: np.ndarray
+    A_cols: np.ndarray
+
+    def dense_M(self, values: np.ndarray) -> np.ndarray:
+        M = np.zeros((self.n, self.n))
+        M[self.M_rows, self.M_cols] = values
+        return M
+
+    def dense_A(self, values: np.ndarray) -> np.ndarray:
+        A = np.zeros((self.m, self.n))
+        A[self.A_rows, self.A_cols] = values
+        return A
 
 
 @dataclass(frozen=True)
 class CompiledEquations:
-    """Generated functions of ``(t, q, qd, p)``; see :class:`NumericModel`."""
+    """Generated functions of ``(t, q, qd, p)``; see :class:`NumericModel`.
 
-    kkt_blocks: Callable
-    velocity_constraint: Callable
-    position_constraint: Callable
-    energies: Callable
-    n: int
-    m: int
+    ``kkt_values(t, q, qd, p)`` returns ``[M values, f, A values, c]`` and
+    ``velocity_values(t, q, p)`` ``[A values, b]`` (values in ``pattern`` order);
+    ``backend`` is ``"c"`` or ``"numpy"`` (see :mod:`dalembert.codegen.c_backend`).
+    """
+
+    kkt_values: Callable
+    velocity_values: Callable
+    position_values: Callable
+    energy_values: Callable
+    pattern: SparsePattern
     holonomic_rows: tuple[int, ...]
+    backend: str = "numpy"
+
+    @property
+    def n(self) -> int:
+        return self.pattern.n
+
+    @property
+    def m(self) -> int:
+        return self.pattern.m
+
+    def kkt_blocks(self, t: float, q: np.ndarray, qd: np.ndarray, p: np.ndarray):
+        """Dense ``(M, f, A, c)``."""
+        Mv, f, Av, c = self.split_kkt(self.kkt_values(t, q, qd, p))
+        return self.pattern.dense_M(Mv), f, self.pattern.dense_A(Av), c
+
+    def split_kkt(self, values: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``[M values, f, A values, c]`` cut into its four parts (views)."""
+        k1 = len(self.pattern.M_rows)
+        k2 = k1 + self.n
+        k3 = k2 + len(self.pattern.A_rows)
+        return values[:k1], values[k1:k2], values[k2:k3], values[k3:]
+
+    def velocity_constraint(self, t: float, q: np.ndarray, p: np.ndarray):
+        """Dense ``(A, b)``."""
+        k = len(self.pattern.A_rows)
+        values = self.velocity_values(t, q, p)
+        return self.pattern.dense_A(values[:k]), values[k:]
 
     def bind(self, p: np.ndarray) -> NumericModel:
         return NumericModel(self, np.asarray(p, dtype=float))
@@ -40,8 +102,10 @@ class CompiledEquations:
 class NumericModel:
     """The compiled equations with numeric parameter values.
 
-    - ``kkt_blocks(t, q, qd) -> (M, f, A, c)``
-    - ``velocity_constraint(t, q) -> (A, b)`` with ``A qd + b = 0``
+    - ``kkt_blocks(t, q, qd) -> (M, f, A, c)`` (dense arrays)
+    - ``kkt_sparse(t, q, qd) -> (M values, f, A values, c)`` in ``pattern`` order
+    - ``velocity_constraint(t, q) -> (A, b)`` with ``A qd + b = 0`` (dense ``A``)
+    - ``velocity_sparse(t, q) -> (A values, b)``
     - ``position_constraint(t, q) -> psi`` (holonomic rows only)
     - ``energies(t, q, qd) -> [T, V, h]`` with ``h = qd . dL/dqd - L`` (Jacobi)
     """
@@ -58,45 +122,63 @@ class NumericModel:
         return self.compiled.m
 
     @property
+    def pattern(self) -> SparsePattern:
+        return self.compiled.pattern
+
+    @property
     def holonomic_rows(self) -> tuple[int, ...]:
         return self.compiled.holonomic_rows
 
     def kkt_blocks(self, t: float, q: np.ndarray, qd: np.ndarray):
         return self.compiled.kkt_blocks(t, q, qd, self.p)
 
+    def kkt_sparse(self, t: float, q: np.ndarray, qd: np.ndarray):
+        return self.compiled.split_kkt(self.compiled.kkt_values(t, q, qd, self.p))
+
     def velocity_constraint(self, t: float, q: np.ndarray):
         return self.compiled.velocity_constraint(t, q, self.p)
 
+    def velocity_sparse(self, t: float, q: np.ndarray):
+        k = len(self.pattern.A_rows)
+        values = self.compiled.velocity_values(t, q, self.p)
+        return values[:k], values[k:]
+
     def position_constraint(self, t: float, q: np.ndarray) -> np.ndarray:
-        return self.compiled.position_constraint(t, q, self.p)[0]
+        return self.compiled.position_values(t, q, self.p)
 
     def energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        return self.compiled.energies(t, q, qd, self.p)[0]
+        return self.compiled.energy_values(t, q, qd, self.p)
 
 
-def compile_equations(eqs: Equations) -> CompiledEquations:
-    """Generate the numeric functions of ``eqs`` (common subexpressions shared)."""
+def compile_equations(eqs: Equations, backend: str | None = None) -> CompiledEquations:
+    """Generate the numeric functions of ``eqs`` (C when a compiler exists, else NumPy).
+
+    ``backend`` (``"c"`` or ``"numpy"``) overrides :func:`~.c_backend.backend`.
+    """
     model = eqs.model
     coords = model.coords
     time = [("t", [t]), ("q", coords.q)]
     state = [*time, ("qd", coords.qd), ("p", model.parameters)]
     static = [*time, ("p", model.parameters)]
     cons = model.constraints
-    vectors = ("f", "c", "b", "psi", "E")
-    kkt = generate_function(
-        "kkt_blocks", state, [("M", eqs.M), ("f", eqs.f), ("A", eqs.A), ("c", eqs.c)],
-        vectors=vectors,
-    )
-    velocity = generate_function(
-        "velocity_constraint", static, [("A", eqs.A), ("b", eqs.b)], vectors=vectors
-    )
-    position = generate_function("position_constraint", static, [("psi", cons.psi)],
-                                 vectors=vectors)
-    energies = generate_function("energies", state, [("E", _energy_vector(eqs))],
-                                 vectors=vectors)
-    return CompiledEquations(
-        kkt, velocity, position, energies, coords.n, cons.m, cons.holonomic_rows
-    )
+    M_entries, A_entries = nonzero_entries(eqs.M), nonzero_entries(eqs.A)
+    pattern = SparsePattern(coords.n, cons.m, *_indices(M_entries), *_indices(A_entries))
+    M_vals, A_vals = list(M_entries.values()), list(A_entries.values())
+    specs = [
+        ("kkt_values", state, [*M_vals, *eqs.f, *A_vals, *eqs.c]),
+        ("velocity_values", static, [*A_vals, *eqs.b]),
+        ("position_values", static, list(cons.psi)),
+        ("energy_values", state, list(_energy_vector(eqs))),
+    ]
+    use = c_backend.backend() if backend is None else backend
+    functions = c_backend.build_flat_functions(specs, use=use)
+    used = "c" if hasattr(functions[0], "library") else "numpy"
+    return CompiledEquations(*functions, pattern, cons.holonomic_rows, used)
+
+
+def _indices(entries: dict) -> tuple[np.ndarray, np.ndarray]:
+    ij = np.array(list(entries), dtype=np.intp).reshape(-1, 2)
+    return ij[:, 0].copy(), ij[:, 1].copy()
 
 
 def _energy_vector(eqs: Equations) -> sp.Matrix:

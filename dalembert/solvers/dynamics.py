@@ -11,6 +11,11 @@ With dependent constraints, ``kept`` (the independent rows, measured once at the
 initial state by :func:`~dalembert.solvers.kkt.constraint_rank`) makes each
 evaluation solve the reduced KKT system: same cost as the full-rank path, and no
 multipliers are computed, since the integrator needs ``qdd`` only.
+
+Each evaluation is linear in the size of the mechanism: the generated code returns
+``M`` and ``A`` on their fixed sparsity pattern and
+:class:`~dalembert.solvers.sparse_kkt.KKTSolver` factors the sparse KKT matrix
+(dense below a measured size, where that is faster).
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from .kkt import kkt_accelerations, solve_kkt
+from .sparse_kkt import KKTSolver, matvec
 
 
 def accelerations(
@@ -28,19 +33,20 @@ def accelerations(
     kept: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``qdd`` and the multipliers ``lambda`` at one state (minimum norm if ``kept``)."""
-    return solve_kkt(*_blocks(num, t, q, qd, baumgarte), kept)
+    return KKTSolver(num.pattern, kept).solve(*_blocks(num, t, q, qd, baumgarte))
 
 
 def _blocks(num: NumericModel, t: float, q: np.ndarray, qd: np.ndarray, baumgarte: float):
-    """``M, f, A, c`` with the Baumgarte terms added to ``c``."""
-    M, f, A, c = num.kkt_blocks(t, q, qd)
+    """Values of ``M``, ``f``, ``A`` (on the pattern), ``c`` with the Baumgarte terms."""
+    Mv, f, Av, c = num.kkt_sparse(t, q, qd)
     if baumgarte and num.m:
-        _, b = num.velocity_constraint(t, q)
-        c = c - 2.0 * baumgarte * (A @ qd + b)
+        pat = num.pattern
+        _, b = num.velocity_sparse(t, q)
+        c = c - 2.0 * baumgarte * (matvec(pat.A_rows, pat.A_cols, Av, qd, num.m) + b)
         rows = list(num.holonomic_rows)
         if rows:
             c[rows] -= baumgarte**2 * num.position_constraint(t, q)
-    return M, f, A, c
+    return Mv, f, Av, c
 
 
 def first_order_rhs(
@@ -48,9 +54,10 @@ def first_order_rhs(
 ) -> Callable:
     """``F(t, y)`` for SciPy's integrators (``kept``: see the module docstring)."""
     n = num.n
+    solver = KKTSolver(num.pattern, kept)
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
-        qdd = kkt_accelerations(*_blocks(num, t, y[:n], y[n:], baumgarte), kept)
+        qdd = solver.accelerations(*_blocks(num, t, y[:n], y[n:], baumgarte))
         return np.concatenate([y[n:], qdd])
 
     return rhs

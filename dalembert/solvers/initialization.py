@@ -12,6 +12,7 @@ from ..errors import ConstraintError, InitialConditionError
 from ..model.coordinates import key_name
 from .kkt import REDUNDANT_MODES, ConstraintRank, check_kkt, constraint_rank, dependent_error
 from .projection import project_positions, project_velocities
+from .sparse_kkt import DENSE_MAX, KKTSolver, gram_well_conditioned, kkt_well_conditioned
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
 REPORT_TOL = 1e-10
@@ -168,10 +169,13 @@ def consistent_state(
             + ("; or fix fewer coordinates" if held else "")
         ) from exc
     _check_consistent(num, t0, q, qd, free, names)
-    M, *_ = num.kkt_blocks(t0, q, qd)
-    A = num.velocity_constraint(t0, q)[0]
     kept = None if rank is None else rank.kept
-    check_kkt(M, A if kept is None else A[kept], names, "at the initial state")
+    Mv, _, Av, _ = num.kkt_sparse(t0, q, qd)
+    solver = KKTSolver(num.pattern, kept)
+    # The dense SVD diagnosis costs O(size^3): only when the sparse screen is unsure.
+    if solver.dense or not kkt_well_conditioned(solver, Mv, Av):
+        M, A = num.pattern.dense_M(Mv), num.pattern.dense_A(Av)
+        check_kkt(M, A if kept is None else A[kept], names, "at the initial state")
     return InitializationReport(tuple(names), q0, qd0, q, qd, rank)
 
 
@@ -180,12 +184,19 @@ def _rank_at(
     labels: Sequence[str], constraint_names: Sequence[str] | None, mode: str,
 ) -> ConstraintRank:
     """Measure the rank of ``A`` once; refuse no freedom, and dependence if asked to."""
-    A, _ = num.velocity_constraint(t0, q)
-    rank = constraint_rank(A, labels if constraint_names is None else constraint_names)
+    Av, _ = num.velocity_sparse(t0, q)
+    pat = num.pattern
+    label = labels if constraint_names is None else constraint_names
+    if num.m > DENSE_MAX and num.m < num.n and gram_well_conditioned(
+            pat.A_rows, pat.A_cols, Av, (num.m, num.n)):
+        rank = ConstraintRank(num.n, num.m, (), tuple(label))  # independent: no SVD needed
+    else:
+        A = pat.dense_A(Av)
+        rank = constraint_rank(A, label)
     if rank.degrees_of_freedom == 0:
         raise ConstraintError(
             f"the constraints leave no degree of freedom at the initial state: rank(A) = "
-            f"{rank.rank} independent constraints ({A.shape[0]} given) on {num.n} coordinates "
+            f"{rank.rank} independent constraints ({num.m} given) on {num.n} coordinates "
             f"({', '.join(names)}); remove constraints or add coordinates"
         )
     if rank.dependent and mode == "error":

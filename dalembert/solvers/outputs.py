@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from .kkt import solve_kkt
+from .sparse_kkt import KKTSolver, matvec
 
 
 def evaluate_outputs(
@@ -31,17 +31,19 @@ def evaluate_outputs(
         "velocity_residual": np.zeros(k),
         "energies": np.empty((k, 3)),
     }
+    solver = KKTSolver(num.pattern, kept)
+    rows, cols = num.pattern.A_rows, num.pattern.A_cols
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
-        M, f, A, c = num.kkt_blocks(ti, q, qd)
-        qdd, lam = solve_kkt(M, f, A, c, kept)
+        Mv, f, Av, c = num.kkt_sparse(ti, q, qd)
+        qdd, lam = solver.solve(Mv, f, Av, c)
         out["qdd"][i] = qdd
         out["multipliers"][i] = lam
-        out["constraint_forces"][i] = A.T @ lam
+        out["constraint_forces"][i] = matvec(cols, rows, Av, lam, n)
         if num.holonomic_rows:
             out["position_residual"][i] = np.abs(num.position_constraint(ti, q)).max()
         if m:
-            _, b = num.velocity_constraint(ti, q)
-            out["velocity_residual"][i] = np.abs(A @ qd + b).max()
+            _, b = num.velocity_sparse(ti, q)
+            out["velocity_residual"][i] = np.abs(matvec(rows, cols, Av, qd, m) + b).max()
         out["energies"][i] = num.energies(ti, q, qd)
     return out

@@ -1,0 +1,109 @@
+"""The compiled-C route: same values as the NumPy route, disk cache, fallbacks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from dalembert.codegen import c_backend
+from dalembert.codegen.compiled import compile_equations
+from dalembert.examples import coin, spherical_chain
+
+needs_cc = pytest.mark.skipif(c_backend.find_compiler() is None, reason="no C compiler found")
+x, y, k = sp.symbols("x y k")
+#: Trig, roots, powers (integer, negative, fractional), atan2, exp/log, a rational.
+EXPRS = [sp.sin(x) * sp.exp(y) + k, sp.atan2(x, y), sp.sqrt(x**2 + y**2) / k,
+         x**3 - y**-2 + sp.Rational(1, 3) * x ** sp.Rational(5, 2), sp.log(1 + y**2) * sp.cos(k),
+         sp.Abs(x - y) * sp.tanh(x), sp.pi * x**4]
+
+
+@pytest.fixture()
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("DALEMBERT_CACHE_DIR", str(tmp_path))
+    return tmp_path
+
+
+def evaluate(use):
+    spec = ("f", [("q", [x, y]), ("p", [k])], EXPRS)
+    (fn,) = c_backend.build_flat_functions([spec], use=use)
+    return fn
+
+
+@needs_cc
+def test_c_matches_sympy_at_random_points(cache):
+    fn = evaluate("c")
+    assert hasattr(fn, "library")
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        q, p = rng.uniform(0.1, 2.0, size=2), rng.uniform(0.5, 2.0, size=1)
+        expected = [float(e.subs({x: q[0], y: q[1], k: p[0]})) for e in EXPRS]
+        assert np.allclose(fn(q, p), expected, rtol=1e-14, atol=0)
+
+
+@needs_cc
+@pytest.mark.parametrize("module", [spherical_chain, coin], ids=["chain2", "coin"])
+def test_c_and_numpy_equations_agree(cache, module):
+    system = module.build(2) if module is spherical_chain else module.build()
+    eqs = system.equations()
+    fast, slow = (compile_equations(eqs, backend=b).bind(system.numeric().p)
+                  for b in ("c", "numpy"))
+    assert fast.compiled.backend == "c" and slow.compiled.backend == "numpy"
+    q0 = np.resize(np.r_[1.0, 0.2, -0.3, 0.9, 0.1, -0.2, 0.3], fast.n)  # away from singular
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        t, q, qd = rng.uniform(0, 1), q0 + 0.1 * rng.normal(size=fast.n), rng.normal(size=fast.n)
+        for a, b in zip(fast.kkt_sparse(t, q, qd), slow.kkt_sparse(t, q, qd)):
+            assert np.allclose(a, b, rtol=1e-12, atol=1e-12)
+        for a, b in zip(fast.velocity_sparse(t, q), slow.velocity_sparse(t, q)):
+            assert np.allclose(a, b, rtol=1e-12, atol=1e-12)
+        assert np.allclose(fast.position_constraint(t, q), slow.position_constraint(t, q),
+                           rtol=1e-12, atol=1e-12)
+        assert np.allclose(fast.energies(t, q, qd), slow.energies(t, q, qd), rtol=1e-12)
+
+
+@needs_cc
+def test_cache_hit_runs_neither_cse_nor_the_compiler(cache, monkeypatch):
+    evaluate("c")
+    assert len(list((cache / "c").glob("*.so"))) == 1
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("regenerated on a cache hit")
+
+    monkeypatch.setattr(c_backend.subprocess, "run", forbidden)
+    monkeypatch.setattr(c_backend.sp, "cse", forbidden)
+    fn = evaluate("c")
+    assert np.isclose(fn(np.array([1.0, 2.0]), np.array([3.0]))[0], np.sin(1) * np.exp(2) + 3)
+
+
+def test_numpy_fallback_without_a_compiler(cache, monkeypatch):
+    monkeypatch.setattr(c_backend, "find_compiler", lambda: None)
+    assert c_backend.backend() == "numpy"
+    fn = evaluate(None)
+    assert not hasattr(fn, "library")
+    assert np.isclose(fn(np.array([1.0, 2.0]), np.array([3.0]))[0], np.sin(1) * np.exp(2) + 3)
+
+
+def test_failing_compiler_warns_and_falls_back(cache, monkeypatch):
+    monkeypatch.setenv("CC", "false")
+    with pytest.warns(UserWarning, match="using NumPy"):
+        fn = evaluate("c")
+    assert np.isclose(fn(np.array([1.0, 2.0]), np.array([3.0]))[1], np.arctan2(1.0, 2.0))
+
+
+def test_backend_environment_variable(monkeypatch):
+    monkeypatch.setenv("DALEMBERT_BACKEND", "numpy")
+    assert c_backend.backend() == "numpy"
+    monkeypatch.setenv("DALEMBERT_BACKEND", "fortran")
+    with pytest.raises(ValueError, match="DALEMBERT_BACKEND must be one of"):
+        c_backend.backend()
+
+
+@needs_cc
+def test_unwritable_cache_falls_back_with_a_hint(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("DALEMBERT_CACHE_DIR", str(blocker))
+    with pytest.warns(UserWarning, match="DALEMBERT_CACHE_DIR"):
+        fn = evaluate("c")
+    assert not hasattr(fn, "library")
