@@ -131,3 +131,4 @@ def test_free_hanging_spherical_chain_conserves_energy():
     # measured over 20 s: n=2 3e-12, n=4 1.2e-12, n=16 7.1e-12 (residual 9.8e-15)
     assert np.abs(e - e[0]).max() / abs(e[0]) <= 1e-8
     assert traj.position_residual.max() <= 1e-12
+    assert traj.velocity_residual.max() <= 1e-12
