@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 import sympy as sp
+from statics_systems import L_ROD, M_BOB, G, spinning_hoop
 
 from dalembert import Holonomic, InitialConditionError, Pfaffian, System, coordinates
 from dalembert.examples import cartesian_pendulum
@@ -25,29 +26,9 @@ from dalembert.statics.equilibrium import (
     equilibrium,
 )
 
-M_BOB, G, L_ROD = 2.0, 9.81, 1.5
-
-
-@pytest.fixture(scope="module")
-def pendulum():
-    return cartesian_pendulum.build(m_value=M_BOB, g_value=G, l_value=L_ROD)
-
-
 # --------------------------------------------------------------------------- builders
 
 
-def spinning_hoop(m=0.3, g=9.81, R=0.7, W=2.0) -> System:
-    """Bead on a hoop spinning at rate W, in the hoop's rotating plane (x horizontal, z up)."""
-    x, z = coordinates("x z")
-    ms, gs, Rs, Ws = sp.symbols("m g R W", positive=True)
-    return System(
-        [x, z],
-        kinetic=ms / 2 * (x.diff() ** 2 + z.diff() ** 2 + Ws**2 * x**2),
-        potential=ms * gs * z,
-        constraints=[Holonomic(x**2 + z**2 - Rs**2, name="hoop")],
-        parameters={ms: m, gs: g, Rs: R, Ws: W},
-        name="spinning hoop",
-    )
 
 
 def hoop_point(phi: float, R: float) -> dict[str, float]:
