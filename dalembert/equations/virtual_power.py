@@ -22,7 +22,7 @@ import sympy as sp
 
 from ..errors import ModelError
 from ..model.coordinates import Coordinates, build_coordinates, t
-from ..model.forces import PointForce
+from ..model.forces import PointForce, vector_components
 
 
 def virtual_power_equations(
@@ -125,16 +125,7 @@ def _position(vec: object, frame: object, coords: Coordinates, what: str) -> sp.
 
 def _components(vec: object, frame: object, what: str) -> list[object]:
     """Three components; planar vectors get ``z = 0`` so 2- and 3-vectors mix."""
-    if hasattr(vec, "to_matrix"):
-        if frame is None:
-            raise ModelError(f"{what} is a SymPy Vector; pass frame= to read its components")
-        vec = vec.to_matrix(frame)
-    try:
-        comps = list(vec)
-    except TypeError as exc:
-        raise ModelError(f"{what} must be a vector of components, got {vec!r}") from exc
-    if len(comps) not in (2, 3):
-        raise ModelError(f"{what} has {len(comps)} components; give 2 or 3")
+    comps = vector_components(vec, frame, what)
     return comps + [0] * (3 - len(comps))
 
 

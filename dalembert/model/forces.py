@@ -80,8 +80,8 @@ def _per_coordinate_forces(
 
 
 def _virtual_work(pf: PointForce, label: str, coords: Coordinates) -> sp.Matrix:
-    force = _components(pf.force, pf.frame, f"force of {label}")
-    point = _components(pf.point, pf.frame, f"point of {label}")
+    force = vector_components(pf.force, pf.frame, f"the force of {label}")
+    point = vector_components(pf.point, pf.frame, f"the point of {label}")
     F = sp.Matrix([coords.to_plain(c, f"force of {label}") for c in force])
     r = sp.Matrix([coords.to_plain(c, f"point of {label}") for c in point])
     if any(r.has(v) for v in coords.qd):
@@ -90,19 +90,24 @@ def _virtual_work(pf: PointForce, label: str, coords: Coordinates) -> sp.Matrix:
     return partials.T * F
 
 
-def _components(vec: object, frame: object | None, what: str) -> list[object]:
+def vector_components(vec: object, frame: object | None, what: str) -> list[object]:
+    """The 2 or 3 components of a vector given as a sequence, matrix or SymPy ``Vector``.
+
+    ``what`` names the vector in error messages (``"the force of drag"``).
+
+    >>> vector_components(sp.Matrix([1, 2]), None, "the force")
+    [1, 2]
+    """
     if hasattr(vec, "to_matrix"):
         if frame is None:
-            raise ModelError(f"the {what} is a SymPy Vector; pass frame= to read its components")
+            raise ModelError(f"{what} is a SymPy Vector; pass frame= to read its components")
         vec = vec.to_matrix(frame)
-    if isinstance(vec, sp.MatrixBase):
-        vec = list(vec)
     try:
         comps = list(vec)
     except TypeError as exc:
-        raise ModelError(f"the {what} must be a vector of components, got {vec!r}") from exc
+        raise ModelError(f"{what} must be a vector of components, got {vec!r}") from exc
     if len(comps) not in (2, 3):
-        raise ModelError(f"the {what} has {len(comps)} components; give 2 or 3")
+        raise ModelError(f"{what} has {len(comps)} components; give 2 or 3")
     return comps
 
 
