@@ -112,6 +112,10 @@ class System:
 
     # -- description -----------------------------------------------------------------
     @property
+    def name(self) -> str:
+        return self.model.name
+
+    @property
     def coordinate_names(self) -> tuple[str, ...]:
         return self.model.coords.names
 
@@ -131,10 +135,10 @@ class System:
         With dependent (redundant) constraints this undercounts; the true number,
         ``n - rank(A)`` at a state, is ``consistent_initial_state(q0).degrees_of_freedom``.
         """
-        return self.model.coords.n - self.model.constraints.m
+        return len(self.coordinate_names) - len(self.constraint_names)
 
     def __repr__(self) -> str:
-        return (f"System({self.model.name!r}, coordinates={list(self.coordinate_names)}, "
+        return (f"System({self.name!r}, coordinates={list(self.coordinate_names)}, "
                 f"constraints={list(self.constraint_names)})")
 
     # -- equations and code ----------------------------------------------------------
@@ -154,7 +158,7 @@ class System:
 
     def numeric(self, parameters: Mapping[object, object] | None = None) -> NumericModel:
         """The compiled equations bound to parameter values."""
-        p = resolve_parameters(self.model.parameters, self.parameter_values, parameters)
+        p = resolve_parameters(self.parameters, self.parameter_values, parameters)
         return self.compiled.bind(p)
 
     # -- simulation ------------------------------------------------------------------
@@ -177,12 +181,14 @@ class System:
         names = self.coordinate_names
         q = state_vector(q0, names, "q0")
         qd = state_vector(qd0, names, "qd0")
-        cons = self.model.constraints
-        labels = _LazyLabels(cons.describe, cons.m)  # printed only for an error message
+        # printed only for an error message (and only then is the symbolic model needed)
+        labels = _LazyLabels(lambda i: self.model.constraints.describe(i),
+                             len(self.constraint_names))
         mode = self.redundant_constraints if redundant_constraints is None \
             else _check_redundant(redundant_constraints)
         return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed,
-                                constraint_names=cons.names, redundant_constraints=mode)
+                                constraint_names=self.constraint_names,
+                                redundant_constraints=mode)
 
     def simulate(
         self,

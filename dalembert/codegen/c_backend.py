@@ -42,7 +42,7 @@ import shutil
 import subprocess
 import tempfile
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -56,8 +56,10 @@ Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
 FlatSpec = tuple[str, Arguments, Sequence[sp.Expr]]
 
 #: Bumped whenever the generated C changes, so that stale cached libraries are not used.
-GENERATOR_VERSION = "1"
+GENERATOR_VERSION = "2"
 CFLAGS = ("-O0", "-fPIC", "-shared", "-fno-math-errno")
+#: Kernels of one part (a body, a joint) are short, so optimizing them costs little.
+PART_CFLAGS = ("-O2", *CFLAGS[1:])
 BACKENDS = ("auto", "c", "numpy")
 
 
@@ -141,25 +143,53 @@ def _empty(*arrays) -> np.ndarray:
 
 
 def _c_functions(specs: Sequence[FlatSpec]) -> list[Callable]:
-    compiler = find_compiler()
-    if compiler is None:
-        raise CompileError("no C compiler found")
-    key = _cache_key(specs, compiler)
-    library = cache_dir() / "c" / f"dalembert_{key}.so"
-    try:
-        if not library.exists():
-            source = "\n".join(["#include <math.h>", *(_c_source(*s) for s in specs)])
-            _compile(source, library, compiler)
-        lib = ctypes.CDLL(str(library))
-    except OSError as exc:  # unwritable cache directory, unloadable library
-        raise CompileError(f"{exc} (set DALEMBERT_CACHE_DIR to a writable folder)") from exc
+    lib = _library(specs, "flat", lambda: [_c_source(*s) for s in specs], CFLAGS)
     return [_bind(lib, name, arguments, len(exprs)) for name, arguments, exprs in specs]
 
 
-def _cache_key(specs: Sequence[FlatSpec], compiler: str) -> str:
+def scatter_library(kinds: Sequence[tuple[str, Sequence[FlatSpec]]],
+                    gathered: Collection[str]) -> ctypes.CDLL:
+    """Compile (or load from the cache) one driver per kind that sums many kernels.
+
+    Each spec describes one part of a model in its local variables. For kind
+    ``name`` the library exports ::
+
+        void name(const int64_t *K, const int64_t *const *index, const int64_t *const *target,
+                  const double *arg1, ..., double *out)
+
+    which, for each spec ``g`` and each of its ``K[g]`` instances ``k``, reads the
+    ``gathered`` arguments at the global positions ``index[g][k, :]``, evaluates
+    the spec's expressions and adds value ``e`` into ``out[target[g][k, e]]``
+    (``out`` is not cleared). The other arguments are passed through whole. Raises
+    :class:`CompileError` when C is unavailable.
+    """
+    gathered = frozenset(gathered)
+    every = [s for _, specs in kinds for s in specs]
+    variant = "scatter:" + ",".join(sorted(gathered)) + ":" + ",".join(k for k, _ in kinds)
+    return _library(every, variant, lambda: [
+        _scatter_source(kind, specs, gathered) for kind, specs in kinds], PART_CFLAGS)
+
+
+def _library(specs: Sequence[FlatSpec], variant: str, sources: Callable,
+             flags: Sequence[str]) -> ctypes.CDLL:
+    compiler = find_compiler()
+    if compiler is None:
+        raise CompileError("no C compiler found")
+    key = _cache_key(specs, compiler, variant + " ".join(flags))
+    library = cache_dir() / "c" / f"dalembert_{key}.so"
+    try:
+        if not library.exists():
+            _compile("\n".join(["#include <math.h>", "#include <stdint.h>", *sources()]),
+                     library, compiler, flags)
+        return ctypes.CDLL(str(library))
+    except OSError as exc:  # unwritable cache directory, unloadable library
+        raise CompileError(f"{exc} (set DALEMBERT_CACHE_DIR to a writable folder)") from exc
+
+
+def _cache_key(specs: Sequence[FlatSpec], compiler: str, variant: str) -> str:
     """Hash of everything the library depends on: expressions, argument order, flags."""
     h = hashlib.sha256()
-    for part in (GENERATOR_VERSION, sp.__version__, compiler, " ".join(CFLAGS)):
+    for part in (GENERATOR_VERSION, sp.__version__, compiler, variant):
         h.update(part.encode() + b"\0")
     for name, arguments, exprs in specs:
         h.update(name.encode() + b"\0")
@@ -194,18 +224,60 @@ class _Printer(C99CodePrinter):
 
 
 def _c_source(name: str, arguments: Arguments, exprs: Sequence[sp.Expr]) -> str:
-    names = {s: f"{arg}[{i}]" for arg, symbols in arguments for i, s in enumerate(symbols)}
     params = ", ".join([*(f"const double *{arg}" for arg, _ in arguments), "double *out"])
-    lines = [f"void {name}({params}) {{"]
+    return "\n".join([f"void {name}({params}) {{", *_c_body(arguments, exprs), "}"])
+
+
+def _c_body(arguments: Arguments, exprs: Sequence[sp.Expr]) -> list[str]:
+    """Statements setting ``out[i]`` from the arguments, common subexpressions first."""
+    names = {s: f"{arg}[{i}]" for arg, symbols in arguments for i, s in enumerate(symbols)}
     temporaries = (sp.Dummy(f"w{k}") for k in range(10**9))
     replacements, reduced = sp.cse(list(exprs), symbols=temporaries)
     printer = _Printer(names)
+    lines = []
     for k, (tmp, expr) in enumerate(replacements):
         code = _print(printer, expr)
         names[tmp] = f"w{k}"
         lines.append(f"  const double w{k} = {code};")
     lines += [f"  out[{i}] = {_print(printer, e)};" for i, e in enumerate(reduced)]
-    lines.append("}")
+    return lines
+
+
+def _scatter_source(kind: str, specs: Sequence[FlatSpec], gathered: frozenset[str]) -> str:
+    """The kernels of one kind (gather, evaluate, add) and their driver ``kind``."""
+    kernels, calls = [], []
+    for g, (_, arguments, exprs) in enumerate(specs):
+        if not exprs:
+            continue
+        name = f"{kind}_{g}"
+        kernels.append(_scatter_kernel(name, arguments, exprs, gathered))
+        passed = ", ".join(arg for arg, _ in arguments)
+        calls.append(f"  {name}(K[{g}], index[{g}], target[{g}], {passed}, out);")
+    arguments = specs[0][1]
+    params = ", ".join(["const int64_t *K", "const int64_t *const *index",
+                        "const int64_t *const *target",
+                        *(f"const double *{arg}" for arg, _ in arguments), "double *out"])
+    return "\n".join([*kernels, f"void {kind}({params}) {{", *calls, "}"])
+
+
+def _scatter_kernel(name: str, arguments: Arguments, exprs: Sequence[sp.Expr],
+                    gathered: frozenset[str]) -> str:
+    width = max((len(s) for arg, s in arguments if arg in gathered), default=0)
+    size = len(exprs)
+    params = ", ".join(["int64_t K", "const int64_t *index", "const int64_t *target",
+                        *(f"const double *{arg}_all" if arg in gathered
+                          else f"const double *{arg}" for arg, _ in arguments),
+                        "double *out_all"])
+    lines = [f"static void {name}({params}) {{", "  for (int64_t k = 0; k < K; ++k) {",
+             f"    const int64_t *at = index + k * {width};",
+             f"    double out[{size}];"]
+    for arg, symbols in arguments:
+        if arg in gathered and symbols:
+            lines += [f"    double {arg}[{len(symbols)}];",
+                      f"    for (int i = 0; i < {len(symbols)}; ++i) {arg}[i] = {arg}_all[at[i]];"]
+    lines += ["  " + line for line in _c_body(arguments, exprs)]
+    lines += [f"    const int64_t *to = target + k * {size};",
+              f"    for (int e = 0; e < {size}; ++e) out_all[to[e]] += out[e];", "  }", "}"]
     return "\n".join(lines)
 
 
@@ -221,12 +293,12 @@ def _print(printer: _Printer, expr: sp.Expr) -> str:
     return code
 
 
-def _compile(source: str, library: Path, compiler: str) -> None:
+def _compile(source: str, library: Path, compiler: str, flags: Sequence[str]) -> None:
     library.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=library.parent) as tmp:
         src, out = Path(tmp) / "gen.c", Path(tmp) / "gen.so"
         src.write_text(source)
-        run = subprocess.run([compiler, *CFLAGS, str(src), "-o", str(out), "-lm"],
+        run = subprocess.run([compiler, *flags, str(src), "-o", str(out), "-lm"],
                              capture_output=True, text=True)
         if run.returncode != 0:
             raise CompileError(f"{compiler} failed: {run.stderr.strip()[:500]}")

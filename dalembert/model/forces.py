@@ -117,11 +117,16 @@ def warn_double_counting(Q: sp.Matrix, V: sp.Expr, coords: Coordinates) -> None:
     That is the classic mistake of putting gravity (or a spring) both in the
     potential energy and again among the applied forces.
     """
+    state = (*coords.q, *coords.qd)
     for j, q in enumerate(coords.q):
-        if Q[j] == 0:
+        if Q[j] == 0 or not V.has(q):
             continue
         conservative = set(sp.Add.make_args(sp.expand(-V.diff(q)))) - {sp.S.Zero}
-        repeated = conservative & set(sp.Add.make_args(sp.expand(Q[j])))
+        # Q's own terms, and its state-independent part expanded (a constant weight m*g
+        # hidden in a product); expanding all of Q can take long for damper forces.
+        constant = Q[j].as_independent(*state, as_Add=True)[0]
+        applied = set(sp.Add.make_args(Q[j])) | set(sp.Add.make_args(sp.expand(constant)))
+        repeated = conservative & applied
         for term in repeated:
             warnings.warn(
                 f"the generalized force on {coords.names[j]!r} contains {term}, which is "

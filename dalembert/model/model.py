@@ -61,6 +61,37 @@ def build_model(
     return Model(coords, L, T, V, Q, cons, params, name)
 
 
+def build_part_model(
+    coordinates: object,
+    *,
+    kinetic: object = 0,
+    potential: object = 0,
+    constraints: object = (),
+    generalized_forces: Mapping[object, object] | Sequence[object] | None = None,
+    forces: Sequence[PointForce] = (),
+    name: str = "part",
+) -> Model:
+    """A piece of a larger model (one body, one joint, the loads) in its own coordinates.
+
+    Unlike :func:`build_model` the energies may be zero: a joint is constraints only.
+    The equations of the whole are the sum of its parts' (the Lagrangian is a sum,
+    each constraint belongs to one part).
+
+    >>> from dalembert.model.coordinates import coordinates
+    >>> x, y = coordinates("x y")
+    >>> from dalembert.model.constraints import Holonomic
+    >>> build_part_model([x, y], constraints=[Holonomic(x - y)]).constraints.m
+    1
+    """
+    coords = build_coordinates(coordinates)
+    T = coords.to_plain(kinetic, f"the kinetic energy of {name}")
+    V = coords.to_plain(potential, f"the potential energy of {name}")
+    Q = _generalized_forces(generalized_forces, forces, coords)
+    cons = build_constraints(constraints, coords)
+    params = _parameters(coords, T - V, Q, cons)
+    return Model(coords, T - V, T, V, Q, cons, params, name)
+
+
 def _energies(
     kinetic: object, potential: object, lagrangian: object, coords: Coordinates
 ) -> tuple[sp.Expr | None, sp.Expr | None, sp.Expr]:

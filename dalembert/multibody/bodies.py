@@ -70,6 +70,10 @@ class Body:
     def constraints(self) -> list[Holonomic]:
         return []
 
+    @property
+    def constraint_names(self) -> list[str]:
+        return []
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name!r})"
 
@@ -185,7 +189,11 @@ class RigidBody(Body):
 
     def constraints(self) -> list[Holonomic]:
         b = self.quaternion
-        return [Holonomic(b.dot(b) - 1, name=f"{self.name}_unit_quaternion")]
+        return [Holonomic(b.dot(b) - 1, name=self.constraint_names[0])]
+
+    @property
+    def constraint_names(self) -> list[str]:
+        return [f"{self.name}_unit_quaternion"]
 
 
 def _number(value: float) -> sp.Expr:

@@ -21,7 +21,9 @@ from .diagnostics import check_initial_joint_points, check_joint_points, check_m
 from .drawing import stick_figure
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
+from .parts import gravity_potential
 from .rotations import E_matrix, check_rotation, quaternion_from_matrix, rotation_matrix
+from .system import MultibodySystem
 
 
 class Multibody:
@@ -117,35 +119,30 @@ class Multibody:
         return sp.Add(*(b.kinetic_energy() for b in self.bodies))
 
     def potential_energy(self) -> sp.Expr:
-        g = sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in self.gravity])
-        V = sp.Add(*(-sp.Float(b.mass) * g.dot(b.center) for b in self.bodies))
+        V = sp.Add(*(gravity_potential(b, self.gravity) for b in self.bodies))
         return V + sp.Add(*(s.potential() for s in self.springs))
 
-    def _generalized_forces(self) -> dict[object, sp.Expr]:
+    def generalized_forces(self) -> dict[object, sp.Expr]:
+        """Generalized forces of the torques, by coordinate."""
         Q: dict[object, sp.Expr] = {}
         for torque in self.torques:
             for coord, value in torque.generalized_forces().items():
                 Q[coord] = Q.get(coord, sp.S.Zero) + value
         return Q
 
-    def _point_forces(self) -> list:
+    def point_forces(self) -> list:
+        """The forces and the spring dampers as :class:`~dalembert.PointForce` objects."""
         pfs = [f.point_force() for f in self.forces]
         return pfs + [pf for s in self.springs for pf in s.point_forces()]
 
     @cached_property
     def system(self) -> System:
-        """The :class:`dalembert.System` (built once; :func:`multibody_of` finds ``self``)."""
-        system = System(
-            self.coordinates,
-            kinetic=self.kinetic_energy(),
-            potential=self.potential_energy(),
-            constraints=self.constraints(),
-            generalized_forces=self._generalized_forces() or None,
-            forces=self._point_forces(),
-            name=self.name,
-        )
-        system._multibody = self
-        return system
+        """The :class:`dalembert.System` (built once; :func:`multibody_of` finds ``self``).
+
+        Its numeric code is assembled from one kernel per kind of body and joint
+        (:mod:`dalembert.multibody.parts`); its symbolic equations are made on request.
+        """
+        return MultibodySystem(self)
 
     def body(self, name: str) -> Body:
         """The body called ``name``."""

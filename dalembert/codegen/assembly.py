@@ -1,0 +1,267 @@
+"""Numeric functions of a model assembled from parts, each part generated once.
+
+A mechanism's equations are sums over its parts: the Lagrangian is a sum of the
+bodies' energies, each constraint belongs to one joint. A :class:`Part` is the
+equations of one kind of piece (a body, a joint) in its own local coordinates,
+with the places it occupies in the whole: for each of its ``K`` instances, the
+global index of every local coordinate and constraint row. Identical pieces share
+one part, so a chain of 1000 equal links derives and compiles one body and two
+joints, not 1000 of each; the generated code loops over the instances (see
+:func:`~.c_backend.build_batched_functions`).
+
+An evaluation gathers each part's coordinates, calls its kernel once for all
+instances and adds every output into its place in the global vectors with one
+``bincount``: the cost is linear in the number of instances, and the result is
+the same :class:`~.compiled.CompiledEquations` the global route
+(:func:`~.compiled.compile_equations`) makes, so the solvers cannot tell them apart.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import threading
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+
+from ..equations.lagrange import Equations
+from ..equations.sparse import nonzero_entries
+from ..model.coordinates import t
+from . import c_backend
+from .compiled import CompiledEquations, SparsePattern, _energy_vector
+
+
+@dataclass(frozen=True)
+class Part:
+    """Local equations placed ``K`` times in a global model.
+
+    ``coordinates[k, i]`` is the global index of local coordinate ``i`` in instance
+    ``k``; ``rows[k, r]`` the global constraint row of local row ``r``.
+    """
+
+    equations: Equations
+    coordinates: np.ndarray
+    rows: np.ndarray
+
+    def __post_init__(self) -> None:
+        model = self.equations.model
+        K = len(self.coordinates)
+        object.__setattr__(self, "coordinates", _index_array(self.coordinates, K, model.coords.n))
+        object.__setattr__(self, "rows", _index_array(self.rows, K, model.constraints.m))
+
+    @property
+    def instances(self) -> int:
+        return len(self.coordinates)
+
+
+def _index_array(values: object, K: int, width: int) -> np.ndarray:
+    return np.asarray(values, dtype=np.intp).reshape(K, width)
+
+
+def compile_parts(
+    parts: Sequence[Part], n: int, m: int, parameters: Sequence[sp.Symbol] = (),
+    backend: str | None = None,
+) -> CompiledEquations:
+    """The numeric functions of the model made of ``parts`` (``n`` coordinates, ``m`` rows).
+
+    Every coordinate index and constraint row must be in range and every row
+    covered exactly once. ``parameters`` are the global parameter symbols, passed to
+    every part.
+    """
+    _check_rows(parts, m)
+    holonomic = _holonomic_rows(parts)
+    pattern = _pattern(parts, n, m)
+    layout = _Layout(pattern, holonomic)
+    kinds = {kind: ([], []) for kind in _KINDS}
+    for g, part in enumerate(parts):
+        for kind, exprs, target in _outputs(part, layout):
+            kinds[kind][0].append((f"{kind}_{g}", _arguments(part, kind, parameters), exprs))
+            kinds[kind][1].append(target)
+    sizes = layout.sizes(n, m)
+    indices = [part.coordinates for part in parts]
+    use = c_backend.backend() if backend is None else backend
+    functions = None
+    if use == "c":
+        try:
+            lib = c_backend.scatter_library([(k, kinds[k][0]) for k in _KINDS], {"q", "qd"})
+            functions = [_CEvaluator(getattr(lib, k), (n, len(parameters), sizes[k]), indices,
+                                     kinds[k][1], k in _STATE, lib) for k in _KINDS]
+        except c_backend.CompileError as exc:
+            warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=2)
+    if functions is None:
+        functions = [_numpy_evaluator(kinds[k][0], indices, kinds[k][1], sizes[k])
+                     for k in _KINDS]
+    used = "numpy" if isinstance(functions[0], _NumpyEvaluator) else "c"
+    return CompiledEquations(*functions, pattern, tuple(holonomic), used)
+
+
+_KINDS = ("kkt", "velocity", "position", "energy")
+_STATE = ("kkt", "energy")
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Where each global quantity sits in the flat output vectors."""
+
+    pattern: SparsePattern
+    holonomic: list[int]
+
+    def sizes(self, n: int, m: int) -> dict[str, int]:
+        nM, nA = len(self.pattern.M_rows), len(self.pattern.A_rows)
+        return {"kkt": nM + n + nA + m, "velocity": nA + m,
+                "position": len(self.holonomic), "energy": 3}
+
+    def M_position(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        return _positions(self.pattern.M_rows, self.pattern.M_cols, self.pattern.n, rows, cols)
+
+    def A_position(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        return _positions(self.pattern.A_rows, self.pattern.A_cols, self.pattern.n, rows, cols)
+
+
+def _outputs(part: Part, layout: _Layout) -> list[tuple[str, list[sp.Expr], np.ndarray]]:
+    """Per kind: the part's output expressions and, per instance, their global targets."""
+    eqs, idx, rows = part.equations, part.coordinates, part.rows
+    pat = layout.pattern
+    nM, n, nA = len(pat.M_rows), pat.n, len(pat.A_rows)
+    M, A = nonzero_entries(eqs.M), nonzero_entries(eqs.A)
+    f, c, b = _nonzero(eqs.f), _nonzero(eqs.c), _nonzero(eqs.b)
+    M_at = [layout.M_position(idx[:, i], idx[:, j]) for i, j in M]
+    A_at = [layout.A_position(rows[:, r], idx[:, j]) for r, j in A]
+    f_at = [nM + idx[:, i] for i in f]
+    c_at = [nM + n + nA + rows[:, r] for r in c]
+    b_at = [nA + rows[:, r] for r in b]
+    hol = {row: k for k, row in enumerate(layout.holonomic)}
+    local_hol = eqs.model.constraints.holonomic_rows
+    psi_at = [np.array([hol[r] for r in rows[:, i]], dtype=np.intp) for i in local_hol]
+    K = part.instances
+    energy_at = [np.full(K, k, dtype=np.intp) for k in range(3)]
+    return [
+        ("kkt", [*M.values(), *f.values(), *A.values(), *c.values()],
+         _columns([*M_at, *f_at, *[nM + n + a for a in A_at], *c_at], K)),
+        ("velocity", [*A.values(), *b.values()], _columns([*A_at, *b_at], K)),
+        ("position", list(eqs.model.constraints.psi), _columns(psi_at, K)),
+        ("energy", list(_energy_vector(eqs)), _columns(energy_at, K)),
+    ]
+
+
+def _nonzero(vector: sp.Matrix) -> dict[int, sp.Expr]:
+    return {i: e for i, e in enumerate(vector) if e != 0}
+
+
+def _columns(targets: list[np.ndarray], K: int) -> np.ndarray:
+    """Targets ``(K, outputs)`` flattened in the kernels' row-major output order."""
+    if not targets:
+        return np.zeros(0, dtype=np.intp)
+    return np.stack(targets, axis=1).reshape(-1)
+
+
+def _arguments(part: Part, kind: str, parameters: Sequence[sp.Symbol]) -> list:
+    coords = part.equations.model.coords
+    state = [("t", [t]), ("q", coords.q)]
+    if kind in _STATE:
+        state.append(("qd", coords.qd))
+    return [*state, ("p", list(parameters))]
+
+
+class _CEvaluator:
+    """``fn(t, q, [qd,] p)``: one call of a generated driver that sums every part.
+
+    The index and target tables are fixed, so they are handed to C once; the
+    arguments are copied into buffers whose addresses are fixed too (getting an
+    array's address from Python costs more than the copy). A lock keeps two threads
+    from sharing the buffers, since the call releases the GIL.
+    """
+
+    def __init__(self, cfun, shape: tuple[int, int, int], indices: list[np.ndarray],
+                 targets: list[np.ndarray], velocities: bool, library) -> None:
+        n, n_parameters, size = shape
+        self._library = library  # keeps the code loaded while this lives
+        self._K = np.array([len(i) for i in indices], dtype=np.int64)
+        self._tables = [np.ascontiguousarray(a, dtype=np.int64) for a in (*indices, *targets)]
+        G = len(indices)
+        pointers = [a.ctypes.data for a in self._tables]
+        self._index = (ctypes.c_void_p * max(G, 1))(*pointers[:G])
+        self._target = (ctypes.c_void_p * max(G, 1))(*pointers[G:])
+        self._time, self._q, self._qd = np.zeros(1), np.zeros(n), np.zeros(n)
+        self._p, self._out = np.zeros(n_parameters), np.zeros(size)
+        arrays = (self._time, self._q, *([self._qd] if velocities else []), self._p, self._out)
+        self._args = (self._K.ctypes.data, ctypes.addressof(self._index),
+                      ctypes.addressof(self._target), *(a.ctypes.data for a in arrays))
+        cfun.restype = None
+        cfun.argtypes = [ctypes.c_void_p] * len(self._args)
+        self._cfun = cfun
+        self._lock = threading.Lock()
+
+    def __call__(self, time, q, *rest):
+        with self._lock:
+            self._time[0] = time
+            self._q[:] = q
+            if len(rest) == 2:
+                self._qd[:] = rest[0]
+            self._p[:] = rest[-1]
+            self._out[:] = 0.0
+            self._cfun(*self._args)
+            return self._out.copy()
+
+
+class _NumpyEvaluator:
+    """The same sums with NumPy kernels called instance by instance (no C compiler)."""
+
+    def __init__(self, kernels: list, indices: list[np.ndarray], targets: list[np.ndarray],
+                 size: int) -> None:
+        self._kernels, self._indices, self._size = kernels, indices, size
+        self._where = np.concatenate(targets) if targets else np.zeros(0, dtype=np.intp)
+
+    def __call__(self, time, q, *rest):
+        *qd, p = rest
+        outputs = []
+        for kernel, idx in zip(self._kernels, self._indices):
+            for row in idx:
+                outputs.append(kernel(time, q[row], *(v[row] for v in qd), p))
+        weights = np.concatenate(outputs) if outputs else np.zeros(0)
+        return np.bincount(self._where, weights=weights, minlength=self._size)
+
+
+def _numpy_evaluator(specs: list, indices: list[np.ndarray], targets: list[np.ndarray],
+                     size: int) -> _NumpyEvaluator:
+    kernels = c_backend.build_flat_functions(specs, use="numpy")
+    return _NumpyEvaluator(kernels, indices, targets, size)
+
+
+def _pattern(parts: Sequence[Part], n: int, m: int) -> SparsePattern:
+    """The union of the parts' ``M`` and ``A`` entries, sorted by row then column."""
+    M_keys, A_keys = [np.zeros(0, dtype=np.intp)], [np.zeros(0, dtype=np.intp)]
+    for part in parts:
+        idx, rows = part.coordinates, part.rows
+        _check_coordinates(idx, n)
+        M_keys += [idx[:, i] * n + idx[:, j] for i, j in nonzero_entries(part.equations.M)]
+        A_keys += [rows[:, r] * n + idx[:, j] for r, j in nonzero_entries(part.equations.A)]
+    M_unique = np.unique(np.concatenate(M_keys))
+    A_unique = np.unique(np.concatenate(A_keys))
+    return SparsePattern(n, m, M_unique // n, M_unique % n, A_unique // n, A_unique % n)
+
+
+def _positions(p_rows: np.ndarray, p_cols: np.ndarray, n: int, rows: np.ndarray,
+               cols: np.ndarray) -> np.ndarray:
+    keys = p_rows * n + p_cols
+    return np.searchsorted(keys, rows * n + cols)
+
+
+def _check_coordinates(idx: np.ndarray, n: int) -> None:
+    if idx.size and (idx.min() < 0 or idx.max() >= n):
+        raise ValueError(f"a part's coordinate index is outside 0..{n - 1}")
+
+
+def _check_rows(parts: Sequence[Part], m: int) -> None:
+    rows = np.concatenate([p.rows.reshape(-1) for p in parts] or [np.zeros(0, dtype=np.intp)])
+    if len(rows) != m or not np.array_equal(np.sort(rows), np.arange(m)):
+        raise ValueError(f"the parts' constraint rows must cover 0..{m - 1} exactly once")
+
+
+def _holonomic_rows(parts: Sequence[Part]) -> list[int]:
+    rows = [int(r) for p in parts
+            for i in p.equations.model.constraints.holonomic_rows for r in p.rows[:, i]]
+    return sorted(rows)

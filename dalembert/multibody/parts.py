@@ -1,0 +1,188 @@
+"""A :class:`~dalembert.multibody.Multibody` as parts: each kind of body and joint derived once.
+
+The equations of a mechanism in absolute coordinates are sums over its pieces:
+the kinetic and gravitational energy of each body involve only its own
+coordinates, the equations of each joint only its two bodies'. Bodies with the
+same mass and inertia have the same equations in their own coordinates, and so
+do joints of one type with the same geometry between the same kinds of bodies
+(a joint's equations are kinematic: they depend on whether each side is ground,
+a particle or a rigid body, not on masses). Each such kind is derived once, on
+template bodies, and placed at every instance (:class:`~dalembert.codegen.assembly.Part`):
+building a chain of a thousand equal links derives one body and two joints.
+
+Loads (forces, torques, springs) may depend on any coordinates and the time, so
+they form one part written in the coordinates they actually use.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from ..codegen.assembly import Part
+from ..equations.lagrange import derive_equations
+from ..model.forces import warn_double_counting
+from ..model.model import Model, build_part_model
+from .bodies import Body, Ground, Particle, RigidBody
+
+
+def gravity_potential(body: Body, gravity: np.ndarray) -> sp.Expr:
+    """``-m g . x`` of the body's mass center (exact zeros drop out)."""
+    g = sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in gravity])
+    return -sp.Float(body.mass) * g.dot(body.center)
+
+
+def multibody_parts(mb) -> list[Part]:
+    """The parts of ``mb`` (a Multibody): bodies, then joints, then loads.
+
+    Global coordinates and constraint rows are in the order of ``mb.coordinates``
+    and ``mb.constraints()``: bodies' rows (unit quaternions) first, then joints'.
+    """
+    offsets = _coordinate_offsets(mb.bodies)
+    parts = _body_parts(mb.bodies, mb.gravity, offsets)
+    first_row = sum(len(b.constraint_names) for b in mb.bodies)
+    parts += _joint_parts(mb.joints, offsets, first_row)
+    loads = _load_part(mb, offsets)
+    return parts + ([loads] if loads is not None else [])
+
+
+def _coordinate_offsets(bodies: Sequence[Body]) -> dict[int, np.ndarray]:
+    """Global coordinate indices of each body, keyed by ``id(body)``."""
+    out, start = {}, 0
+    for body in bodies:
+        k = len(body.coordinates)
+        out[id(body)] = np.arange(start, start + k)
+        start += k
+    return out
+
+
+def _body_parts(bodies: Sequence[Body], gravity: np.ndarray,
+                offsets: dict[int, np.ndarray]) -> list[Part]:
+    groups: dict[tuple, list[Body]] = {}
+    for body in bodies:
+        groups.setdefault(_body_signature(body), []).append(body)
+    row_of = _body_rows(bodies)
+    parts = []
+    for members in groups.values():
+        template = _template_body(members[0], "body", keep_mass=True)
+        model = build_part_model(
+            template.coordinates, kinetic=template.kinetic_energy(),
+            potential=gravity_potential(template, gravity), constraints=template.constraints(),
+            name=f"body {members[0].name}",
+        )
+        parts.append(Part(derive_equations(model), [offsets[id(b)] for b in members],
+                          [row_of[id(b)] for b in members]))
+    return parts
+
+
+def _body_rows(bodies: Sequence[Body]) -> dict[int, np.ndarray]:
+    out, start = {}, 0
+    for body in bodies:
+        k = len(body.constraint_names)
+        out[id(body)] = np.arange(start, start + k)
+        start += k
+    return out
+
+
+def _body_signature(body: Body) -> tuple:
+    inertia = tuple(body.inertia.ravel()) if isinstance(body, RigidBody) else None
+    return type(body), body.mass, inertia
+
+
+def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
+    """A body of the same kind with coordinates ``<name>_x ...`` (ground is itself)."""
+    if isinstance(body, Ground):
+        return body
+    mass = body.mass if keep_mass else 1.0
+    if isinstance(body, RigidBody):
+        return RigidBody(name, mass, body.inertia if keep_mass else np.ones(3))
+    if isinstance(body, Particle):
+        return Particle(name, mass)
+    raise TypeError(f"no template for {body!r}")
+
+
+def _joint_parts(joints: Sequence, offsets: dict[int, np.ndarray], first_row: int) -> list[Part]:
+    groups: dict[tuple, list] = {}
+    for joint in joints:
+        groups.setdefault(_signature(joint), []).append(joint)
+    rows, start = {}, first_row
+    for joint in joints:
+        rows[id(joint)] = np.arange(start, start + joint.n_equations)
+        start += joint.n_equations
+    parts = []
+    for members in groups.values():
+        template = copy.copy(members[0])
+        template.body_a = _template_body(template.body_a, "a")
+        template.body_b = _template_body(template.body_b, "b")
+        coords = [*template.body_a.coordinates, *template.body_b.coordinates]
+        model = build_part_model(coords, constraints=template.constraints(),
+                                 name=f"joint {members[0].name}")
+        places = [_joint_coordinates(j, offsets) for j in members]
+        parts.append(Part(derive_equations(model), places, [rows[id(j)] for j in members]))
+    return parts
+
+
+def _joint_coordinates(joint, offsets: dict[int, np.ndarray]) -> np.ndarray:
+    return np.concatenate([offsets.get(id(b), np.zeros(0, dtype=np.intp))
+                           for b in joint.bodies]).astype(np.intp)
+
+
+def _signature(joint) -> tuple:
+    """What a joint's equations depend on: its type, geometry and the kinds of its bodies."""
+    items = tuple((k, _freeze(v)) for k, v in sorted(vars(joint).items()) if k != "name")
+    return type(joint), items
+
+
+def _freeze(value: object) -> object:
+    if isinstance(value, Body):
+        return ("body", type(value).__name__)
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, tuple(value.ravel().tolist()))
+    if isinstance(value, (sp.Basic, sp.MatrixBase)):
+        return ("sympy", sp.srepr(value))
+    try:
+        hash(value)
+    except TypeError:
+        return ("repr", repr(value))
+    return value
+
+
+def _load_part(mb, offsets: dict[int, np.ndarray]) -> Part | None:
+    """Forces, torques and springs as one part in the coordinates they involve."""
+    if not (mb.forces or mb.torques or mb.springs):
+        return None
+    potential = sp.Add(*(s.potential() for s in mb.springs))
+    generalized = mb.generalized_forces()
+    point_forces = mb.point_forces()
+    used = _coordinates_in(mb.bodies, [potential, *generalized.values(),
+                                       *(e for pf in point_forces for e in (*pf.force,
+                                                                            *pf.point))])
+    coords = [c for body in mb.bodies for c in body.coordinates if c in used]
+    index = {c: i for body in mb.bodies
+             for c, i in zip(body.coordinates, offsets[id(body)])}
+    model = build_part_model(coords, potential=potential, generalized_forces=generalized,
+                             forces=point_forces, name="loads")
+    _warn_double_counting(mb, model, used)
+    return Part(derive_equations(model), [[index[c] for c in coords]], np.zeros((1, 0)))
+
+
+def _coordinates_in(bodies: Sequence[Body], exprs: Sequence[object]) -> set:
+    every = {c for body in bodies for c in body.coordinates}
+    found = set()
+    for e in exprs:
+        found |= sp.sympify(e).atoms(AppliedUndef) & every
+    return found
+
+
+def _warn_double_counting(mb, loads: Model, used: set) -> None:
+    """Gravity (in the bodies' potential) given again as an applied force."""
+    every = sp.Add(*(gravity_potential(b, mb.gravity) for b in mb.bodies))
+    # only the terms in the loads' coordinates (each is -m g_k x_k of one coordinate)
+    gravity = sp.Add(*(term for term in sp.Add.make_args(every)
+                       if term.atoms(AppliedUndef) <= used))
+    V = loads.potential + loads.coords.to_plain(gravity, "the gravitational potential")
+    warn_double_counting(loads.Q, V, loads.coords)

@@ -1,0 +1,73 @@
+"""``MultibodySystem``: the :class:`dalembert.System` of a Multibody, built part by part.
+
+Its numeric functions come from :func:`~dalembert.multibody.parts.multibody_parts`
+(each kind of body and joint derived and compiled once, evaluated for all of
+them), so building it costs time in proportion to the number of different
+pieces, not the size of the mechanism. The global symbolic model -- needed only
+for :meth:`equations`, statics and the printing of a constraint in an error
+message -- is made on first use and gives the same equations.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import sympy as sp
+
+from ..codegen.assembly import compile_parts
+from ..codegen.compiled import CompiledEquations
+from ..model.model import Model, build_model
+from ..system import System, _check_redundant
+from .parts import multibody_parts
+
+
+class MultibodySystem(System):
+    """A :class:`~dalembert.System` whose model and code come from a Multibody.
+
+    >>> from dalembert.multibody import chain
+    >>> system = chain(3, 1.0, 1.0, 0.05).system
+    >>> len(system.coordinate_names), len(system.constraint_names)
+    (21, 12)
+    """
+
+    def __init__(self, multibody, redundant_constraints: str = "minimum-norm") -> None:
+        self._multibody = multibody
+        self.redundant_constraints = _check_redundant(redundant_constraints)
+        self.parameter_values: dict[str, float] = {}
+        self._names = tuple(c.name for c in multibody.coordinates)
+        self._rows = tuple(
+            [name for b in multibody.bodies for name in b.constraint_names]
+            + [name for j in multibody.joints for name in j.constraint_names]
+        )
+
+    @property
+    def name(self) -> str:
+        return self._multibody.name
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return self._names
+
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        return self._rows
+
+    @property
+    def parameters(self) -> tuple[sp.Symbol, ...]:
+        return ()
+
+    @cached_property
+    def model(self) -> Model:
+        """The global symbolic model (built on first use; the numerics do not need it)."""
+        mb = self._multibody
+        return build_model(
+            mb.coordinates, kinetic=mb.kinetic_energy(), potential=mb.potential_energy(),
+            constraints=mb.constraints(), generalized_forces=mb.generalized_forces() or None,
+            forces=mb.point_forces(), name=mb.name,
+        )
+
+    @cached_property
+    def compiled(self) -> CompiledEquations:
+        """Generated numeric functions, one kernel per kind of body, joint and the loads."""
+        parts = multibody_parts(self._multibody)
+        return compile_parts(parts, len(self._names), len(self._rows))
