@@ -5,11 +5,12 @@ The generated code returns the values of ``M`` and ``A`` on a fixed pattern
 straight into the arrays of ``K = [[M, A^T], [A, 0]]`` (the maps are computed
 once) and picks, once per pattern, one of three factorizations:
 
-- ``band`` (when the band is at most ``BAND_MAX`` wide): reverse Cuthill-McKee
-  order, then LAPACK's band LU with partial pivoting (``gbtrf``/``gbtrs``). For a
-  chain the band is ~2 links wide whatever the length (``kl = ku = 13`` for
-  spherical quaternion links), so a solve costs ``O(n)``; measured per solve 22 us
-  (n = 2), 105 us (16), 290 us (64).
+- ``band`` (when the band is at most ``BAND_MAX`` wide): a bandwidth-reducing
+  order (reverse Cuthill-McKee, see :func:`_band_order`), then LAPACK's band LU
+  with partial pivoting (``gbtrf``/``gbtrs``), the values scattered straight into
+  its storage. For a chain the band is ~2 links wide whatever the length
+  (``kl = ku = 11`` for spherical quaternion links), so a solve costs ``O(n)``;
+  measured per factorization and solve 20 us (n = 4), 55 us (16), 190 us (64).
 - ``dense`` (small systems whose band is wide): one LAPACK solve.
 - ``splu``: SuperLU with a fill-reducing order (``MMD_AT_PLUS_A``), for large
   patterns with a wide band (a branching tree); 200-700 us of fixed overhead.
@@ -50,6 +51,10 @@ BAND_MAX = 40
 #: threshold pivoting relaxed so that the order is mostly kept (zero (2,2) block).
 PERMC = "MMD_AT_PLUS_A"
 DIAG_PIVOT_THRESH = 0.1
+SINGULAR_MESSAGE = (
+    "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are not "
+    "determined (a singular configuration of the constraints, or a coordinate without "
+    "inertia)")
 
 
 def matvec(pattern_rows: np.ndarray, pattern_cols: np.ndarray, values: np.ndarray,
@@ -89,10 +94,15 @@ class KKTSolver:
         a_rows = position[pattern.A_rows[self._a_sel]]
         a_cols = pattern.A_cols[self._a_sel]
         self.size = n + self.mk
-        self._data_order, self._indices, self._indptr = _csc_map(
-            np.concatenate([pattern.M_rows, a_cols, n + a_rows]),
-            np.concatenate([pattern.M_cols, n + a_rows, a_cols]), self.size)
-        self._band = _BandMap(self._indices, self._indptr, self.size)
+        # Every entry of K: row, column, and where its value is in ``[M values, A values]``.
+        n_m = len(pattern.M_rows)
+        self._rows = np.concatenate([pattern.M_rows, a_cols, n + a_rows]).astype(np.intp)
+        self._cols = np.concatenate([pattern.M_cols, n + a_rows, a_cols]).astype(np.intp)
+        self._src = np.concatenate([np.arange(n_m), n_m + self._a_sel, n_m + self._a_sel])
+        self._data_order, self._indices, self._indptr = _csc_map(self._rows, self._cols,
+                                                                 self.size)
+        self._csc_src = self._src[self._data_order]
+        self._band = _BandMap(self._rows, self._cols, self._src, self.size)
         if dense is not None:
             self.method = "dense" if dense else "splu"
         elif self._band.width <= BAND_MAX:
@@ -115,40 +125,40 @@ class KKTSolver:
     def accelerations(self, Mv: np.ndarray, f: np.ndarray, Av: np.ndarray,
                       c: np.ndarray) -> np.ndarray:
         """``qdd`` alone (no multipliers computed with dependent constraints)."""
-        return self._solve(Mv, f, Av, c)[0]
+        return self._solve(Mv, f, Av, c, multipliers=False)[0]
 
     def factor(self, Mv: np.ndarray, Av: np.ndarray):
         """A function ``rhs -> K^-1 rhs`` for the KKT matrix of these values."""
         if self.method == "dense":
             K = kkt_matrix(self.pattern.dense_M(Mv), self._dense_kept_A(Av))
             return lambda rhs: _dense_solve(K, rhs)
-        data = np.concatenate([Mv, Av[self._a_sel], Av[self._a_sel]])[self._data_order]
+        values = np.concatenate([Mv, Av])
         if self.method == "band":
-            return self._band.factor(data)
-        K = sps.csc_matrix((data, self._indices, self._indptr), shape=(self.size, self.size))
+            return self._band.factor(values)
+        K = sps.csc_matrix((values[self._csc_src], self._indices, self._indptr),
+                           shape=(self.size, self.size))
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", spla.MatrixRankWarning)
                 lu = spla.splu(K, permc_spec=PERMC, diag_pivot_thresh=DIAG_PIVOT_THRESH)
         except (RuntimeError, spla.MatrixRankWarning) as exc:
-            raise SingularSystemError(
-                "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are "
-                "not determined (a singular configuration of the constraints, or a "
-                "coordinate without inertia)") from exc
+            raise SingularSystemError(SINGULAR_MESSAGE) from exc
         return lu.solve
 
     def _dense_kept_A(self, Av: np.ndarray) -> np.ndarray:
         A = self.pattern.dense_A(Av)
         return A if self.kept is None else A[self.kept]
 
-    def _solve(self, Mv, f, Av, c):
-        """``(qdd, lambda or None, A^T lambda)``; see :func:`.kkt._redundant_solve`."""
+    def _solve(self, Mv, f, Av, c, multipliers: bool = True):
+        """``(qdd, lambda or None, A^T lambda)``; see :func:`.kkt._redundant_solve`.
+        Without ``multipliers`` the full-rank path leaves ``lambda`` out (``None``)."""
         n, p = self.pattern.n, self.pattern
         rhs = np.concatenate([f, c if self.kept is None else c[self.kept]])
         x = self.factor(Mv, Av)(rhs)
-        qdd, mu = x[:n], -x[n:]
+        qdd = x[:n]
         if self.kept is None:
-            return qdd, mu, None
+            return qdd, -x[n:] if multipliers else None, None
+        mu = -x[n:]
         miss = np.abs(matvec(p.A_rows, p.A_cols, Av, qdd, p.m) - c)
         miss[self.kept] = 0.0
         scale = 1.0 + np.abs(c).max(initial=0.0) \
@@ -163,46 +173,117 @@ class KKTSolver:
 
 
 class _BandMap:
-    """Band LU (LAPACK ``gbtrf``/``gbtrs``) of the KKT matrix in reverse Cuthill-McKee order.
+    """Band LU (LAPACK ``gbtrf``/``gbtrs``) of the KKT matrix in a bandwidth-reducing order.
 
     For a chain or a tree numbered along it the band stays a few bodies wide, so a
     factorization costs ``O(size * band^2)``: linear in the mechanism, and with far
-    less overhead than SuperLU. The order and the scatter into LAPACK's band storage
-    are computed once from the pattern.
+    less overhead than SuperLU. The order and the scatter of the values straight into
+    LAPACK's column-major band storage are computed once, so a factorization is one
+    gather, one scatter and one LAPACK call.
     """
 
-    def __init__(self, indices: np.ndarray, indptr: np.ndarray, size: int) -> None:
-        pattern = sps.csc_matrix((np.ones(len(indices)), indices, indptr), shape=(size, size))
-        self.perm = reverse_cuthill_mckee(pattern.tocsr(), symmetric_mode=True).astype(np.intp)
-        inverse = np.empty(size, dtype=np.intp)
-        inverse[self.perm] = np.arange(size)
-        cols = np.repeat(np.arange(size), np.diff(indptr))
-        i, j = inverse[indices], inverse[cols]
-        self.kl = int(max(0, (i - j).max(initial=0)))
-        self.ku = int(max(0, (j - i).max(initial=0)))
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, src: np.ndarray,
+                 size: int) -> None:
+        self.perm, self.kl, self.ku, self.flat = _band_layout(rows, cols, size)
+        self.size, self.src = size, src
         self.width = self.kl + self.ku + 1
-        self.shape = (2 * self.kl + self.ku + 1, size)
-        # gbtrf storage: entry (i, j) at row kl + ku + i - j, column j.
-        self.flat = (self.kl + self.ku + i - j) * size + j
+        self.ldab = 2 * self.kl + self.ku + 1
 
-    def factor(self, data: np.ndarray):
-        ab = np.zeros(self.shape)
-        ab.flat[self.flat] = data
-        lu, piv, info = lapack.dgbtrf(ab, self.kl, self.ku)
+    def factor(self, values: np.ndarray):
+        """A function ``rhs -> K^-1 rhs``; ``values`` indexed by the ``src`` given."""
+        size, ldab, kl, ku, perm = self.size, self.ldab, self.kl, self.ku, self.perm
+        ab = np.zeros(ldab * size)
+        ab[self.flat] = values[self.src]
+        lu, piv, info = lapack.dgbtrf(ab.reshape(size, ldab).T, kl, ku, overwrite_ab=1)
         if info != 0:
-            raise SingularSystemError(
-                "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are "
-                "not determined (a singular configuration of the constraints, or a "
-                "coordinate without inertia)")
-        perm, kl, ku = self.perm, self.kl, self.ku
+            raise SingularSystemError(SINGULAR_MESSAGE)
 
         def solve(rhs: np.ndarray) -> np.ndarray:
-            x, _ = lapack.dgbtrs(lu, kl, ku, rhs[perm], piv)
+            x = lapack.dgbtrs(lu, kl, ku, rhs[perm], piv, overwrite_b=1)[0]
             out = np.empty_like(x)
             out[perm] = x
             return out
 
         return solve
+
+
+def _band_layout(rows: np.ndarray, cols: np.ndarray, size: int):
+    """``(perm, kl, ku, flat)`` for the entries ``(rows, cols)`` of a symmetric pattern:
+    a bandwidth-reducing order (:func:`_band_order`), the band, and each entry's index
+    in the flat column-major storage of LAPACK's ``gbtrf`` (entry ``(i, j)`` of the
+    permuted matrix at row ``kl + ku + i - j``, column ``j``)."""
+    perm = _band_order(rows, cols, size)
+    inverse = np.empty(size, dtype=np.intp)
+    inverse[perm] = np.arange(size)
+    i, j = inverse[rows], inverse[cols]
+    kl = int(max(0, (i - j).max(initial=0)))
+    ku = int(max(0, (j - i).max(initial=0)))
+    flat = (kl + ku + i - j) + j * (2 * kl + ku + 1)
+    return perm, kl, ku, flat
+
+
+def _band_order(rows: np.ndarray, cols: np.ndarray, size: int) -> np.ndarray:
+    """A reverse Cuthill-McKee order: SciPy's (started at a node of least degree) or,
+    past ``DENSE_MAX`` unknowns and if its band is narrower, one started at a
+    pseudo-peripheral node (George and Liu), often several unknowns narrower on long
+    chains. Small systems keep SciPy's order: the band hardly costs there, and another
+    order changes the rounding of every result."""
+    if not len(rows):
+        return np.arange(size)
+    graph = sps.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
+    graph.sum_duplicates()
+    candidates = [reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.intp)]
+    if size > DENSE_MAX:
+        candidates.append(_peripheral_rcm(graph))
+    return min(candidates, key=lambda perm: _bandwidth(rows, cols, perm))
+
+
+def _bandwidth(rows: np.ndarray, cols: np.ndarray, perm: np.ndarray) -> int:
+    inverse = np.empty(len(perm), dtype=np.intp)
+    inverse[perm] = np.arange(len(perm))
+    return int(np.abs(inverse[rows] - inverse[cols]).max(initial=0))
+
+
+def _peripheral_rcm(graph: sps.csr_matrix) -> np.ndarray:
+    """Reverse Cuthill-McKee, each connected component started at a pseudo-peripheral node."""
+    indptr, indices = graph.indptr, graph.indices
+    degree = np.diff(indptr)
+    seen = np.zeros(graph.shape[0], dtype=bool)
+    order: list[int] = []
+    for root in np.argsort(degree, kind="stable").tolist():
+        if seen[root]:
+            continue
+        start, eccentricity = root, -1
+        while True:  # the far end of a breadth-first search, until it stops receding
+            levels = _levels(indptr, indices, start)
+            if len(levels) - 1 <= eccentricity:
+                break
+            eccentricity = len(levels) - 1
+            start = min(levels[-1], key=lambda v: degree[v])
+        component = [start]
+        seen[start] = True
+        for v in component:  # Cuthill-McKee: neighbours by increasing degree
+            new = [u for u in indices[indptr[v]:indptr[v + 1]].tolist() if not seen[u]]
+            new.sort(key=lambda u: degree[u])
+            seen[new] = True
+            component.extend(new)
+        order.extend(reversed(component))
+    return np.array(order, dtype=np.intp)
+
+
+def _levels(indptr: np.ndarray, indices: np.ndarray, start: int) -> list[list[int]]:
+    """Breadth-first levels from ``start``."""
+    levels, seen = [[start]], {start}
+    while True:
+        nxt = []
+        for v in levels[-1]:
+            for u in indices[indptr[v]:indptr[v + 1]].tolist():
+                if u not in seen:
+                    seen.add(u)
+                    nxt.append(u)
+        if not nxt:
+            return levels
+        levels.append(nxt)
 
 
 def _csc_map(rows: np.ndarray, cols: np.ndarray, size: int):
@@ -230,7 +311,7 @@ def kkt_well_conditioned(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray,
     >>> kkt_well_conditioned(KKTSolver(pattern), np.ones(2), np.ones(2))
     True
     """
-    data = np.concatenate([Mv, Av[solver._a_sel], Av[solver._a_sel]])[solver._data_order]
+    data = np.concatenate([Mv, Av])[solver._csc_src]
     K = sps.csc_matrix((data, solver._indices, solver._indptr), shape=(solver.size,) * 2)
     try:
         solve = solver.factor(Mv, Av)
