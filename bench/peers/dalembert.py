@@ -1,13 +1,18 @@
 """dalembert: the chain in redundant coordinates (7 per link: center + Euler parameters).
 
-Build = ``chain(...)`` + derivation + code generation (``system.compiled``). The
-simulation is ``Multibody.simulate`` with DOP853 and projection, tolerances
-tightened until the target is met. One evaluation = the KKT solve for the
-accelerations and multipliers at the initial state.
+Build = ``chain(...)`` + derivation + code generation (``system.compiled``: one
+link and two joint kinds derived and compiled, whatever ``n``). Cold = an empty
+code cache (a fresh ``DALEMBERT_CACHE_DIR``); warm = the same build again in the
+same process, the compiled library found on disk. The simulation is
+``Multibody.simulate`` with DOP853 and projection, tolerances tightened from
+loose until the target is met (as MuJoCo's step is halved from 1e-2). One
+evaluation = the KKT solve for the accelerations and multipliers at the initial state.
 """
 
 from __future__ import annotations
 
+import os
+import tempfile
 import time
 import warnings
 
@@ -18,7 +23,7 @@ from .ladder import climb
 
 TOOL = "dalembert"
 #: DOP853 relative tolerances tried in turn (atol = rtol / 100).
-RTOLS = (1e-6, 1e-8, 1e-10, 1e-12)
+RTOLS = (1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12)
 
 
 def versions() -> dict:
@@ -51,6 +56,12 @@ def initial_state(mb, workload: str, n: int):
 
 
 def run(workload: str, n: int) -> dict:
+    with tempfile.TemporaryDirectory(prefix="dalembert-bench-") as cache:
+        os.environ["DALEMBERT_CACHE_DIR"] = cache  # the first build is cold
+        return _measure(workload, n)
+
+
+def _measure(workload: str, n: int) -> dict:
     from dalembert.solvers.dynamics import accelerations
 
     mb, cold = build(workload, n)
@@ -84,6 +95,6 @@ def run(workload: str, n: int) -> dict:
     coords = len(mb.system.coordinate_names)
     record.update(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=coords,
                   constraints=len(mb.system.constraint_names),
-                  build_note="no on-disk cache: the warm build re-derives in the same "
-                             "process (only SymPy's in-memory caches are warm)")
+                  build_note="cold: empty code cache; warm: rebuilt in the same process, "
+                             "the compiled library loaded from the disk cache")
     return record

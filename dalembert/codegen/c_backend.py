@@ -25,6 +25,14 @@ installed here, is a heavy dependency, and would compile the same straight-line
 function through LLVM's optimizer, with the same compile-time problem as ``-O1``
 and no gain at run time over C.
 
+Multibody models take another route (:mod:`dalembert.codegen.assembly`): one short
+kernel per kind of body or joint, looped over its instances by a generated
+driver (:func:`scatter_library`). There the code is small whatever the size of
+the mechanism, so it is compiled at ``-O2``: for the 256-link chain the cold
+build takes 0.2-0.4 s longer than at ``-O0`` (1.2 vs 1.0 s spherical, 2.2 vs
+1.75 s revolute) and one evaluation of the KKT blocks is 2.4-2.8x faster (39 vs
+111 us, 58 vs 141 us).
+
 The library is cached under :func:`cache_dir` (``$DALEMBERT_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/dalembert`` or ``~/.cache/dalembert``) by a hash of the
 symbolic input, so on a cache hit neither ``cse``, printing nor the compiler run

@@ -8,14 +8,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from ..errors import ConstraintError, InitialConditionError
+from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.coordinates import key_name
 from .kkt import REDUNDANT_MODES, ConstraintRank, check_kkt, constraint_rank, dependent_error
-from .projection import project_positions, project_velocities
-from .sparse_kkt import DENSE_MAX, KKTSolver, gram_well_conditioned, kkt_well_conditioned
+from .projection import StepProjector, project_positions, project_velocities
+from .sparse_kkt import DENSE_MAX, KKTSolver, gram_well_conditioned, kkt_condition, matvec
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
 REPORT_TOL = 1e-10
+#: Above this many KKT unknowns the O(size^3) dense diagnosis is not run.
+DENSE_CHECK_MAX = 1000
+#: Estimated 1-norm condition number beyond which a large KKT matrix counts as singular.
+KKT_COND_LIMIT = 1e13
 
 
 @dataclass(frozen=True)
@@ -88,14 +92,15 @@ def state_vector(values: object, names: Sequence[str], what: str) -> np.ndarray:
         return np.zeros(n)
     if isinstance(values, Mapping):
         vec = np.zeros(n)
+        position = {name: i for i, name in enumerate(names)}
         for key, value in values.items():
             name = key_name(key)
-            if name not in names:
+            if name not in position:
                 raise InitialConditionError(
                     f"{what} names {name!r}, which is not a coordinate "
                     f"(the coordinates are {', '.join(names)})"
                 )
-            vec[names.index(name)] = _number(value, f"{what}[{name!r}]")
+            vec[position[name]] = _number(value, f"{what}[{name!r}]")
     else:
         try:
             vec = np.asarray(values, dtype=float).ravel()
@@ -153,11 +158,11 @@ def consistent_state(
     free = free_mask(fixed, names)
     rank = None
     try:
-        q = project_positions(num, t0, q0, free)
+        q = _project_positions(num, t0, q0, free)
         if num.m:
             rank = _rank_at(num, t0, q, names, constraint_labels, constraint_names,
                             redundant_constraints)
-        qd = project_velocities(num, t0, q, qd0, free)
+        qd = _project_velocities(num, t0, q, qd0, free, rank)
     except np.linalg.LinAlgError as exc:
         raise InitialConditionError(f"could not project the initial state: {exc}") from exc
     except InitialConditionError as exc:
@@ -169,14 +174,63 @@ def consistent_state(
             + ("; or fix fewer coordinates" if held else "")
         ) from exc
     _check_consistent(num, t0, q, qd, free, names)
-    kept = None if rank is None else rank.kept
+    _check_kkt_at(num, t0, q, qd, None if rank is None else rank.kept, names)
+    return InitializationReport(tuple(names), q0, qd0, q, qd, rank)
+
+
+def _sparse_start(num: NumericModel, free: np.ndarray) -> bool:
+    """Large models with every coordinate free are projected with the sparse solver."""
+    return num.m > DENSE_MAX and bool(free.all())
+
+
+def _project_positions(num: NumericModel, t0: float, q0: np.ndarray,
+                       free: np.ndarray) -> np.ndarray:
+    if _sparse_start(num, free):
+        try:
+            return StepProjector(num).positions(t0, q0, refactor=True)
+        except (SingularSystemError, np.linalg.LinAlgError, InitialConditionError):
+            pass  # dependent constraints, or too far: the dense least squares decide
+    return project_positions(num, t0, q0, free)
+
+
+def _project_velocities(num: NumericModel, t0: float, q: np.ndarray, qd0: np.ndarray,
+                        free: np.ndarray, rank: ConstraintRank | None) -> np.ndarray:
+    if _sparse_start(num, free) and (rank is None or not rank.dependent):
+        try:
+            return StepProjector(num).velocities(t0, q, qd0)
+        except (SingularSystemError, np.linalg.LinAlgError):
+            pass
+    return project_velocities(num, t0, q, qd0, free)
+
+
+def _check_kkt_at(num: NumericModel, t0: float, q: np.ndarray, qd: np.ndarray,
+                  kept: np.ndarray | None, names: Sequence[str]) -> None:
+    """Refuse a singular KKT matrix; the dense SVD diagnosis only where it is affordable.
+
+    The sparse screen estimates the condition number from the factorization. Below
+    ``1e10 / size`` the matrix is surely regular. Up to ``DENSE_CHECK_MAX`` unknowns
+    the exact SVD decides otherwise (and names the coordinates). Larger mechanisms
+    can be regular yet worse conditioned than that (a 1024-link hinge chain of thin
+    cylinders: about 1e12), so there the estimate itself decides, against
+    ``KKT_COND_LIMIT``.
+    """
     Mv, _, Av, _ = num.kkt_sparse(t0, q, qd)
     solver = KKTSolver(num.pattern, kept)
-    # The dense SVD diagnosis costs O(size^3): only when the sparse screen is unsure.
-    if solver.dense or not kkt_well_conditioned(solver, Mv, Av):
-        M, A = num.pattern.dense_M(Mv), num.pattern.dense_A(Av)
-        check_kkt(M, A if kept is None else A[kept], names, "at the initial state")
-    return InitializationReport(tuple(names), q0, qd0, q, qd, rank)
+    if not solver.dense:
+        cond = kkt_condition(solver, Mv, Av)
+        if cond < 1e10 / solver.size:
+            return
+        if solver.size > DENSE_CHECK_MAX:
+            if cond < KKT_COND_LIMIT:
+                return
+            raise SingularSystemError(
+                f"the KKT matrix [[M, A^T], [A, 0]] is singular at the initial state "
+                f"(condition number estimate {cond:.1e}): the motion is not determined. "
+                "Check the kinetic energy (a direction without inertia the constraints "
+                "leave free) or add the missing constraint."
+            )
+    M, A = num.pattern.dense_M(Mv), num.pattern.dense_A(Av)
+    check_kkt(M, A if kept is None else A[kept], names, "at the initial state")
 
 
 def _rank_at(
@@ -211,8 +265,9 @@ def _check_consistent(
     """The velocity projection is exact only if the free coordinates can reach it."""
     if num.m == 0:
         return
-    A, b = num.velocity_constraint(t0, q)
-    residual = np.abs(A @ qd + b).max()
+    Av, b = num.velocity_sparse(t0, q)
+    pat = num.pattern
+    residual = np.abs(matvec(pat.A_rows, pat.A_cols, Av, qd, num.m) + b).max()
     if residual > 1e-10 * max(1.0, np.abs(qd).max()):
         held = [n for n, f in zip(names, free) if not f]
         raise InitialConditionError(

@@ -126,8 +126,12 @@ class StepProjector:
         q = project_positions(self.num, t, q)
         return np.concatenate([q, project_velocities(self.num, t, q, y[n:])])
 
-    def positions(self, t: float, q: np.ndarray) -> np.ndarray:
-        """Simplified Newton with one factorization; the dense path if it stalls."""
+    def positions(self, t: float, q: np.ndarray, refactor: bool = False) -> np.ndarray:
+        """Simplified Newton with one factorization; the dense path if it stalls.
+
+        ``refactor`` makes it full Newton (a factorization per iteration, up to
+        ``MAX_NEWTON``), for initial values that may be far from the constraints.
+        """
         num = self.num
         if not num.holonomic_rows:
             return q
@@ -136,7 +140,9 @@ class StepProjector:
         if residual <= POSITION_TOL:
             return q
         solve = self._position.factor(self._ones, num.velocity_sparse(t, q)[0])
-        for _ in range(FAST_NEWTON):
+        for _ in range(MAX_NEWTON if refactor else FAST_NEWTON):
+            if refactor:
+                solve = self._position.factor(self._ones, num.velocity_sparse(t, q)[0])
             trial = q + solve(np.concatenate([self._zeros, -psi]))[: num.n]
             psi_trial = num.position_constraint(t, trial)
             new_residual = np.abs(psi_trial).max()

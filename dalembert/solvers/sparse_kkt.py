@@ -25,6 +25,7 @@ Products with ``A`` and ``A^T`` go through :func:`numpy.bincount` on the pattern
 
 from __future__ import annotations
 
+import hashlib
 import warnings
 
 import numpy as np
@@ -223,6 +224,24 @@ def _band_layout(rows: np.ndarray, cols: np.ndarray, size: int):
 
 
 def _band_order(rows: np.ndarray, cols: np.ndarray, size: int) -> np.ndarray:
+    """:func:`_find_band_order`, remembered for recent patterns: a simulation builds
+    several solvers on one pattern (dynamics, projection, initial checks), and the
+    search costs about a second at ten thousand unknowns."""
+    key = hashlib.sha1(rows.astype(np.int64).tobytes() + b"|" + cols.astype(np.int64).tobytes()
+                       + str(size).encode()).hexdigest()
+    perm = _ORDERS.get(key)
+    if perm is None:
+        perm = _find_band_order(rows, cols, size)
+        _ORDERS[key] = perm
+        while len(_ORDERS) > 32:
+            _ORDERS.pop(next(iter(_ORDERS)))
+    return perm
+
+
+_ORDERS: dict[str, np.ndarray] = {}
+
+
+def _find_band_order(rows: np.ndarray, cols: np.ndarray, size: int) -> np.ndarray:
     """A reverse Cuthill-McKee order: SciPy's (started at a node of least degree) or,
     past ``DENSE_MAX`` unknowns and if its band is narrower, one started at a
     pseudo-peripheral node (George and Liu), often several unknowns narrower on long
@@ -295,20 +314,17 @@ def _csc_map(rows: np.ndarray, cols: np.ndarray, size: int):
     return K.data.astype(np.intp) - 1, K.indices, K.indptr
 
 
-def kkt_well_conditioned(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray,
-                         limit: float = 1e10) -> bool:
-    """``True`` when the KKT matrix's 2-norm condition number is surely below ``limit``.
-
-    A cheap screen before the dense SVD diagnosis (:func:`.kkt.check_kkt`): the
-    1-norm condition number is estimated from the sparse factorization
-    (:func:`scipy.sparse.linalg.onenormest`, a few solves) and compared with
-    ``limit / size`` (the two norms differ by at most that factor). ``False`` means
-    "not sure": run the exact check.
+def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:
+    """Estimated 1-norm condition number of the KKT matrix (``inf`` if it cannot be
+    factored), from the sparse factorization and a few solves
+    (:func:`scipy.sparse.linalg.onenormest`): a cheap screen before the dense SVD
+    diagnosis (:func:`.kkt.check_kkt`). The 2-norm condition number is at most
+    ``size`` times larger.
 
     >>> from dalembert.codegen.compiled import SparsePattern
     >>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
     ...                         np.array([0, 0]), np.array([0, 1]))
-    >>> kkt_well_conditioned(KKTSolver(pattern), np.ones(2), np.ones(2))
+    >>> bool(kkt_condition(KKTSolver(pattern), np.ones(2), np.ones(2)) < 10)
     True
     """
     data = np.concatenate([Mv, Av])[solver._csc_src]
@@ -316,8 +332,8 @@ def kkt_well_conditioned(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray,
     try:
         solve = solver.factor(Mv, Av)
     except (SingularSystemError, np.linalg.LinAlgError):
-        return False
-    return _condition_1norm(K, solve) < limit / solver.size
+        return np.inf
+    return _condition_1norm(K, solve)
 
 
 def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, shape: tuple,
@@ -341,8 +357,9 @@ def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, sh
         return False
     with np.errstate(all="ignore"):
         cond = _condition_1norm(G, solve)
-    # cond(G) = cond(A)^2, but is computed reliably only far below 1/eps: screen at 1e12.
-    return bool(cond < min(limit**2, 1e12) / max(shape[0], 1))
+    # cond(G) = cond(A)^2 and the 2-norm condition is at most m times the 1-norm one;
+    # the estimate is reliable only well below 1/eps, hence the cap at 1e13.
+    return bool(cond < min(limit**2 / max(shape[0], 1), 1e13))
 
 
 def _condition_1norm(K: sps.spmatrix, solve) -> float:
