@@ -23,7 +23,7 @@ from .ladder import climb
 
 TOOL = "dalembert"
 #: DOP853 relative tolerances tried in turn (atol = rtol / 100).
-RTOLS = (1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12)
+RTOLS = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12)
 
 
 def versions() -> dict:
