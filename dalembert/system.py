@@ -137,6 +137,10 @@ class System:
         """
         return len(self.coordinate_names) - len(self.constraint_names)
 
+    def describe_constraint(self, i: int) -> str:
+        """Constraint ``i`` for a message: its name, kind and equation."""
+        return self.model.constraints.describe(i)
+
     def __repr__(self) -> str:
         return (f"System({self.name!r}, coordinates={list(self.coordinate_names)}, "
                 f"constraints={list(self.constraint_names)})")
@@ -181,9 +185,7 @@ class System:
         names = self.coordinate_names
         q = state_vector(q0, names, "q0")
         qd = state_vector(qd0, names, "qd0")
-        # printed only for an error message (and only then is the symbolic model needed)
-        labels = _LazyLabels(lambda i: self.model.constraints.describe(i),
-                             len(self.constraint_names))
+        labels = _LazyLabels(self.describe_constraint, len(self.constraint_names))
         mode = self.redundant_constraints if redundant_constraints is None \
             else _check_redundant(redundant_constraints)
         return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed,

@@ -2,7 +2,9 @@
 
 Every body carries its full pose (particles ``x, y, z``; rigid bodies also the
 Euler parameters ``b0..b3``) and joints become named holonomic constraints, so
-:class:`Multibody` builds an ordinary :class:`dalembert.System`. See
+:class:`Multibody` builds an ordinary :class:`dalembert.System`, whose numeric code
+is assembled from one kernel per kind of body and joint
+(:mod:`~dalembert.multibody.parts`). See
 :mod:`~dalembert.multibody.rotations` for the quaternion convention,
 :mod:`~dalembert.multibody.bodies` for why the singular rotational mass block is
 harmless, :mod:`~dalembert.multibody.joints` for the joint equations,

@@ -56,6 +56,15 @@ class MultibodySystem(System):
     def parameters(self) -> tuple[sp.Symbol, ...]:
         return ()
 
+    def describe_constraint(self, i: int) -> str:
+        """Constraint ``i`` by name and the joint or body it belongs to (no symbolic
+        model is built for a message: for a large mechanism that takes long)."""
+        mb, name = self._multibody, self._rows[i]
+        owners = [*((b, b.constraint_names) for b in mb.bodies),
+                  *((j, j.constraint_names) for j in mb.joints)]
+        owner = next(o for o, names in owners if name in names)
+        return f"constraint {name!r} ({type(owner).__name__} {owner.name!r})"
+
     @cached_property
     def model(self) -> Model:
         """The global symbolic model (built on first use; the numerics do not need it)."""
