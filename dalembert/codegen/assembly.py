@@ -23,6 +23,7 @@ import threading
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import sympy as sp
@@ -114,11 +115,20 @@ class _Layout:
         return {"kkt": nM + n + nA + m, "velocity": nA + m,
                 "position": len(self.holonomic), "energy": 3}
 
+    @cached_property
+    def _M_keys(self) -> np.ndarray:
+        return self.pattern.M_rows * self.pattern.n + self.pattern.M_cols
+
+    @cached_property
+    def _A_keys(self) -> np.ndarray:
+        return self.pattern.A_rows * self.pattern.n + self.pattern.A_cols
+
     def M_position(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        return _positions(self.pattern.M_rows, self.pattern.M_cols, self.pattern.n, rows, cols)
+        """Where the ``M`` entries ``(rows, cols)`` sit among the pattern's values."""
+        return np.searchsorted(self._M_keys, rows * self.pattern.n + cols)
 
     def A_position(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        return _positions(self.pattern.A_rows, self.pattern.A_cols, self.pattern.n, rows, cols)
+        return np.searchsorted(self._A_keys, rows * self.pattern.n + cols)
 
 
 def _outputs(part: Part, layout: _Layout) -> list[tuple[str, list[sp.Expr], np.ndarray]]:
@@ -242,12 +252,6 @@ def _pattern(parts: Sequence[Part], n: int, m: int) -> SparsePattern:
     M_unique = np.unique(np.concatenate(M_keys))
     A_unique = np.unique(np.concatenate(A_keys))
     return SparsePattern(n, m, M_unique // n, M_unique % n, A_unique // n, A_unique % n)
-
-
-def _positions(p_rows: np.ndarray, p_cols: np.ndarray, n: int, rows: np.ndarray,
-               cols: np.ndarray) -> np.ndarray:
-    keys = p_rows * n + p_cols
-    return np.searchsorted(keys, rows * n + cols)
 
 
 def _check_coordinates(idx: np.ndarray, n: int) -> None:

@@ -168,8 +168,10 @@ def scatter_library(kinds: Sequence[tuple[str, Sequence[FlatSpec]]],
     which, for each spec ``g`` and each of its ``K[g]`` instances ``k``, reads the
     ``gathered`` arguments at the global positions ``index[g][k, :]``, evaluates
     the spec's expressions and adds value ``e`` into ``out[target[g][k, e]]``
-    (``out`` is not cleared). The other arguments are passed through whole. Raises
-    :class:`CompileError` when C is unavailable.
+    (``out`` is not cleared). The other arguments are passed through whole. Each
+    spec's kernel is a static function under the spec's name (names must differ
+    from each other and from the kinds). Raises :class:`CompileError` when C is
+    unavailable.
     """
     gathered = frozenset(gathered)
     every = [s for _, specs in kinds for s in specs]
@@ -254,10 +256,9 @@ def _c_body(arguments: Arguments, exprs: Sequence[sp.Expr]) -> list[str]:
 def _scatter_source(kind: str, specs: Sequence[FlatSpec], gathered: frozenset[str]) -> str:
     """The kernels of one kind (gather, evaluate, add) and their driver ``kind``."""
     kernels, calls = [], []
-    for g, (_, arguments, exprs) in enumerate(specs):
+    for g, (name, arguments, exprs) in enumerate(specs):
         if not exprs:
             continue
-        name = f"{kind}_{g}"
         kernels.append(_scatter_kernel(name, arguments, exprs, gathered))
         passed = ", ".join(arg for arg, _ in arguments)
         calls.append(f"  {name}(K[{g}], index[{g}], target[{g}], {passed}, out);")

@@ -42,32 +42,36 @@ def multibody_parts(mb) -> list[Part]:
     Global coordinates and constraint rows are in the order of ``mb.coordinates``
     and ``mb.constraints()``: bodies' rows (unit quaternions) first, then joints'.
     """
-    offsets = _coordinate_offsets(mb.bodies)
-    parts = _body_parts(mb.bodies, mb.gravity, offsets)
-    first_row = sum(len(b.constraint_names) for b in mb.bodies)
-    parts += _joint_parts(mb.joints, offsets, first_row)
+    offsets = _consecutive(mb.bodies, lambda b: len(b.coordinates))
+    rows = _consecutive([*mb.bodies, *mb.joints], lambda o: len(o.constraint_names))
+    parts = _body_parts(mb.bodies, mb.gravity, offsets, rows)
+    parts += _joint_parts(mb.joints, offsets, rows)
     loads = _load_part(mb, offsets)
     return parts + ([loads] if loads is not None else [])
 
 
-def _coordinate_offsets(bodies: Sequence[Body]) -> dict[int, np.ndarray]:
-    """Global coordinate indices of each body, keyed by ``id(body)``."""
+def _consecutive(items: Sequence, size) -> dict[int, np.ndarray]:
+    """Consecutive global indices, ``size(item)`` of them per item, keyed by ``id(item)``."""
     out, start = {}, 0
-    for body in bodies:
-        k = len(body.coordinates)
-        out[id(body)] = np.arange(start, start + k)
+    for item in items:
+        k = size(item)
+        out[id(item)] = np.arange(start, start + k)
         start += k
     return out
 
 
-def _body_parts(bodies: Sequence[Body], gravity: np.ndarray,
-                offsets: dict[int, np.ndarray]) -> list[Part]:
-    groups: dict[tuple, list[Body]] = {}
-    for body in bodies:
-        groups.setdefault(_body_signature(body), []).append(body)
-    row_of = _body_rows(bodies)
+def _grouped(items: Sequence, signature) -> list[list]:
+    """Items with equal ``signature(item)`` together, in order of first appearance."""
+    groups: dict[tuple, list] = {}
+    for item in items:
+        groups.setdefault(signature(item), []).append(item)
+    return list(groups.values())
+
+
+def _body_parts(bodies: Sequence[Body], gravity: np.ndarray, offsets: dict[int, np.ndarray],
+                rows: dict[int, np.ndarray]) -> list[Part]:
     parts = []
-    for members in groups.values():
+    for members in _grouped(bodies, _body_signature):
         template = _template_body(members[0], "body", keep_mass=True)
         model = build_part_model(
             template.coordinates, kinetic=template.kinetic_energy(),
@@ -75,17 +79,8 @@ def _body_parts(bodies: Sequence[Body], gravity: np.ndarray,
             name=f"body {members[0].name}",
         )
         parts.append(Part(derive_equations(model), [offsets[id(b)] for b in members],
-                          [row_of[id(b)] for b in members]))
+                          [rows[id(b)] for b in members]))
     return parts
-
-
-def _body_rows(bodies: Sequence[Body]) -> dict[int, np.ndarray]:
-    out, start = {}, 0
-    for body in bodies:
-        k = len(body.constraint_names)
-        out[id(body)] = np.arange(start, start + k)
-        start += k
-    return out
 
 
 def _body_signature(body: Body) -> tuple:
@@ -105,16 +100,10 @@ def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
     raise TypeError(f"no template for {body!r}")
 
 
-def _joint_parts(joints: Sequence, offsets: dict[int, np.ndarray], first_row: int) -> list[Part]:
-    groups: dict[tuple, list] = {}
-    for joint in joints:
-        groups.setdefault(_signature(joint), []).append(joint)
-    rows, start = {}, first_row
-    for joint in joints:
-        rows[id(joint)] = np.arange(start, start + joint.n_equations)
-        start += joint.n_equations
+def _joint_parts(joints: Sequence, offsets: dict[int, np.ndarray],
+                 rows: dict[int, np.ndarray]) -> list[Part]:
     parts = []
-    for members in groups.values():
+    for members in _grouped(joints, _signature):
         template = copy.copy(members[0])
         template.body_a = _template_body(template.body_a, "a")
         template.body_b = _template_body(template.body_b, "b")

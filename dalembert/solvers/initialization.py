@@ -156,13 +156,17 @@ def consistent_state(
         raise ValueError(f"redundant_constraints must be one of {REDUNDANT_MODES}, "
                          f"not {redundant_constraints!r}")
     free = free_mask(fixed, names)
+    # Large models with every coordinate free are projected with the sparse solver.
+    sparse = StepProjector(num) if num.m > DENSE_MAX and free.all() else None
     rank = None
     try:
-        q = _project_positions(num, t0, q0, free)
+        q = _project_positions(num, t0, q0, free, sparse)
         if num.m:
             rank = _rank_at(num, t0, q, names, constraint_labels, constraint_names,
                             redundant_constraints)
-        qd = _project_velocities(num, t0, q, qd0, free, rank)
+        if rank is not None and rank.dependent:
+            sparse = None  # the sparse velocity projection needs independent rows
+        qd = _project_velocities(num, t0, q, qd0, free, sparse)
     except np.linalg.LinAlgError as exc:
         raise InitialConditionError(f"could not project the initial state: {exc}") from exc
     except InitialConditionError as exc:
@@ -178,26 +182,21 @@ def consistent_state(
     return InitializationReport(tuple(names), q0, qd0, q, qd, rank)
 
 
-def _sparse_start(num: NumericModel, free: np.ndarray) -> bool:
-    """Large models with every coordinate free are projected with the sparse solver."""
-    return num.m > DENSE_MAX and bool(free.all())
-
-
-def _project_positions(num: NumericModel, t0: float, q0: np.ndarray,
-                       free: np.ndarray) -> np.ndarray:
-    if _sparse_start(num, free):
+def _project_positions(num: NumericModel, t0: float, q0: np.ndarray, free: np.ndarray,
+                       sparse: StepProjector | None) -> np.ndarray:
+    if sparse is not None:
         try:
-            return StepProjector(num).positions(t0, q0, refactor=True)
+            return sparse.positions(t0, q0, refactor=True)
         except (SingularSystemError, np.linalg.LinAlgError, InitialConditionError):
             pass  # dependent constraints, or too far: the dense least squares decide
     return project_positions(num, t0, q0, free)
 
 
 def _project_velocities(num: NumericModel, t0: float, q: np.ndarray, qd0: np.ndarray,
-                        free: np.ndarray, rank: ConstraintRank | None) -> np.ndarray:
-    if _sparse_start(num, free) and (rank is None or not rank.dependent):
+                        free: np.ndarray, sparse: StepProjector | None) -> np.ndarray:
+    if sparse is not None:
         try:
-            return StepProjector(num).velocities(t0, q, qd0)
+            return sparse.velocities(t0, q, qd0)
         except (SingularSystemError, np.linalg.LinAlgError):
             pass
     return project_velocities(num, t0, q, qd0, free)
