@@ -20,12 +20,12 @@ from .errors import InitialConditionsAdjusted, IntegrationWarning, RedundantCons
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
-from .solvers.dynamics import first_order_rhs
+from .solvers.engine import choose_engine
 from .solvers.initialization import InitializationReport, consistent_state, state_vector
 from .solvers.integrate import IntegrationResult, integrate
 from .solvers.kkt import REDUNDANT_MODES
+from .solvers.native.library import prepare_runtime
 from .solvers.outputs import evaluate_outputs
-from .solvers.projection import StepProjector
 from .statics import Equilibrium, Linearization
 from .statics import equilibrium as _equilibrium
 from .statics import linearize as _linearize
@@ -157,6 +157,7 @@ class System:
     @cached_property
     def compiled(self) -> CompiledEquations:
         """Generated numeric functions (made on first use, then reused)."""
+        prepare_runtime()
         # Looked up on the module so that tests (and profilers) can wrap it.
         return codegen.compile_equations(self._equations)
 
@@ -210,6 +211,7 @@ class System:
         dense_output: bool = False,
         progress: bool = False,
         redundant_constraints: str | None = None,
+        native: bool | None = None,
         **options: object,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
@@ -228,6 +230,10 @@ class System:
         drift). A failure or Ctrl-C returns the part computed so far with
         ``success=False`` and an :class:`~dalembert.errors.IntegrationWarning`.
         ``redundant_constraints`` overrides the System's option of that name.
+        ``native`` chooses the simulation loop: ``None`` runs it in C when it applies
+        (C-generated functions, independent constraints, a block-structured mass
+        matrix; see :mod:`dalembert.solvers.native`), ``True`` requires that,
+        ``False`` keeps it in Python. Both give the same trajectory to rounding.
         """
         if stabilization not in STABILIZATIONS:
             raise ValueError(
@@ -244,19 +250,22 @@ class System:
         if report.dependent_constraints:
             warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=2)
         kept = report.rank.kept if report.rank is not None else None
-        gain = baumgarte_gain if stabilization == "baumgarte" else 0.0
-        project = StepProjector(num, kept) if stabilization == "projection" else None
+        y0 = np.concatenate([report.q, report.qd])
+        engine = choose_engine(
+            num, t_span[0], y0, method, projection=stabilization == "projection",
+            baumgarte=baumgarte_gain if stabilization == "baumgarte" else 0.0, kept=kept,
+            native=native)
         result = integrate(
-            first_order_rhs(num, gain, kept), t_span, np.concatenate([report.q, report.qd]),
-            method=method, t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
-            events=[_state_event(e, num.n) for e in events], project=project,
-            progress=progress, rtol=rtol, atol=atol, **options,
+            engine.rhs, t_span, y0, method=engine.method,
+            t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
+            events=[_state_event(e, num.n) for e in events], project=engine.project,
+            progress=progress, rtol=rtol, atol=atol, **engine.options, **options,
         )
         if not result.success:
             warnings.warn(f"{result.message}; returning the trajectory up to "
                           f"t={result.t[-1] if len(result.t) else t_span[0]:.6g}",
                           IntegrationWarning, stacklevel=2)
-        return self._trajectory(num, result, report, kept)
+        return self._trajectory(num, result, report, kept, engine.accelerations)
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: object, **options: object) -> Equilibrium:
@@ -277,10 +286,10 @@ class System:
 
     def _trajectory(
         self, num: NumericModel, result: IntegrationResult, report: InitializationReport,
-        kept: np.ndarray | None = None,
+        kept: np.ndarray | None = None, accelerations: Callable | None = None,
     ) -> Trajectory:
         n = num.n
-        derived = evaluate_outputs(num, result.t, result.y, kept)
+        derived = evaluate_outputs(num, result.t, result.y, kept, accelerations)
         energies = derived.pop("energies")
         return Trajectory(
             t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,

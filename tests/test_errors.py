@@ -262,26 +262,30 @@ def test_keyboard_interrupt_returns_the_part_computed(pend):
     assert traj.position_residual.max() < 1e-12
 
 
-def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch):
-    import dalembert.system as system_module
+def _interrupting(rhs):
+    """``rhs`` that raises KeyboardInterrupt from its 201st call on (Ctrl-C)."""
+    calls = {"n": 0}
 
-    real = system_module.first_order_rhs
+    def wrapped(*args):
+        calls["n"] += 1
+        if calls["n"] > 200:
+            raise KeyboardInterrupt
+        return rhs(*args)
 
-    def counting_rhs(num, gain=0.0, kept=None):
-        rhs = real(num, gain, kept)
-        calls = {"n": 0}
+    return wrapped
 
-        def wrapped(t_, y_):
-            calls["n"] += 1
-            if calls["n"] > 200:
-                raise KeyboardInterrupt
-            return rhs(t_, y_)
 
-        return wrapped
+@pytest.mark.parametrize("native", [False, True])
+def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch, native):
+    # The C loop returns to Python after every step, so Ctrl-C lands there too.
+    from dalembert.solvers import engine
+    from dalembert.solvers.native import NativeSolver
 
-    monkeypatch.setattr(system_module, "first_order_rhs", counting_rhs)
+    real = engine.first_order_rhs
+    monkeypatch.setattr(engine, "first_order_rhs", lambda *a: _interrupting(real(*a)))
+    monkeypatch.setattr(NativeSolver, "rhs", _interrupting(NativeSolver.rhs))
     with pytest.warns(IntegrationWarning, match=r"interrupted"):
-        traj = pend.simulate((0, 10), q0=[1.0, 0.0])
+        traj = pend.simulate((0, 10), q0=[1.0, 0.0], native=native)
     assert traj.status == "interrupted" and 0 < traj.t[-1] < 10 and len(traj) > 2
 
 

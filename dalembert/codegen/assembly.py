@@ -204,6 +204,9 @@ class _CEvaluator:
         cfun.argtypes = [ctypes.c_void_p] * len(self._args)
         self._cfun = cfun
         self._lock = threading.Lock()
+        #: For C loops (:mod:`dalembert.solvers.native`); the tables live as long as self.
+        self.native = c_backend.NativeHandle(ctypes.cast(cfun, ctypes.c_void_p).value,
+                                             *self._args[:3], size)
 
     def __call__(self, time, q, *rest):
         with self._lock:

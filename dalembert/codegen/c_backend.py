@@ -51,6 +51,7 @@ import subprocess
 import tempfile
 import warnings
 from collections.abc import Callable, Collection, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -180,17 +181,37 @@ def scatter_library(kinds: Sequence[tuple[str, Sequence[FlatSpec]]],
         _scatter_source(kind, specs, gathered) for kind, specs in kinds], PART_CFLAGS)
 
 
+def source_library(source: str, flags: Sequence[str] = PART_CFLAGS) -> ctypes.CDLL:
+    """Compile hand-written C ``source`` (or load it from the cache, keyed by its text).
+
+    Raises :class:`CompileError` when C is unavailable.
+    """
+    compiler = _compiler()
+    key = hashlib.sha256("\0".join([compiler, *flags, source]).encode()).hexdigest()[:32]
+    return _load(key, lambda: source, compiler, flags)
+
+
 def _library(specs: Sequence[FlatSpec], variant: str, sources: Callable,
              flags: Sequence[str]) -> ctypes.CDLL:
+    compiler = _compiler()
+    key = _cache_key(specs, compiler, variant + " ".join(flags))
+    return _load(key, lambda: "\n".join(["#include <math.h>", "#include <stdint.h>", *sources()]),
+                 compiler, flags)
+
+
+def _compiler() -> str:
     compiler = find_compiler()
     if compiler is None:
         raise CompileError("no C compiler found")
-    key = _cache_key(specs, compiler, variant + " ".join(flags))
+    return compiler
+
+
+def _load(key: str, source: Callable[[], str], compiler: str,
+          flags: Sequence[str]) -> ctypes.CDLL:
     library = cache_dir() / "c" / f"dalembert_{key}.so"
     try:
         if not library.exists():
-            _compile("\n".join(["#include <math.h>", "#include <stdint.h>", *sources()]),
-                     library, compiler, flags)
+            _compile(source(), library, compiler, flags)
         return ctypes.CDLL(str(library))
     except OSError as exc:  # unwritable cache directory, unloadable library
         raise CompileError(f"{exc} (set DALEMBERT_CACHE_DIR to a writable folder)") from exc
@@ -320,13 +341,29 @@ def _bind(lib: ctypes.CDLL, name: str, arguments: Arguments, size: int) -> Calla
     cfun.restype = None
     cfun.argtypes = [ctypes.c_void_p] * (len(arguments) + 1)
     if not size:
-        return _empty
-
-    def call(*arrays):
-        args = [np.ascontiguousarray(a, dtype=float).reshape(-1) for a in arrays]
-        out = np.empty(size)
-        cfun(*(a.ctypes.data for a in args), out.ctypes.data)
-        return out
+        def call(*arrays):
+            return np.zeros(0)
+    else:
+        def call(*arrays):
+            args = [np.ascontiguousarray(a, dtype=float).reshape(-1) for a in arrays]
+            out = np.empty(size)
+            cfun(*(a.ctypes.data for a in args), out.ctypes.data)
+            return out
 
     call.library = lib  # keeps the library loaded as long as the function lives
+    #: For C loops (:mod:`dalembert.solvers.native`): address, no scatter tables, size.
+    call.native = NativeHandle(ctypes.cast(cfun, ctypes.c_void_p).value, 0, 0, 0, size)
     return call
+
+
+@dataclass(frozen=True)
+class NativeHandle:
+    """A generated function as C code calls it: a flat ``fn(t, q, [qd,] p, out)`` (the
+    tables are 0) or a scatter driver ``fn(K, index, target, t, q, [qd,] p, out)``
+    that adds into ``out``; ``size`` outputs."""
+
+    address: int
+    K: int
+    index: int
+    target: int
+    size: int

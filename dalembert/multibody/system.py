@@ -17,6 +17,7 @@ import sympy as sp
 from ..codegen.assembly import compile_parts
 from ..codegen.compiled import CompiledEquations
 from ..model.model import Model, build_model
+from ..solvers.native.library import prepare_runtime
 from ..system import System, _check_redundant
 from .parts import multibody_parts
 
@@ -78,5 +79,6 @@ class MultibodySystem(System):
     @cached_property
     def compiled(self) -> CompiledEquations:
         """Generated numeric functions, one kernel per kind of body, joint and the loads."""
+        prepare_runtime()
         parts = multibody_parts(self._multibody)
         return compile_parts(parts, len(self._names), len(self._rows))

@@ -129,6 +129,11 @@ class _Run:
         self.events = list(events or ())
         self.dense_output = dense_output
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
+        if self.t_eval is not None:
+            #: Output times as increasing numbers in the direction of integration.
+            self._t_eval_ahead = self.direction * self.t_eval
+            if np.any(np.diff(self._t_eval_ahead) < 0):
+                raise ValueError("t_eval must be sorted in the direction of integration")
         self.status: str | None = None
         self.message = ""
         self.n_projections = 0
@@ -169,41 +174,45 @@ class _Run:
             )
         t_old, t_new = solver.t_old, solver.t
         self.n_steps += 1
-        interpolant = solver.dense_output() if self._needs_interpolant() else None
         try:
             y_new = self._project_step(t_new)
         except DalembertError as exc:
             return self.stop("failed", f"projection failed at t={t_new:.6g}: {exc}")
-        state = self._interpolator(interpolant, t_new, y_new)
+        state = self._interpolator(t_new, y_new)
         t_stop = self._handle_events(t_old, t_new, y_new, state)
         if t_stop is not None:
             t_new, y_new = t_stop, state(t_stop)
         self._record(t_old, t_new, y_new, state)
         self.t_reached = t_new
         if self.dense_output:
+            state(t_old)  # the interpolant, made now from this step's solver state
             self.segments.append((t_old, t_new, state))
+        if self.project is not None and self.status is None:
+            _restart_from(solver, y_new)
         if self.status is None and solver.status == "finished":
             self.stop("finished", "the integration reached the end of t_span")
 
-    def _needs_interpolant(self) -> bool:
-        return self.t_eval is not None or bool(self.events) or self.dense_output
-
     def _project_step(self, t: float) -> np.ndarray:
+        """The new state, projected (the solver restarts from it after the outputs)."""
         solver = self.solver
         if self.project is None:
             return solver.y.copy()
-        y = self.project(t, solver.y)
         self.n_projections += 1
-        _restart_from(solver, y)
-        return y.copy()
+        return self.project(t, solver.y).copy()
 
-    def _interpolator(self, interpolant, t_new: float, y_new: np.ndarray) -> Callable:
-        project = self.project
+    def _interpolator(self, t_new: float, y_new: np.ndarray) -> Callable:
+        """``state(s)`` within the step; the solver's interpolant is made on first use
+        (only steps with an output time or an event pay for it) and must be, as with
+        any SciPy solver, before the next step or restart."""
+        solver, project = self.solver, self.project
+        made: list[Callable] = []
 
         def state(s: float) -> np.ndarray:
-            if s == t_new or interpolant is None:
+            if s == t_new:
                 return y_new
-            y = interpolant(s)
+            if not made:
+                made.append(solver.dense_output())
+            y = made[0](s)
             return project(s, y) if project is not None else y
 
         return state
@@ -237,8 +246,8 @@ class _Run:
             self.ys.append(y_new)
             return
         d = self.direction
-        inside = (d * self.t_eval > d * t_old) & (d * self.t_eval <= d * t_new)
-        for s in self.t_eval[inside]:
+        lo, hi = np.searchsorted(self._t_eval_ahead, [d * t_old, d * t_new], side="right")
+        for s in self.t_eval[lo:hi]:
             self.ts.append(float(s))
             self.ys.append(state(float(s)))
 

@@ -157,7 +157,9 @@ def test_stiff_mechanism_with_implicit_methods(method, rtol, atol, tol):
                     potential=k / 2 * (x - sp.sin(t)) ** 2, generalized_forces={x: -c * x.diff()},
                     constraints=[Holonomic(y - 2 * x, name="line")])
     traj = system.simulate((0, 2), q0=[0, 0], method=method, rtol=rtol, atol=atol)
-    assert traj.success and traj.stats["n_steps"] < 5000
+    # Explicit methods need 12800 (DOP853) to 32800 (RK45) steps here. BDF's count
+    # depends on rounding: 4700-10300 with the right-hand side scaled by 1 +- 1e-15.
+    assert traj.success and traj.stats["n_steps"] < 11000
     assert np.abs(traj["x"] - stiff_exact(m, k, c)(traj.t)).max() < tol
     assert np.abs(traj["y"] - 2 * traj["x"]).max() < 1e-14
 

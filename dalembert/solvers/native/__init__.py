@@ -1,0 +1,58 @@
+"""The simulation loop in C: KKT solves, Runge-Kutta steps and projections.
+
+Python around SciPy's integrators costs ~100 us per right-hand side, more than
+the mechanics of a 16-link chain. Here the right-hand side, whole explicit
+Runge-Kutta steps and the projection after each step run in ``runtime.c``
+(hand-written, compiled once per machine, cached like generated code), calling
+the model's generated C functions through pointers; Python only sees accepted
+steps. Everything else (initial values, events, ``t_eval``, dense output,
+outputs) is the regular path, so results match it to rounding (tested).
+
+The KKT solve is a range-space (Schur complement) method, linear in the size of
+the mechanism: ``M`` is block diagonal (one block per body), constraint rows
+that lie inside one block (a quaternion's unit norm) are folded into it,
+``Mt = M_b + w a a^T`` (true at every solution, and it makes a quaternion body's
+block positive definite), each block gets a dense Cholesky factor, and the
+multipliers solve ``A Mt^-1 A^T lambda = c - A Mt^-1 f``, a banded positive
+definite system for chains and trees (band Cholesky in reverse Cuthill-McKee
+order; see :mod:`.structure`). This is Baraff's linear-time multiplier method
+in sparse form. The projections solve ``J J^T`` with the same code.
+
+:func:`native_solver` says when it applies: C-generated model functions, blocks
+of ``M`` and a band of at most 64, independent constraints, ``M`` positive
+definite on each block once folded (checked at the initial state).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...codegen.c_backend import CompileError
+from ...codegen.compiled import NumericModel
+from ...errors import DalembertError
+from .runge_kutta import NATIVE_METHODS, NativeDOP853, NativeRK23, NativeRK45
+from .solver import NativeSolver
+from .structure import NotApplicable
+
+__all__ = ["NATIVE_METHODS", "NativeDOP853", "NativeRK23", "NativeRK45", "NativeSolver",
+           "NotApplicable", "native_solver"]
+
+
+def native_solver(num: NumericModel, y0: np.ndarray, t0: float = 0.0, baumgarte: float = 0.0,
+                  kept: np.ndarray | None = None) -> NativeSolver:
+    """A :class:`NativeSolver` for ``num``, checked at ``(t0, y0)``.
+
+    Raises :class:`NotApplicable` with the reason when the C loop cannot be used.
+    """
+    if kept is not None:
+        raise NotApplicable("the constraints are dependent (the C loop needs them independent)")
+    try:
+        solver = NativeSolver(num, baumgarte)
+    except CompileError as exc:
+        raise NotApplicable(f"the C runtime could not be compiled: {exc}") from exc
+    try:
+        solver.rhs(t0, y0)
+    except DalembertError as exc:
+        raise NotApplicable(f"the block solve does not apply at the initial state: {exc}") \
+            from exc
+    return solver

@@ -1,0 +1,95 @@
+"""Loading ``runtime.c`` and the ctypes mirrors of its structs."""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import threading
+from functools import lru_cache
+from pathlib import Path
+
+from ...codegen import c_backend
+
+_i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
+
+#: Return codes of the runtime.
+OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION = range(5)
+
+
+class Function(ctypes.Structure):
+    _fields_ = [("fn", _ptr), ("K", _ptr), ("index", _ptr), ("target", _ptr), ("size", _i64)]
+
+
+class Model(ctypes.Structure):
+    _fields_ = [
+        *((name, _i64) for name in ("n", "m", "nM", "nA", "n_hol")),
+        ("p", _ptr), ("kkt", Function), ("velocity", Function), ("position", Function),
+        ("holonomic", _ptr), ("baumgarte", _f64), ("n_blocks", _i64),
+        *((name, _ptr) for name in ("block_start", "slot_coord", "block_mat", "M_at")),
+        ("n_pairs", _i64),
+        *((name, _ptr) for name in ("pair_row", "pair_block", "pair_vec", "A_at", "block_pairs",
+                                    "internal")),
+        ("kd", _i64), ("row_pos", _ptr), ("gram_start", _ptr), ("gram_target", _ptr),
+        *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
+                                    "r", "lambda", "qdd", "q_trial")),
+    ]
+
+
+class Tableau(ctypes.Structure):
+    _fields_ = [("n_stages", _i64), *((name, _ptr) for name in ("A", "B", "C", "E", "E3")),
+                ("error_exponent", _f64)]
+
+
+class Stepper(ctypes.Structure):
+    _fields_ = [*((name, _f64) for name in ("t", "h_abs", "h_previous", "t_bound", "direction",
+                                            "rtol", "max_step")),
+                ("atol", _ptr), ("nfev", _i64)]
+
+
+_LOCK = threading.Lock()
+
+
+def runtime() -> ctypes.CDLL:
+    """The compiled runtime (built once per machine and cached like generated code).
+
+    Raises :class:`~dalembert.codegen.c_backend.CompileError` without a C compiler.
+    """
+    with _LOCK:  # one compilation, even when prepare_runtime's thread is at it
+        return _runtime()
+
+
+def prepare_runtime() -> None:
+    """Start compiling the runtime in the background, if C is the backend.
+
+    Called when a model's code is generated: gcc then runs beside the derivation
+    (a cold build on a new machine does not wait for it), and the first simulation
+    finds it ready.
+    """
+    if _runtime.cache_info().currsize or c_backend.backend() != "c":
+        return
+    threading.Thread(target=_runtime_if_possible, daemon=True).start()
+
+
+def _runtime_if_possible() -> None:
+    # A failure is reported by the first simulation that needs the runtime.
+    with contextlib.suppress(c_backend.CompileError):
+        runtime()
+
+
+@lru_cache(maxsize=1)
+def _runtime() -> ctypes.CDLL:
+    source = (Path(__file__).with_name("runtime.c")).read_text()
+    lib = c_backend.source_library(source)
+    signatures = {
+        "dl_solve": [_ptr] * 4,
+        "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
+        "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _f64, _f64],
+        "dl_rk_step": [_ptr] * 7,
+        "dl_stages": [_ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr, _ptr,
+                      _ptr],
+    }
+    for name, argtypes in signatures.items():
+        fn = getattr(lib, name)
+        fn.restype = ctypes.c_int
+        fn.argtypes = argtypes
+    return lib

@@ -1,0 +1,104 @@
+"""SciPy's explicit Runge-Kutta solvers with each step taken in C.
+
+:class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) subclass SciPy's
+solvers and replace only ``_step_impl``: the stages, the error estimate and the
+step-size control of :class:`scipy.integrate.RungeKutta` run in ``runtime.c``
+with the same tableau, the same formulas and constants, so the steps taken are
+SciPy's up to rounding (tested). Start-up (the initial step), dense output and
+everything else stay SciPy's.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+from scipy.integrate import DOP853, RK23, RK45, OdeSolver
+from scipy.integrate._ivp import dop853_coefficients
+from scipy.integrate._ivp.rk import Dop853DenseOutput
+
+from . import library
+from .solver import NativeSolver
+
+
+class _NativeSteps:
+    """Mixin for a SciPy ``RungeKutta`` subclass; ``native`` is a :class:`NativeSolver`."""
+
+    def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
+        super().__init__(fun, t0, y0, t_bound, **options)
+        self._native = native
+        self._keep = [None if a is None else np.ascontiguousarray(a, dtype=float)
+                      for a in self._coefficients()]
+        A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in self._keep)
+        self._tableau = library.Tableau(self.n_stages, A, B, C, E, E3, self.error_exponent)
+        self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=float)
+        self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
+                                        rtol=self.rtol, max_step=self.max_step,
+                                        atol=self._atol.ctypes.data)
+        self._stage = np.empty(self.n)
+
+    def _coefficients(self) -> list:
+        s = self.n_stages
+        A = np.zeros((s, s))  # SciPy's RK45 leaves out the last (zero) column
+        A[:, :self.A.shape[1]] = self.A[:s, :s]
+        if isinstance(self, DOP853):
+            return [A, self.B, self.C, self.E5, self.E3]
+        return [A, self.B, self.C, self.E, None]
+
+    def _step_impl(self):
+        st, K = self._stepper, self.K  # K: rows of stages, C-contiguous in SciPy's solvers
+        y = np.ascontiguousarray(self.y, dtype=float)
+        K[0] = self.f
+        y_new = np.empty(self.n)
+        st.t, st.h_abs, st.nfev = self.t, self.h_abs, 0
+        status = self._native.lib.dl_rk_step(
+            self._native._address, ctypes.addressof(self._tableau), ctypes.addressof(st),
+            y.ctypes.data, K.ctypes.data, y_new.ctypes.data, self._stage.ctypes.data)
+        self.nfev += st.nfev
+        if status == library.STEP_TOO_SMALL:
+            return False, self.TOO_SMALL_STEP
+        self._native._check(status)
+        self.h_previous, self.y_old = st.h_previous, y
+        self.t, self.y, self.h_abs = st.t, y_new, st.h_abs
+        self.f = K[self.n_stages].copy()
+        return True, None
+
+
+class NativeDOP853(_NativeSteps, DOP853):
+    """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
+
+    def _dense_output_impl(self):
+        # SciPy's DOP853._dense_output_impl with the three extra stages evaluated in C.
+        K, h, s = self.K_extended, self.h_previous, self.n_stages + 1
+        if not hasattr(self, "_extra"):
+            self._extra = [np.ascontiguousarray(a, dtype=float) for a in (self.A_EXTRA,
+                                                                            self.C_EXTRA)]
+        A, C = self._extra
+        y_old = np.ascontiguousarray(self.y_old, dtype=float)
+        nfev = ctypes.c_int64(0)
+        status = self._native.lib.dl_stages(
+            self._native._address, A.ctypes.data, A.shape[1], C.ctypes.data, s, s, len(K),
+            self.t_old, h, y_old.ctypes.data, K.ctypes.data, self._stage.ctypes.data,
+            ctypes.addressof(nfev))
+        self.nfev += nfev.value
+        self._native._check(status)
+        F = np.empty((dop853_coefficients.INTERPOLATOR_POWER, self.n))
+        f_old, delta_y = K[0], self.y - self.y_old
+        F[0] = delta_y
+        F[1] = h * f_old - delta_y
+        F[2] = 2 * delta_y - h * (self.f + f_old)
+        F[3:] = h * np.dot(self.D, K)
+        return Dop853DenseOutput(self.t_old, self.t, self.y_old, F)
+
+
+class NativeRK45(_NativeSteps, RK45):
+    """:class:`scipy.integrate.RK45` stepping in C."""
+
+
+class NativeRK23(_NativeSteps, RK23):
+    """:class:`scipy.integrate.RK23` stepping in C."""
+
+
+NATIVE_METHODS: dict[type[OdeSolver], type[OdeSolver]] = {
+    DOP853: NativeDOP853, RK45: NativeRK45, RK23: NativeRK23,
+}

@@ -1,0 +1,490 @@
+/* The simulation loop of dalembert in C: KKT solves, projection, Runge-Kutta steps.
+ *
+ * The model's generated functions (KKT blocks, velocity constraint, position
+ * constraint) are called through pointers; everything else here is hand-written
+ * and model independent. See native/__init__.py for the method and the tables.
+ *
+ * KKT solve (range-space / Schur complement, linear in the mechanism):
+ *   M qdd = f + A^T lam,  A qdd = c.
+ * M is block diagonal (one block per body). Rows lying inside one block (a
+ * quaternion's unit norm) are folded into it, Mt = M_b + w a a^T, f_b += w a c_r:
+ * true for every solution, and it makes a quaternion body's singular block
+ * positive definite. Then, with Y = Mt^-1 A^T and u = Mt^-1 f,
+ *   S lam = c - A u,  S = A Mt^-1 A^T (banded for chains and trees),  qdd = u + Y lam,
+ * computed with the blocks' Cholesky factors Mt = L L^T as S = Z^T Z, Z = L^-1 A^T.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
+       DL_PROJECTION = 4 };
+
+typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
+                              const double *, const double *, const double *, double *);
+typedef void (*scatter_static)(const int64_t *, const void *, const void *, const double *,
+                               const double *, const double *, double *);
+typedef void (*flat_state)(const double *, const double *, const double *, const double *,
+                           double *);
+typedef void (*flat_static)(const double *, const double *, const double *, double *);
+
+/* One generated function: a scatter driver (K != NULL, adds into out) or a flat one. */
+typedef struct {
+  void *fn;
+  const int64_t *K;
+  const void *index;
+  const void *target;
+  int64_t size;
+} dl_function;
+
+typedef struct {
+  int64_t n, m, nM, nA, n_hol;
+  const double *p;
+  dl_function kkt, velocity, position;
+  const int64_t *holonomic;   /* n_hol: constraint row of each psi entry */
+  double baumgarte;
+  /* blocks of M: slots [block_start[b], block_start[b+1]) hold global coordinates */
+  int64_t n_blocks;
+  const int64_t *block_start, *slot_coord, *block_mat, *M_at;
+  /* (row, block) pairs: the part of a constraint row inside one block, by block */
+  int64_t n_pairs;
+  const int64_t *pair_row, *pair_block, *pair_vec, *A_at, *block_pairs, *internal;
+  /* Schur complement in band storage, rows in the order row_pos */
+  int64_t kd;
+  const int64_t *row_pos;
+  const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i */
+  /* work arrays */
+  double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
+} dl_model;
+
+static void eval_state(const dl_function *F, double t, const double *q, const double *qd,
+                       const double *p, double *out) {
+  if (F->size == 0) return;
+  if (F->K) {
+    memset(out, 0, (size_t)F->size * sizeof(double));
+    ((scatter_state)F->fn)(F->K, F->index, F->target, &t, q, qd, p, out);
+  } else {
+    ((flat_state)F->fn)(&t, q, qd, p, out);
+  }
+}
+
+static void eval_static(const dl_function *F, double t, const double *q, const double *p,
+                        double *out) {
+  if (F->size == 0) return;
+  if (F->K) {
+    memset(out, 0, (size_t)F->size * sizeof(double));
+    ((scatter_static)F->fn)(F->K, F->index, F->target, &t, q, p, out);
+  } else {
+    ((flat_static)F->fn)(&t, q, p, out);
+  }
+}
+
+static double dot(const double *x, const double *y, int64_t n) {
+  double s = 0.0;
+  for (int64_t i = 0; i < n; ++i) s += x[i] * y[i];
+  return s;
+}
+
+/* Cholesky of a dense n x n block in place (lower triangle, row major); the diagonal
+ * keeps 1 / L_jj, so the solves multiply instead of divide. */
+static int cholesky(double *L, int64_t n) {
+  for (int64_t j = 0; j < n; ++j) {
+    double d = L[j * n + j];
+    const double scale = fabs(d);
+    for (int64_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_MASS;
+    const double inv = 1.0 / sqrt(d);
+    L[j * n + j] = inv;
+    for (int64_t i = j + 1; i < n; ++i) {
+      double s = L[i * n + j];
+      for (int64_t k = 0; k < j; ++k) s -= L[i * n + k] * L[j * n + k];
+      L[i * n + j] = s * inv;
+    }
+  }
+  return DL_OK;
+}
+
+/* x <- L^-1 x */
+static void forward(const double *L, int64_t n, double *x) {
+  for (int64_t i = 0; i < n; ++i) {
+    double s = x[i];
+    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
+/* x <- L^-T x */
+static void backward(const double *L, int64_t n, double *x) {
+  for (int64_t i = n - 1; i >= 0; --i) {
+    double s = x[i];
+    for (int64_t k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
+/* Band Cholesky: S[i * (kd + 1) + (i - j)] holds S_ij for i - kd <= j <= i; the
+ * diagonal keeps 1 / L_jj. */
+static int band_cholesky(double *S, int64_t m, int64_t kd) {
+  const int64_t w = kd + 1;
+  for (int64_t j = 0; j < m; ++j) {
+    const int64_t k0 = j > kd ? j - kd : 0;
+    double *Sj = S + j * w + j;  /* Sj[-k] = S_jk */
+    double d = Sj[-j];
+    const double scale = fabs(d);
+    for (int64_t k = k0; k < j; ++k) d -= Sj[-k] * Sj[-k];
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
+    const double inv = 1.0 / sqrt(d);
+    Sj[-j] = inv;
+    const int64_t i1 = j + kd < m - 1 ? j + kd : m - 1;
+    for (int64_t i = j + 1; i <= i1; ++i) {
+      double *Si = S + i * w + i;
+      const int64_t kk = i > kd ? i - kd : 0;
+      double s = Si[-j];
+      for (int64_t k = kk; k < j; ++k) s -= Si[-k] * Sj[-k];
+      Si[-j] = s * inv;
+    }
+  }
+  return DL_OK;
+}
+
+static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
+  const int64_t w = kd + 1;
+  for (int64_t i = 0; i < m; ++i) {
+    const int64_t k0 = i > kd ? i - kd : 0;
+    const double *Si = S + i * w + i;
+    double s = x[i];
+    for (int64_t k = k0; k < i; ++k) s -= Si[-k] * x[k];
+    x[i] = s * Si[-i];
+  }
+  for (int64_t i = m - 1; i >= 0; --i) {
+    const int64_t k1 = i + kd < m - 1 ? i + kd : m - 1;
+    double s = x[i];
+    for (int64_t k = i + 1; k <= k1; ++k) s -= S[k * w + (k - i)] * x[k];
+    x[i] = s * S[i * w];
+  }
+}
+
+static int64_t block_size(const dl_model *md, int64_t b) {
+  return md->block_start[b + 1] - md->block_start[b];
+}
+
+/* Scatter the values of A (pattern order) into the pair vectors. */
+static void load_pairs(dl_model *md, const double *Av) {
+  memset(md->a, 0, (size_t)md->pair_vec[md->n_pairs] * sizeof(double));
+  for (int64_t e = 0; e < md->nA; ++e) md->a[md->A_at[e]] = Av[e];
+}
+
+/* M and f into the blocks, internal rows folded in, blocks factored (Mt = L L^T);
+ * u = L^-1 f and z_p = L^-1 a_p. */
+static int factor_blocks(dl_model *md, const double *Mv, const double *f, const double *c) {
+  memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
+  for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
+  for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
+  for (int64_t b = 0; b < md->n_blocks; ++b) {
+    const int64_t nb = block_size(md, b);
+    double *B = md->blocks + md->block_mat[b];
+    double *u = md->u + md->block_start[b];
+    double trace = 0.0;
+    for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
+    for (int64_t p = md->block_pairs[b]; p < md->block_pairs[b + 1]; ++p) {
+      if (!md->internal[p]) continue;
+      const double *a = md->a + md->pair_vec[p];
+      const double norm2 = dot(a, a, nb);
+      if (norm2 == 0.0) continue;
+      const double w = trace > 0.0 ? trace / (nb * norm2) : 1.0 / norm2;
+      const double wc = w * c[md->pair_row[p]];
+      for (int64_t i = 0; i < nb; ++i) {
+        u[i] += wc * a[i];
+        for (int64_t j = 0; j <= i; ++j) B[i * nb + j] += w * a[i] * a[j];
+      }
+    }
+    if (cholesky(B, nb) != DL_OK) return DL_SINGULAR_MASS;
+    forward(B, nb, u);
+    const int64_t p0 = md->block_pairs[b], pb = md->block_pairs[b + 1] - p0;
+    double *z = md->y + md->pair_vec[p0];
+    memcpy(z, md->a + md->pair_vec[p0], (size_t)(pb * nb) * sizeof(double));
+    for (int64_t k = 0; k < pb; ++k) forward(B, nb, z + k * nb);
+  }
+  return DL_OK;
+}
+
+/* S = sum over blocks of Z_b^T Z_b over the active rows (others get a unit diagonal),
+ * factored. A block's pair vectors z are contiguous, nb values each. */
+static int factor_schur(dl_model *md, const double *z, const unsigned char *active) {
+  const int64_t w = md->kd + 1;
+  double *S = md->S;
+  memset(S, 0, (size_t)(md->m * w) * sizeof(double));
+  for (int64_t b = 0; b < md->n_blocks; ++b) {
+    const int64_t nb = block_size(md, b), p0 = md->block_pairs[b];
+    const int64_t pb = md->block_pairs[b + 1] - p0;
+    const double *zb = z + md->pair_vec[p0];
+    const int64_t *target = md->gram_target + md->gram_start[b];
+    if (active) {
+      for (int64_t i = 0, k = 0; i < pb; ++i)
+        for (int64_t j = 0; j <= i; ++j, ++k)
+          if (active[md->pair_row[p0 + i]] && active[md->pair_row[p0 + j]])
+            S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
+    } else if (nb == 1) {
+      for (int64_t i = 0, k = 0; i < pb; ++i)
+        for (int64_t j = 0; j <= i; ++j, ++k) S[target[k]] += zb[i] * zb[j];
+    } else {
+      for (int64_t i = 0, k = 0; i < pb; ++i)
+        for (int64_t j = 0; j <= i; ++j, ++k) S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
+    }
+  }
+  if (active)
+    for (int64_t r = 0; r < md->m; ++r)
+      if (!active[r]) S[md->row_pos[r] * w] = 1.0;
+  return md->m ? band_cholesky(S, md->m, md->kd) : DL_OK;
+}
+
+/* lam = S^-1 rhs (rhs by row, overwritten by lam), then x += Z lam (x by slot). */
+static void apply_multipliers(dl_model *md, const double *z, double *rhs, double *x) {
+  for (int64_t r = 0; r < md->m; ++r) md->r[md->row_pos[r]] = rhs[r];
+  band_solve(md->S, md->m, md->kd, md->r);
+  for (int64_t r = 0; r < md->m; ++r) rhs[r] = md->r[md->row_pos[r]];
+  for (int64_t p = 0; p < md->n_pairs; ++p) {
+    const int64_t b = md->pair_block[p], nb = block_size(md, b);
+    const double lam = rhs[md->pair_row[p]];
+    const double *zp = z + md->pair_vec[p];
+    double *xb = x + md->block_start[b];
+    for (int64_t i = 0; i < nb; ++i) xb[i] += zp[i] * lam;
+  }
+}
+
+/* qdd and lambda from the KKT values [M values, f, A values, c] (c modified in place):
+ * S lam = c - Z^T u with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). */
+int dl_solve(dl_model *md, double *values, double *qdd, double *lambda) {
+  const double *Mv = values, *f = values + md->nM, *Av = f + md->n;
+  double *c = (double *)Av + md->nA;
+  load_pairs(md, Av);
+  int status = factor_blocks(md, Mv, f, c);
+  if (status != DL_OK) return status;
+  if ((status = factor_schur(md, md->y, NULL)) != DL_OK) return status;
+  for (int64_t p = 0; p < md->n_pairs; ++p)
+    c[md->pair_row[p]] -= dot(md->y + md->pair_vec[p], md->u + md->block_start[md->pair_block[p]],
+                              block_size(md, md->pair_block[p]));
+  apply_multipliers(md, md->y, c, md->u);
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    backward(md->blocks + md->block_mat[b], block_size(md, b), md->u + md->block_start[b]);
+  for (int64_t s = 0; s < md->n; ++s) qdd[md->slot_coord[s]] = md->u[s];
+  if (lambda) memcpy(lambda, c, (size_t)md->m * sizeof(double));
+  return DL_OK;
+}
+
+/* The Baumgarte terms: c -= 2 w (A qd + b) + w^2 psi (psi on holonomic rows). */
+static void baumgarte(dl_model *md, double t, const double *q, const double *qd, double *c) {
+  const double g = md->baumgarte;
+  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  const double *b = md->vel_values + md->nA;
+  for (int64_t r = 0; r < md->m; ++r) c[r] -= 2.0 * g * b[r];
+  for (int64_t p = 0; p < md->n_pairs; ++p) {
+    const int64_t blk = md->pair_block[p], nb = block_size(md, blk), s0 = md->block_start[blk];
+    const double *a = md->a + md->pair_vec[p];
+    double s = 0.0;
+    for (int64_t i = 0; i < nb; ++i) s += a[i] * qd[md->slot_coord[s0 + i]];
+    c[md->pair_row[p]] -= 2.0 * g * s;
+  }
+  eval_static(&md->position, t, q, md->p, md->psi);
+  for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * md->psi[k];
+}
+
+/* y' = [qd, qdd] at (t, y); lambda may be NULL. */
+int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda) {
+  const int64_t n = md->n;
+  eval_state(&md->kkt, t, y, y + n, md->p, md->values);
+  if (md->baumgarte != 0.0 && md->m) {
+    double *c = md->values + md->nM + n + md->nA;
+    load_pairs(md, md->values + md->nM + n);
+    baumgarte(md, t, y, y + n, c);
+  }
+  memcpy(ydot, y + n, (size_t)n * sizeof(double));
+  return dl_solve(md, md->values, ydot + n, lambda);
+}
+
+/* ---- projection onto the constraints (minimum-norm changes) ---------------------- */
+
+static double max_abs(const double *x, int64_t n) {
+  double m = 0.0;
+  for (int64_t i = 0; i < n; ++i) m = fabs(x[i]) > m ? fabs(x[i]) : m;
+  return m;
+}
+
+/* Least-change step dq = -J^T (J J^T)^-1 psi with the factored S = J J^T. */
+static void position_step(dl_model *md, const double *psi, double *dq) {
+  memset(md->lambda, 0, (size_t)md->m * sizeof(double));
+  for (int64_t k = 0; k < md->n_hol; ++k) md->lambda[md->holonomic[k]] = -psi[k];
+  memset(md->u, 0, (size_t)md->n * sizeof(double));
+  apply_multipliers(md, md->a, md->lambda, md->u);
+  for (int64_t s = 0; s < md->n; ++s) dq[md->slot_coord[s]] = md->u[s];
+}
+
+/* Simplified Newton on psi(q, t) = 0 (one factorization), as StepProjector.positions. */
+static int project_positions(dl_model *md, double t, double *q, const unsigned char *holonomic,
+                             int64_t max_newton, double position_tol, double accept_tol) {
+  const int64_t n = md->n;
+  double *psi = md->psi, *trial = md->q_trial, *dq = md->qdd;
+  eval_static(&md->position, t, q, md->p, psi);
+  double residual = max_abs(psi, md->n_hol);
+  if (residual <= position_tol) return DL_OK;
+  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  load_pairs(md, md->vel_values);
+  if (factor_schur(md, md->a, holonomic) != DL_OK) return DL_PROJECTION;
+  for (int64_t it = 0; it < max_newton; ++it) {
+    position_step(md, psi, dq);
+    for (int64_t i = 0; i < n; ++i) trial[i] = q[i] + dq[i];
+    eval_static(&md->position, t, trial, md->p, psi);
+    const double new_residual = max_abs(psi, md->n_hol);
+    if (!(new_residual < 0.5 * residual)) break;
+    memcpy(q, trial, (size_t)n * sizeof(double));
+    residual = new_residual;
+    if (residual <= position_tol) return DL_OK;
+  }
+  const double scale = max_abs(q, n) > 1.0 ? max_abs(q, n) : 1.0;
+  return residual <= accept_tol * scale ? DL_OK : DL_PROJECTION;
+}
+
+/* qd <- qd - A^T (A A^T)^-1 (A qd + b), A and b at q. */
+static int project_velocities(dl_model *md, double t, const double *q, double *qd) {
+  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  load_pairs(md, md->vel_values);
+  if (factor_schur(md, md->a, NULL) != DL_OK) return DL_PROJECTION;
+  const double *b = md->vel_values + md->nA;
+  /* residual A qd + b, by row, from the pattern's values */
+  for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = b[r];
+  for (int64_t p = 0; p < md->n_pairs; ++p) {
+    const int64_t blk = md->pair_block[p], nb = block_size(md, blk), s0 = md->block_start[blk];
+    const double *a = md->a + md->pair_vec[p];
+    double s = 0.0;
+    for (int64_t i = 0; i < nb; ++i) s += a[i] * qd[md->slot_coord[s0 + i]];
+    md->lambda[md->pair_row[p]] += s;
+  }
+  for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = -md->lambda[r];
+  memset(md->u, 0, (size_t)md->n * sizeof(double));
+  apply_multipliers(md, md->a, md->lambda, md->u);
+  for (int64_t s = 0; s < md->n; ++s) qd[md->slot_coord[s]] += md->u[s];
+  return DL_OK;
+}
+
+/* y = [q, qd] projected in place: positions (holonomic rows), then velocities. */
+int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
+               int64_t max_newton, double position_tol, double accept_tol) {
+  if (md->m == 0) return DL_OK;
+  if (md->n_hol) {
+    const int status = project_positions(md, t, y, holonomic, max_newton, position_tol,
+                                         accept_tol);
+    if (status != DL_OK) return status;
+  }
+  return project_velocities(md, t, y, y + md->n);
+}
+
+/* ---- one accepted explicit Runge-Kutta step, as scipy.integrate's RungeKutta ------ */
+
+typedef struct {
+  int64_t n_stages;           /* s: K has s + 1 rows (the last is f at the new point) */
+  const double *A, *B, *C;    /* A: s x s row major, B and C: s */
+  const double *E;            /* s + 1: error weights (E5 for DOP853) */
+  const double *E3;           /* DOP853's second estimator, or NULL */
+  double error_exponent;
+} dl_tableau;
+
+typedef struct {
+  double t, h_abs, h_previous, t_bound, direction, rtol, max_step;
+  const double *atol;         /* n_state */
+  int64_t nfev;
+} dl_stepper;
+
+static double error_norm(const dl_tableau *tb, const double *K, int64_t n_state, double h,
+                         const double *scale) {
+  const int64_t s1 = tb->n_stages + 1;
+  double e5 = 0.0, e3 = 0.0;
+  for (int64_t i = 0; i < n_state; ++i) {
+    double x5 = 0.0, x3 = 0.0;
+    for (int64_t k = 0; k < s1; ++k) x5 += K[k * n_state + i] * tb->E[k];
+    if (tb->E3) {
+      for (int64_t k = 0; k < s1; ++k) x3 += K[k * n_state + i] * tb->E3[k];
+      x3 /= scale[i];
+      e3 += x3 * x3;
+    }
+    x5 /= scale[i];
+    e5 += x5 * x5;
+  }
+  if (!tb->E3) return fabs(h) * sqrt(e5 / n_state);
+  if (e5 == 0.0 && e3 == 0.0) return 0.0;
+  return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n_state);
+}
+
+/* Stages j0 <= j < j1: K[j] = f(t + C[j - row0] h, y + h sum_k A[j - row0][k] K[k]);
+ * A has rows of length lda and starts at stage row0. */
+int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64_t row0,
+              int64_t j0, int64_t j1, double t, double h, const double *y, double *K,
+              double *stage, int64_t *nfev) {
+  const int64_t n_state = 2 * md->n;
+  for (int64_t j = j0; j < j1; ++j) {
+    const double *a = A + (j - row0) * lda;
+    for (int64_t i = 0; i < n_state; ++i) {
+      double dy = 0.0;
+      for (int64_t k = 0; k < j; ++k) dy += K[k * n_state + i] * a[k];
+      stage[i] = y[i] + dy * h;
+    }
+    ++*nfev;
+    const int status = dl_rhs(md, t + C[j - row0] * h, stage, K + j * n_state, NULL);
+    if (status != DL_OK) return status;
+  }
+  return DL_OK;
+}
+
+/* One Runge-Kutta step from (st->t, y, f = K[0] on entry): y_new, f_new = K[s]. */
+static int rk_attempt(dl_model *md, const dl_tableau *tb, dl_stepper *st, double h,
+                      const double *y, double *K, double *y_new, double *stage) {
+  const int64_t n_state = 2 * md->n, s = tb->n_stages;
+  const int status = dl_stages(md, tb->A, s, tb->C, 0, 1, s, st->t, h, y, K, stage, &st->nfev);
+  if (status != DL_OK) return status;
+  for (int64_t i = 0; i < n_state; ++i) {
+    double dy = 0.0;
+    for (int64_t k = 0; k < s; ++k) dy += K[k * n_state + i] * tb->B[k];
+    y_new[i] = y[i] + h * dy;
+  }
+  st->nfev++;
+  return dl_rhs(md, st->t + h, y_new, K + s * n_state, NULL);
+}
+
+/* Steps from st->t until one is accepted (scipy's RungeKutta._step_impl). K[0] must
+ * hold f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced. */
+int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
+               double *y_new, double *stage) {
+  const double SAFETY = 0.9, MIN_FACTOR = 0.2, MAX_FACTOR = 10.0;
+  const int64_t n_state = 2 * md->n;
+  const double t = st->t;
+  const double min_step = 10.0 * fabs(nextafter(t, st->direction * INFINITY) - t);
+  double h_abs = st->h_abs;
+  if (h_abs > st->max_step) h_abs = st->max_step;
+  else if (h_abs < min_step) h_abs = min_step;
+  int rejected = 0;
+  for (;;) {
+    if (h_abs < min_step) return DL_STEP_TOO_SMALL;
+    double t_new = t + h_abs * st->direction;
+    if (st->direction * (t_new - st->t_bound) > 0) t_new = st->t_bound;
+    const double h = t_new - t;
+    h_abs = fabs(h);
+    const int status = rk_attempt(md, tb, st, h, y, K, y_new, stage);
+    if (status != DL_OK) return status;
+    for (int64_t i = 0; i < n_state; ++i) {
+      const double big = fabs(y[i]) > fabs(y_new[i]) ? fabs(y[i]) : fabs(y_new[i]);
+      stage[i] = st->atol[i] + big * st->rtol;
+    }
+    const double err = error_norm(tb, K, n_state, h, stage);
+    if (err < 1.0) {
+      double factor = err == 0.0 ? MAX_FACTOR : SAFETY * pow(err, tb->error_exponent);
+      if (factor > MAX_FACTOR) factor = MAX_FACTOR;
+      if (rejected && factor > 1.0) factor = 1.0;
+      st->h_abs = h_abs * factor;
+      st->h_previous = h;
+      st->t = t_new;
+      return DL_OK;
+    }
+    const double shrink = SAFETY * pow(err, tb->error_exponent);
+    h_abs *= shrink > MIN_FACTOR ? shrink : MIN_FACTOR;
+    rejected = 1;
+  }
+}

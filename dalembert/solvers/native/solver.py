@@ -1,0 +1,104 @@
+"""One model's state in the C runtime: accelerations, multipliers and projections."""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from ...codegen.compiled import NumericModel
+from ...errors import SingularSystemError
+from ..projection import ACCEPT_TOL, FAST_NEWTON, POSITION_TOL, StepProjector
+from ..sparse_kkt import SINGULAR_MESSAGE
+from . import library
+from .structure import NotApplicable, schur_structure
+
+_MESSAGES = {
+    library.SINGULAR_MASS: "a block of the mass matrix is singular even with the constraints "
+                           "inside it folded in",
+    library.SINGULAR_CONSTRAINTS: SINGULAR_MESSAGE,
+}
+
+
+class NativeSolver:
+    """The right-hand side ``y' = F(t, y)`` and the step projection, evaluated in C.
+
+    Same equations as :func:`~dalembert.solvers.dynamics.first_order_rhs` and
+    :class:`~dalembert.solvers.projection.StepProjector`, solved by the method of
+    :mod:`dalembert.solvers.native`. Raises :class:`NotApplicable` (saying why) for
+    models it does not cover: NumPy-generated functions, wide mass blocks or bands.
+    """
+
+    def __init__(self, num: NumericModel, baumgarte: float = 0.0) -> None:
+        handles = [getattr(f, "native", None) for f in (
+            num.compiled.kkt_values, num.compiled.velocity_values, num.compiled.position_values)]
+        if any(h is None for h in handles):
+            raise NotApplicable("the model's functions were not generated in C")
+        self.num, self.n, self.m = num, num.n, num.m
+        self.lib = library.runtime()
+        self.structure = schur_structure(num.pattern)
+        self._keep = []  # every array the C struct points to
+        self.model = self._model(handles, baumgarte)
+        self._address = ctypes.addressof(self.model)
+        self._holonomic_mask = self._array(np.isin(np.arange(self.m), num.holonomic_rows),
+                                           np.uint8)
+        self._fallback: StepProjector | None = None  # made on first need
+
+    def _array(self, values, dtype=np.int64) -> int:
+        array = np.ascontiguousarray(values, dtype=dtype)
+        self._keep.append(array)
+        return array.ctypes.data
+
+    def _buffer(self, size: int) -> int:
+        return self._array(np.zeros(max(int(size), 1)), np.float64)
+
+    def _model(self, handles, baumgarte: float) -> library.Model:
+        num, s = self.num, self.structure
+        n, m = self.n, self.m
+        nM, nA = len(num.pattern.M_rows), len(num.pattern.A_rows)
+        model = library.Model(n=n, m=m, nM=nM, nA=nA, n_hol=len(num.holonomic_rows),
+                              p=self._array(num.p, np.float64), baumgarte=baumgarte,
+                              holonomic=self._array(num.holonomic_rows),
+                              n_blocks=s.n_blocks, n_pairs=len(s.pair_row), kd=s.kd)
+        for name, h in zip(("kkt", "velocity", "position"), handles):
+            setattr(model, name, library.Function(h.address or None, h.K or None,
+                                                  h.index or None, h.target or None, h.size))
+        for name, array in s.arrays().items():
+            setattr(model, name, self._array(array))
+        vectors = int(s.pair_vec[-1])
+        sizes = {"values": nM + n + nA + m, "vel_values": nA + m, "psi": len(num.holonomic_rows),
+                 "blocks": s.block_mat[-1], "a": vectors, "y": vectors, "u": n,
+                 "S": m * (s.kd + 1), "r": m, "lambda": m, "qdd": n, "q_trial": n}
+        for name, size in sizes.items():
+            setattr(model, name, self._buffer(size))
+        return model
+
+    def _check(self, status: int) -> None:
+        if status != library.OK:
+            raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """``[qd, qdd]`` at ``(t, y)``, ``y = [q, qd]``."""
+        y = np.ascontiguousarray(y, dtype=float)
+        out = np.empty(2 * self.n)
+        self._check(self.lib.dl_rhs(self._address, t, y.ctypes.data, out.ctypes.data, None))
+        return out
+
+    def solve(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(qdd, lambda)`` at one state (with the Baumgarte terms, if any)."""
+        y = np.concatenate([q, qd]).astype(float)
+        out, lam = np.empty(2 * self.n), np.empty(self.m)
+        self._check(self.lib.dl_rhs(self._address, t, y.ctypes.data, out.ctypes.data,
+                                    lam.ctypes.data))
+        return out[self.n:], lam
+
+    def project(self, t: float, y: np.ndarray) -> np.ndarray:
+        """``y`` projected onto the constraints; the Python projector if C cannot."""
+        projected = np.array(y, dtype=float)
+        status = self.lib.dl_project(self._address, t, projected.ctypes.data,
+                                     self._holonomic_mask, FAST_NEWTON, POSITION_TOL, ACCEPT_TOL)
+        if status == library.OK:
+            return projected
+        if self._fallback is None:
+            self._fallback = StepProjector(self.num)
+        return self._fallback(t, np.asarray(y, dtype=float))

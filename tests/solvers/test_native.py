@@ -1,0 +1,149 @@
+"""The C loop (:mod:`dalembert.solvers.native`) against the Python path and SciPy.
+
+References: the dense KKT solve (:func:`~dalembert.solvers.kkt.solve_kkt`), the
+Python right-hand side with its Baumgarte terms, the Python step projector, and
+SciPy's own Runge-Kutta solvers, which must take the same steps.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import scipy.integrate as si
+
+from dalembert import SingularSystemError
+from dalembert.codegen.compiled import SparsePattern
+from dalembert.examples import EXAMPLES, load
+from dalembert.multibody import chain
+from dalembert.solvers.dynamics import first_order_rhs
+from dalembert.solvers.integrate import integrate
+from dalembert.solvers.kkt import solve_kkt
+from dalembert.solvers.native import NATIVE_METHODS, NativeSolver, NotApplicable, native_solver
+from dalembert.solvers.native.structure import BLOCK_MAX, schur_structure
+from dalembert.solvers.projection import StepProjector
+
+
+def initial(name: str):
+    module = load(name)
+    system = module.build()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report = system.consistent_initial_state(**module.INITIAL)
+    return system.numeric(), report
+
+
+def states(num, report, count=4, seed=0):
+    """States near the initial one (off the constraints, which the solve allows)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        q = report.q + 0.05 * rng.standard_normal(num.n)
+        yield rng.random(), q, report.qd + 0.5 * rng.standard_normal(num.n)
+
+
+def relative(x, reference):
+    return np.abs(x - reference).max(initial=0.0) / max(1.0, np.abs(reference).max(initial=0.0))
+
+
+@pytest.mark.parametrize("name", [n for n in EXAMPLES if n != "four-bar"])
+def test_solve_matches_dense_reference(name):
+    num, report = initial(name)
+    solver = native_solver(num, np.concatenate([report.q, report.qd]))
+    for t, q, qd in states(num, report):
+        qdd, lam = solver.solve(t, q, qd)
+        qdd_ref, lam_ref = solve_kkt(*num.kkt_blocks(t, q, qd))
+        assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
+
+
+def test_dependent_constraints_are_not_native():
+    num, report = initial("four-bar")
+    y0 = np.concatenate([report.q, report.qd])
+    with pytest.raises(NotApplicable, match="dependent"):
+        native_solver(num, y0, kept=report.rank.kept)
+
+
+@pytest.mark.parametrize("name", ["heavy-top", "hanging-chain", "rolling-disk"])
+def test_baumgarte_terms_match_python(name):
+    num, report = initial(name)
+    native = NativeSolver(num, baumgarte=7.0)
+    python = first_order_rhs(num, 7.0)
+    for t, q, qd in states(num, report):
+        y = np.concatenate([q, qd])
+        assert relative(native.rhs(t, y), python(t, y)) < 1e-12
+
+
+@pytest.mark.parametrize("name", ["spherical-chain", "closed-chain", "coin", "dumbbell"])
+def test_projection_matches_python(name):
+    num, report = initial(name)
+    native, python = NativeSolver(num), StepProjector(num)
+    rng = np.random.default_rng(1)
+    y0 = np.concatenate([report.q, report.qd])
+    for _ in range(4):
+        y = y0 + 1e-6 * rng.standard_normal(y0.size)
+        projected = native.project(0.0, y)
+        assert np.abs(projected - python(0.0, y)).max() < 1e-12
+        if num.holonomic_rows:
+            assert np.abs(num.position_constraint(0.0, projected[: num.n])).max() < 1e-13
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK45", "RK23"])
+def test_runge_kutta_steps_are_scipys(method):
+    num, report = initial("spherical-chain")
+    y0 = np.concatenate([report.q, report.qd])
+    native = native_solver(num, y0)
+    scipy_class = getattr(si, method)
+    t_eval = np.linspace(0.0, 1.0, 7)
+    ours = integrate(native.rhs, (0.0, 1.0), y0, method=NATIVE_METHODS[scipy_class],
+                     native=native, rtol=1e-7, atol=1e-9, t_eval=t_eval)
+    ref = integrate(first_order_rhs(num), (0.0, 1.0), y0, method=scipy_class, rtol=1e-7,
+                    atol=1e-9, t_eval=t_eval)
+    assert ours.stats["n_steps"] == ref.stats["n_steps"]
+    assert ours.stats["nfev"] == ref.stats["nfev"]
+    assert np.abs(ours.y - ref.y).max() < 1e-9
+
+
+@pytest.mark.validation
+@pytest.mark.parametrize("joint", ["spherical", "revolute"])
+def test_simulation_matches_python_loop(joint):
+    mb = chain(6, 1.0, 1.0, 0.05, joint=joint)
+    names = [b.name for b in mb.bodies]
+    c, s = np.cos(0.5), np.sin(0.5)
+    tilt = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    q0, qd0 = mb.initial_state(
+        positions={k: tilt @ [0, 0, -(i + 0.5)] for i, k in enumerate(names)},
+        orientations=dict.fromkeys(names, tilt))
+    runs = [mb.simulate((0, 2), q0, qd0, rtol=1e-9, atol=1e-11, native=native,
+                        t_eval=np.linspace(0, 2, 21)) for native in (True, False)]
+    fast, slow = runs
+    # The same method to rounding, which may move a step-size decision: compare at the
+    # integration tolerance, not bit for bit.
+    assert abs(fast.stats["n_steps"] - slow.stats["n_steps"]) <= 2
+    assert np.abs(fast.q - slow.q).max() < 1e-9
+    assert relative(fast.multipliers, slow.multipliers) < 1e-9
+    assert fast.position_residual.max() < 1e-12
+    energy = fast.kinetic_energy + fast.potential_energy
+    assert np.ptp(energy) < 1e-7 * np.abs(energy).max()
+
+
+def test_native_true_says_why_not():
+    module = load("four-bar")
+    with pytest.raises(ValueError, match="does not apply: the constraints are dependent"), \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        module.build().simulate((0, 0.1), native=True, **module.INITIAL)
+
+
+def test_singular_constraints_raise():
+    num, _ = initial("pendulum")
+    solver = NativeSolver(num)
+    with pytest.raises(SingularSystemError, match="singular"):
+        solver.solve(0.0, np.zeros(2), np.zeros(2))  # the rod has no direction at 0
+
+
+def test_wide_mass_blocks_are_not_native():
+    n = BLOCK_MAX + 1
+    rows, cols = np.divmod(np.arange(n * n), n)
+    pattern = SparsePattern(n, 0, rows, cols, np.zeros(0, int), np.zeros(0, int))
+    with pytest.raises(NotApplicable, match=f"couples {n} coordinates"):
+        schur_structure(pattern)
