@@ -25,7 +25,6 @@ from .solvers.initialization import InitializationReport, consistent_state, stat
 from .solvers.integrate import IntegrationResult, integrate
 from .solvers.kkt import REDUNDANT_MODES
 from .solvers.native.library import prepare_runtime
-from .solvers.outputs import evaluate_outputs
 from .statics import Equilibrium, Linearization
 from .statics import equilibrium as _equilibrium
 from .statics import linearize as _linearize
@@ -265,7 +264,7 @@ class System:
             warnings.warn(f"{result.message}; returning the trajectory up to "
                           f"t={result.t[-1] if len(result.t) else t_span[0]:.6g}",
                           IntegrationWarning, stacklevel=2)
-        return self._trajectory(num, result, report, kept, engine.accelerations)
+        return self._trajectory(result, report, engine.outputs)
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: object, **options: object) -> Equilibrium:
@@ -285,11 +284,10 @@ class System:
         return _linearize(self, q_eq, **options)
 
     def _trajectory(
-        self, num: NumericModel, result: IntegrationResult, report: InitializationReport,
-        kept: np.ndarray | None = None, accelerations: Callable | None = None,
+        self, result: IntegrationResult, report: InitializationReport, outputs: Callable,
     ) -> Trajectory:
-        n = num.n
-        derived = evaluate_outputs(num, result.t, result.y, kept, accelerations)
+        n = len(self.coordinate_names)
+        derived = outputs(result.t, result.y)
         energies = derived.pop("energies")
         return Trajectory(
             t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,

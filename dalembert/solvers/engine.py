@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from scipy.integrate import OdeSolver
@@ -16,20 +17,21 @@ from ..codegen.compiled import NumericModel
 from .dynamics import first_order_rhs
 from .integrate import solver_class
 from .native import NATIVE_METHODS, NotApplicable, native_solver
+from .outputs import evaluate_outputs
 from .projection import StepProjector
 
 
 @dataclass(frozen=True)
 class Engine:
     """``rhs(t, y)``, ``project(t, y)`` (or ``None``), the solver class and its extra
-    options; ``accelerations(t, q, qd) -> (qdd, lambda)`` without stabilization terms,
-    for the outputs (``None``: the outputs' own sparse solve)."""
+    options; ``outputs(t, y)``: the trajectory's derived arrays, as
+    :func:`~dalembert.solvers.outputs.evaluate_outputs` computes them."""
 
     rhs: Callable
     project: Callable | None
     method: type[OdeSolver]
     options: dict
-    accelerations: Callable | None = None
+    outputs: Callable
 
 
 def choose_engine(
@@ -49,7 +51,7 @@ def choose_engine(
         else:
             stepper = NATIVE_METHODS.get(cls)
             return Engine(solver.rhs, solver.project if projection else None, stepper or cls,
-                          {"native": solver} if stepper else {},
-                          solver.solve if baumgarte == 0.0 else None)
+                          {"native": solver} if stepper else {}, solver.outputs)
     project = StepProjector(num, kept) if projection else None
-    return Engine(first_order_rhs(num, baumgarte, kept), project, cls, {})
+    return Engine(first_order_rhs(num, baumgarte, kept), project, cls, {},
+                  partial(evaluate_outputs, num, kept=kept))

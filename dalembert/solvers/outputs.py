@@ -12,8 +12,6 @@ solution of ``A^T lambda = M qdd - f``: one choice among infinitely many, while
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from ..codegen.compiled import NumericModel
@@ -21,14 +19,9 @@ from .sparse_kkt import KKTSolver, matvec
 
 
 def evaluate_outputs(
-    num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None,
-    accelerations: Callable | None = None,
+    num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None
 ) -> dict[str, np.ndarray]:
-    """Arrays with one row per output time (see module docstring).
-
-    ``accelerations(t, q, qd) -> (qdd, lambda)`` replaces the sparse KKT solve (the
-    C loop's, which gives the same values).
-    """
+    """Arrays with one row per output time (see module docstring)."""
     n, m, k = num.n, num.m, len(t)
     out = {
         "qdd": np.empty((k, n)),
@@ -43,8 +36,7 @@ def evaluate_outputs(
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
         Mv, f, Av, c = num.kkt_sparse(ti, q, qd)
-        qdd, lam = solver.solve(Mv, f, Av, c) if accelerations is None \
-            else accelerations(ti, q, qd)
+        qdd, lam = solver.solve(Mv, f, Av, c)
         out["qdd"][i] = qdd
         out["multipliers"][i] = lam
         out["constraint_forces"][i] = matvec(cols, rows, Av, lam, n)

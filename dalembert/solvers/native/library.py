@@ -24,6 +24,7 @@ class Model(ctypes.Structure):
     _fields_ = [
         *((name, _i64) for name in ("n", "m", "nM", "nA", "n_hol")),
         ("p", _ptr), ("kkt", Function), ("velocity", Function), ("position", Function),
+        ("energy", Function),
         ("holonomic", _ptr), ("baumgarte", _f64), ("n_blocks", _i64),
         *((name, _ptr) for name in ("block_start", "slot_coord", "block_mat", "M_at")),
         ("n_pairs", _i64),
@@ -31,7 +32,7 @@ class Model(ctypes.Structure):
                                     "internal")),
         ("kd", _i64), ("row_pos", _ptr), ("gram_start", _ptr), ("gram_target", _ptr),
         *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
-                                    "r", "lambda", "qdd", "q_trial")),
+                                    "r", "lambda", "qdd", "q_trial", "error_work")),
     ]
 
 
@@ -85,6 +86,7 @@ def _runtime() -> ctypes.CDLL:
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
         "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _f64, _f64],
         "dl_rk_step": [_ptr] * 7,
+        "dl_outputs": [_ptr, _i64, *[_ptr] * 8],
         "dl_stages": [_ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr, _ptr,
                       _ptr],
     }

@@ -36,6 +36,7 @@ class _NativeSteps:
                                         rtol=self.rtol, max_step=self.max_step,
                                         atol=self._atol.ctypes.data)
         self._stage = np.empty(self.n)
+        self._fixed = (ctypes.addressof(self._tableau), ctypes.addressof(self._stepper))
 
     def _coefficients(self) -> list:
         s = self.n_stages
@@ -52,8 +53,8 @@ class _NativeSteps:
         y_new = np.empty(self.n)
         st.t, st.h_abs, st.nfev = self.t, self.h_abs, 0
         status = self._native.lib.dl_rk_step(
-            self._native._address, ctypes.addressof(self._tableau), ctypes.addressof(st),
-            y.ctypes.data, K.ctypes.data, y_new.ctypes.data, self._stage.ctypes.data)
+            self._native._address, *self._fixed, y.ctypes.data, K.ctypes.data,
+            y_new.ctypes.data, self._stage.ctypes.data)
         self.nfev += st.nfev
         if status == library.STEP_TOO_SMALL:
             return False, self.TOO_SMALL_STEP

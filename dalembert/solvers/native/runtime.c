@@ -40,7 +40,7 @@ typedef struct {
 typedef struct {
   int64_t n, m, nM, nA, n_hol;
   const double *p;
-  dl_function kkt, velocity, position;
+  dl_function kkt, velocity, position, energy;
   const int64_t *holonomic;   /* n_hol: constraint row of each psi entry */
   double baumgarte;
   /* blocks of M: slots [block_start[b], block_start[b+1]) hold global coordinates */
@@ -55,6 +55,7 @@ typedef struct {
   const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i */
   /* work arrays */
   double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
+  double *error_work;  /* 4 n */
 } dl_model;
 
 static void eval_state(const dl_function *F, double t, const double *q, const double *qd,
@@ -310,6 +311,42 @@ static double max_abs(const double *x, int64_t n) {
   return m;
 }
 
+/* Outputs at k states Y (rows [q, qd]): qdd, lambda (no stabilization terms), the
+ * constraint force A^T lambda, the largest position and velocity residuals, and the
+ * energies [T, V, h]. */
+int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, double *qdd,
+               double *lambda, double *force, double *position_residual,
+               double *velocity_residual, double *energies) {
+  const int64_t n = md->n, m = md->m;
+  for (int64_t i = 0; i < k; ++i) {
+    const double t = times[i], *q = Y + i * 2 * n, *qd = q + n;
+    eval_state(&md->kkt, t, q, qd, md->p, md->values);
+    const int status = dl_solve(md, md->values, qdd + i * n, lambda + i * m);
+    if (status != DL_OK) return status;
+    double *F = force + i * n;
+    const double *lam = lambda + i * m;
+    memset(F, 0, (size_t)n * sizeof(double));
+    eval_static(&md->velocity, t, q, md->p, md->vel_values);
+    double *vres = md->r;  /* A qd + b by row */
+    for (int64_t r = 0; r < m; ++r) vres[r] = md->vel_values[md->nA + r];
+    for (int64_t p = 0; p < md->n_pairs; ++p) {
+      const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
+      const double *a = md->a + md->pair_vec[p];
+      double s = 0.0;
+      for (int64_t j = 0; j < nb; ++j) {
+        F[md->slot_coord[s0 + j]] += a[j] * lam[md->pair_row[p]];
+        s += a[j] * qd[md->slot_coord[s0 + j]];
+      }
+      vres[md->pair_row[p]] += s;
+    }
+    velocity_residual[i] = max_abs(vres, m);
+    eval_static(&md->position, t, q, md->p, md->psi);
+    position_residual[i] = max_abs(md->psi, md->n_hol);
+    eval_state(&md->energy, t, q, qd, md->p, energies + 3 * i);
+  }
+  return DL_OK;
+}
+
 /* Least-change step dq = -J^T (J J^T)^-1 psi with the factored S = J J^T. */
 static void position_step(dl_model *md, const double *psi, double *dq) {
   memset(md->lambda, 0, (size_t)md->m * sizeof(double));
@@ -319,11 +356,14 @@ static void position_step(dl_model *md, const double *psi, double *dq) {
   for (int64_t s = 0; s < md->n; ++s) dq[md->slot_coord[s]] = md->u[s];
 }
 
-/* Simplified Newton on psi(q, t) = 0 (one factorization), as StepProjector.positions. */
+/* Simplified Newton on psi(q, t) = 0 (one factorization), as StepProjector.positions.
+ * *moved: the largest change of a coordinate (0 when no factorization was made). */
 static int project_positions(dl_model *md, double t, double *q, const unsigned char *holonomic,
-                             int64_t max_newton, double position_tol, double accept_tol) {
+                             int64_t max_newton, double position_tol, double accept_tol,
+                             double *moved) {
   const int64_t n = md->n;
   double *psi = md->psi, *trial = md->q_trial, *dq = md->qdd;
+  *moved = 0.0;
   eval_static(&md->position, t, q, md->p, psi);
   double residual = max_abs(psi, md->n_hol);
   if (residual <= position_tol) return DL_OK;
@@ -332,6 +372,8 @@ static int project_positions(dl_model *md, double t, double *q, const unsigned c
   if (factor_schur(md, md->a, holonomic) != DL_OK) return DL_PROJECTION;
   for (int64_t it = 0; it < max_newton; ++it) {
     position_step(md, psi, dq);
+    const double step = max_abs(dq, n);
+    *moved = step > *moved ? step : *moved;
     for (int64_t i = 0; i < n; ++i) trial[i] = q[i] + dq[i];
     eval_static(&md->position, t, trial, md->p, psi);
     const double new_residual = max_abs(psi, md->n_hol);
@@ -344,11 +386,14 @@ static int project_positions(dl_model *md, double t, double *q, const unsigned c
   return residual <= accept_tol * scale ? DL_OK : DL_PROJECTION;
 }
 
-/* qd <- qd - A^T (A A^T)^-1 (A qd + b), A and b at q. */
-static int project_velocities(dl_model *md, double t, const double *q, double *qd) {
+/* qd <- qd - A^T (A A^T)^-1 (A qd + b), A and b at q; without refactor, A A^T is the
+ * factor left by the positions, at a q that differs at drift level (the change of
+ * the result is drift squared). */
+static int project_velocities(dl_model *md, double t, const double *q, double *qd,
+                              int refactor) {
   eval_static(&md->velocity, t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
-  if (factor_schur(md, md->a, NULL) != DL_OK) return DL_PROJECTION;
+  if (refactor && factor_schur(md, md->a, NULL) != DL_OK) return DL_PROJECTION;
   const double *b = md->vel_values + md->nA;
   /* residual A qd + b, by row, from the pattern's values */
   for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = b[r];
@@ -370,12 +415,15 @@ static int project_velocities(dl_model *md, double t, const double *q, double *q
 int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
                int64_t max_newton, double position_tol, double accept_tol) {
   if (md->m == 0) return DL_OK;
+  double moved = 0.0;
   if (md->n_hol) {
     const int status = project_positions(md, t, y, holonomic, max_newton, position_tol,
-                                         accept_tol);
+                                         accept_tol, &moved);
     if (status != DL_OK) return status;
   }
-  return project_velocities(md, t, y, y + md->n);
+  const double scale = max_abs(y, md->n) > 1.0 ? max_abs(y, md->n) : 1.0;
+  const int reuse = md->n_hol == md->m && moved > 0.0 && moved <= 1e-6 * scale;
+  return project_velocities(md, t, y, y + md->n, !reuse);
 }
 
 /* ---- one accepted explicit Runge-Kutta step, as scipy.integrate's RungeKutta ------ */
@@ -394,24 +442,40 @@ typedef struct {
   int64_t nfev;
 } dl_stepper;
 
+/* scipy's error norms; work (2 n_state) holds the estimates. */
 static double error_norm(const dl_tableau *tb, const double *K, int64_t n_state, double h,
-                         const double *scale) {
+                         const double *scale, double *work) {
   const int64_t s1 = tb->n_stages + 1;
+  double *x5 = work, *x3 = work + n_state;
+  memset(work, 0, (size_t)(2 * n_state) * sizeof(double));
+  for (int64_t k = 0; k < s1; ++k) {
+    const double *Kk = K + k * n_state;
+    if (tb->E[k] != 0.0)
+      for (int64_t i = 0; i < n_state; ++i) x5[i] += Kk[i] * tb->E[k];
+    if (tb->E3 && tb->E3[k] != 0.0)
+      for (int64_t i = 0; i < n_state; ++i) x3[i] += Kk[i] * tb->E3[k];
+  }
   double e5 = 0.0, e3 = 0.0;
   for (int64_t i = 0; i < n_state; ++i) {
-    double x5 = 0.0, x3 = 0.0;
-    for (int64_t k = 0; k < s1; ++k) x5 += K[k * n_state + i] * tb->E[k];
-    if (tb->E3) {
-      for (int64_t k = 0; k < s1; ++k) x3 += K[k * n_state + i] * tb->E3[k];
-      x3 /= scale[i];
-      e3 += x3 * x3;
-    }
-    x5 /= scale[i];
-    e5 += x5 * x5;
+    const double a = x5[i] / scale[i], b = x3[i] / scale[i];
+    e5 += a * a;
+    e3 += b * b;
   }
   if (!tb->E3) return fabs(h) * sqrt(e5 / n_state);
   if (e5 == 0.0 && e3 == 0.0) return 0.0;
   return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n_state);
+}
+
+/* out = y + h sum_k w[k] K[k] over k < count (rows of K contiguous, zero weights skipped). */
+static void combine(const double *y, double h, const double *K, const double *w, int64_t count,
+                    int64_t n_state, double *out) {
+  memset(out, 0, (size_t)n_state * sizeof(double));
+  for (int64_t k = 0; k < count; ++k) {
+    if (w[k] == 0.0) continue;
+    const double wk = w[k], *Kk = K + k * n_state;
+    for (int64_t i = 0; i < n_state; ++i) out[i] += wk * Kk[i];
+  }
+  for (int64_t i = 0; i < n_state; ++i) out[i] = y[i] + h * out[i];
 }
 
 /* Stages j0 <= j < j1: K[j] = f(t + C[j - row0] h, y + h sum_k A[j - row0][k] K[k]);
@@ -421,12 +485,7 @@ int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64
               double *stage, int64_t *nfev) {
   const int64_t n_state = 2 * md->n;
   for (int64_t j = j0; j < j1; ++j) {
-    const double *a = A + (j - row0) * lda;
-    for (int64_t i = 0; i < n_state; ++i) {
-      double dy = 0.0;
-      for (int64_t k = 0; k < j; ++k) dy += K[k * n_state + i] * a[k];
-      stage[i] = y[i] + dy * h;
-    }
+    combine(y, h, K, A + (j - row0) * lda, j, n_state, stage);
     ++*nfev;
     const int status = dl_rhs(md, t + C[j - row0] * h, stage, K + j * n_state, NULL);
     if (status != DL_OK) return status;
@@ -440,11 +499,7 @@ static int rk_attempt(dl_model *md, const dl_tableau *tb, dl_stepper *st, double
   const int64_t n_state = 2 * md->n, s = tb->n_stages;
   const int status = dl_stages(md, tb->A, s, tb->C, 0, 1, s, st->t, h, y, K, stage, &st->nfev);
   if (status != DL_OK) return status;
-  for (int64_t i = 0; i < n_state; ++i) {
-    double dy = 0.0;
-    for (int64_t k = 0; k < s; ++k) dy += K[k * n_state + i] * tb->B[k];
-    y_new[i] = y[i] + h * dy;
-  }
+  combine(y, h, K, tb->B, s, n_state, y_new);
   st->nfev++;
   return dl_rhs(md, st->t + h, y_new, K + s * n_state, NULL);
 }
@@ -473,7 +528,7 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
       const double big = fabs(y[i]) > fabs(y_new[i]) ? fabs(y[i]) : fabs(y_new[i]);
       stage[i] = st->atol[i] + big * st->rtol;
     }
-    const double err = error_norm(tb, K, n_state, h, stage);
+    const double err = error_norm(tb, K, n_state, h, stage, md->error_work);
     if (err < 1.0) {
       double factor = err == 0.0 ? MAX_FACTOR : SAFETY * pow(err, tb->error_exponent);
       if (factor > MAX_FACTOR) factor = MAX_FACTOR;

@@ -27,11 +27,14 @@ class NativeSolver:
     :class:`~dalembert.solvers.projection.StepProjector`, solved by the method of
     :mod:`dalembert.solvers.native`. Raises :class:`NotApplicable` (saying why) for
     models it does not cover: NumPy-generated functions, wide mass blocks or bands.
+    One instance per simulation: its work buffers are not shared between threads.
     """
 
     def __init__(self, num: NumericModel, baumgarte: float = 0.0) -> None:
+        compiled = num.compiled
         handles = [getattr(f, "native", None) for f in (
-            num.compiled.kkt_values, num.compiled.velocity_values, num.compiled.position_values)]
+            compiled.kkt_values, compiled.velocity_values, compiled.position_values,
+            compiled.energy_values)]
         if any(h is None for h in handles):
             raise NotApplicable("the model's functions were not generated in C")
         self.num, self.n, self.m = num, num.n, num.m
@@ -43,6 +46,7 @@ class NativeSolver:
         self._holonomic_mask = self._array(np.isin(np.arange(self.m), num.holonomic_rows),
                                            np.uint8)
         self._fallback: StepProjector | None = None  # made on first need
+        self._io()
 
     def _array(self, values, dtype=np.int64) -> int:
         array = np.ascontiguousarray(values, dtype=dtype)
@@ -60,7 +64,7 @@ class NativeSolver:
                               p=self._array(num.p, np.float64), baumgarte=baumgarte,
                               holonomic=self._array(num.holonomic_rows),
                               n_blocks=s.n_blocks, n_pairs=len(s.pair_row), kd=s.kd)
-        for name, h in zip(("kkt", "velocity", "position"), handles):
+        for name, h in zip(("kkt", "velocity", "position", "energy"), handles):
             setattr(model, name, library.Function(h.address or None, h.K or None,
                                                   h.index or None, h.target or None, h.size))
         for name, array in s.arrays().items():
@@ -68,7 +72,8 @@ class NativeSolver:
         vectors = int(s.pair_vec[-1])
         sizes = {"values": nM + n + nA + m, "vel_values": nA + m, "psi": len(num.holonomic_rows),
                  "blocks": s.block_mat[-1], "a": vectors, "y": vectors, "u": n,
-                 "S": m * (s.kd + 1), "r": m, "lambda": m, "qdd": n, "q_trial": n}
+                 "S": m * (s.kd + 1), "r": m, "lambda": m, "qdd": n, "q_trial": n,
+                 "error_work": 4 * n}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
         return model
@@ -77,26 +82,45 @@ class NativeSolver:
         if status != library.OK:
             raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
 
+    def _io(self) -> None:
+        """Fixed input/output buffers: taking a new array's address costs more than a copy."""
+        self._y, self._ydot, self._lam = np.zeros(2 * self.n), np.zeros(2 * self.n), \
+            np.zeros(max(self.m, 1))
+        self._y_at, self._ydot_at, self._lam_at = (a.ctypes.data for a in (
+            self._y, self._ydot, self._lam))
+
+    def _evaluate(self, t: float, y: np.ndarray, lam_at: int | None) -> None:
+        self._y[:] = y
+        self._check(self.lib.dl_rhs(self._address, t, self._y_at, self._ydot_at, lam_at))
+
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """``[qd, qdd]`` at ``(t, y)``, ``y = [q, qd]``."""
-        y = np.ascontiguousarray(y, dtype=float)
-        out = np.empty(2 * self.n)
-        self._check(self.lib.dl_rhs(self._address, t, y.ctypes.data, out.ctypes.data, None))
-        return out
+        self._evaluate(t, y, None)
+        return self._ydot.copy()
 
     def solve(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(qdd, lambda)`` at one state (with the Baumgarte terms, if any)."""
-        y = np.concatenate([q, qd]).astype(float)
-        out, lam = np.empty(2 * self.n), np.empty(self.m)
-        self._check(self.lib.dl_rhs(self._address, t, y.ctypes.data, out.ctypes.data,
-                                    lam.ctypes.data))
-        return out[self.n:], lam
+        self._evaluate(t, np.concatenate([q, qd]), self._lam_at)
+        return self._ydot[self.n:].copy(), self._lam[: self.m].copy()
+
+    def outputs(self, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+        """What :func:`~dalembert.solvers.outputs.evaluate_outputs` returns, in one call."""
+        k, n, m = len(t), self.n, self.m
+        times = np.ascontiguousarray(t, dtype=float)
+        states = np.ascontiguousarray(y, dtype=float).reshape(k, 2 * n)
+        out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m)),
+               "constraint_forces": np.zeros((k, n)), "position_residual": np.zeros(k),
+               "velocity_residual": np.zeros(k), "energies": np.zeros((k, 3))}
+        self._check(self.lib.dl_outputs(self._address, k, times.ctypes.data, states.ctypes.data,
+                                        *(a.ctypes.data for a in out.values())))
+        return out
 
     def project(self, t: float, y: np.ndarray) -> np.ndarray:
         """``y`` projected onto the constraints; the Python projector if C cannot."""
-        projected = np.array(y, dtype=float)
-        status = self.lib.dl_project(self._address, t, projected.ctypes.data,
-                                     self._holonomic_mask, FAST_NEWTON, POSITION_TOL, ACCEPT_TOL)
+        self._y[:] = y
+        status = self.lib.dl_project(self._address, t, self._y_at, self._holonomic_mask,
+                                     FAST_NEWTON, POSITION_TOL, ACCEPT_TOL)
+        projected = self._y.copy()
         if status == library.OK:
             return projected
         if self._fallback is None:
