@@ -26,7 +26,7 @@ from sympy.physics.vector import dynamicsymbols
 from ..errors import ModelError
 from ..model.constraints import Holonomic
 from ..model.coordinates import t
-from .rotations import E_matrix, rotation_matrix
+from .rotations import E_matrix, dot, rotation_matrix, times_vector
 
 
 def _vector(v: object, what: str) -> sp.Matrix:
@@ -173,7 +173,7 @@ class RigidBody(Body):
         s = _vector(point, f"a point of body {self.name!r}")
         if all(c == 0 for c in s):
             return self.center
-        return self.center + self.rotation() * s
+        return self.center + times_vector(self.rotation(), s)
 
     def angular_velocity(self) -> sp.Matrix:
         """Body-frame angular velocity ``2 E(b) bdot``."""
@@ -183,7 +183,7 @@ class RigidBody(Body):
         v = self.center.diff(t)
         w = self.angular_velocity()
         inertia = sp.Matrix(3, 3, lambda i, j: _number(self.inertia[i, j]))
-        rot = (w.T * inertia * w)[0, 0]
+        rot = dot(w, times_vector(inertia, w))
         # expanded: a sum of monomials differentiates much faster than nested products
         return sp.expand(_number(self.mass) / 2 * v.dot(v) + rot / 2)
 

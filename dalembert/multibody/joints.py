@@ -34,6 +34,7 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic
 from .bodies import Body
+from .rotations import dot, times_vector
 
 
 def _unit(v: object, what: str) -> np.ndarray:
@@ -149,12 +150,12 @@ class Joint:
         w = self.axis_a if side == "a" else self.axis_b
         u = self.ref_a if side == "a" else self.ref_b
         R = body.rotation()
-        return R * _sym(u), R * _sym(np.cross(w, u)), R * _sym(w)
+        return tuple(times_vector(R, _sym(e)) for e in (u, np.cross(w, u), w))
 
     def _orientation_lock(self) -> list[sp.Expr]:
         ua, va, _ = self.frame("a")
         _, vb, wb = self.frame("b")
-        return [ua.dot(wb), va.dot(wb), ua.dot(vb)]
+        return [dot(ua, wb), dot(va, wb), dot(ua, vb)]
 
     # -- constraints -----------------------------------------------------------------
     def equations(self) -> list[sp.Expr]:
@@ -202,7 +203,7 @@ class Universal(Joint):
     def equations(self) -> list[sp.Expr]:
         wa = self.frame("a")[2]
         wb = self.frame("b")[2]
-        return [*self.separation(), wa.dot(wb)]
+        return [*self.separation(), dot(wa, wb)]
 
 
 class Revolute(Joint):
@@ -213,7 +214,7 @@ class Revolute(Joint):
     def equations(self) -> list[sp.Expr]:
         ua, va, _ = self.frame("a")
         wb = self.frame("b")[2]
-        return [*self.separation(), ua.dot(wb), va.dot(wb)]
+        return [*self.separation(), dot(ua, wb), dot(va, wb)]
 
 
 class Prismatic(Joint):
@@ -224,7 +225,7 @@ class Prismatic(Joint):
     def equations(self) -> list[sp.Expr]:
         ua, va, _ = self.frame("a")
         d = self.separation()
-        return [*self._orientation_lock(), ua.dot(d), va.dot(d)]
+        return [*self._orientation_lock(), dot(ua, d), dot(va, d)]
 
 
 class Fixed(Joint):
@@ -252,7 +253,7 @@ class Distance(Joint):
 
     def equations(self) -> list[sp.Expr]:
         d = self.separation()
-        return [d.dot(d) - sp.Float(self.length) ** 2]
+        return [dot(d, d) - sp.Float(self.length) ** 2]
 
 
 class PointOnPlane(Joint):
@@ -271,4 +272,4 @@ class PointOnPlane(Joint):
 
     def equations(self) -> list[sp.Expr]:
         n = self.frame("a")[2]
-        return [n.dot(self.separation())]
+        return [dot(n, self.separation())]

@@ -164,6 +164,30 @@ def _check_sequence(sequence: str) -> None:
         )
 
 
+def times_vector(R: sp.MatrixBase, v: sp.MatrixBase) -> sp.Matrix:
+    """``R v`` for SymPy ``R`` and a column ``v``, the products with a zero factor left out.
+
+    The same entries as ``R * v``, which multiplies by the zeros too (to keep
+    ``0 * oo = nan``) and asks each such product whether it is finite: for a joint's
+    frames and points that query was much of the time taken to write the equations.
+
+    >>> b = sp.symbols("b0:4")
+    >>> times_vector(rotation_matrix(b), sp.Matrix([0, 0, 1])) == rotation_matrix(b)[:, 2]
+    True
+    """
+    return sp.Matrix(R.rows, 1, [dot(R[i, :], v) for i in range(R.rows)])
+
+
+def dot(a: sp.MatrixBase, b: sp.MatrixBase) -> sp.Expr:
+    """``a . b`` of two SymPy vectors without the products that have a zero factor.
+
+    >>> x, y = sp.symbols("x y")
+    >>> dot(sp.Matrix([x, 0, 2]), sp.Matrix([y, x, 1]))
+    x*y + 2
+    """
+    return sp.Add(*(u * v for u, v in zip(a, b) if u != 0 and v != 0))
+
+
 def skew(v: object):
     """The cross-product matrix ``[v]x`` with ``[v]x u = v x u``."""
     x, y, z = v
