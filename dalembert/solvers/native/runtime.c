@@ -175,6 +175,17 @@ static void load_pairs(dl_model *md, const double *Av) {
   for (int64_t e = 0; e < md->nA; ++e) md->a[md->A_at[e]] = Av[e];
 }
 
+/* out[r] += w (A x)_r, with A in the pair vectors and x by global coordinate. */
+static void add_A_times(const dl_model *md, const double *x, double w, double *out) {
+  for (int64_t p = 0; p < md->n_pairs; ++p) {
+    const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
+    const double *a = md->a + md->pair_vec[p];
+    double s = 0.0;
+    for (int64_t i = 0; i < nb; ++i) s += a[i] * x[md->slot_coord[s0 + i]];
+    out[md->pair_row[p]] += w * s;
+  }
+}
+
 /* M and f into the blocks, internal rows folded in, blocks factored (Mt = L L^T);
  * u = L^-1 f and z_p = L^-1 a_p. */
 static int factor_blocks(dl_model *md, const double *Mv, const double *f, const double *c) {
@@ -279,13 +290,7 @@ static void baumgarte(dl_model *md, double t, const double *q, const double *qd,
   eval_static(&md->velocity, t, q, md->p, md->vel_values);
   const double *b = md->vel_values + md->nA;
   for (int64_t r = 0; r < md->m; ++r) c[r] -= 2.0 * g * b[r];
-  for (int64_t p = 0; p < md->n_pairs; ++p) {
-    const int64_t blk = md->pair_block[p], nb = block_size(md, blk), s0 = md->block_start[blk];
-    const double *a = md->a + md->pair_vec[p];
-    double s = 0.0;
-    for (int64_t i = 0; i < nb; ++i) s += a[i] * qd[md->slot_coord[s0 + i]];
-    c[md->pair_row[p]] -= 2.0 * g * s;
-  }
+  add_A_times(md, qd, -2.0 * g, c);
   eval_static(&md->position, t, q, md->p, md->psi);
   for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * md->psi[k];
 }
@@ -329,15 +334,11 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
     eval_static(&md->velocity, t, q, md->p, md->vel_values);
     double *vres = md->r;  /* A qd + b by row */
     for (int64_t r = 0; r < m; ++r) vres[r] = md->vel_values[md->nA + r];
-    for (int64_t p = 0; p < md->n_pairs; ++p) {
+    add_A_times(md, qd, 1.0, vres);
+    for (int64_t p = 0; p < md->n_pairs; ++p) {  /* F = A^T lam */
       const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
       const double *a = md->a + md->pair_vec[p];
-      double s = 0.0;
-      for (int64_t j = 0; j < nb; ++j) {
-        F[md->slot_coord[s0 + j]] += a[j] * lam[md->pair_row[p]];
-        s += a[j] * qd[md->slot_coord[s0 + j]];
-      }
-      vres[md->pair_row[p]] += s;
+      for (int64_t j = 0; j < nb; ++j) F[md->slot_coord[s0 + j]] += a[j] * lam[md->pair_row[p]];
     }
     velocity_residual[i] = max_abs(vres, m);
     eval_static(&md->position, t, q, md->p, md->psi);
@@ -395,16 +396,9 @@ static int project_velocities(dl_model *md, double t, const double *q, double *q
   load_pairs(md, md->vel_values);
   if (refactor && factor_schur(md, md->a, NULL) != DL_OK) return DL_PROJECTION;
   const double *b = md->vel_values + md->nA;
-  /* residual A qd + b, by row, from the pattern's values */
-  for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = b[r];
-  for (int64_t p = 0; p < md->n_pairs; ++p) {
-    const int64_t blk = md->pair_block[p], nb = block_size(md, blk), s0 = md->block_start[blk];
-    const double *a = md->a + md->pair_vec[p];
-    double s = 0.0;
-    for (int64_t i = 0; i < nb; ++i) s += a[i] * qd[md->slot_coord[s0 + i]];
-    md->lambda[md->pair_row[p]] += s;
-  }
-  for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = -md->lambda[r];
+  /* lambda = -(A qd + b): the residual, by row */
+  for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = -b[r];
+  add_A_times(md, qd, -1.0, md->lambda);
   memset(md->u, 0, (size_t)md->n * sizeof(double));
   apply_multipliers(md, md->a, md->lambda, md->u);
   for (int64_t s = 0; s < md->n; ++s) qd[md->slot_coord[s]] += md->u[s];
