@@ -168,6 +168,13 @@ def test_simulate_option_overrides_the_system_option():
         circle_twice().simulate((0, 1), q0=[1.0, 0.0, 0.0], redundant_constraints="error")
 
 
+def test_native_loop_required_where_it_does_not_apply():
+    with pytest.raises(ValueError, match=r"native=True, but the C loop does not apply: the "
+                                         r"constraints are dependent"), \
+            pytest.warns(RedundantConstraintsWarning):
+        circle_twice().simulate((0, 1), q0=[1.0, 0.0, 0.0], native=True)
+
+
 def test_invalid_redundant_constraints_option():
     with pytest.raises(ValueError, match=r"redundant_constraints must be one of "
                        r"\('minimum-norm', 'error'\), not 'ignore'"):
