@@ -16,10 +16,13 @@ of several timed batches, since the machine is shared):
 - ``solve``: the KKT solve on the path chosen for this pattern (``band``: LAPACK band
   LU in reverse Cuthill-McKee order; ``dense`` and ``splu`` are timed too, for the
   record),
-- ``rhs``: one full right-hand side ``F(t, y)`` as the integrator calls it,
+- ``rhs``: one full right-hand side ``F(t, y)`` as the Python loop calls it,
 - ``project``: one projection of a perturbed state (positions and velocities),
+- ``native_rhs``, ``native_project``: the same in the C loop
+  (:mod:`dalembert.solvers.native`; its block/Schur solve instead of the band LU),
 
-and the simulation's wall time, steps, evaluations and errors. ``baseline``
+and the simulation's wall time, steps, evaluations and errors, in the C loop (the
+default) and in the Python loop (``simulate_python_s``). ``baseline``
 holds the per-evaluation times before this work (commit 2665f48, NumPy code,
 dense KKT and lstsq projection, OpenBLAS default threads).
 
@@ -89,6 +92,7 @@ def measure(n: int, t_end: float, rtol: float, atol: float) -> dict:
 
     from dalembert.codegen import c_backend
     from dalembert.solvers.dynamics import first_order_rhs
+    from dalembert.solvers.native import native_solver
     from dalembert.solvers.projection import StepProjector
     from dalembert.solvers.sparse_kkt import KKTSolver
 
@@ -118,6 +122,12 @@ def measure(n: int, t_end: float, rtol: float, atol: float) -> dict:
         "rhs_us": best_time(lambda: rhs(0.0, y)),
         "project_us": best_time(lambda: project(0.0, y + 1e-9)),
     }
+    native = native_solver(num, y)
+    row.update(native_rhs_us=best_time(lambda: native.rhs(0.0, y)),
+               native_project_us=best_time(lambda: native.project(0.0, y + 1e-9)))
+    start = time.perf_counter()
+    system.simulate((0.0, t_end), q0, qd0, rtol=rtol, atol=atol, native=False)
+    row["simulate_python_s"] = time.perf_counter() - start
     start = time.perf_counter()
     traj = system.simulate((0.0, t_end), q0, qd0, rtol=rtol, atol=atol)
     E = traj.energy
@@ -143,7 +153,10 @@ def run(sizes: list[int], t_end: float, rtol: float, atol: float) -> list[dict]:
         rows.append(row)
         print(f"n={n:4d}  build {row['build_s']:6.1f} s  values {row['values_us']:7.1f} us  "
               f"solve[{row['solve_path']}] {row['solve_us']:7.1f} us  rhs {row['rhs_us']:7.1f} us  "
-              f"project {row['project_us']:7.1f} us  simulate {row['simulate_s']:7.1f} s "
+              f"project {row['project_us']:7.1f} us  C loop: rhs {row['native_rhs_us']:6.1f} us "
+              f"project {row['native_project_us']:6.1f} us  "
+              f"simulate {row['simulate_s']:7.2f} s "
+              f"(Python loop {row['simulate_python_s']:7.2f} s) "
               f"({row['steps']} steps)  dE/E {row['energy_rel_error']:.1e}  "
               f"residual {row['position_residual']:.1e}", flush=True)
     return rows

@@ -76,6 +76,22 @@ def test_cache_hit_runs_neither_cse_nor_the_compiler(cache, monkeypatch):
     assert np.isclose(fn(np.array([1.0, 2.0]), np.array([3.0]))[0], np.sin(1) * np.exp(2) + 3)
 
 
+def test_cache_key_tells_expressions_apart():
+    f = sp.Function("f")
+    shared = sp.sin(x) * y  # a subexpression shared by several outputs, digested once
+
+    def key(exprs, arguments=(("q", [x, y]), ("p", [k]))):
+        return c_backend._cache_key([("g", list(arguments), exprs)], "cc", "v")
+
+    base = [shared + 1, shared**2, f(x)]
+    assert key(base) == key([shared + 1, shared**2, f(x)])
+    for other in ([shared + 2, shared**2, f(x)], [shared + 1, shared**3, f(x)],
+                  [shared + 1, shared**2, sp.Function("h")(x)], [shared + 1, shared**2, f(y)],
+                  [shared + sp.Float(1.0), shared**2, f(x)], base[:2]):
+        assert key(other) != key(base), other
+    assert key(base, (("q", [y, x]), ("p", [k]))) != key(base)
+
+
 def test_numpy_fallback_without_a_compiler(cache, monkeypatch):
     monkeypatch.setattr(c_backend, "find_compiler", lambda: None)
     assert c_backend.backend() == "numpy"
