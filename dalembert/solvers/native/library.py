@@ -84,7 +84,7 @@ def _runtime() -> ctypes.CDLL:
     signatures = {
         "dl_solve": [_ptr] * 4,
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
-        "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _f64, _f64],
+        "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
         "dl_rk_step": [_ptr] * 7,
         "dl_outputs": [_ptr, _i64, *[_ptr] * 8],
         "dl_stages": [_ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr, _ptr,

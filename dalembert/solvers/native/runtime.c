@@ -357,28 +357,44 @@ static void position_step(dl_model *md, const double *psi, double *dq) {
   for (int64_t s = 0; s < md->n; ++s) dq[md->slot_coord[s]] = md->u[s];
 }
 
-/* Simplified Newton on psi(q, t) = 0 (one factorization), as StepProjector.positions.
- * *moved: the largest change of a coordinate (0 when no factorization was made). */
+/* J J^T at q factored (holonomic rows). */
+static int factor_positions(dl_model *md, double t, const double *q,
+                            const unsigned char *holonomic) {
+  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  load_pairs(md, md->vel_values);
+  return factor_schur(md, md->a, holonomic) == DL_OK ? DL_OK : DL_PROJECTION;
+}
+
+/* Newton on psi(q, t) = 0, as StepProjector.positions: simplified (one factorization)
+ * for max_newton iterations, then, if that stalls above the rounding floor (a state
+ * far from the constraints, such as a coarse step's interpolant), full Newton for up to
+ * max_full more. *moved: the largest change of a coordinate (0 if none was made). */
 static int project_positions(dl_model *md, double t, double *q, const unsigned char *holonomic,
-                             int64_t max_newton, double position_tol, double accept_tol,
-                             double *moved) {
+                             int64_t max_newton, int64_t max_full, double position_tol,
+                             double accept_tol, double *moved) {
   const int64_t n = md->n;
   double *psi = md->psi, *trial = md->q_trial, *dq = md->qdd;
   *moved = 0.0;
   eval_static(&md->position, t, q, md->p, psi);
   double residual = max_abs(psi, md->n_hol);
   if (residual <= position_tol) return DL_OK;
-  eval_static(&md->velocity, t, q, md->p, md->vel_values);
-  load_pairs(md, md->vel_values);
-  if (factor_schur(md, md->a, holonomic) != DL_OK) return DL_PROJECTION;
-  for (int64_t it = 0; it < max_newton; ++it) {
+  if (factor_positions(md, t, q, holonomic) != DL_OK) return DL_PROJECTION;
+  for (int64_t it = 0; it < max_newton + max_full; ++it) {
+    if (it >= max_newton) {  /* full Newton: psi at q again, J at q */
+      eval_static(&md->position, t, q, md->p, psi);
+      if (factor_positions(md, t, q, holonomic) != DL_OK) return DL_PROJECTION;
+    }
     position_step(md, psi, dq);
     const double step = max_abs(dq, n);
     *moved = step > *moved ? step : *moved;
     for (int64_t i = 0; i < n; ++i) trial[i] = q[i] + dq[i];
     eval_static(&md->position, t, trial, md->p, psi);
     const double new_residual = max_abs(psi, md->n_hol);
-    if (!(new_residual < 0.5 * residual)) break;
+    if (!(new_residual < 0.5 * residual)) {
+      if (it >= max_newton) break;  /* rounding floor, or divergence: judged below */
+      it = max_newton - 1;          /* the simplified iteration stalled: go full */
+      continue;
+    }
     memcpy(q, trial, (size_t)n * sizeof(double));
     residual = new_residual;
     if (residual <= position_tol) return DL_OK;
@@ -407,12 +423,12 @@ static int project_velocities(dl_model *md, double t, const double *q, double *q
 
 /* y = [q, qd] projected in place: positions (holonomic rows), then velocities. */
 int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
-               int64_t max_newton, double position_tol, double accept_tol) {
+               int64_t max_newton, int64_t max_full, double position_tol, double accept_tol) {
   if (md->m == 0) return DL_OK;
   double moved = 0.0;
   if (md->n_hol) {
-    const int status = project_positions(md, t, y, holonomic, max_newton, position_tol,
-                                         accept_tol, &moved);
+    const int status = project_positions(md, t, y, holonomic, max_newton, max_full,
+                                         position_tol, accept_tol, &moved);
     if (status != DL_OK) return status;
   }
   const double scale = max_abs(y, md->n) > 1.0 ? max_abs(y, md->n) : 1.0;

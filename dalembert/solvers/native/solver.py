@@ -8,7 +8,7 @@ import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
-from ..projection import ACCEPT_TOL, FAST_NEWTON, POSITION_TOL, StepProjector
+from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
 from ..sparse_kkt import SINGULAR_MESSAGE
 from . import library
 from .structure import NotApplicable, schur_structure
@@ -119,7 +119,7 @@ class NativeSolver:
         """``y`` projected onto the constraints; the Python projector if C cannot."""
         self._y[:] = y
         status = self.lib.dl_project(self._address, t, self._y_at, self._holonomic_mask,
-                                     FAST_NEWTON, POSITION_TOL, ACCEPT_TOL)
+                                     FAST_NEWTON, MAX_NEWTON, POSITION_TOL, ACCEPT_TOL)
         projected = self._y.copy()
         if status == library.OK:
             return projected
