@@ -68,12 +68,14 @@ class _NativeSteps:
 class NativeDOP853(_NativeSteps, DOP853):
     """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
 
+    def __init__(self, *args, **options) -> None:
+        super().__init__(*args, **options)
+        self._extra = [np.ascontiguousarray(a, dtype=float) for a in (self.A_EXTRA,
+                                                                        self.C_EXTRA)]
+
     def _dense_output_impl(self):
         # SciPy's DOP853._dense_output_impl with the three extra stages evaluated in C.
         K, h, s = self.K_extended, self.h_previous, self.n_stages + 1
-        if not hasattr(self, "_extra"):
-            self._extra = [np.ascontiguousarray(a, dtype=float) for a in (self.A_EXTRA,
-                                                                            self.C_EXTRA)]
         A, C = self._extra
         y_old = np.ascontiguousarray(self.y_old, dtype=float)
         nfev = ctypes.c_int64(0)
