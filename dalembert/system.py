@@ -156,7 +156,10 @@ class System:
     @cached_property
     def compiled(self) -> CompiledEquations:
         """Generated numeric functions (made on first use, then reused)."""
-        prepare_runtime()
+        prepare_runtime()  # the C loop compiles beside the derivation
+        return self._compile()
+
+    def _compile(self) -> CompiledEquations:
         # Looked up on the module so that tests (and profilers) can wrap it.
         return codegen.compile_equations(self._equations)
 

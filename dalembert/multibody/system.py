@@ -17,7 +17,6 @@ import sympy as sp
 from ..codegen.assembly import compile_parts
 from ..codegen.compiled import CompiledEquations
 from ..model.model import Model, build_model
-from ..solvers.native.library import prepare_runtime
 from ..system import System, _check_redundant
 from .parts import multibody_parts
 
@@ -76,9 +75,7 @@ class MultibodySystem(System):
             forces=mb.point_forces(), name=mb.name,
         )
 
-    @cached_property
-    def compiled(self) -> CompiledEquations:
-        """Generated numeric functions, one kernel per kind of body, joint and the loads."""
-        prepare_runtime()
+    def _compile(self) -> CompiledEquations:
+        """One kernel per kind of body, joint and the loads."""
         parts = multibody_parts(self._multibody)
         return compile_parts(parts, len(self._names), len(self._rows))

@@ -185,7 +185,7 @@ class _Run:
         self._record(t_old, t_new, y_new, state)
         self.t_reached = t_new
         if self.dense_output:
-            state(t_old)  # the interpolant, made now from this step's solver state
+            state.interpolant()  # made now, from this step's solver state
             self.segments.append((t_old, t_new, state))
         if self.project is not None and self.status is None:
             _restart_from(solver, y_new)
@@ -207,14 +207,18 @@ class _Run:
         solver, project = self.solver, self.project
         made: list[Callable] = []
 
+        def interpolant() -> Callable:
+            if not made:
+                made.append(solver.dense_output())
+            return made[0]
+
         def state(s: float) -> np.ndarray:
             if s == t_new:
                 return y_new
-            if not made:
-                made.append(solver.dense_output())
-            y = made[0](s)
+            y = interpolant()(s)
             return project(s, y) if project is not None else y
 
+        state.interpolant = interpolant
         return state
 
     def _handle_events(self, t_old, t_new, y_new, state) -> float | None:
