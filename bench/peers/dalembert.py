@@ -1,4 +1,9 @@
-"""dalembert: the chain in redundant coordinates (7 per link: center + Euler parameters).
+"""dalembert: the chain in redundant coordinates.
+
+The 3D (spherical) chain has 7 coordinates per link (center + Euler parameters)
+and 4 constraints; the planar (revolute) chain is made of planar bodies (``x, y,
+theta`` per link, in the x-y plane with gravity along -y) joined by 2-row pins,
+as planar multibody codes (and Exudyn's 2D bodies) model it.
 
 Build = ``chain(...)`` + derivation + code generation (``system.compiled``: one
 link and two joint kinds derived and compiled, whatever ``n``). Cold = an empty
@@ -20,7 +25,7 @@ import warnings
 
 import numpy as np
 
-from .common import T_END, centers, energy_error, omega, tilt, time_call, warm_allowed
+from .common import ANGLE, T_END, centers, energy_error, omega, tilt, time_call, warm_allowed
 from .ladder import climb
 
 TOOL = "dalembert"
@@ -44,7 +49,7 @@ def build(workload: str, n: int):
     from dalembert.solvers.native.library import runtime
 
     start = time.perf_counter()
-    mb = chain(n, 1.0, 1.0, 0.05, joint=workload)
+    mb = chain(n, 1.0, 1.0, 0.05, joint=workload, planar=workload == "revolute")
     mb.system.compiled  # derive and generate code now  # noqa: B018
     runtime()  # the C loop, compiled once per machine: part of a cold build
     return mb, time.perf_counter() - start
@@ -53,6 +58,9 @@ def build(workload: str, n: int):
 def initial_state(mb, workload: str, n: int):
     names = [b.name for b in mb.bodies]
     rot, w, c = tilt(), omega(workload), centers(n)
+    if workload == "revolute":  # the x-z plane of the 3D chain is the x-y plane here
+        return mb.initial_state(positions=dict(zip(names, c[:, [0, 2]])),
+                                orientations=dict.fromkeys(names, -ANGLE))
     return mb.initial_state(
         positions=dict(zip(names, c)), orientations=dict.fromkeys(names, rot),
         velocities={k: np.cross(w, ck) for k, ck in zip(names, c)},

@@ -1,13 +1,24 @@
-"""Exudyn: the chain in redundant coordinates (``ObjectRigidBody`` with Euler parameters).
+"""Exudyn: the chain in redundant coordinates, 3D or planar rigid bodies.
 
-Each link is a rigid body node (position + 4 Euler parameters) with the solid
-cylinder's inertia, joined by ``CreateSphericalJoint`` / ``CreateRevoluteJoint``
-(hinge axis ``y``). Exudyn's implicit generalized-alpha solver (spectral radius 0.95:
-its numerical damping kept small, since at 1 Newton stalls at n >= 4) with its sparse
-linear solver (``EigenSparse``) and tight Newton tolerances; the time step starts
-at 1e-2 and is halved until the constraint residual target is met, and the energy
-error reached is reported. The residual is measured at the end from the body
-outputs: joint point mismatch, hinge axis misalignment, Euler parameter norm.
+- 3D (spherical) chain: each link a rigid body node (position + 4 Euler parameters,
+  ``CreateRigidBody``) with the solid cylinder's inertia, joined by
+  ``CreateSphericalJoint``;
+- planar (revolute) chain: Exudyn's own planar formulation, each link a
+  ``NodeRigidBody2D`` (x, y, angle) with an ``ObjectRigidBody2D`` (inertia about z:
+  the cylinder's transverse one), joined by ``RevoluteJoint2D`` between
+  ``MarkerBodyPosition`` markers at the link ends, gravity by ``LoadMassProportional``.
+  The chain lies in the x-y plane (gravity along -y), link ``k``'s center at
+  ``(k + 1/2) L (sin a, -cos a)``, ``a`` the tilt: the common chain's x-z plane laid
+  on x-y and mirrored in x (same energy and motion). ``build_3d`` keeps the 3D-body
+  hinge chain (``CreateRevoluteJoint``, axis ``y``) to compare.
+
+Exudyn's implicit generalized-alpha solver (spectral radius 0.95: its numerical
+damping kept small, since at 1 Newton stalls at n >= 4) with its sparse linear
+solver (``EigenSparse``) and tight Newton tolerances; the time step starts at 1e-2
+and is halved until the constraint residual target is met, and the energy error
+reached is reported. The residual is measured at the end from the body outputs:
+joint point mismatch, and for 3D bodies hinge axis misalignment and Euler
+parameter norm.
 """
 
 from __future__ import annotations
@@ -17,6 +28,9 @@ import time
 import numpy as np
 
 from .common import (
+    ANGLE,
+    I_A,
+    I_T,
     RESIDUAL_TARGET,
     T_END,
     G,
@@ -41,7 +55,15 @@ def versions() -> dict:
 
 
 def build(workload: str, n: int):
-    """``(SystemContainer, mbs, bodies)``, assembled, and the seconds it took."""
+    """``(SystemContainer, mbs, bodies)``, assembled, and the seconds it took.
+
+    The 3D chain has 3D bodies, the planar chain planar ones (:func:`build_2d`).
+    """
+    return (build_3d if workload == "spherical" else build_2d)(workload, n)
+
+
+def build_3d(workload: str, n: int):
+    """The chain of 3D bodies (Euler parameters), spherical or hinge (axis ``y``) joints."""
     import exudyn as exu
     from exudyn.utilities import InertiaCylinder
 
@@ -70,6 +92,40 @@ def build(workload: str, n: int):
     return (sc, mbs, bodies), time.perf_counter() - start
 
 
+def build_2d(workload: str, n: int):
+    """The planar chain of 2D bodies in the x-y plane, at rest (``workload`` "revolute").
+
+    A link's body frame has its axis along local ``-y`` (top end at ``(0, L/2)``), so
+    its angle is the tilt from hanging straight down.
+    """
+    import exudyn as exu
+    from exudyn import itemInterface as ei
+
+    if workload != "revolute":
+        raise ValueError(f"planar bodies carry only the revolute chain, not {workload!r}")
+    start = time.perf_counter()
+    sc = exu.SystemContainer()
+    mbs = sc.AddSystem()
+    ground = mbs.AddObject(ei.ObjectGround())
+    above = mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0] * 3))
+    down = L * np.array([np.sin(ANGLE), -np.cos(ANGLE)])
+    bodies = []
+    for k in range(n):
+        x, y = (k + 0.5) * down
+        node = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[x, y, ANGLE]))
+        body = mbs.AddObject(ei.ObjectRigidBody2D(mass=M, inertia=I_T, nodeNumber=node))
+        mass = mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=body))
+        mbs.AddLoad(ei.LoadMassProportional(markerNumber=mass, loadVector=[0.0, -G, 0.0]))
+        top = mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=body,
+                                                  localPosition=[0.0, L / 2, 0.0]))
+        mbs.AddObject(ei.ObjectJointRevolute2D(markerNumbers=[above, top]))
+        above = mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=body,
+                                                    localPosition=[0.0, -L / 2, 0.0]))
+        bodies.append(body)
+    mbs.Assemble()
+    return (sc, mbs, bodies), time.perf_counter() - start
+
+
 def _outputs(mbs, body, kind, local=(0.0, 0.0, 0.0)):
     import exudyn as exu
 
@@ -77,14 +133,27 @@ def _outputs(mbs, body, kind, local=(0.0, 0.0, 0.0)):
                                               localPosition=list(local)))
 
 
+def planar(mbs, bodies) -> bool:
+    """Whether the chain is made of 2D bodies."""
+    return str(mbs.GetObject(bodies[0])["objectType"]) == "RigidBody2D"
+
+
+def axis_end(mbs, bodies, sign: float) -> tuple[float, float, float]:
+    """Body-frame point at the top (``sign`` 1) or bottom (-1) end of a link's axis."""
+    return (0.0, sign * L / 2, 0.0) if planar(mbs, bodies) else (0.0, 0.0, sign * L / 2)
+
+
 def energy(mbs, bodies) -> float:
-    """``T + V`` from the bodies' current state (V = M G z)."""
-    J = np.diag([M * (3 * R**2 + L**2) / 12] * 2 + [M * R**2 / 2])
+    """``T + V`` from the bodies' current state (V = M G times the upward coordinate)."""
+    if planar(mbs, bodies):  # up is y; the angular velocity is about z
+        J, up = np.diag([0.0, 0.0, I_T]), 1
+    else:
+        J, up = np.diag([I_T, I_T, I_A]), 2
     total = 0.0
     for b in bodies:
         v = _outputs(mbs, b, "Velocity")
         w = _outputs(mbs, b, "AngularVelocityLocal")
-        total += 0.5 * M * v @ v + 0.5 * w @ J @ w + M * G * _outputs(mbs, b, "Position")[2]
+        total += 0.5 * M * v @ v + 0.5 * w @ J @ w + M * G * _outputs(mbs, b, "Position")[up]
     return float(total)
 
 
@@ -92,11 +161,15 @@ def residual(mbs, bodies, workload: str) -> float:
     """Largest constraint violation at the current state."""
     import exudyn as exu
 
+    flat = planar(mbs, bodies)
+    top, bottom = axis_end(mbs, bodies, 1.0), axis_end(mbs, bodies, -1.0)
     worst, prev_point, prev_rot = 0.0, np.zeros(3), np.eye(3)
     for b in bodies:
-        top = _outputs(mbs, b, "Position", (0.0, 0.0, L / 2))
+        worst = max(worst, float(np.abs(_outputs(mbs, b, "Position", top) - prev_point).max()))
+        prev_point = _outputs(mbs, b, "Position", bottom)
+        if flat:  # x, y, angle: the joint points are the only constraints
+            continue
         rot = _outputs(mbs, b, "RotationMatrix").reshape(3, 3)
-        worst = max(worst, float(np.abs(top - prev_point).max()))
         if workload == "revolute":
             axis = prev_rot[:, 1]
             worst = max(worst, abs(axis @ rot[:, 0]), abs(axis @ rot[:, 2]))
@@ -104,17 +177,16 @@ def residual(mbs, bodies, workload: str) -> float:
         params = np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)) + \
             np.asarray(mbs.GetNode(node)["referenceCoordinates"])
         worst = max(worst, abs(float(params[3:7] @ params[3:7]) - 1.0))
-        prev_point = _outputs(mbs, b, "Position", (0.0, 0.0, -L / 2))
         prev_rot = rot
     return worst
 
 
-def settings(h: float):
+def settings(h: float, t_end: float = T_END):
     import exudyn as exu
 
     s = exu.SimulationSettings()
-    s.timeIntegration.endTime = T_END
-    s.timeIntegration.numberOfSteps = round(T_END / h)
+    s.timeIntegration.endTime = t_end
+    s.timeIntegration.numberOfSteps = round(t_end / h)
     s.timeIntegration.generalizedAlpha.spectralRadius = 0.95
     s.timeIntegration.newton.relativeTolerance = 1e-9
     s.timeIntegration.newton.absoluteTolerance = 1e-10
@@ -126,42 +198,56 @@ def settings(h: float):
     return s
 
 
-def run(workload: str, n: int) -> dict:
-    from .common import warm_allowed
+def simulate(workload: str, n: int, h: float, builder=build, t_end: float = T_END):
+    """A fresh chain (``builder``, default :func:`build`) simulated to ``t_end`` at step ``h``.
 
-    (_, mbs0, bodies0), cold = build(workload, n)
-    warm = build(workload, n)[1] if warm_allowed(cold) else None
-    e0 = energy(mbs0, bodies0)
-    step_cost = {}
-
+    Returns ``(mbs, bodies, finished, seconds)``, the seconds those of ``SolveDynamic``
+    alone. Nothing is kept between calls, so a repeat is the same run.
+    """
     import exudyn as exu
 
+    (sc, mbs, bodies), _ = builder(workload, n)
+    s = settings(h, t_end)
+    start = time.perf_counter()
+    try:
+        ok = mbs.SolveDynamic(s)
+    except exu.SolverError:  # Newton did not converge: try a smaller step
+        ok = False
+    simulate_s = time.perf_counter() - start
+    del sc
+    return mbs, bodies, bool(ok), simulate_s
+
+
+def run(workload: str, n: int, builder=build) -> dict:
+    """The measured record; ``builder`` :func:`build_3d` times the 3D-body hinge chain."""
+    from .common import warm_allowed
+
+    (_, mbs0, bodies0), cold = builder(workload, n)
+    warm = builder(workload, n)[1] if warm_allowed(cold) else None
+    e0 = energy(mbs0, bodies0)
+    flat = planar(mbs0, bodies0)
+
     def attempt(h: float) -> dict:
-        (sc, mbs, bodies), _ = build(workload, n)
-        s = settings(h)
-        start = time.perf_counter()
-        try:
-            ok = mbs.SolveDynamic(s)
-        except exu.SolverError:  # Newton did not converge: try a smaller step
-            ok = False
-        simulate_s = time.perf_counter() - start
+        mbs, bodies, ok, simulate_s = simulate(workload, n, h, builder)
         steps = round(T_END / h)
-        step_cost[h] = simulate_s / steps
-        del sc
         return {"setting": {"solver": "generalized-alpha", "spectralRadius": 0.95,
                             "step": h, "linearSolver": "EigenSparse",
                             "newtonTolerance": [1e-9, 1e-10]},
                 "simulate_s": simulate_s, "evaluations": steps, "steps": steps,
                 "initial_energy": e0, "energy_error": energy_error(e0, energy(mbs, bodies), n),
                 "residual": residual(mbs, bodies, workload) if ok else float("inf"),
-                "finished": bool(ok)}
+                "finished": ok}
 
     record = climb(attempt, STEPS, accept=lambda r: r["residual"] <= RESIDUAL_TARGET)
+    joint = "CreateSphericalJoint" if workload == "spherical" else "CreateRevoluteJoint"
     record.update(build_s=cold, build_warm_s=warm, eval_s=None,
-                  step_s=step_cost.get(record["setting"]["step"]),
+                  step_s=record["simulate_s"] / record["steps"],
                   eval_note="no public single-evaluation call; step_s is one implicit step "
                             "(Newton iterations with Jacobian and sparse factorization)",
                   evaluations_note="time steps, not right-hand-side evaluations",
-                  coordinates=7 * n, constraints=n * (4 if workload == "spherical" else 6),
+                  coordinates=(3 if flat else 7) * n,
+                  constraints=(2 if flat else 4 if workload == "spherical" else 6) * n,
+                  formulation="NodeRigidBody2D + ObjectRigidBody2D, RevoluteJoint2D" if flat
+                  else f"CreateRigidBody (Euler parameters), {joint}",
                   build_note="model creation + Assemble twice in one process")
     return record

@@ -1,10 +1,10 @@
 """Multibody systems in redundant coordinates: rigid bodies with Euler parameters.
 
 Every body carries its full pose (particles ``x, y, z``; rigid bodies also the
-Euler parameters ``b0..b3``) and joints become named holonomic constraints, so
-:class:`Multibody` builds an ordinary :class:`dalembert.System`, whose numeric code
-is assembled from one kernel per kind of body and joint
-(:mod:`~dalembert.multibody.parts`). See
+Euler parameters ``b0..b3``; planar bodies ``x, y, theta``) and joints become
+named holonomic constraints, so :class:`Multibody` builds an ordinary
+:class:`dalembert.System`, whose numeric code is assembled from one kernel per
+kind of body and joint (:mod:`~dalembert.multibody.parts`). See
 :mod:`~dalembert.multibody.rotations` for the quaternion convention,
 :mod:`~dalembert.multibody.bodies` for why the singular rotational mass block is
 harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
@@ -12,7 +12,7 @@ harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
 :mod:`~dalembert.multibody.outputs` for reactions, momenta and energy.
 """
 
-from .bodies import Body, Ground, Particle, RigidBody
+from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of
 from .diagnostics import JointPointWarning, check_mobility
 from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
@@ -53,6 +53,7 @@ __all__ = [
     "JointReaction",
     "Multibody",
     "Particle",
+    "PlanarBody",
     "PointOnPlane",
     "Prismatic",
     "Revolute",

@@ -1,4 +1,4 @@
-"""Bodies: the fixed ``Ground``, point-mass ``Particle`` and ``RigidBody``.
+"""Bodies: the fixed ``Ground``, point-mass ``Particle``, ``RigidBody`` and ``PlanarBody``.
 
 A rigid body's coordinates are its mass-center position ``x, y, z`` (world frame)
 and its Euler parameters ``b0..b3`` (see :mod:`dalembert.multibody.rotations`),
@@ -13,6 +13,17 @@ its null direction is ``b`` itself. The unit-norm constraint
 exactly that direction; the KKT matrix ``[[M, A^T], [A, 0]]`` is therefore
 nonsingular (``M`` is positive definite on the null space of ``A``) and the core
 solves it as a whole, never inverting ``M``.
+
+A :class:`PlanarBody` moves in the world ``x-y`` plane: ``<body>_x, <body>_y`` and
+the angle ``<body>_theta`` about ``z`` (3 coordinates, constant mass matrix
+``diag(m, m, I_z)``, no constraint of its own) -- the classical planar multibody
+formulation, for mechanisms that stay in a plane.
+
+Each kind of body also maps its coordinates to numbers: :meth:`Body.pose` (mass
+center and rotation matrix), :meth:`Body.center_velocity`,
+:meth:`Body.angular_velocity_at` (body frame) and :meth:`Body.center_torque` (the
+torque about the mass center of a generalized force on its coordinates); the
+outputs, drawings and checks use these, whatever the kind.
 """
 
 from __future__ import annotations
@@ -69,6 +80,29 @@ class Body:
 
     def constraints(self) -> list[Holonomic]:
         return []
+
+    # -- numbers: rows of coordinate values ``c`` (k, len(coordinates)) -----------------
+    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` (body -> world)."""
+        c = np.atleast_2d(c)
+        return c[:, :3], np.broadcast_to(np.eye(3), (len(c), 3, 3)).copy()
+
+    def center_velocity(self, cd: np.ndarray) -> np.ndarray:
+        """Mass-center velocities ``(k, 3)`` (world) from the coordinate rates."""
+        return np.atleast_2d(cd)[:, :3]
+
+    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+        """Angular velocities ``(k, 3)`` in body components."""
+        return np.zeros((len(np.atleast_2d(c)), 3))
+
+    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+        """The torque about the mass center (world) whose virtual work on this body's
+        coordinates is the generalized force ``Q`` (k, len(coordinates))."""
+        return np.zeros((len(np.atleast_2d(c)), 3))
+
+    def center_force(self, Q: np.ndarray) -> np.ndarray:
+        """The force (world) of a generalized force ``Q`` on this body's coordinates."""
+        return np.atleast_2d(Q)[:, :3]
 
     @property
     def constraint_names(self) -> list[str]:
@@ -187,6 +221,20 @@ class RigidBody(Body):
         # expanded: a sum of monomials differentiates much faster than nested products
         return sp.expand(_number(self.mass) / 2 * v.dot(v) + rot / 2)
 
+    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = np.atleast_2d(c)
+        return c[:, :3], rotation_matrix(c[:, 3:])
+
+    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+        b, bd = np.atleast_2d(c)[:, 3:], np.atleast_2d(cd)[:, 3:]
+        return 2 * np.einsum("kij,kj->ki", E_matrix(b), bd)
+
+    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+        # Q_b = 2 E^T tau_body, and E E^T = I: tau_body = 1/2 E Q_b
+        b, Qb = np.atleast_2d(c)[:, 3:], np.atleast_2d(Q)[:, 3:]
+        tau_body = 0.5 * np.einsum("kij,kj->ki", E_matrix(b), Qb)
+        return np.einsum("kij,kj->ki", rotation_matrix(b), tau_body)
+
     def constraints(self) -> list[Holonomic]:
         b = self.quaternion
         return [Holonomic(b.dot(b) - 1, name=self.constraint_names[0])]
@@ -194,6 +242,101 @@ class RigidBody(Body):
     @property
     def constraint_names(self) -> list[str]:
         return [f"{self.name}_unit_quaternion"]
+
+
+class PlanarBody(Body):
+    """A rigid body moving in the world ``x-y`` plane (3 coordinates).
+
+    Coordinates ``<name>_x, <name>_y`` (mass center) and ``<name>_theta`` (rotation
+    about ``z``, counterclockwise). Body points are given in the body frame as
+    usual; their ``z`` stays constant. Joints between planar bodies (and ground)
+    take their planar forms (see :mod:`dalembert.multibody.joints`); gravity must
+    lie in the plane.
+
+    Parameters
+    ----------
+    name
+        Prefix of the coordinate names.
+    mass
+        Positive mass.
+    inertia
+        Moment of inertia about the ``z`` axis through the mass center (> 0).
+
+    >>> link = PlanarBody("link", 1.0, 0.1)
+    >>> [c.name for c in link.coordinates], link.constraints()
+    (['link_x', 'link_y', 'link_theta'], [])
+    """
+
+    def __init__(self, name: str, mass: float, inertia: float) -> None:
+        self.name = _check_name(name)
+        self.mass = _positive_mass(mass, name)
+        self.moment = _positive_moment(inertia, name)
+        #: The inertia tensor seen in 3D: only rotations about ``z`` are possible.
+        self.inertia = np.diag([0.0, 0.0, self.moment])
+        self.coordinates = tuple(dynamicsymbols(f"{name}_x {name}_y {name}_theta"))
+
+    @property
+    def center(self) -> sp.Matrix:
+        return sp.Matrix([*self.coordinates[:2], sp.S.Zero])
+
+    @property
+    def angle(self) -> sp.Function:
+        return self.coordinates[2]
+
+    def rotation(self) -> sp.Matrix:
+        c, s = sp.cos(self.angle), sp.sin(self.angle)
+        return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+        s = _vector(point, f"a point of body {self.name!r}")
+        if all(c == 0 for c in s):
+            return self.center
+        return self.center + times_vector(self.rotation(), s)
+
+    def kinetic_energy(self) -> sp.Expr:
+        x, y, theta = (c.diff(t) for c in self.coordinates)
+        return (_number(self.mass) / 2 * (x**2 + y**2)
+                + _number(self.moment) / 2 * theta**2)
+
+    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = np.atleast_2d(c)
+        x = np.column_stack([c[:, 0], c[:, 1], np.zeros(len(c))])
+        cos, sin = np.cos(c[:, 2]), np.sin(c[:, 2])
+        R = np.zeros((len(c), 3, 3))
+        R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = cos, -sin, sin, cos, 1.0
+        return x, R
+
+    def center_velocity(self, cd: np.ndarray) -> np.ndarray:
+        cd = np.atleast_2d(cd)
+        return np.column_stack([cd[:, 0], cd[:, 1], np.zeros(len(cd))])
+
+    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+        return _along_z(np.atleast_2d(cd)[:, 2])
+
+    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+        return _along_z(np.atleast_2d(Q)[:, 2])
+
+    def center_force(self, Q: np.ndarray) -> np.ndarray:
+        Q = np.atleast_2d(Q)
+        return np.column_stack([Q[:, 0], Q[:, 1], np.zeros(len(Q))])
+
+
+def _along_z(values: np.ndarray) -> np.ndarray:
+    out = np.zeros((len(values), 3))
+    out[:, 2] = values
+    return out
+
+
+def _positive_moment(value: object, name: str) -> float:
+    try:
+        moment = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"the inertia of planar body {name!r} is its moment about z, one "
+                         f"number; got {value!r}") from exc
+    if not (np.isfinite(moment) and moment > 0):
+        raise ModelError(f"the moment of inertia of planar body {name!r} must be positive and "
+                         f"finite, got {moment} (use a Particle for a point mass)")
+    return moment
 
 
 def _number(value: float) -> sp.Expr:

@@ -7,22 +7,21 @@ energy is block-diagonal and each joint's equations involve only its two bodies.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 
 import numpy as np
 import sympy as sp
 
-from ..errors import ConstraintError, InitialConditionError, InitialConditionsAdjusted, ModelError
+from ..errors import ConstraintError, InitialConditionError, ModelError
 from ..system import System
-from .bodies import Body, Ground, Particle, RigidBody
+from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
+from .initial_state import body_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
 from .parts import gravity_potential
-from .rotations import E_matrix, check_rotation, quaternion_from_matrix, rotation_matrix
 from .system import MultibodySystem
 
 
@@ -77,8 +76,9 @@ class Multibody:
             raise ModelError("a Multibody needs at least one moving body")
         names = set()
         for body in self.bodies:
-            if not isinstance(body, (Particle, RigidBody)):
-                raise ModelError(f"bodies must be Particle or RigidBody objects, got {body!r}")
+            if not isinstance(body, (Particle, RigidBody, PlanarBody)):
+                raise ModelError("bodies must be Particle, RigidBody or PlanarBody objects, "
+                                 f"got {body!r}")
             if body.name in names:
                 raise ModelError(f"two bodies are named {body.name!r}; names must be distinct")
             names.add(body.name)
@@ -95,6 +95,16 @@ class Multibody:
             self._check_members((load.body,), load.name)
         for j in self.joints:
             check_joint_points(j)
+        self._check_plane()
+
+    def _check_plane(self) -> None:
+        """Planar bodies move in the x-y plane: gravity along z would be silently lost."""
+        planar = [b.name for b in self.bodies if isinstance(b, PlanarBody)]
+        if planar and self.gravity[2] != 0:
+            raise ModelError(
+                f"gravity {tuple(self.gravity.tolist())} has a z component, but the planar "
+                f"bodies {', '.join(planar)} move in the x-y plane, where it does no work; "
+                "give gravity in the plane, e.g. gravity=(0, -9.81, 0)")
 
     def _check_members(self, bodies: Sequence[Body], what: str) -> None:
         for body in bodies:
@@ -180,45 +190,26 @@ class Multibody:
         center (world); ``orientations`` are rotation matrices (body -> world) or
         Euler parameters (a non-unit quaternion is normalized with an
         :class:`~dalembert.InitialConditionsAdjusted` warning); angular velocities
-        are in world or body components (``angular_velocity_frame``). Unlisted
-        bodies start at the origin, unrotated, at rest. ``bdot = 1/2 E(b)^T w_body``.
+        are in world or body components (``angular_velocity_frame``). A planar
+        body also takes 2-vectors, its angle about ``z`` as the orientation and
+        ``w_z`` as the angular velocity. Unlisted bodies start at the origin,
+        unrotated, at rest (see :mod:`~dalembert.multibody.initial_state`).
         """
         if angular_velocity_frame not in ("world", "body"):
             raise ValueError("angular_velocity_frame must be 'world' or 'body'")
+        given: dict[str, dict[str, object]] = {b.name: {} for b in self.bodies}
+        for label, values in (("position", positions), ("orientation", orientations),
+                              ("velocity", velocities), ("angular_velocity", angular_velocities)):
+            for key, value in (values or {}).items():
+                given[self._resolve(key).name][label] = value
         q0: dict[str, float] = {}
         qd0: dict[str, float] = {}
         for body in self.bodies:
-            q0.update(dict.fromkeys(_names(body), 0.0))
-            qd0.update(dict.fromkeys(_names(body), 0.0))
-            if isinstance(body, RigidBody):
-                q0[f"{body.name}_b0"] = 1.0
-        for key, value in (positions or {}).items():
-            body = self._resolve(key)
-            q0.update(zip(_names(body)[:3], _triple(value, f"position of {body.name!r}")))
-        for key, value in (velocities or {}).items():
-            body = self._resolve(key)
-            qd0.update(zip(_names(body)[:3], _triple(value, f"velocity of {body.name!r}")))
-        quats = {}
-        for key, value in (orientations or {}).items():
-            body = self._rigid(key, "orientation")
-            quats[body.name] = _quaternion(value, body.name)
-            q0.update(zip(_names(body)[3:], quats[body.name]))
-        for key, value in (angular_velocities or {}).items():
-            body = self._rigid(key, "angular velocity")
-            b = quats.get(body.name, np.array([1.0, 0.0, 0.0, 0.0]))
-            w = _triple(value, f"angular velocity of {body.name!r}")
-            if angular_velocity_frame == "world":
-                w = rotation_matrix(b).T @ w
-            bdot = 0.5 * E_matrix(b).T @ w
-            qd0.update(zip(_names(body)[3:], bdot))
+            q, qd = body_state(body, angular_velocity_frame, **given[body.name])
+            q0.update(zip(_names(body), map(float, q)))
+            qd0.update(zip(_names(body), map(float, qd)))
         check_initial_joint_points(self, q0)
         return q0, qd0
-
-    def _rigid(self, key: object, what: str) -> RigidBody:
-        body = self._resolve(key)
-        if not isinstance(body, RigidBody):
-            raise InitialConditionError(f"{body.name!r} is a particle; it has no {what}")
-        return body
 
     # -- outputs (see dalembert.multibody.outputs) -----------------------------------
     def simulate(self, t_span, q0, qd0=None, **kwargs):
@@ -279,46 +270,14 @@ def _gravity(g: Sequence[float]) -> np.ndarray:
     return arr
 
 
-def _triple(value: object, what: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise InitialConditionError(f"the {what} must be 3 finite numbers, got {value!r}")
-    return arr
-
-
-def _quaternion(value: object, name: str) -> np.ndarray:
-    """Euler parameters of an orientation given as a matrix or a quaternion."""
-    arr = np.asarray(value, dtype=float)
-    if arr.shape == (3, 3):
-        try:
-            R = check_rotation(arr, f"the orientation of {name!r}")
-        except ValueError as exc:
-            raise InitialConditionError(str(exc)) from exc
-        return quaternion_from_matrix(R)
-    if arr.shape != (4,) or not np.all(np.isfinite(arr)):
-        raise InitialConditionError(
-            f"the orientation of {name!r} must be a 3x3 rotation matrix or 4 Euler "
-            f"parameters, got {value!r}"
-        )
-    norm = np.linalg.norm(arr)
-    if norm == 0:
-        raise InitialConditionError(f"the quaternion of {name!r} is zero; it has no direction")
-    if abs(norm - 1.0) > 1e-12:
-        warnings.warn(
-            f"the quaternion of {name!r} had norm {norm:.12g}; normalized to "
-            f"{np.array2string(arr / norm, precision=12)}",
-            InitialConditionsAdjusted, stacklevel=3,
-        )
-    return arr / norm
-
-
 def chain(
     n: int,
     length: float,
     mass: float,
     radius: float,
     joint: str = "spherical",
-    gravity: Sequence[float] = (0.0, 0.0, -9.81),
+    gravity: Sequence[float] | None = None,
+    planar: bool = False,
 ) -> Multibody:
     """An ``n``-link chain of uniform cylinders hung from the origin.
 
@@ -326,26 +285,45 @@ def chain(
     ``z``, joint points ``(0, 0, +-length/2)`` and, hanging straight down, its
     center at ``(0, 0, -(k - 1/2) length)``. Joints ``joint1`` (ground to
     ``link1``) ... ``jointn`` are spherical or revolute about the body ``y`` axes.
+    Gravity defaults to ``(0, 0, -9.81)``.
+
+    ``planar=True`` (revolute joints only) makes the links :class:`PlanarBody`
+    objects in the ``x-y`` plane instead (3 coordinates each, pins of 2 rows): the
+    link axis is its body ``y``, the joint points ``(0, +-length/2, 0)``, link
+    ``k`` hangs at ``(0, -(k - 1/2) length)`` and gravity defaults to
+    ``(0, -9.81, 0)``.
 
     >>> chain(2, 1.0, 1.0, 0.05, joint="revolute").system.degrees_of_freedom
     2
+    >>> len(chain(2, 1.0, 1.0, 0.05, joint="revolute", planar=True).system.coordinate_names)
+    6
     """
     if int(n) != n or n < 1:
         raise ModelError(f"a chain needs a positive whole number of links, got {n!r}")
     if joint not in ("spherical", "revolute"):
         raise ModelError(f"joint must be 'spherical' or 'revolute', got {joint!r}")
+    if planar and joint != "revolute":
+        raise ModelError("a planar chain has revolute joints; use joint='revolute'")
     if not (length > 0 and radius > 0):
         raise ModelError(f"length and radius must be positive, got {length}, {radius}")
     transverse = mass * (3 * radius**2 + length**2) / 12
-    inertia = (transverse, transverse, mass * radius**2 / 2)
-    links = [RigidBody(f"link{k + 1}", mass, inertia) for k in range(int(n))]
-    top, bottom = (0.0, 0.0, length / 2), (0.0, 0.0, -length / 2)
+    if planar:
+        links = [PlanarBody(f"link{k + 1}", mass, transverse) for k in range(int(n))]
+        axis, down, hinge = 1, (0.0, -9.81, 0.0), (0, 0, 1)
+    else:
+        inertia = (transverse, transverse, mass * radius**2 / 2)
+        links = [RigidBody(f"link{k + 1}", mass, inertia) for k in range(int(n))]
+        axis, down, hinge = 2, (0.0, 0.0, -9.81), (0, 1, 0)
+    top, bottom = np.zeros(3), np.zeros(3)
+    top[axis], bottom[axis] = length / 2, -length / 2
     joints = []
     parents = [Ground(), *links[:-1]]
     for k, (parent, child) in enumerate(zip(parents, links)):
-        pa = (0.0, 0.0, 0.0) if k == 0 else bottom
+        pa = np.zeros(3) if k == 0 else bottom
         if joint == "spherical":
             joints.append(Spherical(f"joint{k + 1}", parent, child, pa, top))
         else:
-            joints.append(Revolute(f"joint{k + 1}", parent, child, pa, top, axis_a=(0, 1, 0)))
-    return Multibody(links, joints, gravity=gravity, name=f"{n}-link {joint} chain")
+            joints.append(Revolute(f"joint{k + 1}", parent, child, pa, top, axis_a=hinge))
+    kind = "planar revolute" if planar else joint
+    return Multibody(links, joints, gravity=down if gravity is None else gravity,
+                     name=f"{n}-link {kind} chain")

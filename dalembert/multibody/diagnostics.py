@@ -32,9 +32,8 @@ import numpy as np
 
 from ..errors import ConstraintError
 from ..solvers.kkt import constraint_rank
-from .bodies import Ground, RigidBody
+from .bodies import Body, Ground, PlanarBody, RigidBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
-from .rotations import rotation_matrix
 
 if TYPE_CHECKING:
     from .builder import Multibody
@@ -49,7 +48,7 @@ class JointPointWarning(UserWarning):
     """A joint point looks as if it were given in the wrong frame."""
 
 
-def radius_of_gyration(body: RigidBody) -> float:
+def radius_of_gyration(body: RigidBody | PlanarBody) -> float:
     """``sqrt(I_max / m)``: the body's size as seen by its inertia.
 
     >>> radius_of_gyration(RigidBody("b", 2.0, (0.02, 0.08, 0.08)))
@@ -62,7 +61,7 @@ def check_joint_points(joint: Joint) -> None:
     """Warn when a body-frame joint point is implausibly far from the mass center."""
     for side, body, point in (("a", joint.body_a, joint.point_a),
                               ("b", joint.body_b, joint.point_b)):
-        if not isinstance(body, RigidBody):
+        if isinstance(body, Ground) or not body.has_orientation:
             continue
         size = radius_of_gyration(body)
         dist = float(np.linalg.norm(point))
@@ -77,20 +76,16 @@ def check_joint_points(joint: Joint) -> None:
             )
 
 
-def _pose(q0: Mapping[str, float], body: RigidBody) -> tuple[np.ndarray, np.ndarray]:
-    names = [c.name for c in body.coordinates]
-    x = np.array([q0[n] for n in names[:3]])
-    return x, rotation_matrix(np.array([q0[n] for n in names[3:]]))
+def _pose(q0: Mapping[str, float], body: Body) -> tuple[np.ndarray, np.ndarray]:
+    x, R = body.pose(np.array([q0[c.name] for c in body.coordinates]))
+    return x[0], R[0]
 
 
-def _world(q0: Mapping[str, float], body, point: np.ndarray) -> np.ndarray:
+def _world(q0: Mapping[str, float], body: Body, point: np.ndarray) -> np.ndarray:
     if isinstance(body, Ground):
         return point
-    names = [c.name for c in body.coordinates]
-    x = np.array([q0[n] for n in names[:3]])
-    if not isinstance(body, RigidBody):
-        return x
-    return x + _pose(q0, body)[1] @ point
+    x, R = _pose(q0, body)
+    return x + R @ point
 
 
 def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
@@ -105,7 +100,7 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
             continue
         for side, body, point, other in (("a", j.body_a, j.point_a, pb),
                                          ("b", j.body_b, j.point_b, pa)):
-            if not isinstance(body, RigidBody) or np.linalg.norm(point - other) > 1e-9 * scale:
+            if not body.has_orientation or np.linalg.norm(point - other) > 1e-9 * scale:
                 continue
             x, R = _pose(q0, body)
             fixed = R.T @ (point - x)

@@ -19,9 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .bodies import Body, Ground, RigidBody
+from .bodies import Body, Ground
 from .rolling import Rolling
-from .rotations import rotation_matrix
 
 if TYPE_CHECKING:
     from .builder import Multibody
@@ -34,9 +33,8 @@ def _poses(mb: Multibody, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarr
     out, k = {}, 0
     for body in mb.bodies:
         n = len(body.coordinates)
-        c = q[k:k + n]
-        R = rotation_matrix(c[3:]) if isinstance(body, RigidBody) else np.eye(3)
-        out[body.name] = (c[:3].copy(), R)
+        x, R = body.pose(q[k:k + n])
+        out[body.name] = (x[0], R[0])
         k += n
     return out
 
@@ -88,7 +86,7 @@ def stick_figure(mb: Multibody, q: np.ndarray) -> list[np.ndarray]:
                                _point(poses, s.body_b, s.point_b)]))
     for body in mb.bodies:
         x, R = poses[body.name]
-        if not isinstance(body, RigidBody):
+        if not body.has_orientation:
             lines.append(x[None].copy())
             continue
         k = np.sqrt(np.linalg.eigvalsh(body.inertia)[-1] / body.mass)

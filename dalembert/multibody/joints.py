@@ -19,7 +19,25 @@ PointOnPlane  1      ``n_a . d = 0`` (point ``b`` on the plane through ``a``)
 ============  =====  ===========================================================
 
 ``Prismatic`` and ``Fixed`` lock the two joint frames parallel, so give each
-side's ``axis``/``ref`` as they are when the bodies are assembled. The rows of
+side's ``axis``/``ref`` as they are when the bodies are assembled.
+
+Between planar bodies (:class:`~dalembert.multibody.PlanarBody`, or one and
+``Ground``) the rows that hold identically in the plane are left out, so the
+constraints stay independent:
+
+============  =====  ===========================================================
+planar        rows   equations (``d``: in-plane components; axes in world)
+============  =====  ===========================================================
+Spherical     2      ``d = 0`` (a pin)
+Revolute      2      ``d = 0``; the axes must be along ``z``
+Fixed         3      ``d = 0``, ``u_a . v_b = 0``; the axes must be along ``z``
+Prismatic     2      ``n_a . w_b = 0``, ``n_a . d = 0`` with ``n_a = z x w_a``; the
+                     sliding axes must lie in the plane
+Distance      1      as in 3D
+PointOnPlane  1      as in 3D (a point on a line); the normal must lie in the plane
+============  =====  ===========================================================
+
+``Universal`` has no planar form. The rows of
 joint ``J`` are the constraints ``J_1, J_2, ...``. Every joint's equations are
 invariant under a common rigid motion of both bodies, so its constraint forces
 on ``a`` and ``b`` are equal and opposite (see
@@ -33,7 +51,7 @@ import sympy as sp
 
 from ..errors import ModelError
 from ..model.constraints import Holonomic
-from .bodies import Body
+from .bodies import Body, Ground, PlanarBody
 from .rotations import dot, times_vector
 
 
@@ -94,6 +112,8 @@ class Joint:
 
     n_equations = 0
     uses_orientation = True
+    #: Rows between planar bodies (``None``: no planar form).
+    planar_rows: int | None = None
 
     def __init__(
         self,
@@ -124,6 +144,7 @@ class Joint:
         self.ref_a = _perpendicular(self.axis_a, ref_a, f"joint {name!r}: ref_a")
         self.ref_b = _perpendicular(self.axis_b, ref_b, f"joint {name!r}: ref_b")
         self._check_bodies()
+        self._check_planar()
 
     @property
     def bodies(self) -> tuple[Body, Body]:
@@ -138,6 +159,41 @@ class Joint:
                     f"joint {self.name!r} ({type(self).__name__}) constrains the orientation "
                     f"of {body.name!r}, but a particle has none; use a RigidBody"
                 )
+
+    @property
+    def planar(self) -> bool:
+        """Both sides planar bodies or ground (at least one planar body)."""
+        kinds = [type(b) for b in self.bodies]
+        return PlanarBody in kinds and all(k in (PlanarBody, Ground) for k in kinds)
+
+    def _check_planar(self) -> None:
+        """Use the planar rows between planar bodies, after checking the axes fit."""
+        if not self.planar:
+            return
+        if self.planar_rows is None:
+            raise ModelError(
+                f"joint {self.name!r} ({type(self).__name__}) has no planar form; between "
+                "planar bodies use Revolute, Prismatic, Fixed, Distance or PointOnPlane")
+        self._check_planar_axes()
+        self.n_equations = self.planar_rows
+
+    def _check_planar_axes(self) -> None:
+        pass
+
+    def _axes_along_z(self, what: str) -> None:
+        for side, axis in (("a", self.axis_a), ("b", self.axis_b)):
+            if abs(abs(axis[2]) - 1.0) > 1e-12:
+                raise ModelError(
+                    f"joint {self.name!r} ({type(self).__name__}) between planar bodies: "
+                    f"axis_{side} {tuple(axis.tolist())} must be along z, the plane's normal "
+                    f"({what})")
+
+    def _axes_in_plane(self, what: str) -> None:
+        for side, axis in (("a", self.axis_a), ("b", self.axis_b)):
+            if abs(axis[2]) > 1e-12:
+                raise ModelError(
+                    f"joint {self.name!r} ({type(self).__name__}) between planar bodies: "
+                    f"axis_{side} {tuple(axis.tolist())} must lie in the x-y plane ({what})")
 
     # -- geometry in world components ------------------------------------------------
     def separation(self) -> sp.Matrix:
@@ -161,9 +217,13 @@ class Joint:
     def equations(self) -> list[sp.Expr]:
         raise NotImplementedError
 
+    def planar_equations(self) -> list[sp.Expr]:
+        """The equations between planar bodies (``planar_rows`` of them)."""
+        raise NotImplementedError
+
     def constraints(self) -> list[Holonomic]:
         """The joint's equations as named ``Holonomic`` constraints ``<name>_<k>``."""
-        eqs = self.equations()
+        eqs = self.planar_equations() if self.planar else self.equations()
         return [Holonomic(e, name=f"{self.name}_{k + 1}") for k, e in enumerate(eqs)]
 
     @property
@@ -184,10 +244,14 @@ class Spherical(Joint):
     """
 
     n_equations = 3
+    planar_rows = 2
     uses_orientation = False
 
     def equations(self) -> list[sp.Expr]:
         return list(self.separation())
+
+    def planar_equations(self) -> list[sp.Expr]:
+        return list(self.separation()[:2])
 
 
 class Universal(Joint):
@@ -210,37 +274,62 @@ class Revolute(Joint):
     """Hinge: points coincide, axes stay parallel (5 equations)."""
 
     n_equations = 5
+    planar_rows = 2
 
     def equations(self) -> list[sp.Expr]:
         ua, va, _ = self.frame("a")
         wb = self.frame("b")[2]
         return [*self.separation(), dot(ua, wb), dot(va, wb)]
 
+    def _check_planar_axes(self) -> None:
+        self._axes_along_z("a hinge in the plane turns about its normal")
+
+    def planar_equations(self) -> list[sp.Expr]:
+        return list(self.separation()[:2])
+
 
 class Prismatic(Joint):
     """Slider: frames locked parallel, point ``b`` moves along the axis of ``a`` (5)."""
 
     n_equations = 5
+    planar_rows = 2
 
     def equations(self) -> list[sp.Expr]:
         ua, va, _ = self.frame("a")
         d = self.separation()
         return [*self._orientation_lock(), dot(ua, d), dot(va, d)]
 
+    def _check_planar_axes(self) -> None:
+        self._axes_in_plane("the slider moves in the plane")
+
+    def planar_equations(self) -> list[sp.Expr]:
+        wa, wb = self.frame("a")[2], self.frame("b")[2]
+        normal = sp.Matrix([-wa[1], wa[0], 0])  # z x w_a
+        return [dot(normal, wb), dot(normal, self.separation())]
+
 
 class Fixed(Joint):
     """Weld: points coincide and frames locked parallel (6 equations)."""
 
     n_equations = 6
+    planar_rows = 3
 
     def equations(self) -> list[sp.Expr]:
         return [*self.separation(), *self._orientation_lock()]
+
+    def _check_planar_axes(self) -> None:
+        self._axes_along_z("a weld in the plane keeps the angle about its normal")
+
+    def planar_equations(self) -> list[sp.Expr]:
+        ua, vb = self.frame("a")[0], self.frame("b")[1]
+        return [*self.separation()[:2], dot(ua, vb)]
 
 
 class Distance(Joint):
     """Massless rod of length ``length`` between the two points (1 equation)."""
 
     n_equations = 1
+    planar_rows = 1
     uses_orientation = False
 
     def __init__(self, name: str, body_a: Body, body_b: Body, length: float,
@@ -255,11 +344,14 @@ class Distance(Joint):
         d = self.separation()
         return [dot(d, d) - sp.Float(self.length) ** 2]
 
+    planar_equations = equations
+
 
 class PointOnPlane(Joint):
     """Point ``b`` stays on the plane through point ``a`` with normal ``normal`` (1)."""
 
     n_equations = 1
+    planar_rows = 1
 
     def __init__(self, name: str, body_a: Body, body_b: Body, normal: object = (0, 0, 1),
                  point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
@@ -270,6 +362,11 @@ class PointOnPlane(Joint):
             raise ModelError(f"joint {self.name!r}: the plane's body {self.body_a.name!r} is "
                              "a particle, which has no orientation")
 
+    def _check_planar_axes(self) -> None:
+        self._axes_in_plane("in the plane the point moves on a line")
+
     def equations(self) -> list[sp.Expr]:
         n = self.frame("a")[2]
         return [dot(n, self.separation())]
+
+    planar_equations = equations

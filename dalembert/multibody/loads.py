@@ -4,10 +4,11 @@ Forces become :class:`dalembert.PointForce` (generalized force by virtual work,
 ``Q = (dr/dq)^T F``). A torque on a rigid body does the virtual work
 ``tau . dtheta`` with ``dtheta_body = 2 E(b) db``, so its generalized force on the
 Euler parameters is ``2 E(b)^T tau_body = 2 G(b)^T tau_world`` (nothing on the
-position coordinates). A spring's elastic force is conservative and goes into
-the potential ``1/2 k (L - L0)^2``; its damper ``-c Ldot`` along the spring is a
-pair of opposite point forces. Loads may depend on the coordinates (as the
-bodies' ``dynamicsymbols``), their time derivatives and the time ``dalembert.t``.
+position coordinates); on a planar body it is ``tau_z`` on the angle. A spring's
+elastic force is conservative and goes into the potential ``1/2 k (L - L0)^2``;
+its damper ``-c Ldot`` along the spring is a pair of opposite point forces. Loads
+may depend on the coordinates (as the bodies' ``dynamicsymbols``), their time
+derivatives and the time ``dalembert.t``.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.coordinates import t
 from ..model.forces import PointForce
-from .bodies import Body, RigidBody, _vector
+from .bodies import Body, PlanarBody, RigidBody, _vector
 from .joints import _point
 from .rotations import E_matrix, G_matrix
 
@@ -55,19 +56,30 @@ class Force:
 
 
 class Torque:
-    """A torque on a rigid body, in world (``frame="world"``) or body components."""
+    """A torque on a rigid or planar body, in world (``frame="world"``) or body components.
+
+    On a :class:`~dalembert.multibody.PlanarBody` only ``tau_z`` does work (the
+    body cannot turn about ``x`` or ``y``), so the torque must be along ``z``.
+    """
 
     def __init__(self, body: Body, torque: object, frame: str = "world",
                  name: str | None = None) -> None:
         self.body = body
         self.name = name or f"torque_on_{getattr(body, 'name', '?')}"
-        if not isinstance(body, RigidBody):
-            raise ModelError(f"{self.name}: a torque needs a RigidBody, got {body!r}")
+        if not isinstance(body, (RigidBody, PlanarBody)):
+            raise ModelError(f"{self.name}: a torque needs a RigidBody or PlanarBody, got "
+                             f"{body!r}")
         self.torque = _vector(torque, f"{self.name}: torque")
         self.frame = _frame(frame, self.name)
+        if isinstance(body, PlanarBody) and any(c != 0 for c in self.torque[:2]):
+            raise ModelError(f"{self.name}: planar body {body.name!r} turns about z only; give "
+                             f"the torque as (0, 0, tau_z), got {tuple(self.torque)}")
 
     def generalized_forces(self) -> dict[object, sp.Expr]:
-        """``{b_k: Q_k}`` with ``Q = 2 E^T tau_body`` (or ``2 G^T tau_world``)."""
+        """``{b_k: Q_k}`` with ``Q = 2 E^T tau_body`` (or ``2 G^T tau_world``); a planar
+        body's ``{theta: tau_z}`` (world and body ``z`` are the same axis)."""
+        if isinstance(self.body, PlanarBody):
+            return {self.body.angle: self.torque[2]}
         b = self.body.quaternion
         P = E_matrix(b) if self.frame == "body" else G_matrix(b)
         Q = 2 * P.T * self.torque

@@ -8,8 +8,10 @@ Joint reactions: the rows of joint ``J`` give the generalized constraint force
 ``Q = A_J^T lambda_J``. On a body's position coordinates it is the force ``F``
 (world) the joint exerts on the body; on its Euler parameters it is
 ``Q_b = 2 E(b)^T tau_body``, so ``tau_body = 1/2 E(b) Q_b`` (``E E^T = I``) is
-the torque about the mass center. The torque about the joint point ``P`` is
-``tau_P = tau_cm - (r_P - x) x F``; it vanishes for a spherical joint. For a
+the torque about the mass center (on a planar body's angle, ``Q_theta`` is the
+torque about ``z``; see :meth:`~dalembert.multibody.bodies.Body.center_torque`).
+The torque about the joint point ``P`` is ``tau_P = tau_cm - (r_P - x) x F``; it
+vanishes for a spherical joint. For a
 :class:`~dalembert.multibody.rolling.Rolling` joint ``P`` is the moving contact point.
 """
 
@@ -21,11 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..trajectory import Trajectory
-from .bodies import Body, Ground, RigidBody
+from .bodies import Body, Ground
 from .builder import Multibody
 from .joints import Joint
 from .rolling import Rolling
-from .rotations import E_matrix, euler_from_matrix, rotation_matrix
+from .rotations import euler_from_matrix
 
 
 def _columns(traj: Trajectory, body: Body, suffix: str = "") -> np.ndarray:
@@ -36,12 +38,17 @@ def _body(mb: Multibody, body: Body | str) -> Body:
     return mb.body(body) if isinstance(body, str) else body
 
 
+def _pose(traj: Trajectory, body: Body) -> tuple[np.ndarray, np.ndarray]:
+    return body.pose(_columns(traj, body))
+
+
+def _velocity(traj: Trajectory, body: Body) -> np.ndarray:
+    return body.center_velocity(_columns(traj, body, "_dot"))
+
+
 def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> np.ndarray:
-    """``R(b)`` (body -> world) at every time, shape ``(k, 3, 3)``; identity for particles."""
-    body = _body(mb, body)
-    if not isinstance(body, RigidBody):
-        return np.broadcast_to(np.eye(3), (len(traj), 3, 3)).copy()
-    return rotation_matrix(_columns(traj, body)[:, 3:])
+    """``R`` (body -> world) at every time, shape ``(k, 3, 3)``; identity for particles."""
+    return _pose(traj, _body(mb, body))[1]
 
 
 def euler_angles(mb: Multibody, traj: Trajectory, body: Body | str,
@@ -57,28 +64,27 @@ def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
     body = _body(mb, body)
     if isinstance(body, Ground):
         return np.broadcast_to(np.asarray(point, float), (len(traj), 3)).copy()
-    x = _columns(traj, body)[:, :3]
-    return x + rotation_matrices(mb, traj, body) @ np.asarray(point, dtype=float)
+    x, R = _pose(traj, body)
+    return x + R @ np.asarray(point, dtype=float)
 
 
 def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
                        frame: str = "world") -> np.ndarray:
-    """Angular velocity ``2 E(b) bdot`` (body) or ``R`` times it (world), shape ``(k, 3)``."""
+    """Angular velocity in body (``2 E(b) bdot`` for Euler parameters) or world
+    components, shape ``(k, 3)``; zero for particles."""
     body = _body(mb, body)
-    if not isinstance(body, RigidBody):
-        return np.zeros((len(traj), 3))
-    b = _columns(traj, body)[:, 3:]
-    w = 2 * np.einsum("kij,kj->ki", E_matrix(b), _columns(traj, body, "_dot")[:, 3:])
+    if frame not in ("world", "body"):
+        raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
+    c = _columns(traj, body)
+    w = body.angular_velocity_at(c, _columns(traj, body, "_dot"))
     if frame == "body":
         return w
-    if frame != "world":
-        raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
-    return np.einsum("kij,kj->ki", rotation_matrix(b), w)
+    return np.einsum("kij,kj->ki", body.pose(c)[1], w)
 
 
 def linear_momentum(mb: Multibody, traj: Trajectory) -> np.ndarray:
     """Total ``sum m v`` (world), shape ``(k, 3)``."""
-    return sum(b.mass * _columns(traj, b, "_dot")[:, :3] for b in mb.bodies)
+    return sum(b.mass * _velocity(traj, b) for b in mb.bodies)
 
 
 def angular_momentum(mb: Multibody, traj: Trajectory,
@@ -87,12 +93,11 @@ def angular_momentum(mb: Multibody, traj: Trajectory,
     ``sum (x - about) x m v + R I w_body``."""
     H = np.zeros((len(traj), 3))
     for b in mb.bodies:
-        x = _columns(traj, b)[:, :3] - np.asarray(about, dtype=float)
-        H += np.cross(x, b.mass * _columns(traj, b, "_dot")[:, :3])
-        if isinstance(b, RigidBody):
+        x, R = _pose(traj, b)
+        H += np.cross(x - np.asarray(about, dtype=float), b.mass * _velocity(traj, b))
+        if b.has_orientation:
             w = angular_velocities(mb, traj, b, "body")
-            spin = np.einsum("kij,jl,kl->ki", rotation_matrices(mb, traj, b), b.inertia, w)
-            H += spin
+            H += np.einsum("kij,jl,kl->ki", R, b.inertia, w)
     return H
 
 
@@ -100,9 +105,9 @@ def kinetic_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
     """``sum 1/2 m v.v + 1/2 w.I w``."""
     T = np.zeros(len(traj))
     for b in mb.bodies:
-        v = _columns(traj, b, "_dot")[:, :3]
+        v = _velocity(traj, b)
         T += 0.5 * b.mass * np.einsum("ki,ki->k", v, v)
-        if isinstance(b, RigidBody):
+        if b.has_orientation:
             w = angular_velocities(mb, traj, b, "body")
             T += 0.5 * np.einsum("ki,ij,kj->k", w, b.inertia, w)
     return T
@@ -112,7 +117,7 @@ def potential_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
     """Gravity ``-sum m g.x`` plus the springs' ``1/2 k (L - L0)^2``."""
     V = np.zeros(len(traj))
     for b in mb.bodies:
-        V -= b.mass * _columns(traj, b)[:, :3] @ mb.gravity
+        V -= b.mass * _pose(traj, b)[0] @ mb.gravity
     for s in mb.springs:
         d = (point_positions(mb, traj, s.body_b, s.point_b)
              - point_positions(mb, traj, s.body_a, s.point_a))
@@ -188,23 +193,17 @@ def _application_points(mb: Multibody, traj: Trajectory, joint: Joint, body: Bod
                         point: np.ndarray) -> np.ndarray:
     """Where the joint acts on ``body``: its joint point, or a rolling body's contact point."""
     if isinstance(joint, Rolling):
-        x = _columns(traj, body)[:, :3]
-        return joint.contact_points(x, rotation_matrices(mb, traj, body))
+        return joint.contact_points(*_pose(traj, body))
     return point_positions(mb, traj, body, point)
 
 
 def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
               P: np.ndarray, Q: np.ndarray) -> JointReaction:
-    F = Q[:, :3]
-    R = rotation_matrices(mb, traj, body)
-    if isinstance(body, RigidBody):
-        b = _columns(traj, body)[:, 3:]
-        tau_cm_body = 0.5 * np.einsum("kij,kj->ki", E_matrix(b), Q[:, 3:])
-        tau_cm = np.einsum("kij,kj->ki", R, tau_cm_body)
-    else:
-        tau_cm = np.zeros_like(F)
-    arm = P - _columns(traj, body)[:, :3]
-    tau_P = tau_cm - np.cross(arm, F)
+    c = _columns(traj, body)
+    x, R = body.pose(c)
+    F = body.center_force(Q)
+    tau_cm = body.center_torque(c, Q)
+    tau_P = tau_cm - np.cross(P - x, F)
     to_body = np.transpose(R, (0, 2, 1))
     return JointReaction(
         joint, body.name, P, F, tau_P, tau_cm,

@@ -32,7 +32,7 @@ from ..model.constraints import ConstraintSet, Holonomic
 from ..model.coordinates import Coordinates, t
 from ..model.forces import warn_double_counting
 from ..model.model import Model, build_part_model
-from .bodies import Body, Ground, Particle, RigidBody
+from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .derivatives import NotPolynomial, holonomic_rates
 
 
@@ -90,8 +90,8 @@ def _body_parts(bodies: Sequence[Body], gravity: np.ndarray, offsets: dict[int, 
 
 
 def _body_signature(body: Body) -> tuple:
-    inertia = tuple(body.inertia.ravel()) if isinstance(body, RigidBody) else None
-    return type(body), body.mass, inertia
+    inertia = getattr(body, "inertia", None)
+    return type(body), body.mass, None if inertia is None else tuple(inertia.ravel())
 
 
 def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
@@ -101,6 +101,8 @@ def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
     mass = body.mass if keep_mass else 1.0
     if isinstance(body, RigidBody):
         return RigidBody(name, mass, body.inertia if keep_mass else np.ones(3))
+    if isinstance(body, PlanarBody):
+        return PlanarBody(name, mass, body.moment if keep_mass else 1.0)
     if isinstance(body, Particle):
         return Particle(name, mass)
     raise TypeError(f"no template for {body!r}")
