@@ -1,12 +1,13 @@
 """Derivatives of a joint's constraints by the chain rule on their expression trees.
 
-A joint's equations are polynomials in its bodies' coordinates built from a few
-shared pieces (rotation-matrix entries, sums of products). SymPy's ``diff`` goes
+A joint's equations are polynomials in its bodies' coordinates (or in the sines
+and cosines of a planar body's angle) built from a few shared pieces
+(rotation-matrix entries, sums of products). SymPy's ``diff`` goes
 through its general ``Derivative`` machinery for every node, and the rates
 ``c = -(d/dq (A qd)) qd`` differentiate every term of every entry of ``A`` again:
 for the revolute joint between two links that was most of a chain's build time.
-Here each node is differentiated once (memoized) by the sum, product and
-integer-power rules, so the results stay factored over the same pieces, which
+Here each node is differentiated once (memoized) by the sum, product,
+integer-power and sine/cosine rules, so the results stay factored over the same pieces, which
 ``cse`` then finds once: the same polynomials, fewer operations to derive,
 compile and evaluate.
 """
@@ -19,12 +20,14 @@ import sympy as sp
 
 
 class NotPolynomial(ValueError):
-    """An expression holds something other than sums, products and positive integer powers."""
+    """An expression holds something other than sums, products, positive integer powers,
+    sines and cosines."""
 
 
 def directional_derivative(expr: sp.Expr, direction: Mapping[sp.Symbol, sp.Expr],
                            memo: dict[sp.Expr, sp.Expr]) -> sp.Expr:
-    """``sum_k d expr/d x_k * direction[x_k]`` of a polynomial ``expr``, kept factored.
+    """``sum_k d expr/d x_k * direction[x_k]`` of ``expr`` (a polynomial, possibly in
+    sines and cosines), kept factored.
 
     Symbols not in ``direction`` are constants. ``memo`` holds the derivatives of
     the nodes already seen along this ``direction`` (share it between expressions).
@@ -32,6 +35,8 @@ def directional_derivative(expr: sp.Expr, direction: Mapping[sp.Symbol, sp.Expr]
     >>> x, y, u = sp.symbols("x y u")
     >>> directional_derivative((x + y) ** 2 * y, {x: u}, {})
     u*y*(2*x + 2*y)
+    >>> directional_derivative(x * sp.sin(y), {y: u}, {})
+    u*x*cos(y)
     """
     done = memo.get(expr)
     if done is not None:
@@ -49,6 +54,11 @@ def directional_derivative(expr: sp.Expr, direction: Mapping[sp.Symbol, sp.Expr]
     elif expr.is_Pow and expr.exp.is_Integer and expr.exp > 0:
         d = directional_derivative(expr.base, direction, memo)
         out = expr.exp * expr.base ** (expr.exp - 1) * d if d != 0 else sp.S.Zero
+    elif isinstance(expr, (sp.sin, sp.cos)):
+        u = expr.args[0]
+        d = directional_derivative(u, direction, memo)
+        slope = sp.cos(u) if isinstance(expr, sp.sin) else -sp.sin(u)
+        out = slope * d if d != 0 else sp.S.Zero
     elif not expr.free_symbols & direction.keys():  # a constant such as sqrt(2)
         out = sp.S.Zero
     else:
@@ -59,7 +69,8 @@ def directional_derivative(expr: sp.Expr, direction: Mapping[sp.Symbol, sp.Expr]
 
 def holonomic_rates(exprs: Sequence[sp.Expr], q: Sequence[sp.Symbol],
                     qd: Sequence[sp.Symbol]) -> tuple[sp.Matrix, sp.Matrix]:
-    """``A = d psi/dq`` and ``c = -(d/dq (A qd)) qd`` of polynomials ``psi(q)`` (no time).
+    """``A = d psi/dq`` and ``c = -(d/dq (A qd)) qd`` of ``psi(q)`` (no time): polynomials,
+    possibly in sines and cosines.
 
     The rows are those :func:`dalembert.equations.lagrange.derive_equations` gives a
     scleronomic holonomic constraint (``b = 0``), as equal polynomials. Raises

@@ -126,8 +126,9 @@ def _joint_parts(joints: Sequence, offsets: dict[int, np.ndarray],
 def _constraint_equations(coordinates: Sequence, constraints: Sequence, name: str) -> Equations:
     """What :func:`derive_equations` gives a part that is constraints only (a joint).
 
-    Polynomial holonomic constraints without time (every joint but rolling) are
-    differentiated on their expression trees (:func:`~.derivatives.holonomic_rates`):
+    Holonomic constraints without time that are polynomials (also in the sines and
+    cosines of planar angles: every joint but rolling) are differentiated on their
+    expression trees (:func:`~.derivatives.holonomic_rates`):
     the same polynomials, factored, several times faster to derive and compile.
     Any other constraint, and any constraint to report an error about, takes the
     general route.

@@ -13,7 +13,16 @@ from dalembert.equations.lagrange import derive_equations
 from dalembert.model.constraints import Holonomic
 from dalembert.model.coordinates import coordinates
 from dalembert.model.model import build_part_model
-from dalembert.multibody import Fixed, Ground, Prismatic, Revolute, RigidBody, Universal
+from dalembert.multibody import (
+    Distance,
+    Fixed,
+    Ground,
+    PlanarBody,
+    Prismatic,
+    Revolute,
+    RigidBody,
+    Universal,
+)
 from dalembert.multibody.derivatives import NotPolynomial, holonomic_rates
 from dalembert.multibody.parts import _constraint_equations, _template_body
 
@@ -28,10 +37,20 @@ def test_rates_of_a_polynomial_are_exact():
     assert sp.expand(c - c_ref) == sp.zeros(2, 1)
 
 
-def test_non_polynomial_constraints_are_refused():
+def test_rates_through_sines_and_cosines_are_exact():
+    x, y, xd, yd = sp.symbols("x y x_dot y_dot")
+    psi = [x * sp.cos(y) - sp.sin(y) ** 2 + sp.sin(2 * x + y), sp.cos(x) * sp.sin(y) - 1]
+    A, c = holonomic_rates(psi, [x, y], [xd, yd])
+    A_ref = sp.Matrix(psi).jacobian([x, y])
+    c_ref = -(A_ref * sp.Matrix([xd, yd])).jacobian([x, y]) * sp.Matrix([xd, yd])
+    assert sp.simplify(A - A_ref) == sp.zeros(2, 2)
+    assert sp.simplify(sp.expand(c - c_ref)) == sp.zeros(2, 1)
+
+
+def test_other_functions_are_refused():
     x, y = sp.symbols("x y")
     with pytest.raises(NotPolynomial):
-        holonomic_rates([sp.sin(x) + y], [x, y], sp.symbols("a b"))
+        holonomic_rates([sp.exp(x) + y], [x, y], sp.symbols("a b"))
 
 
 def skew_joints():
@@ -44,6 +63,19 @@ def skew_joints():
         Universal("cardan", a, b, (0, 0, -0.5), (0, 0, 0.5)),
         Prismatic("slider", a, b, (0, 0, -0.5), (0, 0, 0.5), axis_a=(0, 0.6, 0.8)),
         Fixed("weld", a, b, (0.1, 0, -0.5), (0, 0, 0.2)),
+        *planar_joints(),
+    ]
+
+
+def planar_joints():
+    a, b = PlanarBody("pa", 1.0, 0.1), PlanarBody("pb", 1.0, 0.1)
+    return [
+        Revolute("pin", a, b, (0.3, -0.5, 0), (-0.1, 0.5, 0)),
+        Revolute("ground_pin", Ground(), b, (1, 2, 0), (0, 0.5, 0)),
+        Prismatic("planar_slider", a, b, (0, 0.2, 0), (0.1, 0, 0), axis_a=(0.6, 0.8, 0),
+                  axis_b=(1, 0, 0)),
+        Fixed("planar_weld", a, b, (0.1, -0.5, 0), (0, 0.2, 0)),
+        Distance("planar_rod", a, b, 1.5, (0.1, 0.3, 0), (-0.2, 0, 0)),
     ]
 
 
