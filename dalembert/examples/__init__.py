@@ -40,6 +40,7 @@ EXAMPLES: dict[str, str] = {
     "spherical-chain": "spherical_chain",
     "hanging-chain": "hanging_chain",
     "four-bar": "four_bar",
+    "slider-crank": "slider_crank",
     "closed-chain": "closed_chain",
 }
 
