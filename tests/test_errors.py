@@ -284,13 +284,16 @@ def _interrupting(rhs):
 
 @pytest.mark.parametrize("native", [False, True])
 def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch, native):
-    # The C loop returns to Python after every step, so Ctrl-C lands there too.
+    # The C loop returns to Python after every stretch of steps (one step here), so
+    # Ctrl-C lands between stretches too.
     from dalembert.solvers import engine
-    from dalembert.solvers.native import NativeSolver
+    from dalembert.solvers.native import NativeSolver, run
 
     real = engine.first_order_rhs
     monkeypatch.setattr(engine, "first_order_rhs", lambda *a: _interrupting(real(*a)))
     monkeypatch.setattr(NativeSolver, "rhs", _interrupting(NativeSolver.rhs))
+    monkeypatch.setattr(run, "MAX_STEPS", 1)
+    monkeypatch.setattr(run.StretchRunner, "run", _interrupting(run.StretchRunner.run))
     with pytest.warns(IntegrationWarning, match=r"interrupted"):
         traj = pend.simulate((0, 10), q0=[1.0, 0.0], native=native)
     assert traj.status == "interrupted" and 0 < traj.t[-1] < 10 and len(traj) > 2

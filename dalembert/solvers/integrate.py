@@ -6,6 +6,15 @@ what constrained dynamics needs: after every accepted step the state is projecte
 back onto the constraint manifold and the solver restarts from the projected
 state; output points between steps are interpolated and projected too. A failure
 or Ctrl-C ends the loop but keeps every step computed so far.
+
+What runs where: with events, dense output, no projection or a solver of SciPy's
+own, each step goes through Python (:meth:`OdeSolver.step`, the projection,
+the outputs, the restart). A solver that can run whole stretches of this loop
+itself (``stretch_runner``: the native Runge-Kutta solvers of
+:mod:`dalembert.solvers.native`, with their own projection) does so in C, in
+calls of a fraction of a second; a step it cannot finish (a failure, or a
+projection it leaves to the Python projector) is then taken here, step by step.
+Both ways give the same steps, evaluations and states (tested).
 """
 
 from __future__ import annotations
@@ -24,6 +33,10 @@ METHODS: dict[str, type[OdeSolver]] = {
 }
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
+
+#: Whether a solver's own loop over whole stretches of steps is used where it applies
+#: (switched off only to compare with the step-by-step loop).
+_RUN_STRETCHES = True
 
 
 @dataclass
@@ -86,7 +99,7 @@ def integrate(
                 bar.update(abs(run.t_reached - bar.n_t))
                 bar.n_t = run.t_reached
     except KeyboardInterrupt:
-        run.stop("interrupted", f"interrupted by the user at t={solver.t:.6g}")
+        run.interrupt()
     finally:
         if bar is not None:
             bar.close()
@@ -147,7 +160,16 @@ class _Run:
         self.y_events = [[] for _ in self.events]
         self.g = [float(e(solver.t, solver.y)) for e in self.events]
         self.event_counts = [0 for _ in self.events]
+        self.stretches = self._stretch_runner()
         self._record_start()
+
+    def _stretch_runner(self):
+        """The solver's runner of whole stretches of steps, where it applies."""
+        make = getattr(self.solver, "stretch_runner", None)
+        if make is None or not _RUN_STRETCHES or self.project is None or self.events \
+                or self.dense_output:
+            return None
+        return make(self.t_eval, self.project)
 
     def _record_start(self) -> None:
         t0, y0 = self.solver.t, self.solver.y.copy()
@@ -158,7 +180,35 @@ class _Run:
     def stop(self, status: str, message: str) -> None:
         self.status, self.message = status, message
 
+    def interrupt(self) -> None:
+        """Ctrl-C: stop, keeping what was done (a stretch run in C too)."""
+        self._absorb()
+        self.stop("interrupted", f"interrupted by the user at t={self.solver.t:.6g}")
+
     def advance(self) -> None:
+        if self.stretches is None:
+            return self._advance_one()
+        ran = self.stretches.run()
+        self._absorb()
+        if not ran:  # C left the next step to the step-by-step loop
+            return self._advance_one()
+        if self.solver.status == "finished":
+            self.stop("finished", "the integration reached the end of t_span")
+
+    def _absorb(self) -> None:
+        """Take over the steps and outputs of the last stretch run in C."""
+        taken = self.stretches.take() if self.stretches is not None else None
+        if taken is None:
+            return
+        steps, t, y = taken
+        self.n_steps += steps
+        self.n_projections += steps
+        self.t_reached = self.solver.t
+        self.ts.extend(t.tolist())
+        self.ys.extend(y)
+
+    def _advance_one(self) -> None:
+        """One step the step-by-step way: step, project, events, outputs, restart."""
         solver = self.solver
         try:
             message = solver.step()

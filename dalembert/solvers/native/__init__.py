@@ -4,9 +4,17 @@ Python around SciPy's integrators costs ~100 us per right-hand side, more than
 the mechanics of a 16-link chain. Here the right-hand side, whole explicit
 Runge-Kutta steps and the projection after each step run in ``runtime.c``
 (hand-written, compiled once per machine, cached like generated code), calling
-the model's generated C functions through pointers; Python only sees accepted
-steps. Everything else (initial values, events, ``t_eval``, dense output,
-outputs) is the regular path, so results match it to rounding (tested).
+the model's generated C functions through pointers.
+
+What runs where: with the step projection and without events or dense output,
+whole stretches of the loop run in C (``dl_rk_run``, :mod:`.run`): steps, the
+projection of each step's end, the outputs at ``t_eval`` (the step's interpolant
+as SciPy makes it, projected) and the restart, returning to Python every fraction
+of a second; a step C cannot finish is taken the step-by-step way. Otherwise
+Python sees each accepted step (:mod:`.runge_kutta`: the steps in C, SciPy's
+solver object around them) and the regular loop does the rest. Initial values
+and the trajectory's outputs are the regular path's, so results match it to
+rounding (tested).
 
 The KKT solve is a range-space (Schur complement) method, linear in the size of
 the mechanism: ``M`` is block diagonal (one block per body), constraint rows

@@ -12,8 +12,8 @@ from ...codegen import c_backend
 
 _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
 
-#: Return codes of the runtime.
-OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION = range(5)
+#: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds).
+OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS = range(6)
 
 
 class Function(ctypes.Structure):
@@ -38,13 +38,23 @@ class Model(ctypes.Structure):
 
 class Tableau(ctypes.Structure):
     _fields_ = [("n_stages", _i64), *((name, _ptr) for name in ("A", "B", "C", "E", "E3")),
-                ("error_exponent", _f64)]
+                ("error_exponent", _f64), ("n_P", _i64), ("P", _ptr), ("n_extra", _i64),
+                ("A_extra", _ptr), ("C_extra", _ptr), ("n_D", _i64), ("D", _ptr)]
 
 
 class Stepper(ctypes.Structure):
     _fields_ = [*((name, _f64) for name in ("t", "h_abs", "h_previous", "t_bound", "direction",
                                             "rtol", "max_step")),
                 ("atol", _ptr), ("nfev", _i64)]
+
+
+class Run(ctypes.Structure):
+    _fields_ = [("t_eval", _ptr), ("n_eval", _i64), ("next_eval", _i64), ("holonomic", _ptr),
+                ("max_newton", _i64), ("max_full", _i64), ("position_tol", _f64),
+                ("accept_tol", _f64), ("max_steps", _i64), ("max_seconds", _f64),
+                ("capacity", _i64), ("t_out", _ptr), ("y_out", _ptr), ("n_steps", _i64),
+                ("n_out", _i64), ("t_old", _f64),
+                *((name, _ptr) for name in ("y_new", "y_end", "f_end", "rows"))]
 
 
 _LOCK = threading.Lock()
@@ -86,6 +96,7 @@ def _runtime() -> ctypes.CDLL:
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
         "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
         "dl_rk_step": [_ptr] * 7,
+        "dl_rk_run": [_ptr] * 7,
         "dl_outputs": [_ptr, _i64, *[_ptr] * 8],
         "dl_stages": [_ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr, _ptr,
                       _ptr],

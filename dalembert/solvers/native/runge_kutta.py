@@ -6,11 +6,18 @@ step-size control of :class:`scipy.integrate.RungeKutta` run in ``runtime.c``
 with the same tableau, the same formulas and constants, so the steps taken are
 SciPy's up to rounding (tested). Start-up (the initial step), dense output and
 everything else stay SciPy's.
+
+Beyond single steps, :meth:`~_NativeSteps.stretch_runner` gives a
+:class:`~.run.StretchRunner`, which runs whole stretches of the simulation loop in
+C (the projection after each step, the outputs at ``t_eval``, the restart), for
+:func:`~dalembert.solvers.integrate.integrate` to use when the projection is the
+native one and there are no events and no dense output.
 """
 
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Callable
 
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
@@ -18,6 +25,7 @@ from scipy.integrate._ivp import dop853_coefficients
 from scipy.integrate._ivp.rk import Dop853DenseOutput
 
 from . import library
+from .run import StretchRunner
 from .solver import NativeSolver
 
 
@@ -27,10 +35,12 @@ class _NativeSteps:
     def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self._native = native
+        self._own_rhs = fun == native.rhs
         self._keep = [None if a is None else np.ascontiguousarray(a, dtype=float)
                       for a in self._coefficients()]
         A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in self._keep)
         self._tableau = library.Tableau(self.n_stages, A, B, C, E, E3, self.error_exponent)
+        self._n_rows = self._interpolant(self._tableau)
         self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=float)
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
                                         rtol=self.rtol, max_step=self.max_step,
@@ -45,6 +55,25 @@ class _NativeSteps:
         if isinstance(self, DOP853):
             return [A, self.B, self.C, self.E5, self.E3]
         return [A, self.B, self.C, self.E, None]
+
+    def _interpolant(self, tableau: library.Tableau) -> int:
+        """The dense output's coefficients into ``tableau``; the rows of its interpolant."""
+        P = np.ascontiguousarray(self.P, dtype=float)
+        self._keep.append(P)
+        tableau.n_P, tableau.P = P.shape[1], P.ctypes.data
+        return P.shape[1]
+
+    def _stages(self) -> np.ndarray:
+        """The stage buffer the interpolant needs (DOP853: with its extra stages)."""
+        return self.K
+
+    def stretch_runner(self, t_eval: np.ndarray | None,
+                       project: Callable | None) -> StretchRunner | None:
+        """A runner of whole stretches of steps in C, if ``project`` is the native
+        solver's projection and ``fun`` its right-hand side (else ``None``)."""
+        if not self._own_rhs or project != self._native.project:
+            return None
+        return StretchRunner(self, t_eval)
 
     def _step_impl(self):
         st, K = self._stepper, self.K  # K: rows of stages, C-contiguous in SciPy's solvers
@@ -68,10 +97,17 @@ class _NativeSteps:
 class NativeDOP853(_NativeSteps, DOP853):
     """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
 
-    def __init__(self, *args, **options) -> None:
-        super().__init__(*args, **options)
-        self._extra = [np.ascontiguousarray(a, dtype=float) for a in (self.A_EXTRA,
-                                                                        self.C_EXTRA)]
+    def _interpolant(self, tableau: library.Tableau) -> int:
+        A, C, D = (np.ascontiguousarray(a, dtype=float) for a in (self.A_EXTRA, self.C_EXTRA,
+                                                                   self.D))
+        self._keep.append(D)
+        self._extra = [A, C]
+        tableau.n_extra, tableau.A_extra, tableau.C_extra = len(C), A.ctypes.data, C.ctypes.data
+        tableau.n_D, tableau.D = len(D), D.ctypes.data
+        return dop853_coefficients.INTERPOLATOR_POWER
+
+    def _stages(self) -> np.ndarray:
+        return self.K_extended
 
     def _dense_output_impl(self):
         # SciPy's DOP853._dense_output_impl with the three extra stages evaluated in C.

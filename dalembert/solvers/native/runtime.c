@@ -16,9 +16,10 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
+#include <time.h>
 
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
-       DL_PROJECTION = 4 };
+       DL_PROJECTION = 4, DL_OUTPUTS = 5 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);
@@ -444,6 +445,15 @@ typedef struct {
   const double *E;            /* s + 1: error weights (E5 for DOP853) */
   const double *E3;           /* DOP853's second estimator, or NULL */
   double error_exponent;
+  /* The step's interpolant (scipy's dense output), used by dl_rk_run: either
+   * RkDenseOutput's P ((s + 1) x n_P), or DOP853's n_extra extra stages (A_extra:
+   * n_extra rows of length s + 1 + n_extra, C_extra) and D (n_D rows, same length). */
+  int64_t n_P;
+  const double *P;
+  int64_t n_extra;
+  const double *A_extra, *C_extra;
+  int64_t n_D;
+  const double *D;
 } dl_tableau;
 
 typedef struct {
@@ -552,4 +562,165 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
     h_abs *= shrink > MIN_FACTOR ? shrink : MIN_FACTOR;
     rejected = 1;
   }
+}
+
+/* ---- whole stretches of steps: step, projection, outputs, restart --------------- */
+
+/* One call of dl_rk_run: where the outputs go, how to project, when to return. */
+typedef struct {
+  const double *t_eval;       /* n_eval output times in the direction of integration, or
+                               * n_eval < 0: every step end */
+  int64_t n_eval, next_eval;  /* next_eval: the first output time after st->t */
+  const unsigned char *holonomic;  /* dl_project's arguments */
+  int64_t max_newton, max_full;
+  double position_tol, accept_tol;
+  int64_t max_steps;          /* budget of one call: steps, and CPU seconds */
+  double max_seconds;
+  int64_t capacity;           /* rows of t_out and y_out */
+  double *t_out, *y_out;
+  int64_t n_steps, n_out;     /* done by this call */
+  double t_old;               /* the start of its last step */
+  double *y_new, *y_end, *f_end;  /* work, n_state each */
+  double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
+} dl_run;
+
+/* out = sum_k w[k * stride] K[k] over k < count. */
+static void weigh(const double *K, const double *w, int64_t stride, int64_t count,
+                  int64_t n_state, double *out) {
+  memset(out, 0, (size_t)n_state * sizeof(double));
+  for (int64_t k = 0; k < count; ++k) {
+    const double wk = w[k * stride], *Kk = K + k * n_state;
+    if (wk != 0.0)
+      for (int64_t i = 0; i < n_state; ++i) out[i] += wk * Kk[i];
+  }
+}
+
+/* The interpolant of the step t_old -> t_old + h from the solver state before the
+ * restart (y_old, the unprojected y_new, the stages K), made as scipy makes it:
+ * rows = (K^T P)^T for RkDenseOutput; for DOP853 the extra stages go into K, then
+ * rows = F: [dy, h f_old - dy, 2 dy - h (f_new + f_old), h D K]. */
+static int make_interpolant(dl_model *md, const dl_tableau *tb, dl_stepper *st, double t_old,
+                            double h, const double *y_old, const double *y_new, double *K,
+                            double *rows, double *stage) {
+  const int64_t n_state = 2 * md->n, s1 = tb->n_stages + 1;
+  if (!tb->n_extra) {
+    for (int64_t j = 0; j < tb->n_P; ++j)
+      weigh(K, tb->P + j, tb->n_P, s1, n_state, rows + j * n_state);
+    return DL_OK;
+  }
+  const int64_t width = s1 + tb->n_extra;
+  const int status = dl_stages(md, tb->A_extra, width, tb->C_extra, s1, s1, width, t_old, h,
+                               y_old, K, stage, &st->nfev);
+  if (status != DL_OK) return status;
+  const double *f_old = K, *f_new = K + tb->n_stages * n_state;
+  double *F0 = rows, *F1 = rows + n_state, *F2 = rows + 2 * n_state;
+  for (int64_t i = 0; i < n_state; ++i) {
+    const double dy = y_new[i] - y_old[i];
+    F0[i] = dy;
+    F1[i] = h * f_old[i] - dy;
+    F2[i] = 2 * dy - h * (f_new[i] + f_old[i]);
+  }
+  for (int64_t j = 0; j < tb->n_D; ++j) {
+    double *Fj = rows + (3 + j) * n_state;
+    weigh(K, tb->D + j * width, 1, width, n_state, Fj);
+    for (int64_t i = 0; i < n_state; ++i) Fj[i] *= h;
+  }
+  return DL_OK;
+}
+
+/* The interpolant at t, with the operations of scipy's RkDenseOutput (y_old + h Q p,
+ * p = [x, x^2, ...]) or Dop853DenseOutput (Horner-like in x and 1 - x). */
+static void interpolate(const dl_tableau *tb, int64_t n_state, double t_old, double h,
+                        const double *y_old, const double *rows, double t, double *y) {
+  const double x = (t - t_old) / h;
+  memset(y, 0, (size_t)n_state * sizeof(double));
+  if (!tb->n_extra) {
+    double p = x;
+    for (int64_t j = 0; j < tb->n_P; ++j, p *= x)
+      for (int64_t i = 0; i < n_state; ++i) y[i] += rows[j * n_state + i] * p;
+    for (int64_t i = 0; i < n_state; ++i) y[i] = h * y[i] + y_old[i];
+    return;
+  }
+  const int64_t n_F = tb->n_D + 3;
+  for (int64_t k = 0; k < n_F; ++k) {
+    const double *f = rows + (n_F - 1 - k) * n_state, w = k % 2 == 0 ? x : 1 - x;
+    for (int64_t i = 0; i < n_state; ++i) y[i] = (y[i] + f[i]) * w;
+  }
+  for (int64_t i = 0; i < n_state; ++i) y[i] += y_old[i];
+}
+
+static int project(dl_model *md, const dl_run *run, double t, double *y) {
+  return dl_project(md, t, y, run->holonomic, run->max_newton, run->max_full,
+                    run->position_tol, run->accept_tol);
+}
+
+/* One step from (st->t, y, K[0] = f(t, y)), finished as the Python loop finishes it:
+ * the end projected into y_end, the outputs in (t_old, t_new] written after row
+ * run->n_out (interpolated and projected; the one at t_new is the projected end), f at
+ * the projected end into f_end. On DL_OK the outputs are counted (n_out, next_eval)
+ * and the caller moves y_end, f_end into y, K[0]; on any other status run is as
+ * before and the caller restores st. */
+static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run,
+                       const double *y, double *K, double *stage) {
+  const int64_t n_state = 2 * md->n;
+  const double t_old = st->t;
+  int status = dl_rk_step(md, tb, st, y, K, run->y_new, stage);
+  if (status != DL_OK) return status;
+  const double t_new = st->t, d = st->direction;
+  const int every_step = run->n_eval < 0;
+  int64_t hi = run->next_eval;
+  while (hi < run->n_eval && d * run->t_eval[hi] <= d * t_new) ++hi;
+  const int64_t count = every_step ? 1 : hi - run->next_eval;
+  if (run->n_out + count > run->capacity) return DL_OUTPUTS;
+  memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
+  if ((status = project(md, run, t_new, run->y_end)) != DL_OK) return status;
+  int made = 0;
+  for (int64_t k = 0; k < count; ++k) {
+    const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
+    double *row = run->y_out + (run->n_out + k) * n_state;
+    run->t_out[run->n_out + k] = s;
+    if (s == t_new) {
+      memcpy(row, run->y_end, (size_t)n_state * sizeof(double));
+      continue;
+    }
+    if (!made && (status = make_interpolant(md, tb, st, t_old, t_new - t_old, y, run->y_new, K,
+                                            run->rows, stage)) != DL_OK)
+      return status;
+    made = 1;
+    interpolate(tb, n_state, t_old, t_new - t_old, y, run->rows, s, row);
+    if ((status = project(md, run, s, row)) != DL_OK) return status;
+  }
+  ++st->nfev;
+  if ((status = dl_rhs(md, t_new, run->y_end, run->f_end, NULL)) != DL_OK) return status;
+  run->next_eval = hi;
+  run->n_out += count;
+  return DL_OK;
+}
+
+/* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
+ * until t_bound, the step or time budget, or a full output buffer. On return y,
+ * K[0] and st hold the state after the last finished step; a non-OK status means
+ * the next step could not be finished here (too small, a singular system, a failed
+ * projection, more outputs than the buffer holds): the caller takes that step
+ * itself, from this state, and st->nfev does not count the dropped attempt. */
+int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
+              double *K, double *stage) {
+  const int64_t n_state = 2 * md->n;
+  const clock_t start = clock();
+  run->n_steps = run->n_out = 0;
+  while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
+    if (run->n_steps && (double)(clock() - start) > run->max_seconds * CLOCKS_PER_SEC) break;
+    const dl_stepper before = *st;
+    const int status = finish_step(md, tb, st, run, y, K, stage);
+    if (status != DL_OK) {
+      *st = before;
+      /* a full buffer after some steps just ends this call */
+      return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;
+    }
+    run->t_old = before.t;
+    ++run->n_steps;
+    memcpy(y, run->y_end, (size_t)n_state * sizeof(double));
+    memcpy(K, run->f_end, (size_t)n_state * sizeof(double));
+  }
+  return DL_OK;
 }

@@ -115,11 +115,15 @@ class NativeSolver:
                                         *(a.ctypes.data for a in out.values())))
         return out
 
+    def projection_arguments(self) -> tuple[int, int, int, float, float]:
+        """The arguments of ``dl_project`` after ``(model, t, y)``, as :meth:`project`
+        passes them (the C loop projects with the same)."""
+        return self._holonomic_mask, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, ACCEPT_TOL
+
     def project(self, t: float, y: np.ndarray) -> np.ndarray:
         """``y`` projected onto the constraints; the Python projector if C cannot."""
         self._y[:] = y
-        status = self.lib.dl_project(self._address, t, self._y_at, self._holonomic_mask,
-                                     FAST_NEWTON, MAX_NEWTON, POSITION_TOL, ACCEPT_TOL)
+        status = self.lib.dl_project(self._address, t, self._y_at, *self.projection_arguments())
         projected = self._y.copy()
         if status == library.OK:
             return projected

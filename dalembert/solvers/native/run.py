@@ -1,0 +1,95 @@
+"""Whole stretches of a simulation in C: steps, projections, outputs and restarts.
+
+:class:`StretchRunner` drives ``dl_rk_run`` for one of the native Runge-Kutta
+solvers: each call takes steps as :func:`~dalembert.solvers.integrate.integrate`'s
+loop takes them (step, project the end, interpolate and project the output times
+in the step, restart from the projected end) and returns after a fraction of a
+second, so Ctrl-C and the progress bar are served between calls. A step C cannot
+finish (too small, a singular system, a failed projection) is left to the caller,
+which takes it the step-by-step way (the Python projector then stands in).
+"""
+
+from __future__ import annotations
+
+import ctypes
+from functools import partial
+
+import numpy as np
+from scipy.integrate import OdeSolver
+
+from . import library
+
+#: The budget of one call: CPU seconds (it returns after the step that exceeds them)
+#: and steps.
+MAX_SECONDS, MAX_STEPS = 0.05, 1 << 62
+#: Output rows one call may write: about this many doubles, within ``ROWS``.
+BUFFER_DOUBLES, ROWS = 1 << 20, (64, 4096)
+
+
+class StretchRunner:
+    """Runs a native solver (``NativeDOP853``, ``NativeRK45``, ``NativeRK23``) in C,
+    with outputs at ``t_eval`` (or at every step end if ``None``).
+
+    :meth:`run` calls C; :meth:`take` hands over what it did and brings the SciPy
+    solver object up to date (``t``, ``y``, ``f``, ``h_abs``, ``h_previous``,
+    ``nfev``, ``status``). The two are separate so that what a call did survives a
+    Ctrl-C that lands right after it: ``take`` can be called again until it returns.
+    """
+
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
+        self.solver, native, n_state = solver, solver._native, solver.n
+        rows = max(ROWS[0], min(ROWS[1], BUFFER_DOUBLES // n_state))
+        self._K, self._y = solver._stages(), np.empty(n_state)
+        self._t_out, self._y_out = np.empty(rows), np.empty((rows, n_state))
+        self._work = np.empty((3 + solver._n_rows, n_state))  # y_new, y_end, f_end, rows
+        self._t_eval = np.ascontiguousarray([] if t_eval is None else t_eval, dtype=float)
+        self._ahead = None if t_eval is None else solver.direction * self._t_eval
+        mask, max_newton, max_full, position_tol, accept_tol = native.projection_arguments()
+        y_new, y_end, f_end, interpolant = (row.ctypes.data for row in self._work[:4])
+        self._run = library.Run(
+            t_eval=self._t_eval.ctypes.data, n_eval=-1 if t_eval is None else len(self._t_eval),
+            holonomic=mask, max_newton=max_newton, max_full=max_full,
+            position_tol=position_tol, accept_tol=accept_tol, max_steps=MAX_STEPS,
+            max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
+            y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end, f_end=f_end,
+            rows=interpolant)
+        self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
+                             ctypes.addressof(self._run), self._y.ctypes.data,
+                             self._K.ctypes.data, solver._stage.ctypes.data)
+        self._nfev = 0
+        self._pending = False
+
+    def run(self) -> bool:
+        """Steps from the solver's state until ``t_bound`` or the budget of one call.
+
+        ``False`` if C could not finish the next step: the caller takes it (from the
+        solver's state after :meth:`take`, which must follow, after a Ctrl-C too).
+        """
+        solver, st, run = self.solver, self.solver._stepper, self._run
+        self._y[:] = solver.y
+        self._K[0] = solver.f
+        st.t, st.h_abs, st.nfev = solver.t, solver.h_abs, 0
+        if self._ahead is not None:
+            run.next_eval = int(np.searchsorted(self._ahead, solver.direction * solver.t,
+                                                "right"))
+        run.n_steps = run.n_out = 0
+        self._nfev, self._pending = solver.nfev, True
+        return self._call() == library.OK
+
+    def take(self) -> tuple[int, np.ndarray, np.ndarray] | None:
+        """``(steps, t, y)`` done by the last :meth:`run`, the solver brought up to
+        date; ``None`` if that was handed over already (an interrupted ``take`` may be
+        repeated: it hands over nothing twice)."""
+        if not self._pending:
+            return None
+        solver, st, run = self.solver, self.solver._stepper, self._run
+        k = run.n_out
+        taken = (run.n_steps, self._t_out[:k].copy(), self._y_out[:k].copy())
+        solver.nfev = self._nfev + st.nfev
+        if run.n_steps:
+            solver.t, solver.t_old, solver.h_previous = st.t, run.t_old, st.h_previous
+            solver.y, solver.f, solver.h_abs = self._y.copy(), self._K[0].copy(), st.h_abs
+            if solver.direction * (solver.t - solver.t_bound) >= 0:
+                solver.status = "finished"
+        self._pending = False
+        return taken
