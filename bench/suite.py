@@ -37,6 +37,10 @@ sys.path.insert(0, str(HERE.parent))
 from bench.peers import TOOLS  # noqa: E402
 
 WORKLOADS = ("spherical", "revolute")
+#: Every tool runs on one thread (the machine's 2 cores are shared; BLAS threads
+#: that spin between NumPy calls would take the other one).
+SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                  "MKL_NUM_THREADS")}
 SIZES = (2, 4, 8, 16, 32, 64, 128, 256, 1024)
 QUICK_SIZES = (2, 4, 8)
 MARK = "@@record "
@@ -62,7 +66,7 @@ def spawn(tool: str, workload: str, n: int, cap: float) -> dict:
     """Run one record in a fresh process, killed after ``cap`` seconds."""
     base = {"tool": tool, "workload": workload, "n": n, "cap_s": cap}
     cmd = [sys.executable, str(Path(__file__).resolve()), "--one", tool, workload, str(n)]
-    env = {**os.environ, "BENCH_CAP": str(cap), "PYTHONWARNINGS": "ignore"}
+    env = {**os.environ, "BENCH_CAP": str(cap), "PYTHONWARNINGS": "ignore", **SINGLE_THREAD}
     start = time.perf_counter()
     try:
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=cap, env=env)
