@@ -81,7 +81,10 @@ static void eval_static(const dl_function *F, double t, const double *q, const d
   }
 }
 
-static double dot(const double *x, const double *y, int64_t n) {
+/* Small helpers are inlined where the block size is a constant (see BY_SIZE). */
+#define DL_INLINE static inline __attribute__((always_inline))
+
+DL_INLINE double dot(const double *x, const double *y, int64_t n) {
   double s = 0.0;
   for (int64_t i = 0; i < n; ++i) s += x[i] * y[i];
   return s;
@@ -89,7 +92,7 @@ static double dot(const double *x, const double *y, int64_t n) {
 
 /* Cholesky of a dense n x n block in place (lower triangle, row major); the diagonal
  * keeps 1 / L_jj, so the solves multiply instead of divide. */
-static int cholesky(double *L, int64_t n) {
+DL_INLINE int cholesky(double *L, int64_t n) {
   for (int64_t j = 0; j < n; ++j) {
     double d = L[j * n + j];
     const double scale = fabs(d);
@@ -107,7 +110,7 @@ static int cholesky(double *L, int64_t n) {
 }
 
 /* x <- L^-1 x */
-static void forward(const double *L, int64_t n, double *x) {
+DL_INLINE void forward(const double *L, int64_t n, double *x) {
   for (int64_t i = 0; i < n; ++i) {
     double s = x[i];
     for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
@@ -116,7 +119,7 @@ static void forward(const double *L, int64_t n, double *x) {
 }
 
 /* x <- L^-T x */
-static void backward(const double *L, int64_t n, double *x) {
+DL_INLINE void backward(const double *L, int64_t n, double *x) {
   for (int64_t i = n - 1; i >= 0; --i) {
     double s = x[i];
     for (int64_t k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
@@ -170,9 +173,16 @@ static int64_t block_size(const dl_model *md, int64_t b) {
   return md->block_start[b + 1] - md->block_start[b];
 }
 
-/* Scatter the values of A (pattern order) into the pair vectors. */
+/* The per-block kernels below take the block size nb last; BY_SIZE calls them with a
+ * constant nb for the common small blocks (a diagonal M has 1x1 blocks, a quaternion
+ * body a 4x4 one), so the compiler unrolls their loops and inlines the helpers. */
+#define BY_SIZE(nb, F, ...)                                                               \
+  ((nb) == 1 ? F(__VA_ARGS__, 1) : (nb) == 2 ? F(__VA_ARGS__, 2)                          \
+   : (nb) == 3 ? F(__VA_ARGS__, 3) : (nb) == 4 ? F(__VA_ARGS__, 4) : F(__VA_ARGS__, nb))
+
+/* Scatter the values of A (pattern order) into the pair vectors. Nothing else writes
+ * them, so the slots no value lands in keep the zeros they were allocated with. */
 static void load_pairs(dl_model *md, const double *Av) {
-  memset(md->a, 0, (size_t)md->pair_vec[md->n_pairs] * sizeof(double));
   for (int64_t e = 0; e < md->nA; ++e) md->a[md->A_at[e]] = Av[e];
 }
 
@@ -187,68 +197,92 @@ static void add_A_times(const dl_model *md, const double *x, double w, double *o
   }
 }
 
-/* M and f into the blocks, internal rows folded in, blocks factored (Mt = L L^T);
- * u = L^-1 f and z_p = L^-1 a_p. */
-static int factor_blocks(dl_model *md, const double *Mv, const double *f, const double *c) {
-  memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
-  for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
-  for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
-  for (int64_t b = 0; b < md->n_blocks; ++b) {
-    const int64_t nb = block_size(md, b);
-    double *B = md->blocks + md->block_mat[b];
-    double *u = md->u + md->block_start[b];
-    double trace = 0.0;
-    for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
-    for (int64_t p = md->block_pairs[b]; p < md->block_pairs[b + 1]; ++p) {
-      if (!md->internal[p]) continue;
-      const double *a = md->a + md->pair_vec[p];
-      const double norm2 = dot(a, a, nb);
-      if (norm2 == 0.0) continue;
-      const double w = trace > 0.0 ? trace / (nb * norm2) : 1.0 / norm2;
-      const double wc = w * c[md->pair_row[p]];
-      for (int64_t i = 0; i < nb; ++i) {
-        u[i] += wc * a[i];
-        for (int64_t j = 0; j <= i; ++j) B[i * nb + j] += w * a[i] * a[j];
-      }
+/* Block b of M (scattered) with its internal rows folded in, factored (Mt = L L^T);
+ * u_b = L^-1 f_b and z_p = L^-1 a_p for its pairs. */
+DL_INLINE int factor_block(dl_model *md, int64_t b, const double *c, int64_t nb) {
+  double *restrict B = md->blocks + md->block_mat[b];
+  double *restrict u = md->u + md->block_start[b];
+  double trace = 0.0;
+  for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
+  const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
+  for (int64_t p = p0; p < p1; ++p) {
+    if (!md->internal[p]) continue;
+    const double *restrict a = md->a + md->pair_vec[p];
+    const double norm2 = dot(a, a, nb);
+    if (norm2 == 0.0) continue;
+    const double w = trace > 0.0 ? trace / (nb * norm2) : 1.0 / norm2;
+    const double wc = w * c[md->pair_row[p]];
+    for (int64_t i = 0; i < nb; ++i) {
+      u[i] += wc * a[i];
+      for (int64_t j = 0; j <= i; ++j) B[i * nb + j] += w * a[i] * a[j];
     }
-    if (cholesky(B, nb) != DL_OK) return DL_SINGULAR_MASS;
-    forward(B, nb, u);
-    const int64_t p0 = md->block_pairs[b], pb = md->block_pairs[b + 1] - p0;
-    double *z = md->y + md->pair_vec[p0];
-    memcpy(z, md->a + md->pair_vec[p0], (size_t)(pb * nb) * sizeof(double));
-    for (int64_t k = 0; k < pb; ++k) forward(B, nb, z + k * nb);
   }
+  if (cholesky(B, nb) != DL_OK) return DL_SINGULAR_MASS;
+  forward(B, nb, u);
+  const double *restrict a = md->a + md->pair_vec[p0];
+  double *restrict z = md->y + md->pair_vec[p0];
+  for (int64_t k = 0; k < (p1 - p0) * nb; ++k) z[k] = a[k];
+  for (int64_t k = 0; k < p1 - p0; ++k) forward(B, nb, z + k * nb);
   return DL_OK;
 }
 
-/* S = sum over blocks of Z_b^T Z_b over the active rows (others get a unit diagonal),
- * factored. A block's pair vectors z are contiguous, nb values each. */
-static int factor_schur(dl_model *md, const double *z, const unsigned char *active) {
-  const int64_t w = md->kd + 1;
-  double *S = md->S;
-  memset(S, 0, (size_t)(md->m * w) * sizeof(double));
-  for (int64_t b = 0; b < md->n_blocks; ++b) {
-    const int64_t nb = block_size(md, b), p0 = md->block_pairs[b];
-    const int64_t pb = md->block_pairs[b + 1] - p0;
-    const double *zb = z + md->pair_vec[p0];
-    const int64_t *target = md->gram_target + md->gram_start[b];
-    if (active) {
-      for (int64_t i = 0, k = 0; i < pb; ++i)
-        for (int64_t j = 0; j <= i; ++j, ++k)
-          if (active[md->pair_row[p0 + i]] && active[md->pair_row[p0 + j]])
-            S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
-    } else if (nb == 1) {
-      for (int64_t i = 0, k = 0; i < pb; ++i)
-        for (int64_t j = 0; j <= i; ++j, ++k) S[target[k]] += zb[i] * zb[j];
-    } else {
-      for (int64_t i = 0, k = 0; i < pb; ++i)
-        for (int64_t j = 0; j <= i; ++j, ++k) S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
-    }
+/* S += Z_b^T Z_b over the active rows (all when active is NULL); block b's pair vectors
+ * z are contiguous, nb values each. */
+DL_INLINE void gram_block(const dl_model *md, int64_t b, const double *z,
+                          const unsigned char *active, double *S, int64_t nb) {
+  const int64_t p0 = md->block_pairs[b], pb = md->block_pairs[b + 1] - p0;
+  const double *restrict zb = z + md->pair_vec[p0];
+  const int64_t *restrict target = md->gram_target + md->gram_start[b];
+  if (active) {
+    for (int64_t i = 0, k = 0; i < pb; ++i)
+      for (int64_t j = 0; j <= i; ++j, ++k)
+        if (active[md->pair_row[p0 + i]] && active[md->pair_row[p0 + j]])
+          S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
+  } else {
+    for (int64_t i = 0, k = 0; i < pb; ++i)
+      for (int64_t j = 0; j <= i; ++j, ++k) S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
   }
+}
+
+/* rhs[r] -= z_p . x_b over block b's pairs (x by slot). */
+DL_INLINE void block_residual(const dl_model *md, int64_t b, const double *z, const double *x,
+                              double *rhs, int64_t nb) {
+  const double *restrict xb = x + md->block_start[b];
+  for (int64_t p = md->block_pairs[b]; p < md->block_pairs[b + 1]; ++p)
+    rhs[md->pair_row[p]] -= dot(z + md->pair_vec[p], xb, nb);
+}
+
+/* x_b += Z_b lam (x by slot, lam by row). */
+DL_INLINE void block_update(const dl_model *md, int64_t b, const double *z, const double *lam,
+                            double *x, int64_t nb) {
+  double *restrict xb = x + md->block_start[b];
+  for (int64_t p = md->block_pairs[b]; p < md->block_pairs[b + 1]; ++p) {
+    const double l = lam[md->pair_row[p]];
+    const double *restrict zp = z + md->pair_vec[p];
+    for (int64_t i = 0; i < nb; ++i) xb[i] += zp[i] * l;
+  }
+}
+
+/* x_b <- L_b^-T x_b (x by slot). */
+DL_INLINE void block_backward(const dl_model *md, int64_t b, double *x, int64_t nb) {
+  backward(md->blocks + md->block_mat[b], nb, x + md->block_start[b]);
+}
+
+/* The rows the gram products leave out get a unit diagonal; S factored. */
+static int factor_band(dl_model *md, const unsigned char *active) {
   if (active)
     for (int64_t r = 0; r < md->m; ++r)
-      if (!active[r]) S[md->row_pos[r] * w] = 1.0;
-  return md->m ? band_cholesky(S, md->m, md->kd) : DL_OK;
+      if (!active[r]) md->S[md->row_pos[r] * (md->kd + 1)] = 1.0;
+  return md->m ? band_cholesky(md->S, md->m, md->kd) : DL_OK;
+}
+
+/* S = sum over blocks of Z_b^T Z_b over the active rows (others get a unit diagonal),
+ * factored. */
+static int factor_schur(dl_model *md, const double *z, const unsigned char *active) {
+  memset(md->S, 0, (size_t)(md->m * (md->kd + 1)) * sizeof(double));
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    BY_SIZE(block_size(md, b), gram_block, md, b, z, active, md->S);
+  return factor_band(md, active);
 }
 
 /* lam = S^-1 rhs (rhs by row, overwritten by lam), then x += Z lam (x by slot). */
@@ -256,30 +290,36 @@ static void apply_multipliers(dl_model *md, const double *z, double *rhs, double
   for (int64_t r = 0; r < md->m; ++r) md->r[md->row_pos[r]] = rhs[r];
   band_solve(md->S, md->m, md->kd, md->r);
   for (int64_t r = 0; r < md->m; ++r) rhs[r] = md->r[md->row_pos[r]];
-  for (int64_t p = 0; p < md->n_pairs; ++p) {
-    const int64_t b = md->pair_block[p], nb = block_size(md, b);
-    const double lam = rhs[md->pair_row[p]];
-    const double *zp = z + md->pair_vec[p];
-    double *xb = x + md->block_start[b];
-    for (int64_t i = 0; i < nb; ++i) xb[i] += zp[i] * lam;
-  }
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    BY_SIZE(block_size(md, b), block_update, md, b, z, rhs, x);
+}
+
+/* Block b factored, its gram products into S and its part of c - Z^T u. */
+DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
+  if (factor_block(md, b, c, nb) != DL_OK) return DL_SINGULAR_MASS;
+  gram_block(md, b, md->y, NULL, md->S, nb);
+  block_residual(md, b, md->y, md->u, c, nb);
+  return DL_OK;
 }
 
 /* qdd and lambda from the KKT values [M values, f, A values, c] (c modified in place):
- * S lam = c - Z^T u with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). */
+ * S lam = c - Z^T u with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). One
+ * pass over the blocks factors them and builds S and the right-hand side. */
 int dl_solve(dl_model *md, double *values, double *qdd, double *lambda) {
   const double *Mv = values, *f = values + md->nM, *Av = f + md->n;
   double *c = (double *)Av + md->nA;
   load_pairs(md, Av);
-  int status = factor_blocks(md, Mv, f, c);
+  memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
+  for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
+  for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
+  memset(md->S, 0, (size_t)(md->m * (md->kd + 1)) * sizeof(double));
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    if (BY_SIZE(block_size(md, b), block_pass, md, b, c) != DL_OK) return DL_SINGULAR_MASS;
+  int status = factor_band(md, NULL);
   if (status != DL_OK) return status;
-  if ((status = factor_schur(md, md->y, NULL)) != DL_OK) return status;
-  for (int64_t p = 0; p < md->n_pairs; ++p)
-    c[md->pair_row[p]] -= dot(md->y + md->pair_vec[p], md->u + md->block_start[md->pair_block[p]],
-                              block_size(md, md->pair_block[p]));
   apply_multipliers(md, md->y, c, md->u);
   for (int64_t b = 0; b < md->n_blocks; ++b)
-    backward(md->blocks + md->block_mat[b], block_size(md, b), md->u + md->block_start[b]);
+    BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
   for (int64_t s = 0; s < md->n; ++s) qdd[md->slot_coord[s]] = md->u[s];
   if (lambda) memcpy(lambda, c, (size_t)md->m * sizeof(double));
   return DL_OK;

@@ -54,6 +54,7 @@ class NativeSolver:
         return array.ctypes.data
 
     def _buffer(self, size: int) -> int:
+        # zeroed: runtime.c's pair vectors rely on it (load_pairs writes only A's slots)
         return self._array(np.zeros(max(int(size), 1)), np.float64)
 
     def _model(self, handles, baumgarte: float) -> library.Model:
