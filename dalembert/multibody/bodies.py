@@ -68,8 +68,12 @@ class Body:
     has_orientation = True
 
     def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
-        """World position of a body-fixed point (given in the body frame)."""
-        raise NotImplementedError
+        """World position of a body-fixed point (given in the body frame):
+        ``center + R point`` for a body with an orientation."""
+        s = _vector(point, f"a point of body {self.name!r}")
+        if all(c == 0 for c in s):
+            return self.center
+        return self.center + times_vector(self.rotation(), s)
 
     def rotation(self) -> sp.Matrix:
         """Rotation matrix body -> world as SymPy expressions."""
@@ -203,12 +207,6 @@ class RigidBody(Body):
     def rotation(self) -> sp.Matrix:
         return rotation_matrix(self.quaternion)
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
-        s = _vector(point, f"a point of body {self.name!r}")
-        if all(c == 0 for c in s):
-            return self.center
-        return self.center + times_vector(self.rotation(), s)
-
     def angular_velocity(self) -> sp.Matrix:
         """Body-frame angular velocity ``2 E(b) bdot``."""
         return 2 * E_matrix(self.quaternion) * self.quaternion.diff(t)
@@ -286,12 +284,6 @@ class PlanarBody(Body):
     def rotation(self) -> sp.Matrix:
         c, s = sp.cos(self.angle), sp.sin(self.angle)
         return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
-
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
-        s = _vector(point, f"a point of body {self.name!r}")
-        if all(c == 0 for c in s):
-            return self.center
-        return self.center + times_vector(self.rotation(), s)
 
     def kinetic_energy(self) -> sp.Expr:
         x, y, theta = (c.diff(t) for c in self.coordinates)
