@@ -21,6 +21,10 @@ import matplotlib.pyplot as plt
 HERE = Path(__file__).resolve().parent
 COLORS = {"dalembert": "C0", "sympy": "C1", "mujoco": "C2", "exudyn": "C3"}
 
+#: Panel titles by workload.
+TITLES = {"spherical": "3D chain (spherical joints)",
+          "revolute": "planar chain (revolute joints)"}
+
 
 def plot(result: dict, out: Path) -> Path:
     """Draw the two panels and save them to ``out``."""
@@ -36,7 +40,7 @@ def plot(result: dict, out: Path) -> Path:
                       label=f"{tool} simulate")
             ax.loglog(ns, [r["build_s"] for r in mine], "s--", color=color, alpha=0.6,
                       label=f"{tool} build")
-        ax.set_title(f"{workload} chain, 10 s at energy error <= 1e-6")
+        ax.set_title(f"{TITLES.get(workload, workload)}, 10 s at energy error <= 1e-6")
         ax.set_xlabel("links n")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("seconds (cold build, simulation)")
