@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
-from scipy.integrate import solve_ivp
+from one_coordinate_reference import angle_history
 
 from dalembert import cli
 from dalembert.examples import slider_crank as example
@@ -79,7 +79,6 @@ def minimal_reference(times: np.ndarray) -> np.ndarray:
     """Crank angle from the one-coordinate Lagrangian (see the module docstring)."""
     a, b, _ = example.GEOMETRY
     th, phi, centers = closed_form()
-    w = sp.Symbol("w")
     masses = {"crank": example.DENSITY * a, "rod": example.DENSITY * b,
               "piston": example.PISTON_MASS}
     moments = {"crank": example.DENSITY * a**3 / 12, "rod": example.DENSITY * b**3 / 12}
@@ -91,13 +90,7 @@ def minimal_reference(times: np.ndarray) -> np.ndarray:
         if name in angles:
             J += moments[name] * angles[name].diff(th) ** 2
         V += masses[name] * G * center[1]
-    accel = -(J.diff(th) * w**2 / 2 + V.diff(th)) / J
-    f = sp.lambdify((th, w), accel, cse=True)
-    sol = solve_ivp(lambda t, y: [y[1], f(y[0], y[1])], (times[0], times[-1]),
-                    [example.THETA_0, example.OMEGA_0], method="DOP853", rtol=1e-12,
-                    atol=1e-12, t_eval=times)
-    assert sol.success
-    return sol.y[0]
+    return angle_history(J, V, th, example.THETA_0, example.OMEGA_0, times)
 
 
 @pytest.mark.validation
