@@ -502,19 +502,26 @@ typedef struct {
   int64_t nfev;
 } dl_stepper;
 
+/* out = sum_k w[k * stride] K[k] over k < count (rows of K contiguous, zero weights
+ * skipped). */
+static void weigh(const double *K, const double *w, int64_t stride, int64_t count,
+                  int64_t n_state, double *out) {
+  memset(out, 0, (size_t)n_state * sizeof(double));
+  for (int64_t k = 0; k < count; ++k) {
+    const double wk = w[k * stride], *Kk = K + k * n_state;
+    if (wk != 0.0)
+      for (int64_t i = 0; i < n_state; ++i) out[i] += wk * Kk[i];
+  }
+}
+
 /* scipy's error norms; work (2 n_state) holds the estimates. */
 static double error_norm(const dl_tableau *tb, const double *K, int64_t n_state, double h,
                          const double *scale, double *work) {
   const int64_t s1 = tb->n_stages + 1;
   double *x5 = work, *x3 = work + n_state;
-  memset(work, 0, (size_t)(2 * n_state) * sizeof(double));
-  for (int64_t k = 0; k < s1; ++k) {
-    const double *Kk = K + k * n_state;
-    if (tb->E[k] != 0.0)
-      for (int64_t i = 0; i < n_state; ++i) x5[i] += Kk[i] * tb->E[k];
-    if (tb->E3 && tb->E3[k] != 0.0)
-      for (int64_t i = 0; i < n_state; ++i) x3[i] += Kk[i] * tb->E3[k];
-  }
+  weigh(K, tb->E, 1, s1, n_state, x5);
+  if (tb->E3) weigh(K, tb->E3, 1, s1, n_state, x3);
+  else memset(x3, 0, (size_t)n_state * sizeof(double));
   double e5 = 0.0, e3 = 0.0;
   for (int64_t i = 0; i < n_state; ++i) {
     const double a = x5[i] / scale[i], b = x3[i] / scale[i];
@@ -526,15 +533,10 @@ static double error_norm(const dl_tableau *tb, const double *K, int64_t n_state,
   return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n_state);
 }
 
-/* out = y + h sum_k w[k] K[k] over k < count (rows of K contiguous, zero weights skipped). */
+/* out = y + h sum_k w[k] K[k] over k < count. */
 static void combine(const double *y, double h, const double *K, const double *w, int64_t count,
                     int64_t n_state, double *out) {
-  memset(out, 0, (size_t)n_state * sizeof(double));
-  for (int64_t k = 0; k < count; ++k) {
-    if (w[k] == 0.0) continue;
-    const double wk = w[k], *Kk = K + k * n_state;
-    for (int64_t i = 0; i < n_state; ++i) out[i] += wk * Kk[i];
-  }
+  weigh(K, w, 1, count, n_state, out);
   for (int64_t i = 0; i < n_state; ++i) out[i] = y[i] + h * out[i];
 }
 
@@ -623,17 +625,6 @@ typedef struct {
   double *y_new, *y_end, *f_end;  /* work, n_state each */
   double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
 } dl_run;
-
-/* out = sum_k w[k * stride] K[k] over k < count. */
-static void weigh(const double *K, const double *w, int64_t stride, int64_t count,
-                  int64_t n_state, double *out) {
-  memset(out, 0, (size_t)n_state * sizeof(double));
-  for (int64_t k = 0; k < count; ++k) {
-    const double wk = w[k * stride], *Kk = K + k * n_state;
-    if (wk != 0.0)
-      for (int64_t i = 0; i < n_state; ++i) out[i] += wk * Kk[i];
-  }
-}
 
 /* The interpolant of the step t_old -> t_old + h from the solver state before the
  * restart (y_old, the unprojected y_new, the stages K), made as scipy makes it:
