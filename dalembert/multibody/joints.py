@@ -180,20 +180,15 @@ class Joint:
     def _check_planar_axes(self) -> None:
         pass
 
-    def _axes_along_z(self, what: str) -> None:
+    def _planar_axes(self, normal: bool, why: str) -> None:
+        """Both axes along z, the plane's normal (``normal``), or in the x-y plane."""
+        where = "be along z, the plane's normal" if normal else "lie in the x-y plane"
         for side, axis in (("a", self.axis_a), ("b", self.axis_b)):
-            if abs(abs(axis[2]) - 1.0) > 1e-12:
+            off = abs(abs(axis[2]) - 1.0) if normal else abs(axis[2])
+            if off > 1e-12:
                 raise ModelError(
                     f"joint {self.name!r} ({type(self).__name__}) between planar bodies: "
-                    f"axis_{side} {tuple(axis.tolist())} must be along z, the plane's normal "
-                    f"({what})")
-
-    def _axes_in_plane(self, what: str) -> None:
-        for side, axis in (("a", self.axis_a), ("b", self.axis_b)):
-            if abs(axis[2]) > 1e-12:
-                raise ModelError(
-                    f"joint {self.name!r} ({type(self).__name__}) between planar bodies: "
-                    f"axis_{side} {tuple(axis.tolist())} must lie in the x-y plane ({what})")
+                    f"axis_{side} {tuple(axis.tolist())} must {where} ({why})")
 
     # -- geometry in world components ------------------------------------------------
     def separation(self) -> sp.Matrix:
@@ -282,7 +277,7 @@ class Revolute(Joint):
         return [*self.separation(), dot(ua, wb), dot(va, wb)]
 
     def _check_planar_axes(self) -> None:
-        self._axes_along_z("a hinge in the plane turns about its normal")
+        self._planar_axes(True, "a hinge in the plane turns about its normal")
 
     def planar_equations(self) -> list[sp.Expr]:
         return list(self.separation()[:2])
@@ -300,7 +295,7 @@ class Prismatic(Joint):
         return [*self._orientation_lock(), dot(ua, d), dot(va, d)]
 
     def _check_planar_axes(self) -> None:
-        self._axes_in_plane("the slider moves in the plane")
+        self._planar_axes(False, "the slider moves in the plane")
 
     def planar_equations(self) -> list[sp.Expr]:
         wa, wb = self.frame("a")[2], self.frame("b")[2]
@@ -318,7 +313,7 @@ class Fixed(Joint):
         return [*self.separation(), *self._orientation_lock()]
 
     def _check_planar_axes(self) -> None:
-        self._axes_along_z("a weld in the plane keeps the angle about its normal")
+        self._planar_axes(True, "a weld in the plane keeps the angle about its normal")
 
     def planar_equations(self) -> list[sp.Expr]:
         ua, vb = self.frame("a")[0], self.frame("b")[1]
@@ -363,7 +358,7 @@ class PointOnPlane(Joint):
                              "a particle, which has no orientation")
 
     def _check_planar_axes(self) -> None:
-        self._axes_in_plane("in the plane the point moves on a line")
+        self._planar_axes(False, "in the plane the point moves on a line")
 
     def equations(self) -> list[sp.Expr]:
         n = self.frame("a")[2]
