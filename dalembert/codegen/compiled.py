@@ -13,7 +13,7 @@ once per System and re-bound to new values at no cost.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import sympy as sp
@@ -24,13 +24,15 @@ from ..model.coordinates import t
 from . import c_backend
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SparsePattern:
     """Fixed sparsity of ``M`` (``n x n``) and ``A`` (``m x n``): row and column of each value.
 
     The generated functions return only these entries, in this order; the pattern
     is computed once from the symbolic matrices (an entry that is zero symbolically
-    is zero at every state).
+    is zero at every state). Compared by identity; ``derived`` is where the solvers
+    keep what they compute from the pattern alone (index maps, orders), so that a
+    model simulated many times computes it once.
     """
 
     n: int
@@ -39,6 +41,19 @@ class SparsePattern:
     M_cols: np.ndarray
     A_rows: np.ndarray
     A_cols: np.ndarray
+    derived: dict = field(default_factory=dict, init=False, repr=False)
+
+    def remember(self, key: object, make: Callable[[], object]) -> object:
+        """``derived[key]``, made by ``make()`` the first time.
+
+        >>> p = SparsePattern(1, 0, np.zeros(1, int), np.zeros(1, int), np.zeros(0, int),
+        ...                   np.zeros(0, int))
+        >>> p.remember("size", lambda: 1) + p.remember("size", lambda: 2)
+        2
+        """
+        if key not in self.derived:
+            self.derived[key] = make()
+        return self.derived[key]
 
     def dense_M(self, values: np.ndarray) -> np.ndarray:
         M = np.zeros((self.n, self.n))

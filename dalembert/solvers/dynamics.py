@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from .sparse_kkt import KKTSolver, matvec
+from .sparse_kkt import kkt_solver, matvec
 
 
 def accelerations(
@@ -33,7 +33,7 @@ def accelerations(
     kept: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``qdd`` and the multipliers ``lambda`` at one state (minimum norm if ``kept``)."""
-    return KKTSolver(num.pattern, kept).solve(*_blocks(num, t, q, qd, baumgarte))
+    return kkt_solver(num.pattern, kept).solve(*_blocks(num, t, q, qd, baumgarte))
 
 
 def _blocks(num: NumericModel, t: float, q: np.ndarray, qd: np.ndarray, baumgarte: float):
@@ -54,7 +54,7 @@ def first_order_rhs(
 ) -> Callable:
     """``F(t, y)`` for SciPy's integrators (``kept``: see the module docstring)."""
     n = num.n
-    solver = KKTSolver(num.pattern, kept)
+    solver = kkt_solver(num.pattern, kept)
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         qdd = solver.accelerations(*_blocks(num, t, y[:n], y[n:], baumgarte))

@@ -12,7 +12,7 @@ from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.coordinates import key_name
 from .kkt import REDUNDANT_MODES, ConstraintRank, check_kkt, constraint_rank, dependent_error
 from .projection import StepProjector, project_positions, project_velocities
-from .sparse_kkt import DENSE_MAX, KKTSolver, gram_well_conditioned, kkt_condition, matvec
+from .sparse_kkt import DENSE_MAX, gram_well_conditioned, kkt_condition, kkt_solver, matvec
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
 REPORT_TOL = 1e-10
@@ -215,7 +215,7 @@ def _check_kkt_at(num: NumericModel, t0: float, q: np.ndarray, qd: np.ndarray,
     ``KKT_COND_LIMIT``.
     """
     Mv, _, Av, _ = num.kkt_sparse(t0, q, qd)
-    solver = KKTSolver(num.pattern, kept)
+    solver = kkt_solver(num.pattern, kept)
     if not solver.dense:
         cond = kkt_condition(solver, Mv, Av)
         if cond < 1e10 / solver.size:

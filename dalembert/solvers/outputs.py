@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from .sparse_kkt import KKTSolver, matvec
+from .sparse_kkt import kkt_solver, matvec
 
 
 def evaluate_outputs(
@@ -31,7 +31,7 @@ def evaluate_outputs(
         "velocity_residual": np.zeros(k),
         "energies": np.empty((k, 3)),
     }
-    solver = KKTSolver(num.pattern, kept)
+    solver = kkt_solver(num.pattern, kept)
     rows, cols = num.pattern.A_rows, num.pattern.A_cols
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..codegen.compiled import NumericModel, SparsePattern
 from ..errors import InitialConditionError, SingularSystemError
-from .sparse_kkt import KKTSolver, matvec
+from .sparse_kkt import kkt_solver, matvec
 
 #: Target for the constraint residual. Where rounding keeps a constraint above it
 #: (large coordinates), Newton stops once it no longer halves the residual.
@@ -107,11 +107,12 @@ class StepProjector:
         self.num = num
         self.fast = kept is None
         n, pat = num.n, num.pattern
-        unit = SparsePattern(n, num.m, np.arange(n), np.arange(n), pat.A_rows, pat.A_cols)
+        unit = pat.remember("unit_mass", lambda: SparsePattern(
+            n, num.m, np.arange(n), np.arange(n), pat.A_rows, pat.A_cols))
         self._ones = np.ones(n)
-        self._velocity = KKTSolver(unit)
+        self._velocity = kkt_solver(unit)
         rows = np.array(num.holonomic_rows, dtype=np.intp)
-        self._position = KKTSolver(unit, None if len(rows) == num.m else rows)
+        self._position = kkt_solver(unit, None if len(rows) == num.m else rows)
         self._zeros = np.zeros(n)
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:

@@ -51,6 +51,8 @@ BAND_MAX = 40
 #: SuperLU options: a symmetric fill-reducing order for the symmetric KKT pattern, and
 #: threshold pivoting relaxed so that the order is mostly kept (zero (2,2) block).
 PERMC = "MMD_AT_PLUS_A"
+#: Up to this many constraint rows the rank screen factors ``A A^T`` dense (LAPACK).
+GRAM_DENSE_MAX = 200
 DIAG_PIVOT_THRESH = 0.1
 SINGULAR_MESSAGE = (
     "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are not "
@@ -173,6 +175,20 @@ class KKTSolver:
         return qdd, lam, None
 
 
+def kkt_solver(pattern: SparsePattern, kept: np.ndarray | None = None) -> KKTSolver:
+    """``KKTSolver(pattern, kept)``, made once per pattern and set of kept rows (a
+    solver holds index maps only, so one serves every simulation of a model).
+
+    >>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
+    ...                         np.array([0, 0]), np.array([0, 1]))
+    >>> kkt_solver(pattern) is kkt_solver(pattern)
+    True
+    """
+    rows = None if kept is None else np.asarray(kept, dtype=np.intp)
+    key = ("kkt_solver", None if rows is None else rows.tobytes())
+    return pattern.remember(key, lambda: KKTSolver(pattern, rows))
+
+
 class _BandMap:
     """Band LU (LAPACK ``gbtrf``/``gbtrs``) of the KKT matrix in a bandwidth-reducing order.
 
@@ -186,16 +202,30 @@ class _BandMap:
     def __init__(self, rows: np.ndarray, cols: np.ndarray, src: np.ndarray,
                  size: int) -> None:
         self.perm, self.kl, self.ku, self.flat = _band_layout(rows, cols, size)
-        self.size, self.src = size, src
+        self.size, self.src, self.cols = size, src, cols
         self.width = self.kl + self.ku + 1
         self.ldab = 2 * self.kl + self.ku + 1
 
+    def _lu(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+        ab = np.zeros(self.ldab * self.size)
+        ab[self.flat] = values[self.src]
+        return lapack.dgbtrf(ab.reshape(self.size, self.ldab).T, self.kl, self.ku,
+                             overwrite_ab=1)
+
+    def condition(self, values: np.ndarray) -> float:
+        """Estimated 1-norm condition number (LAPACK ``gbcon`` on the band LU), ``inf``
+        if the matrix is singular."""
+        lu, piv, info = self._lu(values)
+        if info != 0:
+            return np.inf
+        norm = np.bincount(self.cols, weights=np.abs(values[self.src]), minlength=self.size)
+        rcond, info = lapack.dgbcon(self.kl, self.ku, lu, piv, norm.max())
+        return 1.0 / rcond if info == 0 and rcond > 0.0 else np.inf
+
     def factor(self, values: np.ndarray):
         """A function ``rhs -> K^-1 rhs``; ``values`` indexed by the ``src`` given."""
-        size, ldab, kl, ku, perm = self.size, self.ldab, self.kl, self.ku, self.perm
-        ab = np.zeros(ldab * size)
-        ab[self.flat] = values[self.src]
-        lu, piv, info = lapack.dgbtrf(ab.reshape(size, ldab).T, kl, ku, overwrite_ab=1)
+        kl, ku, perm = self.kl, self.ku, self.perm
+        lu, piv, info = self._lu(values)
         if info != 0:
             raise SingularSystemError(SINGULAR_MESSAGE)
 
@@ -316,10 +346,10 @@ def _csc_map(rows: np.ndarray, cols: np.ndarray, size: int):
 
 def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:
     """Estimated 1-norm condition number of the KKT matrix (``inf`` if it cannot be
-    factored), from the sparse factorization and a few solves
-    (:func:`scipy.sparse.linalg.onenormest`): a cheap screen before the dense SVD
-    diagnosis (:func:`.kkt.check_kkt`). The 2-norm condition number is at most
-    ``size`` times larger.
+    factored): LAPACK's estimate from the band LU when the solver uses one, else from
+    the sparse factorization and a few solves (:func:`scipy.sparse.linalg.onenormest`).
+    A cheap screen before the dense SVD diagnosis (:func:`.kkt.check_kkt`). The 2-norm
+    condition number is at most ``size`` times larger.
 
     >>> from dalembert.codegen.compiled import SparsePattern
     >>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
@@ -327,6 +357,8 @@ def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:
     >>> bool(kkt_condition(KKTSolver(pattern), np.ones(2), np.ones(2)) < 10)
     True
     """
+    if solver.method == "band":
+        return solver._band.condition(np.concatenate([Mv, Av]))
     data = np.concatenate([Mv, Av])[solver._csc_src]
     K = sps.csc_matrix((data, solver._indices, solver._indptr), shape=(solver.size,) * 2)
     try:
@@ -340,26 +372,45 @@ def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, sh
                           limit: float = 1e10) -> bool:
     """``True`` when ``A`` (values on a pattern) surely has full row rank, with
     ``s_max / s_min < limit``: a screen before the SVD of :func:`.kkt.constraint_rank`,
-    from a sparse LU of ``A A^T`` (whose condition number is that ratio squared).
+    from a Cholesky (dense) or LU (sparse) factorization of ``A A^T``, whose condition
+    number is that ratio squared.
 
     >>> gram_well_conditioned(np.array([0, 1]), np.array([0, 1]), np.ones(2), (2, 3))
     True
     >>> gram_well_conditioned(np.array([0, 1]), np.array([0, 0]), np.ones(2), (2, 3))
     False
     """
-    A = sps.csr_matrix((Av, (rows, cols)), shape=shape)
-    G = (A @ A.T).tocsc()
+    if shape[0] <= GRAM_DENSE_MAX:
+        A = np.zeros(shape)
+        np.add.at(A, (rows, cols), Av)
+        cond = _dense_spd_condition(A @ A.T)
+    else:
+        A = sps.csr_matrix((Av, (rows, cols)), shape=shape)
+        cond = _sparse_condition((A @ A.T).tocsc())
+    # cond(G) = cond(A)^2 and the 2-norm condition is at most m times the 1-norm one;
+    # the estimate is reliable only well below 1/eps, hence the cap at 1e13.
+    return bool(cond < min(limit**2 / max(shape[0], 1), 1e13))
+
+
+def _dense_spd_condition(G: np.ndarray) -> float:
+    """Estimated 1-norm condition number of a symmetric positive semidefinite ``G``
+    (LAPACK ``potrf`` and ``pocon``), ``inf`` when its Cholesky factorization fails."""
+    factor, info = lapack.dpotrf(G, lower=1)
+    if info != 0:
+        return np.inf
+    rcond, info = lapack.dpocon(factor, np.abs(G).sum(axis=0).max(), uplo="L")
+    return 1.0 / rcond if info == 0 and rcond > 0.0 else np.inf
+
+
+def _sparse_condition(G: sps.csc_matrix) -> float:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", spla.MatrixRankWarning)
             solve = spla.splu(G, permc_spec=PERMC).solve
     except (RuntimeError, spla.MatrixRankWarning):
-        return False
+        return np.inf
     with np.errstate(all="ignore"):
-        cond = _condition_1norm(G, solve)
-    # cond(G) = cond(A)^2 and the 2-norm condition is at most m times the 1-norm one;
-    # the estimate is reliable only well below 1/eps, hence the cap at 1e13.
-    return bool(cond < min(limit**2 / max(shape[0], 1), 1e13))
+        return _condition_1norm(G, solve)
 
 
 def _condition_1norm(K: sps.spmatrix, solve) -> float:

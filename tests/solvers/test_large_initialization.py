@@ -14,7 +14,9 @@ import sympy as sp
 from dalembert import Holonomic, SingularSystemError, System, coordinates
 from dalembert.multibody import chain
 from dalembert.solvers import initialization
+from dalembert.solvers.kkt import kkt_matrix
 from dalembert.solvers.projection import project_positions, project_velocities
+from dalembert.solvers.sparse_kkt import _dense_spd_condition, kkt_condition, kkt_solver
 
 
 def test_sparse_initial_projection_matches_the_dense_one():
@@ -53,3 +55,32 @@ def test_singular_kkt_found_by_the_sparse_screen_and_named_by_the_dense_check(mo
     monkeypatch.setattr(initialization, "DENSE_CHECK_MAX", 10)  # as for a huge model
     with pytest.raises(SingularSystemError, match="condition number estimate"):
         system.consistent_initial_state(q0)
+
+
+@pytest.mark.parametrize("joint", ["spherical", "revolute"])
+def test_condition_screens_agree_with_the_exact_condition_numbers(joint):
+    """The band KKT screen (LAPACK gbcon) and the dense rank screen (pocon) estimate
+    the 1-norm condition numbers NumPy computes exactly from the dense matrices."""
+    mb = chain(12, 1.0, 1.0, 0.05, joint=joint, planar=joint == "revolute")
+    num = mb.system.numeric()
+    q0, qd0 = mb.initial_state()
+    names = mb.system.coordinate_names
+    q, qd = np.array([q0[k] for k in names]), np.array([qd0[k] for k in names])
+    Mv, _, Av, _ = num.kkt_sparse(0.0, q, qd)
+    solver = kkt_solver(num.pattern)
+    assert solver.method == "band"
+    K = kkt_matrix(num.pattern.dense_M(Mv), num.pattern.dense_A(Av))
+    exact = np.linalg.cond(K, 1)
+    assert abs(kkt_condition(solver, Mv, Av) / exact - 1) < 1e-6
+    A = num.pattern.dense_A(Av)
+    gram = np.linalg.cond(A @ A.T, 1)
+    assert abs(_dense_spd_condition(A @ A.T) / gram - 1) < 1e-6
+    assert kkt_condition(solver, Mv, 0 * Av) == np.inf  # no constraints: M alone singular
+
+
+def test_kkt_solvers_are_made_once_per_pattern():
+    num = chain(3, 1.0, 1.0, 0.05).system.numeric()
+    assert kkt_solver(num.pattern) is kkt_solver(num.pattern)
+    kept = np.arange(num.m - 1)
+    assert kkt_solver(num.pattern, kept) is kkt_solver(num.pattern, kept.copy())
+    assert kkt_solver(num.pattern, kept).mk == num.m - 1

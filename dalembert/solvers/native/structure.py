@@ -66,7 +66,22 @@ class SchurStructure:
 
 def schur_structure(pattern: SparsePattern) -> SchurStructure:
     """The tables for ``pattern``; :class:`NotApplicable` when a block or the band is
-    too wide for dense block factors and a band Cholesky to pay off."""
+    too wide for dense block factors and a band Cholesky to pay off. Computed once per
+    pattern (the verdict included)."""
+    found = pattern.remember("schur_structure", lambda: _structure_or_reason(pattern))
+    if isinstance(found, NotApplicable):
+        raise found
+    return found
+
+
+def _structure_or_reason(pattern: SparsePattern) -> SchurStructure | NotApplicable:
+    try:
+        return _structure(pattern)
+    except NotApplicable as reason:
+        return reason
+
+
+def _structure(pattern: SparsePattern) -> SchurStructure:
     block, sizes = _blocks(pattern)
     if sizes.max(initial=0) > BLOCK_MAX:
         raise NotApplicable(f"the mass matrix couples {sizes.max()} coordinates in one block "
