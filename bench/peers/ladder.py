@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 from .common import meets
 
 #: Runs of the kept setting in all when its first run is shorter than ``SHORT_S``.
-REPEATS = 3
+REPEATS = 5
 SHORT_S = 1.0
 #: Fields a repeat of a deterministic tool reproduces exactly.
 SAME_IN_REPEATS = ("energy_error", "residual", "evaluations")
