@@ -31,6 +31,10 @@ class Model(ctypes.Structure):
         *((name, _ptr) for name in ("pair_row", "pair_block", "pair_vec", "A_at", "block_pairs",
                                     "internal")),
         ("kd", _i64), ("row_pos", _ptr), ("gram_start", _ptr), ("gram_target", _ptr),
+        ("unit", _ptr), *((name, _i64) for name in ("n_unit", "n_unit_pairs", "n_unit_gram")),
+        *((name, _ptr) for name in ("unit_slot", "unit_mat", "unit_pair_vec", "unit_pair_row",
+                                    "unit_pair_slot", "unit_pair_mat", "unit_gram_target",
+                                    "unit_gram_i", "unit_gram_j")),
         *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
                                     "r", "lambda", "qdd", "q_trial", "error_work")),
     ]

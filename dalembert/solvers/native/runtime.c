@@ -54,6 +54,12 @@ typedef struct {
   int64_t kd;
   const int64_t *row_pos;
   const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i */
+  /* the 1 x 1 blocks without internal rows, solved in flat loops (see unit_pass) */
+  const int64_t *unit;        /* n_blocks: 1 for such a block */
+  int64_t n_unit, n_unit_pairs, n_unit_gram;
+  const int64_t *unit_slot, *unit_mat;                      /* n_unit */
+  const int64_t *unit_pair_vec, *unit_pair_row, *unit_pair_slot, *unit_pair_mat;
+  const int64_t *unit_gram_target, *unit_gram_i, *unit_gram_j;  /* n_unit_gram */
   /* work arrays */
   double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
   double *error_work;  /* 4 n */
@@ -290,8 +296,34 @@ static void apply_multipliers(dl_model *md, const double *z, double *rhs, double
   for (int64_t r = 0; r < md->m; ++r) md->r[md->row_pos[r]] = rhs[r];
   band_solve(md->S, md->m, md->kd, md->r);
   for (int64_t r = 0; r < md->m; ++r) rhs[r] = md->r[md->row_pos[r]];
+  for (int64_t k = 0; k < md->n_unit_pairs; ++k)
+    x[md->unit_pair_slot[k]] += z[md->unit_pair_vec[k]] * rhs[md->unit_pair_row[k]];
   for (int64_t b = 0; b < md->n_blocks; ++b)
-    BY_SIZE(block_size(md, b), block_update, md, b, z, rhs, x);
+    if (!md->unit[b]) BY_SIZE(block_size(md, b), block_update, md, b, z, rhs, x);
+}
+
+/* The unit blocks' part of block_pass, in flat loops without per-block branching: the
+ * same operations as factor_block, gram_block and block_residual with nb = 1 (the
+ * block keeps 1 / L), only the order of the sums into S and c differs. */
+static int unit_pass(dl_model *md, double *c) {
+  double *restrict blocks = md->blocks, *restrict u = md->u, *restrict z = md->y;
+  const double *restrict a = md->a;
+  for (int64_t k = 0; k < md->n_unit; ++k) {
+    const double d = blocks[md->unit_mat[k]];
+    if (!(d > 0.0)) return DL_SINGULAR_MASS;
+    const double inv = 1.0 / sqrt(d);
+    blocks[md->unit_mat[k]] = inv;
+    u[md->unit_slot[k]] *= inv;
+  }
+  for (int64_t k = 0; k < md->n_unit_pairs; ++k) {
+    const int64_t v = md->unit_pair_vec[k];
+    z[v] = a[v] * blocks[md->unit_pair_mat[k]];
+  }
+  for (int64_t k = 0; k < md->n_unit_gram; ++k)
+    md->S[md->unit_gram_target[k]] += z[md->unit_gram_i[k]] * z[md->unit_gram_j[k]];
+  for (int64_t k = 0; k < md->n_unit_pairs; ++k)
+    c[md->unit_pair_row[k]] -= z[md->unit_pair_vec[k]] * u[md->unit_pair_slot[k]];
+  return DL_OK;
 }
 
 /* Block b factored, its gram products into S and its part of c - Z^T u. */
@@ -313,13 +345,16 @@ int dl_solve(dl_model *md, double *values, double *qdd, double *lambda) {
   for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
   for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
   memset(md->S, 0, (size_t)(md->m * (md->kd + 1)) * sizeof(double));
+  if (unit_pass(md, c) != DL_OK) return DL_SINGULAR_MASS;
   for (int64_t b = 0; b < md->n_blocks; ++b)
-    if (BY_SIZE(block_size(md, b), block_pass, md, b, c) != DL_OK) return DL_SINGULAR_MASS;
+    if (!md->unit[b] && BY_SIZE(block_size(md, b), block_pass, md, b, c) != DL_OK)
+      return DL_SINGULAR_MASS;
   int status = factor_band(md, NULL);
   if (status != DL_OK) return status;
   apply_multipliers(md, md->y, c, md->u);
+  for (int64_t k = 0; k < md->n_unit; ++k) md->u[md->unit_slot[k]] *= md->blocks[md->unit_mat[k]];
   for (int64_t b = 0; b < md->n_blocks; ++b)
-    BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
+    if (!md->unit[b]) BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
   for (int64_t s = 0; s < md->n; ++s) qdd[md->slot_coord[s]] = md->u[s];
   if (lambda) memcpy(lambda, c, (size_t)md->m * sizeof(double));
   return DL_OK;

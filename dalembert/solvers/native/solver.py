@@ -64,7 +64,9 @@ class NativeSolver:
         model = library.Model(n=n, m=m, nM=nM, nA=nA, n_hol=len(num.holonomic_rows),
                               p=self._array(num.p, np.float64), baumgarte=baumgarte,
                               holonomic=self._array(num.holonomic_rows),
-                              n_blocks=s.n_blocks, n_pairs=len(s.pair_row), kd=s.kd)
+                              n_blocks=s.n_blocks, n_pairs=len(s.pair_row), kd=s.kd,
+                              n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
+                              n_unit_gram=len(s.unit_gram_target))
         for name, h in zip(("kkt", "velocity", "position", "energy"), handles):
             setattr(model, name, library.Function(h.address or None, h.K or None,
                                                   h.index or None, h.target or None, h.size))

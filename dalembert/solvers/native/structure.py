@@ -7,7 +7,9 @@ vector of the block's size. The Schur complement ``S = A Mt^-1 A^T`` couples two
 rows when they meet a common block, so its pattern is known here: the rows are
 put in a bandwidth-reducing order (reverse Cuthill-McKee) and each product
 ``z_i . z_j`` (``z = L^-1 a`` with the block's Cholesky factor ``L``) gets its
-place in the band once.
+place in the band once. The 1 x 1 blocks without a row of their own (particles,
+planar bodies) are common and cheap, so they get flat tables of their own: looping
+over them block by block cost more in branching than in arithmetic.
 
 >>> from dalembert.codegen.compiled import SparsePattern
 >>> pattern = SparsePattern(3, 1, np.arange(3), np.arange(3), np.array([0, 0]),
@@ -54,6 +56,20 @@ class SchurStructure:
     row_pos: np.ndarray       # m: place of each row in the band order
     gram_start: np.ndarray    # n_blocks + 1: block b's products are gram_target[gs[b]:gs[b+1]]
     gram_target: np.ndarray   # band place of each product z_i . z_j of a block's pairs
+    # 1 x 1 blocks without internal rows (a particle's or a planar body's coordinate),
+    # solved in flat loops: the flag per block; per such block its slot and matrix place;
+    # per pair its vector, row, slot and matrix place; per product z_i z_j its band place
+    # and the two vectors
+    unit: np.ndarray
+    unit_slot: np.ndarray
+    unit_mat: np.ndarray
+    unit_pair_vec: np.ndarray
+    unit_pair_row: np.ndarray
+    unit_pair_slot: np.ndarray
+    unit_pair_mat: np.ndarray
+    unit_gram_target: np.ndarray
+    unit_gram_i: np.ndarray
+    unit_gram_j: np.ndarray
     kd: int                   # half bandwidth of S
 
     @property
@@ -99,8 +115,9 @@ def _structure(pattern: SparsePattern) -> SchurStructure:
         raise NotApplicable(f"the constraints couple too widely for a band solve "
                             f"(half bandwidth {kd}, at most {BAND_MAX})")
     gram = _gram(pairs["pair_row"], pairs["block_pairs"], row_pos, kd)
+    unit = _unit_blocks(sizes, block_start, block_mat, pairs, gram)
     return SchurStructure(block_start=block_start, slot_coord=slot_coord, block_mat=block_mat,
-                          M_at=M_at, row_pos=row_pos, kd=kd, **pairs, **gram)
+                          M_at=M_at, row_pos=row_pos, kd=kd, **pairs, **gram, **unit)
 
 
 def _blocks(pattern: SparsePattern) -> tuple[np.ndarray, np.ndarray]:
@@ -134,6 +151,32 @@ def _pairs(pattern: SparsePattern, block: np.ndarray, sizes: np.ndarray,
         "block_pairs": block_pairs.astype(np.int64),
         "internal": (per_row[pair_row] == 1).astype(np.int64),
     }
+
+
+def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarray,
+                 pairs: dict[str, np.ndarray],
+                 gram: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The tables of the flat loops over the 1 x 1 blocks without internal rows: their
+    pairs' vectors are single values, their products ``z_i . z_j`` single products."""
+    pair_block, vec = pairs["pair_block"], pairs["pair_vec"]
+    internal = np.bincount(pair_block, weights=pairs["internal"], minlength=len(sizes)) > 0
+    unit = (sizes == 1) & ~internal
+    pair = np.flatnonzero(unit[pair_block])
+    gram_block = np.repeat(np.arange(len(sizes)), np.diff(gram["gram_start"]))
+    product = np.flatnonzero(unit[gram_block])
+    # a block's k-th product is (i, j), j <= i, row by row: k = i (i + 1) / 2 + j
+    k = product - gram["gram_start"][gram_block[product]]
+    i = ((np.sqrt(8 * k + 1) - 1) // 2).astype(np.int64)
+    first = pairs["block_pairs"][gram_block[product]]
+    tables = {
+        "unit": unit, "unit_slot": block_start[:-1][unit], "unit_mat": block_mat[:-1][unit],
+        "unit_pair_vec": vec[pair], "unit_pair_row": pairs["pair_row"][pair],
+        "unit_pair_slot": block_start[pair_block[pair]],
+        "unit_pair_mat": block_mat[pair_block[pair]],
+        "unit_gram_target": gram["gram_target"][product],
+        "unit_gram_i": vec[first + i], "unit_gram_j": vec[first + k - i * (i + 1) // 2],
+    }
+    return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}
 
 
 def _band_order(m: int, pair_row: np.ndarray, pair_block: np.ndarray) -> tuple[np.ndarray, int]:
