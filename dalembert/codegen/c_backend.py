@@ -28,10 +28,13 @@ and no gain at run time over C.
 Multibody models take another route (:mod:`dalembert.codegen.assembly`): one short
 kernel per kind of body or joint, looped over its instances by a generated
 driver (:func:`scatter_library`). There the code is small whatever the size of
-the mechanism, so it is compiled at ``-O2``: for the 256-link chain the cold
-build takes 0.2-0.4 s longer than at ``-O0`` (1.2 vs 1.0 s spherical, 2.2 vs
-1.75 s revolute) and one evaluation of the KKT blocks is 2.4-2.8x faster (39 vs
-111 us, 58 vs 141 us).
+the mechanism, so it is optimized: for the 256-link chain ``-O2`` made the cold
+build 0.2-0.4 s longer than ``-O0`` (1.2 vs 1.0 s spherical, 2.2 vs 1.75 s
+revolute) and one evaluation of the KKT blocks 2.4-2.8x faster (39 vs 111 us,
+58 vs 141 us). ``-O1`` evaluates as fast as ``-O2`` (3.8 us planar and 5.2-5.8 us
+spherical at ``n = 16``, 15 us planar at 256, from Python) and builds 15-20%
+sooner (planar ``n = 16`` cold 0.18 against 0.22 s, spherical 0.57-0.63 against
+0.70-0.72 s), so ``-O1`` it is.
 
 The library is cached under :func:`cache_dir` (``$DALEMBERT_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/dalembert`` or ``~/.cache/dalembert``) by a hash of the
@@ -68,7 +71,9 @@ FlatSpec = tuple[str, Arguments, Sequence[sp.Expr]]
 GENERATOR_VERSION = "3"
 CFLAGS = ("-O0", "-fPIC", "-shared", "-fno-math-errno")
 #: Kernels of one part (a body, a joint) are short, so optimizing them costs little.
-PART_CFLAGS = ("-O2", *CFLAGS[1:])
+PART_CFLAGS = ("-O1", *CFLAGS[1:])
+#: Hand-written loops (the simulation runtime): compiled once, so fully optimized.
+SOURCE_CFLAGS = ("-O2", *CFLAGS[1:])
 BACKENDS = ("auto", "c", "numpy")
 
 
@@ -181,7 +186,7 @@ def scatter_library(kinds: Sequence[tuple[str, Sequence[FlatSpec]]],
         _scatter_source(kind, specs, gathered) for kind, specs in kinds], PART_CFLAGS)
 
 
-def source_library(source: str, flags: Sequence[str] = PART_CFLAGS) -> ctypes.CDLL:
+def source_library(source: str, flags: Sequence[str] = SOURCE_CFLAGS) -> ctypes.CDLL:
     """Compile hand-written C ``source`` (or load it from the cache, keyed by its text).
 
     Raises :class:`CompileError` when C is unavailable.

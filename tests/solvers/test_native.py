@@ -187,7 +187,7 @@ def test_planar_chain_solve_matches_dense_reference():
     """Planar bodies: all blocks 1 x 1 (flat loops), against the dense KKT solve."""
     mb = chain(5, 1.0, 1.0, 0.05, joint="revolute", planar=True)
     num = mb.system.numeric()
-    q0, qd0 = mb.initial_state()
+    q0, _ = mb.initial_state()
     names = mb.system.coordinate_names
     q = np.array([q0[k] for k in names])
     rng = np.random.default_rng(3)
