@@ -538,14 +538,23 @@ typedef struct {
 } dl_stepper;
 
 /* out = sum_k w[k * stride] K[k] over k < count (rows of K contiguous, zero weights
- * skipped). */
+ * skipped, count <= DL_MAX_ROWS). Each out[i] is summed in a register in the order of
+ * k: one store per entry instead of one load and store per weight. */
+enum { DL_MAX_ROWS = 32 };
 static void weigh(const double *K, const double *w, int64_t stride, int64_t count,
                   int64_t n_state, double *out) {
-  memset(out, 0, (size_t)n_state * sizeof(double));
-  for (int64_t k = 0; k < count; ++k) {
-    const double wk = w[k * stride], *Kk = K + k * n_state;
-    if (wk != 0.0)
-      for (int64_t i = 0; i < n_state; ++i) out[i] += wk * Kk[i];
+  const double *rows[DL_MAX_ROWS];
+  double weights[DL_MAX_ROWS];
+  int64_t used = 0;
+  for (int64_t k = 0; k < count; ++k)
+    if (w[k * stride] != 0.0) {
+      rows[used] = K + k * n_state;
+      weights[used++] = w[k * stride];
+    }
+  for (int64_t i = 0; i < n_state; ++i) {
+    double s = 0.0;
+    for (int64_t k = 0; k < used; ++k) s += weights[k] * rows[k][i];
+    out[i] = s;
   }
 }
 
