@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
+from scipy.integrate._ivp.rk import RungeKutta
 from scipy.optimize import brentq
 
 from ..errors import DalembertError
@@ -322,10 +323,22 @@ class _Run:
 
 
 def _restart_from(solver: OdeSolver, y: np.ndarray) -> None:
-    """Continue the solver from a projected state (the change is at tolerance level)."""
+    """Continue the solver from a projected state (the change is at tolerance level).
+
+    An explicit Runge-Kutta solver is not asked for ``f = [qd, qdd]`` again: ``qd`` is
+    the state's, and ``qdd`` its last stage's, at the end before the projection. That
+    ``qdd`` differs from the one at the projected state by about the projection's
+    change ``d``, the size of the step's local error, and enters the next step
+    multiplied by ``h``: a local error ``O(h d)``, an order above the step's own (the
+    energy error of the benchmark's 16-link chain changes in its fourth digit). One
+    evaluation per step saved: 6% of them with DOP853.
+    """
     solver.y = y.copy()
     if isinstance(solver, BDF):
         solver.D[0] = y
+    elif isinstance(solver, RungeKutta):
+        n = y.size // 2  # y = [q, qd]
+        solver.f = np.concatenate([y[n:], solver.f[n:]])
     elif hasattr(solver, "f"):
         solver.f = solver.fun(solver.t, solver.y)
 

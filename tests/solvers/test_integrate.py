@@ -121,7 +121,8 @@ def test_stabilization_none_projection_baumgarte(pendulum, reference):
     runs = {s: pendulum.simulate((0, 4), q0=Q0, stabilization=s, method="RK45", rtol=1e-6,
                                  atol=1e-8) for s in (None, "projection", "baumgarte")}
     drift = {s: r.position_residual.max() for s, r in runs.items()}
-    assert drift["projection"] < 1e-13 and runs["projection"].velocity_residual.max() < 1e-13
+    # velocities projected with the positions' factor: residual ~ position change x drift
+    assert drift["projection"] < 1e-13 and runs["projection"].velocity_residual.max() < 1e-12
     assert drift[None] > 1e-7  # raw index-1 formulation drifts
     assert drift["baumgarte"] < drift[None] / 10
     for r in runs.values():

@@ -58,7 +58,7 @@ class Run(ctypes.Structure):
                 ("accept_tol", _f64), ("max_steps", _i64), ("max_seconds", _f64),
                 ("capacity", _i64), ("t_out", _ptr), ("y_out", _ptr), ("n_steps", _i64),
                 ("n_out", _i64), ("t_old", _f64),
-                *((name, _ptr) for name in ("y_new", "y_end", "f_end", "rows"))]
+                *((name, _ptr) for name in ("y_new", "y_end", "rows"))]
 
 
 _LOCK = threading.Lock()

@@ -41,17 +41,17 @@ class StretchRunner:
         rows = max(ROWS[0], min(ROWS[1], BUFFER_DOUBLES // n_state))
         self._K, self._y = solver._stages(), np.empty(n_state)
         self._t_out, self._y_out = np.empty(rows), np.empty((rows, n_state))
-        self._work = np.empty((3 + solver._n_rows, n_state))  # y_new, y_end, f_end, rows
+        self._work = np.empty((2 + solver._n_rows, n_state))  # y_new, y_end, rows
         self._t_eval = np.ascontiguousarray([] if t_eval is None else t_eval, dtype=float)
         self._ahead = None if t_eval is None else solver.direction * self._t_eval
         mask, max_newton, max_full, position_tol, accept_tol = native.projection_arguments()
-        y_new, y_end, f_end, interpolant = (row.ctypes.data for row in self._work[:4])
+        y_new, y_end, interpolant = (row.ctypes.data for row in self._work[:3])
         self._run = library.Run(
             t_eval=self._t_eval.ctypes.data, n_eval=-1 if t_eval is None else len(self._t_eval),
             holonomic=mask, max_newton=max_newton, max_full=max_full,
             position_tol=position_tol, accept_tol=accept_tol, max_steps=MAX_STEPS,
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
-            y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end, f_end=f_end,
+            y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
             rows=interpolant)
         self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
                              ctypes.addressof(self._run), self._y.ctypes.data,

@@ -666,7 +666,7 @@ typedef struct {
   double *t_out, *y_out;
   int64_t n_steps, n_out;     /* done by this call */
   double t_old;               /* the start of its last step */
-  double *y_new, *y_end, *f_end;  /* work, n_state each */
+  double *y_new, *y_end;      /* work, n_state each */
   double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
 } dl_run;
 
@@ -731,10 +731,9 @@ static int project(dl_model *md, const dl_run *run, double t, double *y) {
 
 /* One step from (st->t, y, K[0] = f(t, y)), finished as the Python loop finishes it:
  * the end projected into y_end, the outputs in (t_old, t_new] written after row
- * run->n_out (interpolated and projected; the one at t_new is the projected end), f at
- * the projected end into f_end. On DL_OK the outputs are counted (n_out, next_eval)
- * and the caller moves y_end, f_end into y, K[0]; on any other status run is as
- * before and the caller restores st. */
+ * run->n_out (interpolated and projected; the one at t_new is the projected end). On
+ * DL_OK the outputs are counted (n_out, next_eval) and the caller restarts from y_end;
+ * on any other status run is as before and the caller restores st. */
 static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run,
                        const double *y, double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
@@ -765,8 +764,6 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
     interpolate(tb, n_state, t_old, t_new - t_old, y, run->rows, s, row);
     if ((status = project(md, run, s, row)) != DL_OK) return status;
   }
-  ++st->nfev;
-  if ((status = dl_rhs(md, t_new, run->y_end, run->f_end, NULL)) != DL_OK) return status;
   run->next_eval = hi;
   run->n_out += count;
   return DL_OK;
@@ -795,7 +792,10 @@ int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, d
     run->t_old = before.t;
     ++run->n_steps;
     memcpy(y, run->y_end, (size_t)n_state * sizeof(double));
-    memcpy(K, run->f_end, (size_t)n_state * sizeof(double));
+    /* f at the restart, as _restart_from makes it (integrate.py says why): [qd, qdd]
+     * with the projected qd and the last stage's qdd, at the end before the projection */
+    memcpy(K, y + md->n, (size_t)md->n * sizeof(double));
+    memcpy(K + md->n, K + tb->n_stages * n_state + md->n, (size_t)md->n * sizeof(double));
   }
   return DL_OK;
 }
