@@ -12,8 +12,9 @@ import warnings
 import numpy as np
 import pytest
 import scipy.integrate as si
+import sympy as sp
 
-from dalembert import SingularSystemError
+from dalembert import Holonomic, Pfaffian, SingularSystemError, System, coordinates
 from dalembert.codegen.compiled import SparsePattern
 from dalembert.examples import EXAMPLES, load
 from dalembert.multibody import chain
@@ -198,3 +199,50 @@ def test_planar_chain_solve_matches_dense_reference():
         qdd, lam = solver.solve(0.3, qs, qd)
         qdd_ref, lam_ref = solve_kkt(*num.kkt_blocks(0.3, qs, qd))
         assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
+
+
+def block_with_internal_rows():
+    """One 4 x 4 mass block (dense, constant) with three rows inside it (two holonomic,
+    one Pfaffian, eliminated in the block) and a particle tied to it by a fourth row,
+    the only one left in the band; a consistent state."""
+    *b, x = coordinates("b0 b1 b2 b3 x")
+    v = sp.Matrix([c.diff() for c in b])
+    M = sp.Matrix([[4, 1, 0.5, 0], [1, 3, 0.2, 0.1], [0.5, 0.2, 2, 0.3], [0, 0.1, 0.3, 1.5]])
+    system = System(
+        [*b, x], kinetic=(v.T * M * v)[0] / 2 + x.diff() ** 2 / 2,
+        potential=b[0] + b[2] * x / 2,
+        constraints=[Holonomic(sum(c**2 for c in b) - 1, name="unit"),
+                     Holonomic(b[1] - b[2] ** 2 - 0.1, name="cam"),
+                     Pfaffian(b[0].diff() + 2 * b[3].diff() + b[1] * b[2].diff(), name="rate"),
+                     Holonomic(x - b[1] - b[3], name="tie")])
+    q = np.array([0.8, 0.19, 0.3, np.sqrt(1 - 0.64 - 0.19**2 - 0.09), 0.0])
+    q[4] = q[1] + q[3]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report = system.consistent_initial_state(
+            q0=dict(zip(system.coordinate_names, q)),
+            qd0=dict(zip(system.coordinate_names, [0.3, -0.2, 0.1, 0.4, 0.5])))
+    return system.numeric(), report, system.constraint_names
+
+
+def test_rows_inside_a_block_are_eliminated_there():
+    """Several internal rows in one block, eliminated one after the other (a Pfaffian
+    one inactive in the position projection): the same solve, multipliers of every
+    row and projections as the references."""
+    num, report, names = block_with_internal_rows()
+    solver = NativeSolver(num)
+    s = solver.structure
+    tie = names.index("tie")
+    assert s.band_row.tolist() == [tie] and len(s.elim_blocks) == 1
+    block = s.elim_blocks[0]
+    assert s.block_external[block] - s.block_pairs[block] == 3
+    for t, q, qd in states(num, report):
+        qdd, lam = solver.solve(t, q, qd)
+        qdd_ref, lam_ref = solve_kkt(*num.kkt_blocks(t, q, qd))
+        assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
+    python = StepProjector(num)
+    rng = np.random.default_rng(2)
+    y0 = np.concatenate([report.q, report.qd])
+    for _ in range(3):
+        y = y0 + 1e-7 * rng.standard_normal(y0.size)
+        assert np.abs(solver.project(0.0, y) - python(0.0, y)).max() < 1e-12

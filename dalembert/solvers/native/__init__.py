@@ -21,10 +21,12 @@ the mechanism: ``M`` is block diagonal (one block per body), constraint rows
 that lie inside one block (a quaternion's unit norm) are folded into it,
 ``Mt = M_b + w a a^T`` (true at every solution, and it makes a quaternion body's
 block positive definite), each block gets a dense Cholesky factor, and the
-multipliers solve ``A Mt^-1 A^T lambda = c - A Mt^-1 f``, a banded positive
-definite system for chains and trees (band Cholesky in reverse Cuthill-McKee
-order; see :mod:`.structure`). This is Baraff's linear-time multiplier method
-in sparse form. The projections solve ``J J^T`` with the same code.
+multipliers solve ``A Mt^-1 A^T lambda = c - A Mt^-1 f``. The rows inside a
+block couple nothing else, so they are eliminated there (Gaussian pivots on the
+block's part of ``S``); the rest is a banded positive definite system for chains
+and trees (band Cholesky in reverse Cuthill-McKee order; see :mod:`.structure`).
+This is Baraff's linear-time multiplier method in sparse form. The projections
+solve ``J J^T`` with the same code.
 
 :func:`native_solver` says when it applies: C-generated model functions, blocks
 of ``M`` and a band of at most 64, independent constraints, ``M`` positive

@@ -29,14 +29,16 @@ class Model(ctypes.Structure):
         *((name, _ptr) for name in ("block_start", "slot_coord", "block_mat", "M_at")),
         ("n_pairs", _i64),
         *((name, _ptr) for name in ("pair_row", "pair_block", "pair_vec", "A_at", "block_pairs",
-                                    "internal")),
-        ("kd", _i64), ("row_pos", _ptr), ("gram_start", _ptr), ("gram_target", _ptr),
+                                    "block_external", "elim_at")),
+        ("n_elim_blocks", _i64), ("elim_blocks", _ptr), ("m_band", _i64), ("kd", _i64),
+        ("band_row", _ptr), ("gram_start", _ptr), ("gram_target", _ptr),
         ("unit", _ptr), *((name, _i64) for name in ("n_unit", "n_unit_pairs", "n_unit_gram")),
         *((name, _ptr) for name in ("unit_slot", "unit_mat", "unit_pair_vec", "unit_pair_row",
                                     "unit_pair_slot", "unit_pair_mat", "unit_gram_target",
                                     "unit_gram_i", "unit_gram_j")),
         *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
-                                    "r", "lambda", "qdd", "q_trial", "error_work")),
+                                    "r", "lambda", "qdd", "q_trial", "elim", "error_work",
+                                    "active")),
     ]
 
 

@@ -47,13 +47,18 @@ typedef struct {
   /* blocks of M: slots [block_start[b], block_start[b+1]) hold global coordinates */
   int64_t n_blocks;
   const int64_t *block_start, *slot_coord, *block_mat, *M_at;
-  /* (row, block) pairs: the part of a constraint row inside one block, by block */
+  /* (row, block) pairs: the part of a constraint row inside one block, by block; a
+   * block's internal pairs (rows inside it) first: [block_pairs[b], block_external[b]) */
   int64_t n_pairs;
-  const int64_t *pair_row, *pair_block, *pair_vec, *A_at, *block_pairs, *internal;
-  /* Schur complement in band storage, rows in the order row_pos */
-  int64_t kd;
-  const int64_t *row_pos;
-  const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i */
+  const int64_t *pair_row, *pair_block, *pair_vec, *A_at, *block_pairs, *block_external;
+  const int64_t *elim_at;     /* an internal pair's factors in elim (eliminate_internal) */
+  int64_t n_elim_blocks;
+  const int64_t *elim_blocks; /* the blocks with internal pairs */
+  /* Schur complement of the other rows in band storage, band_row[k] at place k */
+  int64_t m_band, kd;
+  const int64_t *band_row;
+  const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i,
+                                             * over its external pairs */
   /* the 1 x 1 blocks without internal rows, solved in flat loops (see unit_pass) */
   const int64_t *unit;        /* n_blocks: 1 for such a block */
   int64_t n_unit, n_unit_pairs, n_unit_gram;
@@ -62,7 +67,8 @@ typedef struct {
   const int64_t *unit_gram_target, *unit_gram_i, *unit_gram_j;  /* n_unit_gram */
   /* work arrays */
   double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
-  double *error_work;  /* 4 n */
+  double *elim, *error_work;  /* error_work: 4 n */
+  const unsigned char *active;  /* the rows S was last factored with (NULL: all) */
 } dl_model;
 
 static void eval_state(const dl_function *F, double t, const double *q, const double *qd,
@@ -211,8 +217,7 @@ DL_INLINE int factor_block(dl_model *md, int64_t b, const double *c, int64_t nb)
   double trace = 0.0;
   for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
   const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
-  for (int64_t p = p0; p < p1; ++p) {
-    if (!md->internal[p]) continue;
+  for (int64_t p = p0; p < md->block_external[b]; ++p) {
     const double *restrict a = md->a + md->pair_vec[p];
     const double norm2 = dot(a, a, nb);
     if (norm2 == 0.0) continue;
@@ -232,11 +237,81 @@ DL_INLINE int factor_block(dl_model *md, int64_t b, const double *c, int64_t nb)
   return DL_OK;
 }
 
-/* S += Z_b^T Z_b over the active rows (all when active is NULL); block b's pair vectors
- * z are contiguous, nb values each. */
+DL_INLINE int is_active(const unsigned char *active, const dl_model *md, int64_t p) {
+  return !active || active[md->pair_row[p]];
+}
+
+/* Block b's internal rows (its first pairs; the active ones) eliminated from S, one
+ * Gaussian pivot after the other: each later pair of the block loses its part along
+ * the pivot (z_p -= alpha z_i, alpha = z_i.z_p / z_i.z_i), so that Z^T Z over the
+ * block's external pairs is S with the pivots eliminated. elim keeps, per pivot,
+ * 1 / z_i.z_i and the alphas (for eliminate_rhs and recover_internal). */
+DL_INLINE int eliminate_internal(dl_model *md, int64_t b, double *z,
+                                 const unsigned char *active, int64_t nb) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  const int several = pe - p0 > 1;
+  if (several)  /* the pivots' scales, before any elimination (one pivot: its own) */
+    for (int64_t i = p0; i < pe; ++i)
+      if (is_active(active, md, i))
+        md->elim[md->elim_at[i]] = dot(z + md->pair_vec[i], z + md->pair_vec[i], nb);
+  for (int64_t i = p0; i < pe; ++i) {
+    if (!is_active(active, md, i)) continue;
+    const double *restrict zi = z + md->pair_vec[i];
+    double *restrict e = md->elim + md->elim_at[i];
+    const double s = dot(zi, zi, nb);
+    if (!(s > 1e-14 * (several ? e[0] : s))) return DL_SINGULAR_CONSTRAINTS;  /* dependent */
+    e[0] = 1.0 / s;
+    for (int64_t p = i + 1; p < p1; ++p) {
+      if (!is_active(active, md, p)) continue;
+      double *restrict zp = z + md->pair_vec[p];
+      const double alpha = dot(zi, zp, nb) * e[0];
+      e[p - i] = alpha;
+      for (int64_t k = 0; k < nb; ++k) zp[k] -= alpha * zi[k];
+    }
+  }
+  return DL_OK;
+}
+
+/* The right-hand side through block b's pivots (as eliminate_internal left them): per
+ * pivot i, c_p -= alpha c_i for the later rows and u_b += beta z_i, beta = (c_i - z_i.u_b)
+ * / z_i.z_i, kept in c_i for recover_internal. Then S lam = c - Z^T u over the external
+ * rows, and u + Z lam over the external pairs is the block's solution (u by slot). */
+DL_INLINE void eliminate_rhs(const dl_model *md, int64_t b, const double *z,
+                             const unsigned char *active, double *c, double *u, int64_t nb) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  double *restrict ub = u + md->block_start[b];
+  for (int64_t i = p0; i < pe; ++i) {
+    if (!is_active(active, md, i)) continue;
+    const double *restrict zi = z + md->pair_vec[i], *restrict e = md->elim + md->elim_at[i];
+    const double ci = c[md->pair_row[i]];
+    for (int64_t p = i + 1; p < p1; ++p)
+      if (is_active(active, md, p)) c[md->pair_row[p]] -= e[p - i] * ci;
+    const double beta = (ci - dot(zi, ub, nb)) * e[0];
+    for (int64_t k = 0; k < nb; ++k) ub[k] += beta * zi[k];
+    c[md->pair_row[i]] = beta;
+  }
+}
+
+/* The multipliers of block b's internal rows from the others', last pivot first:
+ * lam_i = beta_i - sum over the later rows of alpha lam_p. */
+static void recover_internal(const dl_model *md, int64_t b, const unsigned char *active,
+                             double *lam) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  for (int64_t i = pe - 1; i >= p0; --i) {
+    if (!is_active(active, md, i)) continue;
+    const double *e = md->elim + md->elim_at[i];
+    double l = lam[md->pair_row[i]];
+    for (int64_t p = i + 1; p < p1; ++p)
+      if (is_active(active, md, p)) l -= e[p - i] * lam[md->pair_row[p]];
+    lam[md->pair_row[i]] = l;
+  }
+}
+
+/* S += Z_b^T Z_b over the block's external pairs and the active rows (all when active is
+ * NULL); block b's pair vectors z are contiguous, nb values each. */
 DL_INLINE void gram_block(const dl_model *md, int64_t b, const double *z,
                           const unsigned char *active, double *S, int64_t nb) {
-  const int64_t p0 = md->block_pairs[b], pb = md->block_pairs[b + 1] - p0;
+  const int64_t p0 = md->block_external[b], pb = md->block_pairs[b + 1] - p0;
   const double *restrict zb = z + md->pair_vec[p0];
   const int64_t *restrict target = md->gram_target + md->gram_start[b];
   if (active) {
@@ -250,19 +325,19 @@ DL_INLINE void gram_block(const dl_model *md, int64_t b, const double *z,
   }
 }
 
-/* rhs[r] -= z_p . x_b over block b's pairs (x by slot). */
+/* rhs[r] -= z_p . x_b over block b's external pairs (x by slot). */
 DL_INLINE void block_residual(const dl_model *md, int64_t b, const double *z, const double *x,
                               double *rhs, int64_t nb) {
   const double *restrict xb = x + md->block_start[b];
-  for (int64_t p = md->block_pairs[b]; p < md->block_pairs[b + 1]; ++p)
+  for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p)
     rhs[md->pair_row[p]] -= dot(z + md->pair_vec[p], xb, nb);
 }
 
-/* x_b += Z_b lam (x by slot, lam by row). */
+/* x_b += Z_b lam over block b's external pairs (x by slot, lam by row). */
 DL_INLINE void block_update(const dl_model *md, int64_t b, const double *z, const double *lam,
                             double *x, int64_t nb) {
   double *restrict xb = x + md->block_start[b];
-  for (int64_t p = md->block_pairs[b]; p < md->block_pairs[b + 1]; ++p) {
+  for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p) {
     const double l = lam[md->pair_row[p]];
     const double *restrict zp = z + md->pair_vec[p];
     for (int64_t i = 0; i < nb; ++i) xb[i] += zp[i] * l;
@@ -276,30 +351,51 @@ DL_INLINE void block_backward(const dl_model *md, int64_t b, double *x, int64_t 
 
 /* The rows the gram products leave out get a unit diagonal; S factored. */
 static int factor_band(dl_model *md, const unsigned char *active) {
+  const int64_t w = md->kd + 1;
   if (active)
-    for (int64_t r = 0; r < md->m; ++r)
-      if (!active[r]) md->S[md->row_pos[r] * (md->kd + 1)] = 1.0;
-  return md->m ? band_cholesky(md->S, md->m, md->kd) : DL_OK;
+    for (int64_t k = 0; k < md->m_band; ++k)
+      if (!active[md->band_row[k]]) md->S[k * w] = 1.0;
+  return md->m_band ? band_cholesky(md->S, md->m_band, md->kd) : DL_OK;
 }
 
-/* S = sum over blocks of Z_b^T Z_b over the active rows (others get a unit diagonal),
- * factored. */
-static int factor_schur(dl_model *md, const double *z, const unsigned char *active) {
-  memset(md->S, 0, (size_t)(md->m * (md->kd + 1)) * sizeof(double));
+/* With M = I (the projections): z = a, copied (the elimination changes it), the internal
+ * rows eliminated, S = Z^T Z over the active rows (others get a unit diagonal), factored. */
+static int factor_schur(dl_model *md, const unsigned char *active) {
+  double *z = md->y;
+  memcpy(z, md->a, (size_t)md->pair_vec[md->n_pairs] * sizeof(double));
+  md->active = active;
+  for (int64_t k = 0; k < md->n_elim_blocks; ++k) {
+    const int64_t b = md->elim_blocks[k];
+    if (BY_SIZE(block_size(md, b), eliminate_internal, md, b, z, active) != DL_OK)
+      return DL_SINGULAR_CONSTRAINTS;
+  }
+  memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
   for (int64_t b = 0; b < md->n_blocks; ++b)
     BY_SIZE(block_size(md, b), gram_block, md, b, z, active, md->S);
   return factor_band(md, active);
 }
 
-/* lam = S^-1 rhs (rhs by row, overwritten by lam), then x += Z lam (x by slot). */
+/* lam = S^-1 rhs over the band's rows (rhs by row, overwritten by lam), then
+ * x += Z lam over the external pairs (x by slot). */
 static void apply_multipliers(dl_model *md, const double *z, double *rhs, double *x) {
-  for (int64_t r = 0; r < md->m; ++r) md->r[md->row_pos[r]] = rhs[r];
-  band_solve(md->S, md->m, md->kd, md->r);
-  for (int64_t r = 0; r < md->m; ++r) rhs[r] = md->r[md->row_pos[r]];
+  for (int64_t k = 0; k < md->m_band; ++k) md->r[k] = rhs[md->band_row[k]];
+  band_solve(md->S, md->m_band, md->kd, md->r);
+  for (int64_t k = 0; k < md->m_band; ++k) rhs[md->band_row[k]] = md->r[k];
   for (int64_t k = 0; k < md->n_unit_pairs; ++k)
     x[md->unit_pair_slot[k]] += z[md->unit_pair_vec[k]] * rhs[md->unit_pair_row[k]];
   for (int64_t b = 0; b < md->n_blocks; ++b)
     if (!md->unit[b]) BY_SIZE(block_size(md, b), block_update, md, b, z, rhs, x);
+}
+
+/* With M = I: x = Z lam for the multipliers of rhs (by row, overwritten), from the
+ * factor of factor_schur. */
+static void solve_schur(dl_model *md, double *rhs, double *x) {
+  memset(x, 0, (size_t)md->n * sizeof(double));
+  for (int64_t k = 0; k < md->n_elim_blocks; ++k) {
+    const int64_t b = md->elim_blocks[k];
+    BY_SIZE(block_size(md, b), eliminate_rhs, md, b, md->y, md->active, rhs, x);
+  }
+  apply_multipliers(md, md->y, rhs, x);
 }
 
 /* The unit blocks' part of block_pass, in flat loops without per-block branching: the
@@ -326,9 +422,14 @@ static int unit_pass(dl_model *md, double *c) {
   return DL_OK;
 }
 
-/* Block b factored, its gram products into S and its part of c - Z^T u. */
+/* Block b factored, its internal rows eliminated, its gram products into S and its
+ * part of c - Z^T u. */
 DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
   if (factor_block(md, b, c, nb) != DL_OK) return DL_SINGULAR_MASS;
+  if (md->block_external[b] > md->block_pairs[b]) {
+    if (eliminate_internal(md, b, md->y, NULL, nb) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+    eliminate_rhs(md, b, md->y, NULL, c, md->u, nb);
+  }
   gram_block(md, b, md->y, NULL, md->S, nb);
   block_residual(md, b, md->y, md->u, c, nb);
   return DL_OK;
@@ -336,7 +437,8 @@ DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
 
 /* qdd and lambda from the KKT values [M values, f, A values, c] (c modified in place):
  * S lam = c - Z^T u with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). One
- * pass over the blocks factors them and builds S and the right-hand side. */
+ * pass over the blocks factors them, eliminates their internal rows and builds S and
+ * the right-hand side. */
 int dl_solve(dl_model *md, double *values, double *qdd, double *lambda) {
   const double *Mv = values, *f = values + md->nM, *Av = f + md->n;
   double *c = (double *)Av + md->nA;
@@ -344,14 +446,17 @@ int dl_solve(dl_model *md, double *values, double *qdd, double *lambda) {
   memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
   for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
   for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
-  memset(md->S, 0, (size_t)(md->m * (md->kd + 1)) * sizeof(double));
+  memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
   if (unit_pass(md, c) != DL_OK) return DL_SINGULAR_MASS;
+  int status;
   for (int64_t b = 0; b < md->n_blocks; ++b)
-    if (!md->unit[b] && BY_SIZE(block_size(md, b), block_pass, md, b, c) != DL_OK)
-      return DL_SINGULAR_MASS;
-  int status = factor_band(md, NULL);
-  if (status != DL_OK) return status;
+    if (!md->unit[b] && (status = BY_SIZE(block_size(md, b), block_pass, md, b, c)) != DL_OK)
+      return status;
+  if ((status = factor_band(md, NULL)) != DL_OK) return status;
   apply_multipliers(md, md->y, c, md->u);
+  if (lambda)
+    for (int64_t k = 0; k < md->n_elim_blocks; ++k)
+      recover_internal(md, md->elim_blocks[k], NULL, c);
   for (int64_t k = 0; k < md->n_unit; ++k) md->u[md->unit_slot[k]] *= md->blocks[md->unit_mat[k]];
   for (int64_t b = 0; b < md->n_blocks; ++b)
     if (!md->unit[b]) BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
@@ -408,7 +513,7 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
     const double *lam = lambda + i * m;
     memset(F, 0, (size_t)n * sizeof(double));
     eval_static(&md->velocity, t, q, md->p, md->vel_values);
-    double *vres = md->r;  /* A qd + b by row */
+    double *vres = md->lambda;  /* A qd + b by row */
     for (int64_t r = 0; r < m; ++r) vres[r] = md->vel_values[md->nA + r];
     add_A_times(md, qd, 1.0, vres);
     for (int64_t p = 0; p < md->n_pairs; ++p) {  /* F = A^T lam */
@@ -428,8 +533,7 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
 static void position_step(dl_model *md, const double *psi, double *dq) {
   memset(md->lambda, 0, (size_t)md->m * sizeof(double));
   for (int64_t k = 0; k < md->n_hol; ++k) md->lambda[md->holonomic[k]] = -psi[k];
-  memset(md->u, 0, (size_t)md->n * sizeof(double));
-  apply_multipliers(md, md->a, md->lambda, md->u);
+  solve_schur(md, md->lambda, md->u);
   for (int64_t s = 0; s < md->n; ++s) dq[md->slot_coord[s]] = md->u[s];
 }
 
@@ -438,7 +542,7 @@ static int factor_positions(dl_model *md, double t, const double *q,
                             const unsigned char *holonomic) {
   eval_static(&md->velocity, t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
-  return factor_schur(md, md->a, holonomic) == DL_OK ? DL_OK : DL_PROJECTION;
+  return factor_schur(md, holonomic) == DL_OK ? DL_OK : DL_PROJECTION;
 }
 
 /* Newton on psi(q, t) = 0, as StepProjector.positions: simplified (one factorization)
@@ -486,13 +590,12 @@ static int project_velocities(dl_model *md, double t, const double *q, double *q
                               int refactor) {
   eval_static(&md->velocity, t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
-  if (refactor && factor_schur(md, md->a, NULL) != DL_OK) return DL_PROJECTION;
+  if (refactor && factor_schur(md, NULL) != DL_OK) return DL_PROJECTION;
   const double *b = md->vel_values + md->nA;
   /* lambda = -(A qd + b): the residual, by row */
   for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = -b[r];
   add_A_times(md, qd, -1.0, md->lambda);
-  memset(md->u, 0, (size_t)md->n * sizeof(double));
-  apply_multipliers(md, md->a, md->lambda, md->u);
+  solve_schur(md, md->lambda, md->u);
   for (int64_t s = 0; s < md->n; ++s) qd[md->slot_coord[s]] += md->u[s];
   return DL_OK;
 }

@@ -65,6 +65,7 @@ class NativeSolver:
                               p=self._array(num.p, np.float64), baumgarte=baumgarte,
                               holonomic=self._array(num.holonomic_rows),
                               n_blocks=s.n_blocks, n_pairs=len(s.pair_row), kd=s.kd,
+                              n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
                               n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
                               n_unit_gram=len(s.unit_gram_target))
         for name, h in zip(("kkt", "velocity", "position", "energy"), handles):
@@ -75,8 +76,8 @@ class NativeSolver:
         vectors = int(s.pair_vec[-1])
         sizes = {"values": nM + n + nA + m, "vel_values": nA + m, "psi": len(num.holonomic_rows),
                  "blocks": s.block_mat[-1], "a": vectors, "y": vectors, "u": n,
-                 "S": m * (s.kd + 1), "r": m, "lambda": m, "qdd": n, "q_trial": n,
-                 "error_work": 4 * n}
+                 "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
+                 "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
         return model

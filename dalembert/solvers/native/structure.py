@@ -7,7 +7,11 @@ vector of the block's size. The Schur complement ``S = A Mt^-1 A^T`` couples two
 rows when they meet a common block, so its pattern is known here: the rows are
 put in a bandwidth-reducing order (reverse Cuthill-McKee) and each product
 ``z_i . z_j`` (``z = L^-1 a`` with the block's Cholesky factor ``L``) gets its
-place in the band once. The 1 x 1 blocks without a row of their own (particles,
+place in the band once. A row inside one block (*internal*: a quaternion's unit
+norm) couples nothing outside it, so it is eliminated inside its block, before
+the band is made: its pairs come first in their block, and the band holds only
+the other rows (a chain of quaternion links: 3 rows per link instead of 4). The
+1 x 1 blocks without a row of their own (particles,
 planar bodies) are common and cheap, so they get flat tables of their own: looping
 over them block by block cost more in branching than in arithmetic.
 
@@ -52,8 +56,11 @@ class SchurStructure:
     pair_vec: np.ndarray      # n_pairs + 1: offset of each pair's vector
     A_at: np.ndarray          # nA: place of each A value in the pair vectors
     block_pairs: np.ndarray   # n_blocks + 1: block b's pairs are bp[b]..bp[b+1]-1
-    internal: np.ndarray      # n_pairs: 1 when the row meets no other block
-    row_pos: np.ndarray       # m: place of each row in the band order
+    block_external: np.ndarray  # n_blocks: block b's internal pairs are bp[b]..be[b]-1
+    elim_at: np.ndarray       # n_pairs + 1: an internal pair's elimination factors
+    elim_blocks: np.ndarray   # the blocks with internal pairs
+    row_pos: np.ndarray       # m: place of each row in the band order (-1: internal)
+    band_row: np.ndarray      # the row at each place of the band
     gram_start: np.ndarray    # n_blocks + 1: block b's products are gram_target[gs[b]:gs[b+1]]
     gram_target: np.ndarray   # band place of each product z_i . z_j of a block's pairs
     # 1 x 1 blocks without internal rows (a particle's or a planar body's coordinate),
@@ -77,7 +84,9 @@ class SchurStructure:
         return len(self.block_start) - 1
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "kd"}
+        """The tables ``runtime.c`` reads (``row_pos`` is folded into the others)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if f.name not in ("kd", "row_pos")}
 
 
 def schur_structure(pattern: SparsePattern) -> SchurStructure:
@@ -110,14 +119,15 @@ def _structure(pattern: SparsePattern) -> SchurStructure:
     rows, cols = pattern.M_rows, pattern.M_cols
     M_at = block_mat[block[rows]] + local[rows] * sizes[block[rows]] + local[cols]
     pairs = _pairs(pattern, block, sizes, local)
-    row_pos, kd = _band_order(pattern.m, pairs["pair_row"], pairs["pair_block"])
+    row_pos, band_row, kd = _band_order(pattern.m, pairs, _external(pairs))
     if kd > BAND_MAX:
         raise NotApplicable(f"the constraints couple too widely for a band solve "
                             f"(half bandwidth {kd}, at most {BAND_MAX})")
-    gram = _gram(pairs["pair_row"], pairs["block_pairs"], row_pos, kd)
+    gram = _gram(pairs["pair_row"], pairs["block_external"], pairs["block_pairs"], row_pos, kd)
     unit = _unit_blocks(sizes, block_start, block_mat, pairs, gram)
     return SchurStructure(block_start=block_start, slot_coord=slot_coord, block_mat=block_mat,
-                          M_at=M_at, row_pos=row_pos, kd=kd, **pairs, **gram, **unit)
+                          M_at=M_at, row_pos=row_pos, band_row=band_row, kd=kd, **pairs,
+                          **gram, **unit)
 
 
 def _blocks(pattern: SparsePattern) -> tuple[np.ndarray, np.ndarray]:
@@ -141,16 +151,31 @@ def _pairs(pattern: SparsePattern, block: np.ndarray, sizes: np.ndarray,
     keys = entry_block * m + pattern.A_rows
     unique, entry_pair = np.unique(keys, return_inverse=True)
     pair_block, pair_row = unique // m, unique % m
+    internal = np.bincount(pair_row, minlength=pattern.m)[pair_row] == 1
+    # block by block, the internal pairs first (the pivots eliminated first), by row
+    order = np.lexsort((pair_row, ~internal, pair_block))
+    place = np.empty_like(order)
+    place[order] = np.arange(len(order))
+    pair_block, pair_row, internal = pair_block[order], pair_row[order], internal[order]
     pair_vec = np.concatenate([[0], np.cumsum(sizes[pair_block])])
     block_pairs = np.searchsorted(pair_block, np.arange(len(sizes) + 1))
-    per_row = np.bincount(pair_row, minlength=pattern.m)
-    return {
-        "pair_row": pair_row.astype(np.int64), "pair_block": pair_block.astype(np.int64),
-        "pair_vec": pair_vec.astype(np.int64),
-        "A_at": (pair_vec[entry_pair.reshape(-1)] + local[pattern.A_cols]).astype(np.int64),
-        "block_pairs": block_pairs.astype(np.int64),
-        "internal": (per_row[pair_row] == 1).astype(np.int64),
+    n_internal = np.bincount(pair_block, weights=internal, minlength=len(sizes)).astype(int)
+    # an internal pair's factors: 1 / z_i.z_i, then one alpha per later pair of its block
+    later = block_pairs[pair_block + 1] - np.arange(len(pair_row)) - 1
+    elim_at = np.concatenate([[0], np.cumsum(np.where(internal, 1 + later, 0))])
+    tables = {
+        "pair_row": pair_row, "pair_block": pair_block, "pair_vec": pair_vec,
+        "A_at": pair_vec[place[entry_pair.reshape(-1)]] + local[pattern.A_cols],
+        "block_pairs": block_pairs, "block_external": block_pairs[:-1] + n_internal,
+        "elim_at": elim_at, "elim_blocks": np.flatnonzero(n_internal),
     }
+    return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}
+
+
+def _external(pairs: dict[str, np.ndarray]) -> np.ndarray:
+    """Mask of the pairs that are not internal (their rows stay in the band)."""
+    first = pairs["block_external"][pairs["pair_block"]]
+    return np.arange(len(pairs["pair_row"])) >= first
 
 
 def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarray,
@@ -159,15 +184,14 @@ def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarr
     """The tables of the flat loops over the 1 x 1 blocks without internal rows: their
     pairs' vectors are single values, their products ``z_i . z_j`` single products."""
     pair_block, vec = pairs["pair_block"], pairs["pair_vec"]
-    internal = np.bincount(pair_block, weights=pairs["internal"], minlength=len(sizes)) > 0
-    unit = (sizes == 1) & ~internal
+    unit = (sizes == 1) & (pairs["block_external"] == pairs["block_pairs"][:-1])
     pair = np.flatnonzero(unit[pair_block])
     gram_block = np.repeat(np.arange(len(sizes)), np.diff(gram["gram_start"]))
     product = np.flatnonzero(unit[gram_block])
     # a block's k-th product is (i, j), j <= i, row by row: k = i (i + 1) / 2 + j
     k = product - gram["gram_start"][gram_block[product]]
     i = ((np.sqrt(8 * k + 1) - 1) // 2).astype(np.int64)
-    first = pairs["block_pairs"][gram_block[product]]
+    first = pairs["block_external"][gram_block[product]]
     tables = {
         "unit": unit, "unit_slot": block_start[:-1][unit], "unit_mat": block_mat[:-1][unit],
         "unit_pair_vec": vec[pair], "unit_pair_row": pairs["pair_row"][pair],
@@ -179,34 +203,45 @@ def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarr
     return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}
 
 
-def _band_order(m: int, pair_row: np.ndarray, pair_block: np.ndarray) -> tuple[np.ndarray, int]:
-    """Rows in reverse Cuthill-McKee order of ``S``'s pattern, and its half bandwidth."""
-    if m == 0:
-        return np.zeros(0, dtype=np.int64), 0
-    incidence = sps.csr_matrix((np.ones(len(pair_row)), (pair_row, pair_block)),
-                               shape=(m, int(pair_block.max(initial=0)) + 1))
-    coupling = (incidence @ incidence.T).tocsr()
-    order = reverse_cuthill_mckee(coupling, symmetric_mode=True)
-    row_pos = np.empty(m, dtype=np.int64)
-    row_pos[order] = np.arange(m)
-    coo = coupling.tocoo()
-    kd = int(np.abs(row_pos[coo.row] - row_pos[coo.col]).max(initial=0))
-    return row_pos, kd
+def _band_order(m: int, pairs: dict[str, np.ndarray],
+                external: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The band's rows (all but the internal ones; a row without pairs stays, and makes
+    ``S`` singular, as it should) in reverse Cuthill-McKee order of ``S``'s pattern:
+    each row's place (-1 for an internal row), the row at each place, the half
+    bandwidth."""
+    row_pos = np.full(m, -1, dtype=np.int64)
+    in_band = np.ones(m, dtype=bool)
+    in_band[pairs["pair_row"][~external]] = False
+    kept = np.flatnonzero(in_band)
+    if len(kept) == 0:
+        return row_pos, kept.astype(np.int64), 0
+    row_pos[kept] = np.arange(len(kept))  # for now: the place among the kept rows
+    rows, blocks = row_pos[pairs["pair_row"][external]], pairs["pair_block"][external]
+    incidence = sps.csr_matrix((np.ones(len(rows)), (rows, blocks)),
+                               shape=(len(kept), int(blocks.max(initial=0)) + 1))
+    coupling = (incidence @ incidence.T).tocoo()
+    order = reverse_cuthill_mckee(coupling.tocsr(), symmetric_mode=True)
+    place = np.empty(len(kept), dtype=np.int64)
+    place[order] = np.arange(len(kept))
+    row_pos[kept] = place
+    kd = int(np.abs(place[coupling.row] - place[coupling.col]).max(initial=0))
+    return row_pos, kept[order].astype(np.int64), kd
 
 
-def _gram(pair_row: np.ndarray, block_pairs: np.ndarray, row_pos: np.ndarray,
-          kd: int) -> dict[str, np.ndarray]:
-    """Per block, the band place of each product ``z_i . z_j`` (``j <= i``) of its pairs,
-    block after block, ``i`` then ``j`` (the order ``runtime.c`` walks them)."""
-    counts = np.diff(block_pairs)
+def _gram(pair_row: np.ndarray, first: np.ndarray, block_pairs: np.ndarray,
+          row_pos: np.ndarray, kd: int) -> dict[str, np.ndarray]:
+    """Per block, the band place of each product ``z_i . z_j`` (``j <= i``) of its
+    external pairs (``first[b]`` on), block after block, ``i`` then ``j`` (the order
+    ``runtime.c`` walks them)."""
+    counts = block_pairs[1:] - first
     sizes = counts * (counts + 1) // 2
     gram_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     target = np.zeros(gram_start[-1], dtype=np.int64)
     for size in np.unique(counts[counts > 0]):
         blocks = np.flatnonzero(counts == size)
         i, j = np.tril_indices(size)
-        pi = row_pos[pair_row[block_pairs[blocks][:, None] + i]]
-        pj = row_pos[pair_row[block_pairs[blocks][:, None] + j]]
+        pi = row_pos[pair_row[first[blocks][:, None] + i]]
+        pj = row_pos[pair_row[first[blocks][:, None] + j]]
         hi, lo = np.maximum(pi, pj), np.minimum(pi, pj)
         target[gram_start[blocks][:, None] + np.arange(len(i))] = hi * (kd + 1) + (hi - lo)
     return {"gram_start": gram_start, "gram_target": target}
