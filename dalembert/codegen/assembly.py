@@ -206,7 +206,7 @@ class _CEvaluator:
         self._lock = threading.Lock()
         #: For C loops (:mod:`dalembert.solvers.native`); the tables live as long as self.
         self.native = c_backend.NativeHandle(ctypes.cast(cfun, ctypes.c_void_p).value,
-                                             *self._args[:3], size)
+                                             *self._args[:3], size, tuple(self._tables[G:]))
 
     def __call__(self, time, q, *rest):
         with self._lock:

@@ -54,7 +54,7 @@ import subprocess
 import tempfile
 import warnings
 from collections.abc import Callable, Collection, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -383,10 +383,12 @@ def _bind(lib: ctypes.CDLL, name: str, arguments: Arguments, size: int) -> Calla
 class NativeHandle:
     """A generated function as C code calls it: a flat ``fn(t, q, [qd,] p, out)`` (the
     tables are 0) or a scatter driver ``fn(K, index, target, t, q, [qd,] p, out)``
-    that adds into ``out``; ``size`` outputs."""
+    that adds into ``out``; ``size`` outputs. A driver's ``targets`` (per group, the
+    place in ``out`` of each output) let a caller make one that writes elsewhere."""
 
     address: int
     K: int
     index: int
     target: int
     size: int
+    targets: tuple[np.ndarray, ...] = field(default=(), compare=False, repr=False)

@@ -39,6 +39,7 @@ class Model(ctypes.Structure):
         *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
                                     "r", "lambda", "qdd", "q_trial", "elim", "error_work",
                                     "active")),
+        ("kkt_in_layout", _i64), ("c", _ptr),
     ]
 
 
@@ -98,7 +99,6 @@ def _runtime() -> ctypes.CDLL:
     source = (Path(__file__).with_name("runtime.c")).read_text()
     lib = c_backend.source_library(source)
     signatures = {
-        "dl_solve": [_ptr] * 4,
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
         "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
         "dl_rk_step": [_ptr] * 7,

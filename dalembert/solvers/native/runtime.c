@@ -69,6 +69,10 @@ typedef struct {
   double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
   double *elim, *error_work;  /* error_work: 4 n */
   const unsigned char *active;  /* the rows S was last factored with (NULL: all) */
+  /* kkt_in_layout: the kkt function writes straight into blocks (M), u (f by slot), a
+   * (A) and c, all inside values; else values is [M, f, A, c] and load_kkt moves them */
+  int64_t kkt_in_layout;
+  double *c;                  /* the KKT right-hand side (in values) */
 } dl_model;
 
 static void eval_state(const dl_function *F, double t, const double *q, const double *qd,
@@ -435,17 +439,27 @@ DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
   return DL_OK;
 }
 
-/* qdd and lambda from the KKT values [M values, f, A values, c] (c modified in place):
- * S lam = c - Z^T u with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). One
- * pass over the blocks factors them, eliminates their internal rows and builds S and
- * the right-hand side. */
-int dl_solve(dl_model *md, double *values, double *qdd, double *lambda) {
-  const double *Mv = values, *f = values + md->nM, *Av = f + md->n;
-  double *c = (double *)Av + md->nA;
-  load_pairs(md, Av);
+/* The KKT values [M values, f, A values, c] of a flat kkt function into the solve's
+ * layout (c stays where it is). */
+static void load_kkt(dl_model *md) {
+  const double *Mv = md->values, *f = Mv + md->nM;
+  load_pairs(md, f + md->n);
   memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
   for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
   for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
+}
+
+/* The KKT values at (t, q, qd), in the solve's layout. */
+static void eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
+  eval_state(&md->kkt, t, q, qd, md->p, md->values);
+  if (!md->kkt_in_layout) load_kkt(md);
+}
+
+/* qdd and lambda from the KKT values (eval_kkt; c modified in place): S lam = c - Z^T u
+ * with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). One pass over the blocks
+ * factors them, eliminates their internal rows and builds S and the right-hand side. */
+static int dl_solve(dl_model *md, double *qdd, double *lambda) {
+  double *c = md->c;
   memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
   if (unit_pass(md, c) != DL_OK) return DL_SINGULAR_MASS;
   int status;
@@ -479,14 +493,10 @@ static void baumgarte(dl_model *md, double t, const double *q, const double *qd,
 /* y' = [qd, qdd] at (t, y); lambda may be NULL. */
 int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda) {
   const int64_t n = md->n;
-  eval_state(&md->kkt, t, y, y + n, md->p, md->values);
-  if (md->baumgarte != 0.0 && md->m) {
-    double *c = md->values + md->nM + n + md->nA;
-    load_pairs(md, md->values + md->nM + n);
-    baumgarte(md, t, y, y + n, c);
-  }
+  eval_kkt(md, t, y, y + n);
+  if (md->baumgarte != 0.0 && md->m) baumgarte(md, t, y, y + n, md->c);
   memcpy(ydot, y + n, (size_t)n * sizeof(double));
-  return dl_solve(md, md->values, ydot + n, lambda);
+  return dl_solve(md, ydot + n, lambda);
 }
 
 /* ---- projection onto the constraints (minimum-norm changes) ---------------------- */
@@ -506,8 +516,8 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
   const int64_t n = md->n, m = md->m;
   for (int64_t i = 0; i < k; ++i) {
     const double t = times[i], *q = Y + i * 2 * n, *qd = q + n;
-    eval_state(&md->kkt, t, q, qd, md->p, md->values);
-    const int status = dl_solve(md, md->values, qdd + i * n, lambda + i * m);
+    eval_kkt(md, t, q, qd);
+    const int status = dl_solve(md, qdd + i * n, lambda + i * m);
     if (status != DL_OK) return status;
     double *F = force + i * n;
     const double *lam = lambda + i * m;

@@ -13,6 +13,7 @@ from ..sparse_kkt import SINGULAR_MESSAGE
 from . import library
 from .structure import NotApplicable, schur_structure
 
+DOUBLE = np.dtype(np.float64).itemsize  # bytes, for addresses inside a buffer
 _MESSAGES = {
     library.SINGULAR_MASS: "a block of the mass matrix is singular even with the constraints "
                            "inside it folded in",
@@ -68,19 +69,52 @@ class NativeSolver:
                               n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
                               n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
                               n_unit_gram=len(s.unit_gram_target))
-        for name, h in zip(("kkt", "velocity", "position", "energy"), handles):
-            setattr(model, name, library.Function(h.address or None, h.K or None,
-                                                  h.index or None, h.target or None, h.size))
+        for name, h in zip(("velocity", "position", "energy"), handles[1:]):
+            setattr(model, name, self._function(h))
         for name, array in s.arrays().items():
             setattr(model, name, self._array(array))
         vectors = int(s.pair_vec[-1])
-        sizes = {"values": nM + n + nA + m, "vel_values": nA + m, "psi": len(num.holonomic_rows),
-                 "blocks": s.block_mat[-1], "a": vectors, "y": vectors, "u": n,
+        sizes = {"vel_values": nA + m, "psi": len(num.holonomic_rows), "y": vectors,
                  "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
                  "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
+        self._kkt(model, handles[0])
         return model
+
+    def _function(self, h, target: int | None = None, size: int | None = None):
+        return library.Function(h.address or None, h.K or None, h.index or None,
+                                target or h.target or None, size or h.size)
+
+    def _kkt(self, model: library.Model, h) -> None:
+        """The KKT values' buffer: in the solve's layout ``[blocks, u, a, c]`` when the
+        kkt function is a scatter driver (its targets remapped, so it writes each value
+        where the solve reads it), else ``[M, f, A, c]`` beside the layout's buffers."""
+        s, n, m = self.structure, self.n, self.m
+        parts = {"blocks": int(s.block_mat[-1]), "u": n, "a": int(s.pair_vec[-1])}
+        start = dict(zip(parts, np.cumsum([0, *parts.values()]).tolist()))
+        model.kkt_in_layout = bool(h.K and h.targets)
+        if not model.kkt_in_layout:
+            model.kkt = self._function(h)
+            for name, size in parts.items():
+                setattr(model, name, self._buffer(size))
+            values = self._buffer(h.size)
+            model.values, model.c = values, values + DOUBLE * (h.size - m)
+            return
+        slot = np.empty(n, dtype=np.int64)
+        slot[s.slot_coord] = np.arange(n)
+        c_at = start["a"] + parts["a"]
+        place = np.concatenate([s.M_at, start["u"] + slot, start["a"] + s.A_at,
+                                c_at + np.arange(m)])
+        assert len(place) == h.size  # [M, f, A, c]
+        targets = [self._array(place[t]) for t in h.targets]
+        table = (ctypes.c_void_p * len(targets))(*targets)
+        self._keep.append(table)
+        model.kkt = self._function(h, ctypes.addressof(table), c_at + m)
+        values = self._buffer(c_at + m)
+        model.values, model.c = values, values + DOUBLE * c_at
+        for name in parts:
+            setattr(model, name, values + DOUBLE * start[name])
 
     def _check(self, status: int) -> None:
         if status != library.OK:
