@@ -297,16 +297,14 @@ DL_INLINE void eliminate_rhs(const dl_model *md, int64_t b, const double *z,
 }
 
 /* The multipliers of block b's internal rows from the others', last pivot first:
- * lam_i = beta_i - sum over the later rows of alpha lam_p. */
-static void recover_internal(const dl_model *md, int64_t b, const unsigned char *active,
-                             double *lam) {
+ * lam_i = beta_i - sum over the later rows of alpha lam_p (after dl_solve's elimination,
+ * all rows active; the projections do not need these multipliers). */
+static void recover_internal(const dl_model *md, int64_t b, double *lam) {
   const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
   for (int64_t i = pe - 1; i >= p0; --i) {
-    if (!is_active(active, md, i)) continue;
     const double *e = md->elim + md->elim_at[i];
     double l = lam[md->pair_row[i]];
-    for (int64_t p = i + 1; p < p1; ++p)
-      if (is_active(active, md, p)) l -= e[p - i] * lam[md->pair_row[p]];
+    for (int64_t p = i + 1; p < p1; ++p) l -= e[p - i] * lam[md->pair_row[p]];
     lam[md->pair_row[i]] = l;
   }
 }
@@ -353,6 +351,10 @@ DL_INLINE void block_backward(const dl_model *md, int64_t b, double *x, int64_t 
   backward(md->blocks + md->block_mat[b], nb, x + md->block_start[b]);
 }
 
+static void clear_band(dl_model *md) {
+  memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
+}
+
 /* The rows the gram products leave out get a unit diagonal; S factored. */
 static int factor_band(dl_model *md, const unsigned char *active) {
   const int64_t w = md->kd + 1;
@@ -373,7 +375,7 @@ static int factor_schur(dl_model *md, const unsigned char *active) {
     if (BY_SIZE(block_size(md, b), eliminate_internal, md, b, z, active) != DL_OK)
       return DL_SINGULAR_CONSTRAINTS;
   }
-  memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
+  clear_band(md);
   for (int64_t b = 0; b < md->n_blocks; ++b)
     BY_SIZE(block_size(md, b), gram_block, md, b, z, active, md->S);
   return factor_band(md, active);
@@ -460,7 +462,7 @@ static void eval_kkt(dl_model *md, double t, const double *q, const double *qd) 
  * factors them, eliminates their internal rows and builds S and the right-hand side. */
 static int dl_solve(dl_model *md, double *qdd, double *lambda) {
   double *c = md->c;
-  memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
+  clear_band(md);
   if (unit_pass(md, c) != DL_OK) return DL_SINGULAR_MASS;
   int status;
   for (int64_t b = 0; b < md->n_blocks; ++b)
@@ -468,14 +470,14 @@ static int dl_solve(dl_model *md, double *qdd, double *lambda) {
       return status;
   if ((status = factor_band(md, NULL)) != DL_OK) return status;
   apply_multipliers(md, md->y, c, md->u);
-  if (lambda)
-    for (int64_t k = 0; k < md->n_elim_blocks; ++k)
-      recover_internal(md, md->elim_blocks[k], NULL, c);
   for (int64_t k = 0; k < md->n_unit; ++k) md->u[md->unit_slot[k]] *= md->blocks[md->unit_mat[k]];
   for (int64_t b = 0; b < md->n_blocks; ++b)
     if (!md->unit[b]) BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
   for (int64_t s = 0; s < md->n; ++s) qdd[md->slot_coord[s]] = md->u[s];
-  if (lambda) memcpy(lambda, c, (size_t)md->m * sizeof(double));
+  if (lambda) {
+    for (int64_t k = 0; k < md->n_elim_blocks; ++k) recover_internal(md, md->elim_blocks[k], c);
+    memcpy(lambda, c, (size_t)md->m * sizeof(double));
+  }
   return DL_OK;
 }
 

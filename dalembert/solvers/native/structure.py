@@ -11,9 +11,9 @@ place in the band once. A row inside one block (*internal*: a quaternion's unit
 norm) couples nothing outside it, so it is eliminated inside its block, before
 the band is made: its pairs come first in their block, and the band holds only
 the other rows (a chain of quaternion links: 3 rows per link instead of 4). The
-1 x 1 blocks without a row of their own (particles,
-planar bodies) are common and cheap, so they get flat tables of their own: looping
-over them block by block cost more in branching than in arithmetic.
+1 x 1 blocks without a row of their own (particles, planar bodies) are common and
+cheap, so they get flat tables of their own: looping over them block by block cost
+more in branching than in arithmetic.
 
 >>> from dalembert.codegen.compiled import SparsePattern
 >>> pattern = SparsePattern(3, 1, np.arange(3), np.arange(3), np.array([0, 0]),
@@ -215,8 +215,9 @@ def _band_order(m: int, pairs: dict[str, np.ndarray],
     kept = np.flatnonzero(in_band)
     if len(kept) == 0:
         return row_pos, kept.astype(np.int64), 0
-    row_pos[kept] = np.arange(len(kept))  # for now: the place among the kept rows
-    rows, blocks = row_pos[pairs["pair_row"][external]], pairs["pair_block"][external]
+    local = np.full(m, -1, dtype=np.int64)  # the place among the kept rows
+    local[kept] = np.arange(len(kept))
+    rows, blocks = local[pairs["pair_row"][external]], pairs["pair_block"][external]
     incidence = sps.csr_matrix((np.ones(len(rows)), (rows, blocks)),
                                shape=(len(kept), int(blocks.max(initial=0)) + 1))
     coupling = (incidence @ incidence.T).tocoo()
