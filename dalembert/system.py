@@ -25,6 +25,7 @@ from .solvers.initialization import InitializationReport, consistent_state, stat
 from .solvers.integrate import IntegrationResult, integrate
 from .solvers.kkt import REDUNDANT_MODES
 from .solvers.native.library import prepare_runtime
+from .solvers.step_control import check_step_control
 from .statics import Equilibrium, Linearization
 from .statics import equilibrium as _equilibrium
 from .statics import linearize as _linearize
@@ -214,6 +215,7 @@ class System:
         progress: bool = False,
         redundant_constraints: str | None = None,
         native: bool | None = None,
+        step_control: str = "PI",
         **options: object,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
@@ -236,6 +238,9 @@ class System:
         (C-generated functions, independent constraints, a block-structured mass
         matrix; see :mod:`dalembert.solvers.native`), ``True`` requires that,
         ``False`` keeps it in Python. Both give the same trajectory to rounding.
+        ``step_control`` is the explicit Runge-Kutta methods' step-size controller:
+        ``"PI"`` (default; fewer rejected steps where stability limits the step, see
+        :mod:`dalembert.solvers.step_control`) or ``"scipy"`` (``solve_ivp``'s steps).
         """
         if stabilization not in STABILIZATIONS:
             raise ValueError(
@@ -243,6 +248,7 @@ class System:
             )
         t_span = _check_span(t_span)
         _check_tolerances(rtol, atol)
+        check_step_control(step_control)
         num = self.numeric(parameters)
         report = self.consistent_initial_state(q0, qd0, t0=t_span[0], fixed=fixed,
                                                parameters=parameters,
@@ -261,7 +267,8 @@ class System:
             engine.rhs, t_span, y0, method=engine.method,
             t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
             events=[_state_event(e, num.n) for e in events], project=engine.project,
-            progress=progress, rtol=rtol, atol=atol, **engine.options, **options,
+            progress=progress, step_control=step_control, rtol=rtol, atol=atol,
+            **engine.options, **options,
         )
         if not result.success:
             warnings.warn(f"{result.message}; returning the trajectory up to "

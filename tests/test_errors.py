@@ -370,6 +370,11 @@ def test_invalid_stabilization(pend):
         pend.simulate((0, 1), q0=[1.0, 0.0], stabilization="magic")
 
 
+def test_invalid_step_control(pend):
+    with pytest.raises(ValueError, match=r"step_control must be one of \('PI', 'scipy'\)"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], step_control="fast")
+
+
 @pytest.mark.parametrize("t_span", [(0, 0), (0, np.inf), (0,), "ab", (0, np.nan)])
 def test_bad_t_span(pend, t_span):
     with pytest.raises(ValueError, match=r"t_span must be"):

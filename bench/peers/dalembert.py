@@ -12,8 +12,8 @@ again in the same process, the compiled library found on disk. The C loop
 (``runtime.c``) does not depend on the model and is compiled once per machine, as
 an extension module would be at installation: it is timed first, apart, as
 ``runtime_build_s``. The simulation is
-``Multibody.simulate`` with DOP853 and projection (the loop in C, see
-``dalembert.solvers.native``), tolerances tightened from loose until the target
+``Multibody.simulate`` with its defaults (DOP853 under PI step-size control,
+projection; the loop in C, see ``dalembert.solvers.native``), tolerances tightened from loose until the target
 is met (as MuJoCo's step is halved from 1e-2). One evaluation = one right-hand
 side ``[qd, qdd]`` at the initial state (KKT blocks and their solve), from Python,
 with the solver set up once as in a simulation.
@@ -108,7 +108,7 @@ def _measure(workload: str, n: int) -> dict:
         simulate_s = time.perf_counter() - start
         return {
             "setting": {"method": "DOP853", "rtol": rtol, "atol": rtol / 100,
-                        "stabilization": "projection",
+                        "step_control": "PI", "stabilization": "projection",
                         "loop": "C" if "native" in engine.options else "Python"},
             "simulate_s": simulate_s, "evaluations": int(traj.stats["nfev"]),
             "energy_error": energy_error(traj.energy[0], traj.energy[-1], n),

@@ -28,6 +28,7 @@ from scipy.integrate._ivp.rk import RungeKutta
 from scipy.optimize import brentq
 
 from ..errors import DalembertError
+from .step_control import CONTROLLED, ControlledSteps, controlled_class
 
 METHODS: dict[str, type[OdeSolver]] = {
     "RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA,
@@ -78,10 +79,16 @@ def integrate(
     events: Sequence[Callable] = (),
     project: Projector | None = None,
     progress: bool = False,
+    step_control: str = "PI",
     **options: object,
 ) -> IntegrationResult:
-    """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step."""
-    cls = solver_class(method)
+    """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
+
+    ``step_control`` picks the explicit Runge-Kutta methods' step-size controller
+    (:mod:`~dalembert.solvers.step_control`); other solvers keep their own."""
+    cls = controlled_class(solver_class(method), step_control)
+    if issubclass(cls, ControlledSteps):
+        options["step_control"] = step_control
     if project is not None and cls is LSODA:
         raise ValueError(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
@@ -104,7 +111,14 @@ def integrate(
     finally:
         if bar is not None:
             bar.close()
-    return run.result(cls.__name__)
+    return run.result(_method_name(cls))
+
+
+def _method_name(cls: type[OdeSolver]) -> str:
+    """SciPy's name for its solvers' controlled and native versions."""
+    if issubclass(cls, ControlledSteps):
+        return next(c.__name__ for c in cls.__mro__ if c in CONTROLLED)
+    return cls.__name__
 
 
 def finite_difference_jacobian(fun: Callable) -> Callable:

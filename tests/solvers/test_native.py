@@ -25,6 +25,7 @@ from dalembert.solvers.native import NATIVE_METHODS, NativeSolver, NotApplicable
 from dalembert.solvers.native.structure import BLOCK_MAX, schur_structure
 from dalembert.solvers.outputs import evaluate_outputs
 from dalembert.solvers.projection import StepProjector
+from dalembert.solvers.step_control import STEP_CONTROLS
 
 
 def initial(name: str):
@@ -106,17 +107,19 @@ def test_outputs_match_python(name):
         assert relative(native[key], value) < 1e-12, key
 
 
+@pytest.mark.parametrize("step_control", STEP_CONTROLS)
 @pytest.mark.parametrize("method", ["DOP853", "RK45", "RK23"])
-def test_runge_kutta_steps_are_scipys(method):
+def test_runge_kutta_steps_are_pythons(method, step_control):
+    """The C steps are the Python controlled solver's; under "scipy", SciPy's own."""
     num, report = initial("spherical-chain")
     y0 = np.concatenate([report.q, report.qd])
     native = native_solver(num, y0)
     scipy_class = getattr(si, method)
     t_eval = np.linspace(0.0, 1.0, 7)
+    options = dict(rtol=1e-7, atol=1e-9, t_eval=t_eval, step_control=step_control)
     ours = integrate(native.rhs, (0.0, 1.0), y0, method=NATIVE_METHODS[scipy_class],
-                     native=native, rtol=1e-7, atol=1e-9, t_eval=t_eval)
-    ref = integrate(first_order_rhs(num), (0.0, 1.0), y0, method=scipy_class, rtol=1e-7,
-                    atol=1e-9, t_eval=t_eval)
+                     native=native, **options)
+    ref = integrate(first_order_rhs(num), (0.0, 1.0), y0, method=scipy_class, **options)
     assert ours.stats["n_steps"] == ref.stats["n_steps"]
     assert ours.stats["nfev"] == ref.stats["nfev"]
     assert np.abs(ours.y - ref.y).max() < 1e-9

@@ -45,14 +45,15 @@ class Model(ctypes.Structure):
 
 class Tableau(ctypes.Structure):
     _fields_ = [("n_stages", _i64), *((name, _ptr) for name in ("A", "B", "C", "E", "E3")),
-                ("error_exponent", _f64), ("n_P", _i64), ("P", _ptr), ("n_extra", _i64),
+                ("n_P", _i64), ("P", _ptr), ("n_extra", _i64),
                 ("A_extra", _ptr), ("C_extra", _ptr), ("n_D", _i64), ("D", _ptr)]
 
 
 class Stepper(ctypes.Structure):
     _fields_ = [*((name, _f64) for name in ("t", "h_abs", "h_previous", "t_bound", "direction",
                                             "rtol", "max_step")),
-                ("atol", _ptr), ("nfev", _i64)]
+                ("atol", _ptr), ("nfev", _i64), ("alpha", _f64), ("beta", _f64),
+                ("err_old", _f64)]
 
 
 class Run(ctypes.Structure):

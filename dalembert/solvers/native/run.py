@@ -68,7 +68,7 @@ class StretchRunner:
         solver, st, run = self.solver, self.solver._stepper, self._run
         self._y[:] = solver.y
         self._K[0] = solver.f
-        st.t, st.h_abs, st.nfev = solver.t, solver.h_abs, 0
+        st.t, st.h_abs, st.err_old, st.nfev = solver.t, solver.h_abs, solver.err_old, 0
         if self._ahead is not None:
             run.next_eval = int(np.searchsorted(self._ahead, solver.direction * solver.t,
                                                 "right"))
@@ -89,6 +89,7 @@ class StretchRunner:
         if run.n_steps:
             solver.t, solver.t_old, solver.h_previous = st.t, run.t_old, st.h_previous
             solver.y, solver.f, solver.h_abs = self._y.copy(), self._K[0].copy(), st.h_abs
+            solver.err_old = st.err_old
             if solver.direction * (solver.t - solver.t_bound) >= 0:
                 solver.status = "finished"
         self._pending = False

@@ -1,11 +1,12 @@
 """SciPy's explicit Runge-Kutta solvers with each step taken in C.
 
 :class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) subclass SciPy's
-solvers and replace only ``_step_impl``: the stages, the error estimate and the
-step-size control of :class:`scipy.integrate.RungeKutta` run in ``runtime.c``
-with the same tableau, the same formulas and constants, so the steps taken are
-SciPy's up to rounding (tested). Start-up (the initial step), dense output and
-everything else stay SciPy's.
+solvers, through their versions under a choice of step-size controller
+(:mod:`~dalembert.solvers.step_control`), and replace only ``_step_impl``: the
+stages, the error estimate and the step-size control run in ``runtime.c`` with the
+same tableau, the same formulas and constants, so the steps taken are those of
+``ControlledDOP853`` (SciPy's own under ``step_control="scipy"``) up to rounding
+(tested). Start-up (the initial step), dense output and everything else stay SciPy's.
 
 Beyond single steps, :meth:`~_NativeSteps.stretch_runner` gives a
 :class:`~.run.StretchRunner`, which runs whole stretches of the simulation loop in
@@ -24,6 +25,7 @@ from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 from scipy.integrate._ivp import dop853_coefficients
 from scipy.integrate._ivp.rk import Dop853DenseOutput
 
+from ..step_control import ControlledDOP853, ControlledRK23, ControlledRK45
 from . import library
 from .run import StretchRunner
 from .solver import NativeSolver
@@ -39,12 +41,13 @@ class _NativeSteps:
         self._keep = [None if a is None else np.ascontiguousarray(a, dtype=float)
                       for a in self._coefficients()]
         A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in self._keep)
-        self._tableau = library.Tableau(self.n_stages, A, B, C, E, E3, self.error_exponent)
+        self._tableau = library.Tableau(self.n_stages, A, B, C, E, E3)
         self._n_rows = self._interpolant(self._tableau)
         self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=float)
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
                                         rtol=self.rtol, max_step=self.max_step,
-                                        atol=self._atol.ctypes.data)
+                                        atol=self._atol.ctypes.data, alpha=self.alpha,
+                                        beta=self.beta)
         self._stage = np.empty(self.n)
         self._fixed = (ctypes.addressof(self._tableau), ctypes.addressof(self._stepper))
 
@@ -80,7 +83,7 @@ class _NativeSteps:
         y = np.ascontiguousarray(self.y, dtype=float)
         K[0] = self.f
         y_new = np.empty(self.n)
-        st.t, st.h_abs, st.nfev = self.t, self.h_abs, 0
+        st.t, st.h_abs, st.err_old, st.nfev = self.t, self.h_abs, self.err_old, 0
         status = self._native.lib.dl_rk_step(
             self._native._address, *self._fixed, y.ctypes.data, K.ctypes.data,
             y_new.ctypes.data, self._stage.ctypes.data)
@@ -89,12 +92,12 @@ class _NativeSteps:
             return False, self.TOO_SMALL_STEP
         self._native._check(status)
         self.h_previous, self.y_old = st.h_previous, y
-        self.t, self.y, self.h_abs = st.t, y_new, st.h_abs
+        self.t, self.y, self.h_abs, self.err_old = st.t, y_new, st.h_abs, st.err_old
         self.f = K[self.n_stages].copy()
         return True, None
 
 
-class NativeDOP853(_NativeSteps, DOP853):
+class NativeDOP853(_NativeSteps, ControlledDOP853):
     """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
 
     def _interpolant(self, tableau: library.Tableau) -> int:
@@ -130,11 +133,11 @@ class NativeDOP853(_NativeSteps, DOP853):
         return Dop853DenseOutput(self.t_old, self.t, self.y_old, F)
 
 
-class NativeRK45(_NativeSteps, RK45):
+class NativeRK45(_NativeSteps, ControlledRK45):
     """:class:`scipy.integrate.RK45` stepping in C."""
 
 
-class NativeRK23(_NativeSteps, RK23):
+class NativeRK23(_NativeSteps, ControlledRK23):
     """:class:`scipy.integrate.RK23` stepping in C."""
 
 

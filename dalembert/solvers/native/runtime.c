@@ -634,7 +634,6 @@ typedef struct {
   const double *A, *B, *C;    /* A: s x s row major, B and C: s */
   const double *E;            /* s + 1: error weights (E5 for DOP853) */
   const double *E3;           /* DOP853's second estimator, or NULL */
-  double error_exponent;
   /* The step's interpolant (scipy's dense output), used by dl_rk_run: either
    * RkDenseOutput's P ((s + 1) x n_P), or DOP853's n_extra extra stages (A_extra:
    * n_extra rows of length s + 1 + n_extra, C_extra) and D (n_D rows, same length). */
@@ -650,6 +649,8 @@ typedef struct {
   double t, h_abs, h_previous, t_bound, direction, rtol, max_step;
   const double *atol;         /* n_state */
   int64_t nfev;
+  double alpha, beta;         /* the controller, step_control.py: h *= 0.9 err^-alpha */
+  double err_old;             /* err_old^beta, err_old the last accepted step's error */
 } dl_stepper;
 
 /* out = sum_k w[k * stride] K[k] over k < count (rows of K contiguous, zero weights
@@ -725,11 +726,12 @@ static int rk_attempt(dl_model *md, const dl_tableau *tb, dl_stepper *st, double
   return dl_rhs(md, st->t + h, y_new, K + s * n_state, NULL);
 }
 
-/* Steps from st->t until one is accepted (scipy's RungeKutta._step_impl). K[0] must
- * hold f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced. */
+/* Steps from st->t until one is accepted (ControlledSteps._step_impl, which is scipy's
+ * RungeKutta._step_impl under PI control; scipy's own with beta = 0). K[0] must hold
+ * f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced. */
 int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
                double *y_new, double *stage) {
-  const double SAFETY = 0.9, MIN_FACTOR = 0.2, MAX_FACTOR = 10.0;
+  const double SAFETY = 0.9, MIN_FACTOR = 0.2, MAX_FACTOR = 10.0, ERROR_FLOOR = 1e-4;
   const int64_t n_state = 2 * md->n;
   const double t = st->t;
   const double min_step = 10.0 * fabs(nextafter(t, st->direction * INFINITY) - t);
@@ -751,15 +753,17 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
     }
     const double err = error_norm(tb, K, n_state, h, stage, md->error_work);
     if (err < 1.0) {
-      double factor = err == 0.0 ? MAX_FACTOR : SAFETY * pow(err, tb->error_exponent);
+      double factor = err == 0.0 ? MAX_FACTOR
+                                 : SAFETY * pow(err, -st->alpha) * pow(st->err_old, st->beta);
       if (factor > MAX_FACTOR) factor = MAX_FACTOR;
+      st->err_old = err > ERROR_FLOOR ? err : ERROR_FLOOR;
       if (rejected && factor > 1.0) factor = 1.0;
       st->h_abs = h_abs * factor;
       st->h_previous = h;
       st->t = t_new;
       return DL_OK;
     }
-    const double shrink = SAFETY * pow(err, tb->error_exponent);
+    const double shrink = SAFETY * pow(err, -st->alpha);
     h_abs *= shrink > MIN_FACTOR ? shrink : MIN_FACTOR;
     rejected = 1;
   }
