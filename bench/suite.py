@@ -44,6 +44,11 @@ SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
 SIZES = (2, 4, 8, 16, 32, 64, 128, 256, 1024)
 QUICK_SIZES = (2, 4, 8)
 MARK = "@@record "
+#: Records whose whole process took under this many seconds run a second time after
+#: the first pass, every tool alike, and the faster round is kept: noise on shared
+#: machines comes in spells of minutes, which best-of-five within one process cannot
+#: leave.
+SECOND_ROUND_WALL_S = 10.0
 
 
 def run_one(tool: str, workload: str, n: int) -> dict:
@@ -161,6 +166,21 @@ def suite(tools, sizes, cap: float, budget: float | None) -> list[dict]:
     return sorted(records, key=lambda r: (r["workload"], r["tool"], r["n"]))
 
 
+def second_round(records: list[dict], cap: float) -> list[dict]:
+    """The short records measured again in fresh processes; per record the faster
+    round is kept, ``simulate_rounds`` has both rounds' times."""
+    kept = []
+    for r in records:
+        if "simulate_s" not in r or r.get("wall_s", float("inf")) > SECOND_ROUND_WALL_S:
+            kept.append(r)
+            continue
+        again = spawn(r["tool"], r["workload"], r["n"], cap)
+        rounds = [r["simulate_s"], again.get("simulate_s", float("nan"))]
+        best = again if rounds[1] < rounds[0] else r
+        kept.append({**best, "simulate_rounds": rounds})
+    return kept
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
@@ -181,7 +201,7 @@ def main() -> None:
     cap = args.cap or (20.0 if args.quick else 300.0)
     budget = args.budget or (240.0 if args.quick else None)
     started = time.time()
-    records = suite(args.tools, sizes, cap, budget)
+    records = second_round(suite(args.tools, sizes, cap, budget), cap)
     result = {"workload": __doc__.split("\n\n")[1].replace("\n", " "),
               "mode": "quick" if args.quick else "full", "cap_s": cap, "sizes": list(sizes),
               "started": time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(started)),

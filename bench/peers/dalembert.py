@@ -11,10 +11,10 @@ code not in the cache (a fresh ``DALEMBERT_CACHE_DIR``); warm = the same build
 again in the same process, the compiled library found on disk. The C loop
 (``runtime.c``) does not depend on the model and is compiled once per machine, as
 an extension module would be at installation: it is timed first, apart, as
-``runtime_build_s``. The simulation is
-``Multibody.simulate`` with its defaults (DOP853 under PI step-size control,
-projection; the loop in C, see ``dalembert.solvers.native``), tolerances tightened from loose until the target
-is met (as MuJoCo's step is halved from 1e-2). One evaluation = one right-hand
+``runtime_build_s``. The simulation is ``Multibody.simulate`` with its defaults
+(DOP853 under PI step-size control, projection; the loop in C, see
+``dalembert.solvers.native``), tolerances tightened from loose until the target is
+met (as MuJoCo's step is halved from 1e-2). One evaluation = one right-hand
 side ``[qd, qdd]`` at the initial state (KKT blocks and their solve), from Python,
 with the solver set up once as in a simulation.
 """
