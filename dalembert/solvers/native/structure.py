@@ -118,8 +118,8 @@ def _structure(pattern: SparsePattern) -> SchurStructure:
     block_mat = np.concatenate([[0], np.cumsum(sizes**2)])
     rows, cols = pattern.M_rows, pattern.M_cols
     M_at = block_mat[block[rows]] + local[rows] * sizes[block[rows]] + local[cols]
-    pairs = _pairs(pattern, block, sizes, local)
-    row_pos, band_row, kd = _band_order(pattern.m, pairs, _external(pairs))
+    pairs, internal = _pairs(pattern, block, sizes, local)
+    row_pos, band_row, kd = _band_order(pattern.m, pairs, ~internal)
     if kd > BAND_MAX:
         raise NotApplicable(f"the constraints couple too widely for a band solve "
                             f"(half bandwidth {kd}, at most {BAND_MAX})")
@@ -145,7 +145,9 @@ def _blocks(pattern: SparsePattern) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pairs(pattern: SparsePattern, block: np.ndarray, sizes: np.ndarray,
-           local: np.ndarray) -> dict[str, np.ndarray]:
+           local: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The (row, block) pairs' tables, a block's internal pairs first, and the mask of
+    the internal pairs (rows inside one block) in that order."""
     m = max(pattern.m, 1)
     entry_block = block[pattern.A_cols]
     keys = entry_block * m + pattern.A_rows
@@ -169,13 +171,7 @@ def _pairs(pattern: SparsePattern, block: np.ndarray, sizes: np.ndarray,
         "block_pairs": block_pairs, "block_external": block_pairs[:-1] + n_internal,
         "elim_at": elim_at, "elim_blocks": np.flatnonzero(n_internal),
     }
-    return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}
-
-
-def _external(pairs: dict[str, np.ndarray]) -> np.ndarray:
-    """Mask of the pairs that are not internal (their rows stay in the band)."""
-    first = pairs["block_external"][pairs["pair_block"]]
-    return np.arange(len(pairs["pair_row"])) >= first
+    return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}, internal
 
 
 def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarray,
