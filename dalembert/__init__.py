@@ -5,18 +5,8 @@ Write ``T``, ``V``, forces and constraints in SymPy; get the constrained equatio
 forces and the constraints held to rounding level.
 """
 
-from .errors import (
-    ConstraintError,
-    DalembertError,
-    DoubleCountingWarning,
-    InitialConditionError,
-    InitialConditionsAdjusted,
-    IntegrationWarning,
-    ModelError,
-    ParameterError,
-    RedundantConstraintsWarning,
-    SingularSystemError,
-)
+from . import errors
+from .errors import *  # noqa: F403  (every error and warning, listed in errors.__all__)
 from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
 from .model.forces import PointForce
@@ -27,19 +17,10 @@ from .trajectory import Trajectory
 __version__ = "0.1.0"
 
 __all__ = [
-    "ConstraintError",
-    "DalembertError",
-    "DoubleCountingWarning",
+    *errors.__all__,
     "Holonomic",
-    "InitialConditionError",
-    "InitialConditionsAdjusted",
-    "IntegrationWarning",
-    "ModelError",
-    "ParameterError",
     "Pfaffian",
     "PointForce",
-    "RedundantConstraintsWarning",
-    "SingularSystemError",
     "System",
     "Trajectory",
     "all_extrema",

@@ -1,12 +1,15 @@
-"""Exceptions and warnings raised by dalembert.
+"""Every exception and warning dalembert raises, in one place.
 
 Every error names the offending item (coordinate, parameter, constraint) and says
-what to do about it. They subclass the built-in exception a user would expect
-(``ValueError`` for bad input, ``RuntimeError`` for numerical failure), so
-generic ``except`` clauses keep working.
+what to do about it. Errors subclass :class:`DalembertError` and the built-in
+exception a user would expect (``ValueError`` for bad input, ``RuntimeError`` for
+numerical failure), so generic ``except`` clauses keep working; warnings subclass
+:class:`DalembertWarning`. ``docs/errors.md`` lists when each is raised.
 """
 
 from __future__ import annotations
+
+# --------------------------------------------------------------------------- errors
 
 
 class DalembertError(Exception):
@@ -21,29 +24,124 @@ class ParameterError(ModelError):
     """A parameter has no numeric value, or a value is not a finite number."""
 
 
+class MissingParameterError(ParameterError):
+    """A free symbol that is not a variable has no numeric value."""
+
+
 class ConstraintError(ModelError):
     """A constraint is malformed, redundant, or too many for the coordinates."""
+
+
+class TooManyConstraintsError(ConstraintError):
+    """There are more constraints than variables."""
+
+
+class DependentConstraintsError(ConstraintError):
+    """The constraint gradients are linearly dependent at the point found.
+
+    ``indices`` holds the 0-based positions (in ``constraints``) of the
+    constraints taking part in the dependency.
+    """
+
+    def __init__(self, message: str, indices: tuple[int, ...] = ()) -> None:
+        super().__init__(message)
+        self.indices = indices
+
+
+class InconsistentConstraintsError(ConstraintError):
+    """The holonomic constraints cannot be satisfied near the guess."""
 
 
 class InitialConditionError(DalembertError, ValueError):
     """Initial conditions name unknown coordinates, are not finite, or cannot be made consistent."""
 
 
+class GuessError(DalembertError, ValueError):
+    """A guess names an unknown variable, has the wrong length, or is not finite."""
+
+
+class NotAnEquilibriumError(DalembertError, ValueError):
+    """The point given to ``linearize`` is not a static equilibrium."""
+
+
 class SingularSystemError(DalembertError, RuntimeError):
     """The KKT matrix [[M, A^T], [A, 0]] is singular, so accelerations are not determined."""
 
 
-class DoubleCountingWarning(UserWarning):
+class CompileError(DalembertError, RuntimeError):
+    """The C route is unavailable for these expressions (unsupported function, no compiler)."""
+
+
+class ExtremumConvergenceError(DalembertError, RuntimeError):
+    """No stationary point of the augmented function was found near the guess."""
+
+
+class EquilibriumNotFoundError(DalembertError, RuntimeError):
+    """Newton's method found no static equilibrium near the guess."""
+
+
+class MarginalStabilityError(DalembertError, RuntimeError):
+    """The constrained stiffness is singular (raised only with ``on_marginal="raise"``)."""
+
+
+class SymbolicSolveError(DalembertError, RuntimeError):
+    """SymPy could not find the isolated stationary points symbolically."""
+
+
+class NonholonomicLinearizationError(DalembertError, NotImplementedError):
+    """``linearize`` handles holonomic constraints only."""
+
+
+# --------------------------------------------------------------------------- warnings
+
+
+class DalembertWarning(UserWarning):
+    """Base class of every warning issued by dalembert."""
+
+
+class DoubleCountingWarning(DalembertWarning):
     """A generalized force repeats a conservative force already in the potential energy."""
 
 
-class InitialConditionsAdjusted(UserWarning):
+class InitialConditionsAdjusted(DalembertWarning):
     """Initial conditions violated the constraints and were projected onto them."""
 
 
-class IntegrationWarning(UserWarning):
+class IntegrationWarning(DalembertWarning):
     """Integration stopped early; the trajectory holds the part computed so far."""
 
 
-class RedundantConstraintsWarning(UserWarning):
+class RedundantConstraintsWarning(DalembertWarning):
     """Dependent constraints: the motion is unique, their multipliers are not."""
+
+
+class JointPointWarning(DalembertWarning):
+    """A joint point looks as if it were given in the wrong frame."""
+
+
+__all__ = [
+    "CompileError",
+    "ConstraintError",
+    "DalembertError",
+    "DalembertWarning",
+    "DependentConstraintsError",
+    "DoubleCountingWarning",
+    "EquilibriumNotFoundError",
+    "ExtremumConvergenceError",
+    "GuessError",
+    "InconsistentConstraintsError",
+    "InitialConditionError",
+    "InitialConditionsAdjusted",
+    "IntegrationWarning",
+    "JointPointWarning",
+    "MarginalStabilityError",
+    "MissingParameterError",
+    "ModelError",
+    "NonholonomicLinearizationError",
+    "NotAnEquilibriumError",
+    "ParameterError",
+    "RedundantConstraintsWarning",
+    "SingularSystemError",
+    "SymbolicSolveError",
+    "TooManyConstraintsError",
+]

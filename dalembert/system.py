@@ -20,8 +20,9 @@ from .errors import InitialConditionsAdjusted, IntegrationWarning, RedundantCons
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
+from .model.values import coordinate_values
 from .solvers.engine import choose_engine
-from .solvers.initialization import InitializationReport, consistent_state, state_vector
+from .solvers.initialization import InitializationReport, consistent_state
 from .solvers.integrate import IntegrationResult, integrate
 from .solvers.kkt import REDUNDANT_MODES
 from .solvers.native.library import prepare_runtime
@@ -187,8 +188,8 @@ class System:
         (``report.dependent_constraints``).
         """
         names = self.coordinate_names
-        q = state_vector(q0, names, "q0")
-        qd = state_vector(qd0, names, "qd0")
+        q = coordinate_values(q0, names, "q0")
+        qd = coordinate_values(qd0, names, "qd0")
         labels = _LazyLabels(self.describe_constraint, len(self.constraint_names))
         mode = self.redundant_constraints if redundant_constraints is None \
             else _check_redundant(redundant_constraints)

@@ -61,6 +61,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
+from ..errors import CompileError
 from .numpy_printer import generate_function
 
 Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
@@ -134,10 +135,6 @@ def build_flat_functions(specs: Sequence[FlatSpec], *, use: str | None = None) -
         except CompileError as exc:
             warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=2)
     return [_numpy_function(*spec) for spec in specs]
-
-
-class CompileError(RuntimeError):
-    """The C route is unavailable for these expressions (unsupported function, no compiler)."""
 
 
 def _numpy_function(name: str, arguments: Arguments, exprs: Sequence[sp.Expr]) -> Callable:

@@ -19,7 +19,7 @@ count of equations decides nothing; :func:`check_mobility` measures
 ``rank(A)`` at the initial state and, when it leaves no degree of freedom,
 raises a :class:`~dalembert.ConstraintError` naming every joint, its rows and
 which of them depend on the others (the rank and the dependent rows are those of
-:func:`dalembert.solvers.kkt.constraint_rank`, as in the solver).
+:func:`dalembert.numerics.rank.constraint_rank`, as in the solver).
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ConstraintError
-from ..solvers.kkt import constraint_rank
+from ..errors import ConstraintError, JointPointWarning
+from ..numerics.rank import constraint_rank
 from .bodies import Body, Ground, PlanarBody, RigidBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
 
@@ -42,10 +42,6 @@ if TYPE_CHECKING:
 FAR_FACTOR = 10.0
 #: Joints whose two points must coincide (the frame check at the initial state applies).
 _COINCIDENT = (Spherical, Universal, Revolute, Fixed)
-
-
-class JointPointWarning(UserWarning):
-    """A joint point looks as if it were given in the wrong frame."""
 
 
 def radius_of_gyration(body: RigidBody | PlanarBody) -> float:

@@ -8,7 +8,7 @@ Gain rule: choose ``w`` a few times above the fastest motion of interest and wel
 below ``1 / step``; ``w = 0`` gives the raw index-1 formulation.
 
 With dependent constraints, ``kept`` (the independent rows, measured once at the
-initial state by :func:`~dalembert.solvers.kkt.constraint_rank`) makes each
+initial state by :func:`~dalembert.numerics.rank.constraint_rank`) makes each
 evaluation solve the reduced KKT system: same cost as the full-rank path, and no
 multipliers are computed, since the integrator needs ``qdd`` only.
 

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..codegen.compiled import NumericModel
 from ..errors import ConstraintError, InitialConditionError, SingularSystemError
-from ..model.coordinates import key_name
-from .kkt import REDUNDANT_MODES, ConstraintRank, check_kkt, constraint_rank, dependent_error
+from ..model.values import free_mask
+from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error
+from .kkt import REDUNDANT_MODES, check_kkt
 from .projection import StepProjector, project_positions, project_velocities
 from .sparse_kkt import DENSE_MAX, gram_well_conditioned, kkt_condition, kkt_solver, matvec
 
@@ -78,61 +79,6 @@ class InitializationReport:
 def _changed(names: Sequence[str], given: np.ndarray, new: np.ndarray) -> list[str]:
     scale = max(1.0, float(np.abs(given).max(initial=0.0)))
     return [n for n, a, b in zip(names, given, new) if abs(a - b) > REPORT_TOL * scale]
-
-
-def state_vector(values: object, names: Sequence[str], what: str) -> np.ndarray:
-    """Read ``q0`` or ``qd0``: a dict by coordinate (or name), or an array in order.
-
-    Coordinates missing from a dict default to zero.
-
-    >>> state_vector({"y": -1.0}, ("x", "y"), "q0")
-    array([ 0., -1.])
-    """
-    n = len(names)
-    if values is None:
-        return np.zeros(n)
-    if isinstance(values, Mapping):
-        vec = np.zeros(n)
-        position = {name: i for i, name in enumerate(names)}
-        for key, value in values.items():
-            name = key_name(key)
-            if name not in position:
-                raise InitialConditionError(
-                    f"{what} names {name!r}, which is not a coordinate "
-                    f"(the coordinates are {', '.join(names)})"
-                )
-            vec[position[name]] = _number(value, f"{what}[{name!r}]")
-    else:
-        try:
-            vec = np.asarray(values, dtype=float).ravel()
-        except (TypeError, ValueError) as exc:
-            raise InitialConditionError(f"{what} must be numbers, got {values!r}") from exc
-        if vec.size != n:
-            raise InitialConditionError(
-                f"{what} has {vec.size} values for {n} coordinates ({', '.join(names)})"
-            )
-    bad = [names[i] for i in np.flatnonzero(~np.isfinite(vec))]
-    if bad:
-        raise InitialConditionError(f"{what} is not finite for {', '.join(bad)}")
-    return vec
-
-
-def _number(value: object, what: str) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError) as exc:
-        raise InitialConditionError(f"{what} = {value!r} is not a number") from exc
-
-
-def free_mask(fixed: Sequence[object] | None, names: Sequence[str]) -> np.ndarray:
-    """Boolean mask of the coordinates initialization may change."""
-    free = np.ones(len(names), dtype=bool)
-    for key in fixed or ():
-        name = key_name(key)
-        if name not in names:
-            raise InitialConditionError(f"fixed names {name!r}, which is not a coordinate")
-        free[names.index(name)] = False
-    return free
 
 
 def consistent_state(

@@ -13,12 +13,9 @@ for every Newton iteration (simplified Newton: the drift after one step is at
 tolerance level, so each iteration gains ~10 digits and one or two reach the
 rounding floor). Velocities are projected with ``A`` at the new positions. With
 dependent constraints, or if the fast path fails, it falls back to the dense
-least-squares functions below.
-
-Both least-squares solves cut singular values below ``RCOND`` times the largest:
-with dependent constraints ``J`` has singular values at rounding level, and
-LAPACK's default cut-off (``eps * max(shape)``) can keep them and divide rounding
-noise by them.
+least-squares functions below (positions through
+:func:`~dalembert.numerics.gauss_newton.gauss_newton`, which says why both cut
+small singular values at :data:`~dalembert.numerics.rank.RANK_RTOL`).
 """
 
 from __future__ import annotations
@@ -27,16 +24,9 @@ import numpy as np
 
 from ..codegen.compiled import NumericModel, SparsePattern
 from ..errors import InitialConditionError, SingularSystemError
+from ..numerics.gauss_newton import ACCEPT_TOL, MAX_NEWTON, POSITION_TOL, gauss_newton
+from ..numerics.rank import RANK_RTOL
 from .sparse_kkt import kkt_solver, matvec
-
-#: Target for the constraint residual. Where rounding keeps a constraint above it
-#: (large coordinates), Newton stops once it no longer halves the residual.
-POSITION_TOL = 1e-14
-MAX_NEWTON = 50
-#: A residual Newton cannot reduce further is accepted below this (rounding floor).
-ACCEPT_TOL = 1e-10
-#: Relative cut-off for singular values of the constraint Jacobian (see above).
-RCOND = 1e-10
 
 
 def project_positions(
@@ -49,27 +39,13 @@ def project_positions(
     rows = list(num.holonomic_rows)
     if not rows:
         return q
-    q = np.array(q, dtype=float)
-    cols = np.arange(num.n) if free is None else np.flatnonzero(free)
-    scale = max(1.0, np.abs(q).max())
-    residual = np.abs(num.position_constraint(t, q)).max()
-    for _ in range(MAX_NEWTON):
-        if residual <= POSITION_TOL:
-            return q
-        psi = num.position_constraint(t, q)
-        J = num.velocity_constraint(t, q)[0][rows][:, cols]
-        step = np.linalg.lstsq(J, psi, rcond=RCOND)[0]
-        trial = q.copy()
-        trial[cols] -= step
-        new_residual = np.abs(num.position_constraint(t, trial)).max()
-        if not new_residual < 0.5 * residual:
-            break  # rounding floor reached (or divergence, judged below)
-        q, residual = trial, new_residual
-    if residual <= ACCEPT_TOL * scale:
-        return q
+    found = gauss_newton(lambda x: num.position_constraint(t, x),
+                         lambda x: num.velocity_constraint(t, x)[0][rows], q, free)
+    if found.converged:
+        return found.q
     raise InitialConditionError(
         f"could not satisfy the holonomic constraints at t={t:g}: Newton (least change) "
-        f"stalled with the largest residual {residual:.3e}"
+        f"stalled with the largest residual {found.residual:.3e}"
     )
 
 
@@ -83,7 +59,7 @@ def project_velocities(
     qd = np.array(qd, dtype=float)
     cols = np.arange(num.n) if free is None else np.flatnonzero(free)
     residual = A @ qd + b
-    qd[cols] -= np.linalg.lstsq(A[:, cols], residual, rcond=RCOND)[0]
+    qd[cols] -= np.linalg.lstsq(A[:, cols], residual, rcond=RANK_RTOL)[0]
     return qd
 
 

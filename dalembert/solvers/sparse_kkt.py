@@ -36,13 +36,8 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..codegen.compiled import SparsePattern
 from ..errors import SingularSystemError
-from .kkt import (
-    DROPPED_ROW_RTOL,
-    _dense_solve,
-    _least_squares_kkt,
-    kkt_matrix,
-    min_norm_multipliers,
-)
+from ..numerics.rank import min_norm_multipliers
+from .kkt import DROPPED_ROW_RTOL, _dense_solve, _least_squares_kkt, kkt_matrix
 
 #: Largest KKT size ``n + m`` solved dense when the banded path does not apply.
 DENSE_MAX = 60
@@ -73,7 +68,7 @@ def matvec(pattern_rows: np.ndarray, pattern_cols: np.ndarray, values: np.ndarra
 class KKTSolver:
     """Solves ``M qdd = f + A^T lambda``, ``A qdd = c`` from pattern values.
 
-    ``kept`` (independent rows, see :func:`~dalembert.solvers.kkt.constraint_rank`)
+    ``kept`` (independent rows, see :func:`~dalembert.numerics.rank.constraint_rank`)
     solves the reduced system of those rows, as :func:`~dalembert.solvers.kkt.solve_kkt`
     does; ``dense`` forces (``True``) or forbids (``False``) the dense path.
 
@@ -371,9 +366,9 @@ def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:
 def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, shape: tuple,
                           limit: float = 1e10) -> bool:
     """``True`` when ``A`` (values on a pattern) surely has full row rank, with
-    ``s_max / s_min < limit``: a screen before the SVD of :func:`.kkt.constraint_rank`,
-    from a Cholesky (dense) or LU (sparse) factorization of ``A A^T``, whose condition
-    number is that ratio squared.
+    ``s_max / s_min < limit``: a screen before the SVD of
+    :func:`~dalembert.numerics.rank.constraint_rank`, from a Cholesky (dense) or LU
+    (sparse) factorization of ``A A^T``, whose condition number is that ratio squared.
 
     >>> gram_well_conditioned(np.array([0, 1]), np.array([0, 1]), np.ones(2), (2, 3))
     True

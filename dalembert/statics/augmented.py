@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from ..errors import SymbolicSolveError
 from .classification import raise_if_dependent
-from .errors import SymbolicSolveError
 from .inputs import multiplier_symbols, read_problem, taken_names
 from .problem import Array, Problem, augmented_function
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from .errors import DependentConstraintsError
+from ..errors import DependentConstraintsError
 from .problem import Array, Problem, max_abs, point_text
 
 #: Possible values of :attr:`Extremum.kind`. ``"isolated"`` is used when there
@@ -26,7 +26,7 @@ _RANK_RTOL = 1e-8  # singular value <= this * largest one counts as zero
 def dependent_constraints(jacobian: Array, rtol: float = _RANK_RTOL) -> tuple[int, ...]:
     """0-based indices of all constraints taking part in a linear dependency.
 
-    Unlike :func:`dalembert.solvers.kkt.dependent_rows`, which names only the rows
+    Unlike :func:`dalembert.numerics.rank.dependent_rows`, which names only the rows
     that repeat earlier ones, this names every participant (for ``x + y - 1`` and
     ``2x + 2y - 2``, both), and the rank test is relative to the largest singular
     value alone. Empty if ``jacobian`` has full row rank.

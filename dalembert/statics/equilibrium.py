@@ -35,12 +35,16 @@ import sympy as sp
 from numpy.typing import NDArray
 
 from ..codegen.numpy_printer import generate_function
-from ..errors import ConstraintError, DalembertError
+from ..errors import (
+    EquilibriumNotFoundError,
+    InconsistentConstraintsError,
+    MarginalStabilityError,
+)
 from ..model.coordinates import key_name
 from ..model.coordinates import t as time_symbol
 from ..model.parameters import resolve_parameters
-from ..solvers.initialization import free_mask, state_vector
-from ..solvers.kkt import check_constraint_rank
+from ..model.values import coordinate_values, free_mask
+from ..numerics.rank import check_constraint_rank
 
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
 # acceptance) and its scipy.optimize.root fallback are shared with extremum().
@@ -49,9 +53,6 @@ from .newton import Attempt, check_settings, newton_iterations, root_then_newton
 __all__ = [
     "STABILITIES",
     "Equilibrium",
-    "EquilibriumNotFoundError",
-    "InconsistentConstraintsError",
-    "MarginalStabilityError",
     "StaticModel",
     "classify_stiffness",
     "equilibrium",
@@ -73,18 +74,6 @@ Array = NDArray[np.float64]
 
 
 # --------------------------------------------------------------------------- errors
-
-
-class EquilibriumNotFoundError(DalembertError, RuntimeError):
-    """Newton's method found no static equilibrium near the guess."""
-
-
-class InconsistentConstraintsError(ConstraintError):
-    """The holonomic constraints cannot be satisfied near the guess."""
-
-
-class MarginalStabilityError(DalembertError, RuntimeError):
-    """The constrained stiffness is singular (raised only with ``on_marginal="raise"``)."""
 
 
 # --------------------------------------------------------------------------- numeric model
@@ -386,7 +375,7 @@ def equilibrium(
     sm = static_model(system)
     p = resolve_parameters(system.model.parameters, system.parameter_values, parameters)
     names = sm.coordinate_names
-    q_guess = state_vector(guess, names, "guess")
+    q_guess = coordinate_values(guess, names, "guess")
     free = free_mask(fixed, names)
     q_start = project_onto_constraints(sm, t, q_guess, free, p)
     problem = _Newton(sm, t, p, q_start, free)

@@ -45,28 +45,14 @@ from numpy.typing import NDArray
 
 from .augmented import StationarityConditions, stationarity_conditions, symbolic_points
 from .classification import KINDS, classify_point, raise_if_dependent
-from .errors import (
-    DependentConstraintsError,
-    ExtremumConvergenceError,
-    GuessError,
-    MissingParameterError,
-    SymbolicSolveError,
-    TooManyConstraintsError,
-)
 from .guess import starting_point
 from .newton import check_settings, solve
 from .problem import Array, Problem, max_abs, prepare
 
 __all__ = [
     "KINDS",
-    "DependentConstraintsError",
     "Extremum",
-    "ExtremumConvergenceError",
-    "GuessError",
-    "MissingParameterError",
     "StationarityConditions",
-    "SymbolicSolveError",
-    "TooManyConstraintsError",
     "all_extrema",
     "extremum",
     "stationarity_conditions",

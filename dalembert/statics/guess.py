@@ -14,8 +14,8 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from ..errors import GuessError
 from ..model.coordinates import key_name
-from .errors import GuessError
 from .problem import Array, Problem, all_finite, point_text
 
 

@@ -13,9 +13,14 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.logic.boolalg import BooleanAtom
 
-from ..errors import ConstraintError, ModelError, ParameterError
+from ..errors import (
+    ConstraintError,
+    MissingParameterError,
+    ModelError,
+    ParameterError,
+    TooManyConstraintsError,
+)
 from ..model.coordinates import key_name
-from .errors import MissingParameterError, TooManyConstraintsError
 
 
 def read_problem(

@@ -26,9 +26,13 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from ..errors import DalembertError, SingularSystemError
+from ..errors import (
+    NonholonomicLinearizationError,
+    NotAnEquilibriumError,
+    SingularSystemError,
+)
 from ..model.parameters import resolve_parameters
-from ..solvers.initialization import free_mask, state_vector
+from ..model.values import coordinate_values, free_mask
 from .equilibrium import (
     Equilibrium,
     MarginalStabilityError,
@@ -41,8 +45,6 @@ from .equilibrium import (
 
 __all__ = [
     "Linearization",
-    "NonholonomicLinearizationError",
-    "NotAnEquilibriumError",
     "linearize",
 ]
 
@@ -50,14 +52,6 @@ Array = NDArray[np.float64]
 
 #: Relative asymmetry of Kr above which the general (non-symmetric) eigenproblem is used.
 _SYMMETRY_RTOL = 1e-10
-
-
-class NotAnEquilibriumError(DalembertError, ValueError):
-    """The point given to :func:`linearize` is not a static equilibrium."""
-
-
-class NonholonomicLinearizationError(DalembertError, NotImplementedError):
-    """:func:`linearize` handles holonomic constraints only."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -224,7 +218,7 @@ def linearize(
     sm = static_model(system)
     _reject_pfaffian(sm)
     given = q_eq if isinstance(q_eq, Equilibrium) else None
-    q = np.array(given.q) if given else state_vector(q_eq, sm.coordinate_names, "q_eq")
+    q = np.array(given.q) if given else coordinate_values(q_eq, sm.coordinate_names, "q_eq")
     t = float(given.t if given and t is None else t or 0.0)
     fixed = given.fixed if given and fixed is None else fixed
     p = resolve_parameters(system.model.parameters, system.parameter_values,

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
+from ..errors import ExtremumConvergenceError
 from .classification import dependent_constraints, raise_if_dependent
-from .errors import ExtremumConvergenceError
 from .problem import Array, KKTFunction, Problem, all_finite, max_abs, point_text
 
 _EPS = float(np.finfo(float).eps)

@@ -9,7 +9,8 @@ import pytest
 import sympy as sp
 
 from dalembert import Holonomic, InitialConditionsAdjusted, System, coordinates, t
-from dalembert.solvers.kkt import check_kkt, dependent_rows, solve_kkt
+from dalembert.numerics.rank import dependent_rows
+from dalembert.solvers.kkt import check_kkt, solve_kkt
 
 
 def test_singular_mass_nonsingular_kkt():

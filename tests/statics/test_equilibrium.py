@@ -18,13 +18,13 @@ import sympy as sp
 from statics_systems import L_ROD, M_BOB, G, spinning_hoop
 
 from dalembert import Holonomic, InitialConditionError, Pfaffian, System, coordinates
-from dalembert.examples import cartesian_pendulum
-from dalembert.statics.equilibrium import (
+from dalembert.errors import (
     EquilibriumNotFoundError,
     InconsistentConstraintsError,
     MarginalStabilityError,
-    equilibrium,
 )
+from dalembert.examples import cartesian_pendulum
+from dalembert.statics.equilibrium import equilibrium
 
 # --------------------------------------------------------------------------- builders
 

@@ -14,13 +14,15 @@ import pytest
 import sympy as sp
 from sympy.physics.mechanics import dynamicsymbols
 
-from dalembert.statics.extremum import (
+from dalembert.errors import (
     DependentConstraintsError,
     ExtremumConvergenceError,
     GuessError,
     MissingParameterError,
     SymbolicSolveError,
     TooManyConstraintsError,
+)
+from dalembert.statics.extremum import (
     all_extrema,
     extremum,
     stationarity_conditions,

@@ -15,12 +15,13 @@ import sympy as sp
 from statics_systems import L_ROD, M_BOB, G, spinning_hoop
 
 from dalembert import Holonomic, Pfaffian, System, coordinates
-from dalembert.statics.equilibrium import MarginalStabilityError, equilibrium
-from dalembert.statics.linearize import (
+from dalembert.errors import (
+    MarginalStabilityError,
     NonholonomicLinearizationError,
     NotAnEquilibriumError,
-    linearize,
 )
+from dalembert.statics.equilibrium import equilibrium
+from dalembert.statics.linearize import linearize
 
 
 def hoop_point(phi: float, R: float) -> dict[str, float]:

@@ -1,0 +1,386 @@
+"""The options of a simulation: one declared table, checked once, turned into typed values.
+
+:func:`simulation_options` is the only place where the keywords of
+:meth:`System.simulate <dalembert.System.simulate>` are checked: each against
+the constraints declared for it in :data:`SIMULATE_PARAMETERS` (one uniform
+message, "The 'rtol' parameter of simulate must be ...; got ..."), then the rules
+that tie two options together. What comes out is a :class:`SimulationOptions`
+made of typed values (a :class:`Baumgarte` stabilization holding its gain, a
+:class:`StepControl` holding its tolerances), which the layers below trust.
+
+>>> options = simulation_options((0, 1), stabilization="baumgarte", baumgarte_gain=20.0)
+>>> options.stabilization
+Baumgarte(gain=20.0)
+>>> simulation_options((0, 1), rtol=float("inf"))  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+ValueError: The 'rtol' parameter of simulate must be a finite positive number ...; got inf.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Literal, Protocol
+
+import numpy as np
+from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
+
+#: SciPy's solvers by the names ``solve_ivp`` knows them by.
+METHODS: dict[str, type[OdeSolver]] = {
+    "RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA,
+}
+
+Backend = Literal["auto", "c", "python"]
+StepController = Literal["PI", "scipy"]
+RedundantConstraints = Literal["minimum-norm", "error"]
+VelocityProjection = Literal["kinetic-energy", "least-change"]
+
+BACKENDS: tuple[Backend, ...] = ("auto", "c", "python")
+STEP_CONTROLS: tuple[StepController, ...] = ("PI", "scipy")
+REDUNDANT_MODES: tuple[RedundantConstraints, ...] = ("minimum-norm", "error")
+VELOCITY_PROJECTIONS: tuple[VelocityProjection, ...] = ("kinetic-energy", "least-change")
+STABILIZATIONS = ("projection", "baumgarte", None)
+#: The Baumgarte gain when ``stabilization="baumgarte"`` is given without one.
+DEFAULT_BAUMGARTE_GAIN = 10.0
+
+
+# --------------------------------------------------------------------------- typed values
+
+
+@dataclass(frozen=True)
+class Projection:
+    """Project positions, then velocities, onto the constraints after every step."""
+
+
+@dataclass(frozen=True)
+class Baumgarte:
+    """Replace ``A qdd = c`` by ``A qdd = c - 2 w (A qd + b) - w^2 psi`` (``w = gain``).
+
+    A constraint error then obeys the critically damped ``e'' + 2 w e' + w^2 e = 0``;
+    choose ``w`` a few times above the fastest motion of interest and well below
+    ``1 / step``.
+    """
+
+    gain: float
+
+
+#: ``None``: the raw index-1 formulation (the drift is left alone).
+Stabilization = Projection | Baumgarte | None
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """The step-size controller with its tolerances and step limits (``solve_ivp``'s)."""
+
+    controller: StepController = "PI"
+    rtol: float | np.ndarray = 1e-11
+    atol: float | np.ndarray = 1e-13
+    first_step: float | None = None
+    max_step: float = math.inf
+
+    def solver_options(self) -> dict[str, object]:
+        """The keywords of a SciPy ``OdeSolver`` these values stand for."""
+        options: dict[str, object] = {"rtol": self.rtol, "atol": self.atol,
+                                      "max_step": self.max_step}
+        if self.first_step is not None:
+            options["first_step"] = self.first_step
+        return options
+
+
+@dataclass(frozen=True)
+class Output:
+    """What the integration records: times, dense output, events, a progress bar."""
+
+    t_eval: np.ndarray | None = None
+    dense_output: bool = False
+    events: tuple[Callable, ...] = ()
+    progress: bool = False
+
+
+@dataclass(frozen=True)
+class SimulationOptions:
+    """Every option of one simulation, checked (see :func:`simulation_options`)."""
+
+    t_span: tuple[float, float]
+    method: type[OdeSolver] = DOP853
+    step: StepControl = field(default_factory=StepControl)
+    stabilization: Stabilization = field(default_factory=Projection)
+    output: Output = field(default_factory=Output)
+    backend: Backend = "auto"
+    redundant_constraints: RedundantConstraints = "minimum-norm"
+    velocity_projection: VelocityProjection = "kinetic-energy"
+
+
+# --------------------------------------------------------------------------- the table
+
+
+class Rule(Protocol):
+    """One accepted form of a value: ``accepts(value)`` and how to say it."""
+
+    description: str
+
+    def accepts(self, value: object) -> bool: ...
+
+
+@dataclass(frozen=True)
+class OneOf:
+    choices: tuple
+
+    @property
+    def description(self) -> str:
+        return "one of " + ", ".join(repr(c) for c in self.choices)
+
+    def accepts(self, value: object) -> bool:
+        return any(value is c or (c is not None and _same(value, c)) for c in self.choices)
+
+
+def _same(value: object, choice: object) -> bool:
+    try:
+        return bool(value == choice) and type(value) is type(choice)
+    except (TypeError, ValueError):
+        return False
+
+
+@dataclass(frozen=True)
+class PositiveNumber:
+    """A positive real number: finite, or also ``inf`` (a step limit)."""
+
+    infinite: bool = False
+
+    @property
+    def description(self) -> str:
+        return "a positive number (inf allowed)" if self.infinite else \
+            "a finite positive number"
+
+    def accepts(self, value: object) -> bool:
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
+            return False
+        v = float(value)
+        return v > 0 and (math.isfinite(v) or (self.infinite and v == math.inf))
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """A finite positive number, or an array of them (one per state component)."""
+
+    description: str = "a finite positive number or an array of them"
+
+    def accepts(self, value: object) -> bool:
+        if isinstance(value, bool):
+            return False
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            return False
+        return array.size > 0 and array.ndim <= 1 and bool(np.all(np.isfinite(array))
+                                                           & np.all(array > 0))
+
+
+@dataclass(frozen=True)
+class Boolean:
+    description: str = "True or False"
+
+    def accepts(self, value: object) -> bool:
+        return isinstance(value, (bool, np.bool_))
+
+
+@dataclass(frozen=True)
+class SolverClass:
+    description: str = "a scipy.integrate.OdeSolver subclass"
+
+    def accepts(self, value: object) -> bool:
+        return isinstance(value, type) and issubclass(value, OdeSolver)
+
+
+@dataclass(frozen=True)
+class Callables:
+    description: str = "a sequence of callables event(t, q, qd)"
+
+    def accepts(self, value: object) -> bool:
+        return isinstance(value, Sequence) and all(callable(e) for e in value)
+
+
+NONE = OneOf((None,))
+
+#: Every option of ``simulate`` and the forms it may take.
+SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
+    "method": [OneOf(tuple(METHODS)), SolverClass()],
+    "rtol": [Tolerance()],
+    "atol": [Tolerance()],
+    "step_control": [OneOf(STEP_CONTROLS)],
+    "first_step": [PositiveNumber(), NONE],
+    "max_step": [PositiveNumber(infinite=True)],
+    "stabilization": [OneOf(STABILIZATIONS)],
+    "baumgarte_gain": [PositiveNumber(), NONE],
+    "backend": [OneOf(BACKENDS)],
+    "native": [Boolean(), NONE],
+    "redundant_constraints": [OneOf(REDUNDANT_MODES)],
+    "velocity_projection": [OneOf(VELOCITY_PROJECTIONS)],
+    "dense_output": [Boolean()],
+    "progress": [Boolean()],
+    "events": [Callables()],
+}
+
+
+def check_parameters(values: dict[str, object], table: dict[str, list[Rule]],
+                     caller: str) -> None:
+    """Raise one uniform ``ValueError`` for the first value no rule of its entry accepts.
+
+    Parameters
+    ----------
+    values
+        The keyword arguments to check, by name (every name must be in ``table``).
+    table
+        The accepted forms of each keyword.
+    caller
+        The function's name, for the message.
+
+    >>> check_parameters({"backend": "gpu"}, SIMULATE_PARAMETERS, "simulate")
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'backend' parameter of simulate must be one of 'auto', 'c', 'python'; got 'gpu'.
+    """
+    for name, value in values.items():
+        rules = table[name]
+        if not any(rule.accepts(value) for rule in rules):
+            forms = " or ".join(rule.description for rule in rules)
+            raise ValueError(f"The {name!r} parameter of {caller} must be {forms}; "
+                             f"got {value!r}.")
+
+
+# --------------------------------------------------------------------------- the door
+
+
+def simulation_options(
+    t_span: Sequence[float],
+    *,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    method: str | type[OdeSolver] = "DOP853",
+    rtol: float | Sequence[float] | np.ndarray = 1e-11,
+    atol: float | Sequence[float] | np.ndarray = 1e-13,
+    step_control: StepController = "PI",
+    first_step: float | None = None,
+    max_step: float = math.inf,
+    stabilization: Literal["projection", "baumgarte"] | None = "projection",
+    baumgarte_gain: float | None = None,
+    backend: Backend = "auto",
+    native: bool | None = None,
+    redundant_constraints: RedundantConstraints = "minimum-norm",
+    velocity_projection: VelocityProjection = "kinetic-energy",
+    events: Sequence[Callable] = (),
+    dense_output: bool = False,
+    progress: bool = False,
+) -> SimulationOptions:
+    """Check the keywords of ``simulate`` once and turn them into typed values.
+
+    Parameters
+    ----------
+    t_span, t_eval, method, rtol, atol, first_step, max_step, events, dense_output
+        As in :func:`scipy.integrate.solve_ivp`.
+    step_control
+        The explicit Runge-Kutta methods' step-size controller, ``"PI"`` or
+        ``"scipy"`` (:mod:`dalembert.solvers.step_control`).
+    stabilization, baumgarte_gain
+        ``"projection"``, ``"baumgarte"`` (with a finite positive gain, default 10) or
+        ``None``; a gain with another stabilization is an error.
+    backend
+        ``"auto"`` (the C loop where it applies), ``"c"`` (required) or ``"python"``.
+    native
+        Deprecated alias of ``backend``: ``True`` is ``"c"``, ``False`` ``"python"``.
+    redundant_constraints
+        ``"minimum-norm"`` or ``"error"`` for dependent constraints.
+    velocity_projection
+        How initial velocities are made consistent: ``"kinetic-energy"`` (the
+        velocities after a perfectly plastic impact onto the constraints) or
+        ``"least-change"`` (the nearest velocities in the Euclidean sense).
+    progress
+        Show a progress bar.
+
+    >>> simulation_options((0, 2), method="RK45", rtol=1e-8).step.rtol
+    1e-08
+    """
+    given = {
+        "method": method, "rtol": rtol, "atol": atol, "step_control": step_control,
+        "first_step": first_step, "max_step": max_step, "stabilization": stabilization,
+        "baumgarte_gain": baumgarte_gain, "backend": backend, "native": native,
+        "redundant_constraints": redundant_constraints,
+        "velocity_projection": velocity_projection, "events": events,
+        "dense_output": dense_output, "progress": progress,
+    }
+    check_parameters(given, SIMULATE_PARAMETERS, "simulate")
+    span = _time_span(t_span)
+    solver = METHODS[method] if isinstance(method, str) else method
+    if stabilization == "projection" and solver is LSODA:
+        raise ValueError(
+            "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
+            "stiff problems, or stabilization='baumgarte'"
+        )
+    return SimulationOptions(
+        t_span=span,
+        method=solver,
+        step=StepControl(step_control, _tolerance(rtol), _tolerance(atol),
+                         None if first_step is None else float(first_step), float(max_step)),
+        stabilization=_stabilization(stabilization, baumgarte_gain),
+        output=Output(_times(t_eval, span), bool(dense_output), tuple(events), bool(progress)),
+        backend=_backend(backend, native),
+        redundant_constraints=redundant_constraints,
+        velocity_projection=velocity_projection,
+    )
+
+
+def _time_span(t_span: Sequence[float]) -> tuple[float, float]:
+    try:
+        t0, tf = (float(v) for v in t_span)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"t_span must be two numbers (t0, tf), got {t_span!r}") from exc
+    if not (math.isfinite(t0) and math.isfinite(tf)) or t0 == tf:
+        raise ValueError(f"t_span must be two different finite times, got {t_span!r}")
+    return t0, tf
+
+
+def _tolerance(value: float | Sequence[float] | np.ndarray) -> float | np.ndarray:
+    array = np.asarray(value, dtype=float)
+    return float(array) if array.ndim == 0 else array
+
+
+def _stabilization(name: str | None, gain: float | None) -> Stabilization:
+    if name == "baumgarte":
+        return Baumgarte(DEFAULT_BAUMGARTE_GAIN if gain is None else float(gain))
+    if gain is not None:
+        raise ValueError(f"baumgarte_gain={gain!r} is given with stabilization={name!r}; "
+                         "the gain applies only to stabilization='baumgarte'")
+    return Projection() if name == "projection" else None
+
+
+def _backend(backend: Backend, native: bool | None) -> Backend:
+    if native is None:
+        return backend
+    warnings.warn("simulate(native=...) is deprecated; use backend='c' (native=True) or "
+                  "backend='python' (native=False)", DeprecationWarning, stacklevel=4)
+    if backend != "auto":
+        raise ValueError(f"native={native!r} and backend={backend!r} are both given; "
+                         "give backend only")
+    return "c" if native else "python"
+
+
+def _times(t_eval: Sequence[float] | np.ndarray | None,
+           t_span: tuple[float, float]) -> np.ndarray | None:
+    if t_eval is None:
+        return None
+    try:
+        times = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"t_eval must be an array of times, got {t_eval!r}") from exc
+    if times.ndim != 1 or not np.all(np.isfinite(times)):
+        bad = np.flatnonzero(~np.isfinite(times.ravel()))
+        where = f" (not finite at index {bad[0]})" if len(bad) else ""
+        raise ValueError(f"t_eval must be a 1-D array of finite times inside t_span{where}")
+    lo, hi = min(t_span), max(t_span)
+    if np.any((times < lo) | (times > hi)):
+        raise ValueError(f"t_eval must be a 1-D array of times inside t_span {t_span}")
+    if np.any(np.diff(times) * np.sign(t_span[1] - t_span[0]) <= 0):
+        raise ValueError("t_eval must be strictly ordered in the direction of integration")
+    return times
