@@ -126,7 +126,7 @@ def measure(n: int, t_end: float, rtol: float, atol: float) -> dict:
     row.update(native_rhs_us=best_time(lambda: native.rhs(0.0, y)),
                native_project_us=best_time(lambda: native.project(0.0, y + 1e-9)))
     start = time.perf_counter()
-    system.simulate((0.0, t_end), q0, qd0, rtol=rtol, atol=atol, native=False)
+    system.simulate((0.0, t_end), q0, qd0, rtol=rtol, atol=atol, backend="python")
     row["simulate_python_s"] = time.perf_counter() - start
     start = time.perf_counter()
     traj = system.simulate((0.0, t_end), q0, qd0, rtol=rtol, atol=atol)

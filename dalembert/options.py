@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
@@ -120,7 +120,8 @@ class SimulationOptions:
 class Rule(Protocol):
     """One accepted form of a value: ``accepts(value)`` and how to say it."""
 
-    description: str
+    @property
+    def description(self) -> str: ...
 
     def accepts(self, value: object) -> bool: ...
 
@@ -203,7 +204,15 @@ class Callables:
         return isinstance(value, Sequence) and all(callable(e) for e in value)
 
 
-NONE = OneOf((None,))
+@dataclass(frozen=True)
+class IsNone:
+    description: str = "None"
+
+    def accepts(self, value: object) -> bool:
+        return value is None
+
+
+NONE = IsNone()
 
 #: Every option of ``simulate`` and the forms it may take.
 SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
@@ -225,7 +234,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
 }
 
 
-def check_parameters(values: dict[str, object], table: dict[str, list[Rule]],
+def check_parameters(values: Mapping[str, object], table: Mapping[str, list[Rule]],
                      caller: str) -> None:
     """Raise one uniform ``ValueError`` for the first value no rule of its entry accepts.
 
@@ -358,12 +367,13 @@ def _stabilization(name: str | None, gain: float | None) -> Stabilization:
 def _backend(backend: Backend, native: bool | None) -> Backend:
     if native is None:
         return backend
-    warnings.warn("simulate(native=...) is deprecated; use backend='c' (native=True) or "
-                  "backend='python' (native=False)", DeprecationWarning, stacklevel=4)
+    meant: Backend = "c" if native else "python"
+    warnings.warn(f"simulate(native={native!r}) is deprecated; use backend={meant!r}",
+                  DeprecationWarning, stacklevel=4)
     if backend != "auto":
         raise ValueError(f"native={native!r} and backend={backend!r} are both given; "
                          "give backend only")
-    return "c" if native else "python"
+    return meant
 
 
 def _times(t_eval: Sequence[float] | np.ndarray | None,

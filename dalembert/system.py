@@ -10,8 +10,10 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from functools import cached_property
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from scipy.integrate import OdeSolver
 
 from .codegen import compiled as codegen
 from .codegen.compiled import CompiledEquations, NumericModel
@@ -20,19 +22,25 @@ from .errors import InitialConditionsAdjusted, IntegrationWarning, RedundantCons
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
-from .model.values import coordinate_values
-from .solvers.engine import choose_engine
+from .model.values import CoordinateValues, coordinate_values
+from .options import (
+    SIMULATE_PARAMETERS,
+    Backend,
+    RedundantConstraints,
+    SimulationOptions,
+    StepController,
+    VelocityProjection,
+    check_parameters,
+    simulation_options,
+)
 from .solvers.initialization import InitializationReport, consistent_state
-from .solvers.integrate import IntegrationResult, integrate
-from .solvers.kkt import REDUNDANT_MODES
+from .solvers.integrate import IntegrationResult
 from .solvers.native.library import prepare_runtime
-from .solvers.step_control import check_step_control
-from .statics import Equilibrium, Linearization
-from .statics import equilibrium as _equilibrium
-from .statics import linearize as _linearize
+from .solvers.plan import SimulationPlan, plan_simulation
 from .trajectory import Trajectory
 
-STABILIZATIONS = ("projection", "baumgarte", None)
+if TYPE_CHECKING:  # statics is imported on first use: it pulls in scipy.optimize
+    from .statics import Equilibrium, Linearization
 
 
 class System:
@@ -63,7 +71,7 @@ class System:
     redundant_constraints
         Dependent (redundant) constraints, detected at the initial state:
         ``"minimum-norm"`` (default) proceeds with a
-        :class:`~dalembert.solvers.kkt.RedundantConstraintsWarning` naming them; the
+        :class:`~dalembert.errors.RedundantConstraintsWarning` naming them; the
         motion is unique, the multipliers are the minimum-norm ones (not unique).
         ``"error"`` raises a :class:`~dalembert.ConstraintError` naming them.
         :meth:`simulate` accepts the same keyword to override it.
@@ -101,7 +109,7 @@ class System:
         parameters: Mapping[object, object] | None = None,
         velocities: Sequence[object] | None = None,
         name: str = "system",
-        redundant_constraints: str = "minimum-norm",
+        redundant_constraints: RedundantConstraints = "minimum-norm",
     ) -> None:
         self.redundant_constraints = _check_redundant(redundant_constraints)
         self.model: Model = build_model(
@@ -173,139 +181,289 @@ class System:
     # -- simulation ------------------------------------------------------------------
     def consistent_initial_state(
         self,
-        q0: object,
-        qd0: object = None,
+        q0: CoordinateValues,
+        qd0: CoordinateValues | None = None,
         *,
         t0: float = 0.0,
         fixed: Sequence[object] | None = None,
         parameters: Mapping[object, object] | None = None,
-        redundant_constraints: str | None = None,
+        redundant_constraints: RedundantConstraints | None = None,
+        velocity_projection: VelocityProjection = "kinetic-energy",
     ) -> InitializationReport:
-        """Project ``(q0, qd0)`` onto the constraints (least change); ``fixed`` stay put.
+        """Project ``(q0, qd0)`` onto the constraints; ``fixed`` coordinates stay put.
 
-        The report also gives the true degrees of freedom ``n - rank(A)`` there
-        (``report.degrees_of_freedom``) and the dependent constraints
-        (``report.dependent_constraints``).
+        Positions change the least (Gauss-Newton). Velocities become, by default,
+        those after a perfectly plastic impact onto the constraints (the projection
+        in the kinetic-energy metric, which does not depend on units; the report's
+        ``impulse`` is the generalized impulse it implies).
+
+        Parameters
+        ----------
+        q0, qd0
+            Positions and velocities: a dict by coordinate (symbol or name; a
+            coordinate left out is 0) or a sequence in coordinate order.
+        t0
+            The initial time (for rheonomic constraints).
+        fixed
+            Coordinates whose given position and velocity must not change.
+        parameters
+            Parameter values overriding the System's.
+        redundant_constraints
+            ``"minimum-norm"`` or ``"error"``; default the System's option.
+        velocity_projection
+            ``"kinetic-energy"`` (default) or ``"least-change"`` (the Euclidean
+            nearest velocities).
+
+        Returns
+        -------
+        InitializationReport
+            ``q``, ``qd``, what changed, the impulse, the true degrees of freedom
+            ``n - rank(A)`` there (``degrees_of_freedom``) and the dependent
+            constraints (``dependent_constraints``).
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> report = pendulum.consistent_initial_state({"x": 2.0, "y": 0.0}, {"y": -1.0})
+        >>> [round(float(v), 12) for v in (*report.q, *report.qd)]
+        [1.0, 0.0, 0.0, -1.0]
         """
         names = self.coordinate_names
         q = coordinate_values(q0, names, "q0")
         qd = coordinate_values(qd0, names, "qd0")
         labels = _LazyLabels(self.describe_constraint, len(self.constraint_names))
-        mode = self.redundant_constraints if redundant_constraints is None \
-            else _check_redundant(redundant_constraints)
+        if redundant_constraints is None:
+            mode = self.redundant_constraints
+        else:
+            mode = _check_redundant(redundant_constraints)
+        check_parameters({"velocity_projection": velocity_projection}, SIMULATE_PARAMETERS,
+                         "consistent_initial_state")
         return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed,
                                 constraint_names=self.constraint_names,
-                                redundant_constraints=mode)
+                                redundant_constraints=mode,
+                                velocity_projection=velocity_projection)
 
     def simulate(
         self,
         t_span: Sequence[float],
-        q0: object,
-        qd0: object = None,
+        q0: CoordinateValues,
+        qd0: CoordinateValues | None = None,
         *,
-        t_eval: Sequence[float] | None = None,
-        method: str = "DOP853",
-        rtol: float = 1e-11,
-        atol: float = 1e-13,
-        stabilization: str | None = "projection",
-        baumgarte_gain: float = 10.0,
+        t_eval: Sequence[float] | np.ndarray | None = None,
+        method: str | type[OdeSolver] = "DOP853",
+        rtol: float | Sequence[float] = 1e-11,
+        atol: float | Sequence[float] = 1e-13,
+        first_step: float | None = None,
+        max_step: float = np.inf,
+        step_control: StepController = "PI",
+        stabilization: Literal["projection", "baumgarte"] | None = "projection",
+        baumgarte_gain: float | None = None,
         parameters: Mapping[object, object] | None = None,
         fixed: Sequence[object] | None = None,
         events: Sequence[Callable] = (),
         dense_output: bool = False,
         progress: bool = False,
-        redundant_constraints: str | None = None,
+        redundant_constraints: RedundantConstraints | None = None,
+        velocity_projection: VelocityProjection = "kinetic-energy",
+        backend: Backend = "auto",
         native: bool | None = None,
-        step_control: str = "PI",
-        **options: object,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
 
-        Like :func:`scipy.integrate.solve_ivp`: ``method`` is any of its solvers
-        (``"DOP853"`` default, ``"Radau"``/``"BDF"`` for stiff mechanisms), ``t_eval``
-        picks output times, ``events`` are functions ``event(t, q, qd)`` with optional
-        ``terminal``/``direction`` attributes, ``dense_output`` adds ``traj.sol(t)``;
-        other keywords (``max_step``, ``first_step``...) go to the solver.
+        The keywords follow :func:`scipy.integrate.solve_ivp`. They are checked
+        once (:func:`dalembert.options.simulation_options`), the initial state is
+        made consistent, and :meth:`plan` decides how the run goes (which loop,
+        which solver); ``simulate`` is ``run(plan(...))``.
 
-        Initial values are first projected onto the constraints (least change,
-        ``fixed`` coordinates held; a warning reports what changed).
-        ``stabilization`` is ``"projection"`` (positions and velocities projected after
-        every step: no tuning, residuals at rounding level), ``"baumgarte"`` (gain
-        ``baumgarte_gain``, see :mod:`dalembert.solvers.dynamics`) or ``None`` (raw
-        drift). A failure or Ctrl-C returns the part computed so far with
-        ``success=False`` and an :class:`~dalembert.errors.IntegrationWarning`.
-        ``redundant_constraints`` overrides the System's option of that name.
-        ``native`` chooses the simulation loop: ``None`` runs it in C when it applies
-        (C-generated functions, independent constraints, a block-structured mass
-        matrix; see :mod:`dalembert.solvers.native`), ``True`` requires that,
-        ``False`` keeps it in Python. Both give the same trajectory to rounding.
-        ``step_control`` is the explicit Runge-Kutta methods' step-size controller:
-        ``"PI"`` (default; fewer rejected steps where stability limits the step, see
-        :mod:`dalembert.solvers.step_control`) or ``"scipy"`` (``solve_ivp``'s steps).
+        Parameters
+        ----------
+        t_span
+            ``(t0, tf)``; ``tf < t0`` integrates backwards.
+        q0, qd0
+            Initial positions and velocities: a dict by coordinate (a coordinate
+            left out is 0) or a sequence in coordinate order. They are projected onto
+            the constraints first (see :meth:`consistent_initial_state`; a warning
+            reports what changed).
+        t_eval
+            Output times (default: every step).
+        method
+            A ``solve_ivp`` method name (``"DOP853"`` default; ``"Radau"``/``"BDF"``
+            for stiff mechanisms) or an ``OdeSolver`` subclass.
+        rtol, atol
+            Tolerances: finite positive numbers (or arrays, one per state entry).
+        first_step, max_step
+            Step limits, as in ``solve_ivp``.
+        step_control
+            The explicit Runge-Kutta methods' step-size controller: ``"PI"``
+            (default; fewer rejected steps where stability limits the step, see
+            :mod:`dalembert.solvers.step_control`) or ``"scipy"`` (``solve_ivp``'s).
+        stabilization
+            ``"projection"`` (positions and velocities projected after every step:
+            no tuning, residuals at rounding level), ``"baumgarte"`` (see
+            :mod:`dalembert.solvers.dynamics`) or ``None`` (raw drift).
+        baumgarte_gain
+            The Baumgarte gain, a finite positive number (default 10); only with
+            ``stabilization="baumgarte"``.
+        parameters
+            Parameter values overriding the System's (no code is regenerated).
+        fixed
+            Coordinates the initial projection must not change.
+        events
+            Functions ``event(t, q, qd)`` with optional ``terminal``/``direction``
+            attributes, as in ``solve_ivp``.
+        dense_output
+            Add ``traj.sol(t)``.
+        progress
+            Show a progress bar.
+        redundant_constraints
+            Overrides the System's option of that name.
+        velocity_projection
+            ``"kinetic-energy"`` (default: the velocities after a plastic impact
+            onto the constraints) or ``"least-change"``.
+        backend
+            ``"auto"`` (default): the loop runs in C where it applies (C-generated
+            functions, a block-structured mass matrix; see
+            :mod:`dalembert.solvers.native`), else in Python; ``"c"`` requires C
+            (a ``ValueError`` says why it does not apply); ``"python"``. Both give
+            the same trajectory to rounding.
+        native
+            Deprecated alias of ``backend`` (``True``: ``"c"``, ``False``:
+            ``"python"``).
+
+        Returns
+        -------
+        Trajectory
+            A failure or Ctrl-C returns the part computed so far with
+            ``success=False`` and an :class:`~dalembert.errors.IntegrationWarning`.
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> traj = pendulum.simulate((0, 1), {"x": 1.0, "y": 0.0}, t_eval=[0.5, 1.0])
+        >>> traj.t.tolist(), bool(traj.position_residual.max() < 1e-12)
+        ([0.5, 1.0], True)
         """
-        if stabilization not in STABILIZATIONS:
-            raise ValueError(
-                f"stabilization must be one of {STABILIZATIONS}, not {stabilization!r}"
-            )
-        t_span = _check_span(t_span)
-        _check_tolerances(rtol, atol)
-        check_step_control(step_control)
+        options = simulation_options(
+            t_span, t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
+            max_step=max_step, step_control=step_control, stabilization=stabilization,
+            baumgarte_gain=baumgarte_gain, backend=backend, native=native,
+            redundant_constraints=self.redundant_constraints if redundant_constraints is None
+            else redundant_constraints, velocity_projection=velocity_projection,
+            events=events, dense_output=dense_output, progress=progress)
+        return self._run(self._plan(options, q0, qd0, parameters, fixed))
+
+    def plan(
+        self,
+        t_span: Sequence[float],
+        q0: CoordinateValues,
+        qd0: CoordinateValues | None = None,
+        *,
+        parameters: Mapping[object, object] | None = None,
+        fixed: Sequence[object] | None = None,
+        **options: Any,
+    ) -> SimulationPlan:
+        """How :meth:`simulate` would run, without running it.
+
+        Parameters
+        ----------
+        t_span, q0, qd0, parameters, fixed
+            As in :meth:`simulate`.
+        options
+            :meth:`simulate`'s other keywords.
+
+        Returns
+        -------
+        SimulationPlan
+            The decisions (``plan.loop``, ``plan.why_python``, ``plan.solver``,
+            ``plan.stretches``...); :meth:`run` executes it.
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> plan = pendulum.plan((0, 1), {"x": 1.0, "y": 0.0}, backend="python")
+        >>> plan.loop
+        'python'
+        >>> traj = pendulum.run(plan)
+        >>> traj.status
+        'finished'
+        """
+        options.setdefault("redundant_constraints", self.redundant_constraints)
+        checked = simulation_options(t_span, **options)
+        return self._plan(checked, q0, qd0, parameters, fixed)
+
+    def _plan(self, options: SimulationOptions, q0: CoordinateValues,
+              qd0: CoordinateValues | None, parameters: Mapping[object, object] | None,
+              fixed: Sequence[object] | None) -> SimulationPlan:
         num = self.numeric(parameters)
-        report = self.consistent_initial_state(q0, qd0, t0=t_span[0], fixed=fixed,
-                                               parameters=parameters,
-                                               redundant_constraints=redundant_constraints)
+        report = self.consistent_initial_state(
+            q0, qd0, t0=options.t_span[0], fixed=fixed, parameters=parameters,
+            redundant_constraints=options.redundant_constraints,
+            velocity_projection=options.velocity_projection)
+        # stacklevel 3: the user's call of simulate or plan
         if report.changed:
-            warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=2)
+            warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=3)
         if report.dependent_constraints:
-            warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=2)
-        kept = report.rank.kept if report.rank is not None else None
-        y0 = np.concatenate([report.q, report.qd])
-        engine = choose_engine(
-            num, t_span[0], y0, method, projection=stabilization == "projection",
-            baumgarte=baumgarte_gain if stabilization == "baumgarte" else 0.0, kept=kept,
-            native=native)
-        result = integrate(
-            engine.rhs, t_span, y0, method=engine.method,
-            t_eval=_check_t_eval(t_eval, t_span), dense_output=dense_output,
-            events=[_state_event(e, num.n) for e in events], project=engine.project,
-            progress=progress, step_control=step_control, rtol=rtol, atol=atol,
-            **engine.options, **options,
-        )
+            warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=3)
+        return plan_simulation(num, report, options)
+
+    def run(self, plan: SimulationPlan) -> Trajectory:
+        """Execute a plan made by :meth:`plan` (see there for an example).
+
+        Parameters
+        ----------
+        plan
+            From :meth:`plan` of this System (or ``dataclasses.replace`` of one).
+
+        Returns
+        -------
+        Trajectory
+            As :meth:`simulate` returns it.
+        """
+        return self._run(plan)
+
+    def _run(self, plan: SimulationPlan) -> Trajectory:
+        result = plan.run()
         if not result.success:
-            warnings.warn(f"{result.message}; returning the trajectory up to "
-                          f"t={result.t[-1] if len(result.t) else t_span[0]:.6g}",
-                          IntegrationWarning, stacklevel=2)
-        return self._trajectory(result, report, engine.outputs)
+            reached = result.t[-1] if len(result.t) else plan.options.t_span[0]
+            # stacklevel 3: the user's call of simulate or run
+            warnings.warn(f"{result.message}; returning the trajectory up to t={reached:.6g}",
+                          IntegrationWarning, stacklevel=3)
+        return self._trajectory(result, plan)
 
     # -- rest and small oscillations -------------------------------------------------
-    def equilibrium(self, guess: object, **options: object) -> Equilibrium:
+    def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:
         """Static equilibrium near ``guess``: ``f(q, 0, t) + A^T lambda = 0``, ``psi(q) = 0``.
 
         Returns the configuration, the multipliers, the reactions at rest
         ``A^T lambda`` and the stability; see :func:`dalembert.statics.equilibrium`.
         """
-        return _equilibrium(self, guess, **options)
+        from .statics import equilibrium
 
-    def linearize(self, q_eq: object, **options: object) -> Linearization:
+        return equilibrium(self, guess, **options)
+
+    def linearize(self, q_eq: Any, **options: Any) -> Linearization:
         """Small oscillations about an equilibrium, on the constraint manifold.
 
         Natural frequencies, mode shapes in the original coordinates and a
         state-space form; see :func:`dalembert.statics.linearize`.
         """
-        return _linearize(self, q_eq, **options)
+        from .statics import linearize
 
-    def _trajectory(
-        self, result: IntegrationResult, report: InitializationReport, outputs: Callable,
-    ) -> Trajectory:
+        return linearize(self, q_eq, **options)
+
+    def _trajectory(self, result: IntegrationResult, plan: SimulationPlan) -> Trajectory:
         n = len(self.coordinate_names)
-        derived = outputs(result.t, result.y)
+        derived = plan.outputs(result.t, result.y)
         energies = derived.pop("energies")
         return Trajectory(
             t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,
             kinetic_energy=energies[:, 0], potential_energy=energies[:, 1],
             jacobi_integral=energies[:, 2], coordinate_names=self.coordinate_names,
             constraint_names=self.constraint_names, status=result.status,
-            message=result.message, stats=result.stats, initialization=str(report),
+            message=result.message, stats=result.stats, initialization=str(plan.initial),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
         )
 
@@ -327,46 +485,9 @@ class _LazyLabels(Sequence):
         return self._describe(i % self._size)
 
 
-def _check_redundant(mode: str) -> str:
-    if mode not in REDUNDANT_MODES:
-        raise ValueError(f"redundant_constraints must be one of {REDUNDANT_MODES}, not {mode!r}")
+def _check_redundant(mode: RedundantConstraints) -> RedundantConstraints:
+    """The ``redundant_constraints`` option of a System, checked."""
+    check_parameters({"redundant_constraints": mode}, SIMULATE_PARAMETERS, "System")
     return mode
 
 
-def _check_span(t_span: Sequence[float]) -> tuple[float, float]:
-    try:
-        t0, tf = (float(v) for v in t_span)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"t_span must be two numbers (t0, tf), got {t_span!r}") from exc
-    if not (np.isfinite(t0) and np.isfinite(tf)) or t0 == tf:
-        raise ValueError(f"t_span must be two different finite times, got {t_span!r}")
-    return t0, tf
-
-
-def _check_tolerances(rtol: float, atol: float) -> None:
-    if not (np.all(np.asarray(rtol) > 0) and np.all(np.asarray(atol) > 0)):
-        raise ValueError(f"rtol and atol must be positive, got rtol={rtol}, atol={atol}")
-
-
-def _check_t_eval(t_eval: Sequence[float] | None, t_span: tuple[float, float]):
-    if t_eval is None:
-        return None
-    t_eval = np.asarray(t_eval, dtype=float)
-    lo, hi = min(t_span), max(t_span)
-    if t_eval.ndim != 1 or np.any((t_eval < lo) | (t_eval > hi)):
-        raise ValueError("t_eval must be a 1-D array of times inside t_span")
-    d = np.diff(t_eval) * np.sign(t_span[1] - t_span[0])
-    if np.any(d <= 0):
-        raise ValueError("t_eval must be strictly ordered in the direction of integration")
-    return t_eval
-
-
-def _state_event(event: Callable, n: int) -> Callable:
-    """Adapt ``event(t, q, qd)`` to SciPy's ``event(t, y)``, keeping its attributes."""
-
-    def wrapped(t: float, y: np.ndarray) -> float:
-        return event(t, y[:n], y[n:])
-
-    wrapped.terminal = getattr(event, "terminal", False)
-    wrapped.direction = getattr(event, "direction", 0)
-    return wrapped

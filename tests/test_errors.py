@@ -168,16 +168,25 @@ def test_simulate_option_overrides_the_system_option():
         circle_twice().simulate((0, 1), q0=[1.0, 0.0, 0.0], redundant_constraints="error")
 
 
-def test_native_loop_required_where_it_does_not_apply():
-    with pytest.raises(ValueError, match=r"native=True, but the C loop does not apply: the "
-                                         r"constraints are dependent"), \
-            pytest.warns(RedundantConstraintsWarning):
-        circle_twice().simulate((0, 1), q0=[1.0, 0.0, 0.0], native=True)
+def test_c_loop_required_where_it_does_not_apply(monkeypatch):
+    monkeypatch.setenv("DALEMBERT_BACKEND", "numpy")
+    with pytest.raises(ValueError, match=r"backend='c', but the C loop does not apply: the "
+                                         r"model's functions were not generated in C"):
+        pendulum().simulate((0, 1), q0=[1.0, 0.0], backend="c")
+
+
+def test_native_keyword_is_a_deprecated_alias_of_backend(pend):
+    with pytest.warns(DeprecationWarning, match=r"native=.*deprecated; use backend='python'"):
+        plan = pend.plan((0, 1), q0=[1.0, 0.0], native=False)
+    assert plan.loop == "python" and plan.options.backend == "python"
+    with pytest.raises(ValueError, match=r"native=True and backend='python' are both given"), \
+            pytest.warns(DeprecationWarning):
+        pend.simulate((0, 1), q0=[1.0, 0.0], native=True, backend="python")
 
 
 def test_invalid_redundant_constraints_option():
-    with pytest.raises(ValueError, match=r"redundant_constraints must be one of "
-                       r"\('minimum-norm', 'error'\), not 'ignore'"):
+    with pytest.raises(ValueError, match=r"The 'redundant_constraints' parameter of System must "
+                       r"be one of 'minimum-norm', 'error'; got 'ignore'"):
         circle_twice(redundant_constraints="ignore")
 
 
@@ -286,16 +295,16 @@ def _interrupting(rhs):
 def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch, native):
     # The C loop returns to Python after every stretch of steps (one step here), so
     # Ctrl-C lands between stretches too.
-    from dalembert.solvers import engine
+    from dalembert.solvers import plan
     from dalembert.solvers.native import NativeSolver, run
 
-    real = engine.first_order_rhs
-    monkeypatch.setattr(engine, "first_order_rhs", lambda *a: _interrupting(real(*a)))
+    real = plan.first_order_rhs
+    monkeypatch.setattr(plan, "first_order_rhs", lambda *a: _interrupting(real(*a)))
     monkeypatch.setattr(NativeSolver, "rhs", _interrupting(NativeSolver.rhs))
     monkeypatch.setattr(run, "MAX_STEPS", 1)
     monkeypatch.setattr(run.StretchRunner, "run", _interrupting(run.StretchRunner.run))
     with pytest.warns(IntegrationWarning, match=r"interrupted"):
-        traj = pend.simulate((0, 10), q0=[1.0, 0.0], native=native)
+        traj = pend.simulate((0, 10), q0=[1.0, 0.0], backend="c" if native else "python")
     assert traj.status == "interrupted" and 0 < traj.t[-1] < 10 and len(traj) > 2
 
 
@@ -356,7 +365,9 @@ def test_no_double_counting_warning_for_a_different_force():
 
 # -- simulate() options ----------------------------------------------------------------
 def test_invalid_method(pend):
-    with pytest.raises(ValueError, match=r"unknown method 'Euler'; choose one of .*Radau"):
+    with pytest.raises(ValueError, match=r"The 'method' parameter of simulate must be one of "
+                                         r"'RK23', .*'Radau'.* or a scipy.integrate.OdeSolver "
+                                         r"subclass; got 'Euler'"):
         pend.simulate((0, 1), q0=[1.0, 0.0], method="Euler")
 
 
@@ -366,12 +377,14 @@ def test_lsoda_with_projection(pend):
 
 
 def test_invalid_stabilization(pend):
-    with pytest.raises(ValueError, match=r"stabilization must be one of"):
+    with pytest.raises(ValueError, match=r"The 'stabilization' parameter of simulate must be "
+                                         r"one of 'projection', 'baumgarte', None; got 'magic'"):
         pend.simulate((0, 1), q0=[1.0, 0.0], stabilization="magic")
 
 
 def test_invalid_step_control(pend):
-    with pytest.raises(ValueError, match=r"step_control must be one of \('PI', 'scipy'\)"):
+    with pytest.raises(ValueError, match=r"The 'step_control' parameter of simulate must be "
+                                         r"one of 'PI', 'scipy'; got 'fast'"):
         pend.simulate((0, 1), q0=[1.0, 0.0], step_control="fast")
 
 
@@ -391,7 +404,38 @@ def test_bad_t_eval(pend, t_eval, match):
         pend.simulate((0, 1), q0=[1.0, 0.0], t_eval=t_eval)
 
 
-@pytest.mark.parametrize(("rtol", "atol"), [(-1.0, 1e-12), (1e-9, 0.0), (0.0, 1e-12)])
-def test_bad_tolerances(pend, rtol, atol):
-    with pytest.raises(ValueError, match=r"rtol and atol must be positive"):
+@pytest.mark.parametrize(("rtol", "atol", "name"), [
+    (-1.0, 1e-12, "rtol"), (1e-9, 0.0, "atol"), (0.0, 1e-12, "rtol"), (np.inf, 1e-12, "rtol"),
+    (1e-9, np.nan, "atol"), ([1e-9, -1.0], 1e-12, "rtol"), ("tight", 1e-12, "rtol")])
+def test_bad_tolerances(pend, rtol, atol, name):
+    with pytest.raises(ValueError, match=rf"The '{name}' parameter of simulate must be a finite "
+                                         r"positive number or an array of them; got"):
         pend.simulate((0, 1), q0=[1.0, 0.0], rtol=rtol, atol=atol)
+
+
+@pytest.mark.parametrize("gain", [-5.0, 0.0, np.nan, np.inf, "high"])
+def test_baumgarte_gain_must_be_finite_and_positive(pend, gain):
+    with pytest.raises(ValueError, match=r"The 'baumgarte_gain' parameter of simulate must be "
+                                         r"a finite positive number or None; got"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], stabilization="baumgarte", baumgarte_gain=gain)
+
+
+@pytest.mark.parametrize("stabilization", ["projection", None])
+def test_baumgarte_gain_without_baumgarte(pend, stabilization):
+    with pytest.raises(ValueError, match=r"baumgarte_gain=5.0 is given with stabilization="
+                                         r".*the gain applies only to stabilization='baumgarte'"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], stabilization=stabilization, baumgarte_gain=5.0)
+
+
+def test_t_eval_holding_nan(pend):
+    with pytest.raises(ValueError, match=r"t_eval must be a 1-D array of finite times inside "
+                                         r"t_span \(not finite at index 1\)"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], t_eval=[0.2, np.nan, 0.8])
+
+
+@pytest.mark.parametrize(("name", "value"), [
+    ("max_step", 0.0), ("first_step", -1e-3), ("dense_output", "yes"), ("progress", 1),
+    ("backend", "gpu"), ("velocity_projection", "mass"), ("events", [1.0])])
+def test_other_options_get_the_uniform_message(pend, name, value):
+    with pytest.raises(ValueError, match=rf"The '{name}' parameter of simulate must be .*; got"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], **{name: value})

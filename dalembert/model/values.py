@@ -61,7 +61,7 @@ def coordinate_values(values: CoordinateValues, names: Sequence[str], what: str)
             raise InitialConditionError(
                 f"{what} has {vec.size} values for {n} coordinates ({', '.join(names)})"
             )
-    bad = [names[i] for i in np.flatnonzero(~np.isfinite(vec))]
+    bad = [names[int(i)] for i in np.flatnonzero(~np.isfinite(vec))]
     if bad:
         raise InitialConditionError(f"{what} is not finite for {', '.join(bad)}")
     return vec

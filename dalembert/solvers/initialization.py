@@ -11,7 +11,8 @@ from ..codegen.compiled import NumericModel
 from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
 from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error
-from .kkt import REDUNDANT_MODES, check_kkt
+from ..options import RedundantConstraints, VelocityProjection
+from .kkt import check_kkt, solve_kkt
 from .projection import StepProjector, project_positions, project_velocities
 from .sparse_kkt import DENSE_MAX, gram_well_conditioned, kkt_condition, kkt_solver, matvec
 
@@ -38,6 +39,15 @@ class InitializationReport:
     q: np.ndarray
     qd: np.ndarray
     rank: ConstraintRank | None = field(default=None, compare=False)
+    #: How the velocities were made consistent (the ``velocity_projection`` option).
+    velocity_projection: VelocityProjection = "kinetic-energy"
+    #: ``M (qd - qd_given)``: with the kinetic-energy projection, the generalized
+    #: impulse ``A^T mu`` of the plastic impact onto the constraints (``None`` if the
+    #: velocities were not changed that way).
+    impulse: np.ndarray | None = field(default=None, compare=False)
+    #: The kinetic energy the velocity projection removed (``T(qd_given) - T(qd)`` for
+    #: the kinetic-energy projection: the energy an impact dissipates).
+    kinetic_energy_lost: float = 0.0
 
     @property
     def degrees_of_freedom(self) -> int:
@@ -73,7 +83,21 @@ class InitializationReport:
             for label, given, new in (("", self.q_given, self.q), ("_dot", self.qd_given, self.qd)):
                 if name in _changed(self.names[i : i + 1], given[i : i + 1], new[i : i + 1]):
                     lines.append(f"  {name}{label}: {given[i]:.10g} -> {new[i]:.10g}")
+        if self.changed_velocities():
+            lines.append(self._velocity_note())
         return "\n".join(lines)
+
+    def _velocity_note(self) -> str:
+        if self.velocity_projection == "least-change" or self.impulse is None:
+            return ("velocities: the nearest consistent ones (least change, "
+                    "velocity_projection='least-change')")
+        moved = [f"{n}: {v:.6g}" for n, v in zip(self.names, self.impulse)
+                 if abs(v) > REPORT_TOL * max(1.0, float(np.abs(self.impulse).max()))]
+        return ("velocities: those after a perfectly plastic impact onto the constraints "
+                "(the projection in the kinetic-energy metric, independent of units; "
+                "velocity_projection='least-change' gives the nearest ones instead); "
+                f"generalized impulse M (qd - qd0) = A^T mu: {', '.join(moved)}; "
+                f"kinetic energy lost {self.kinetic_energy_lost:.6g}")
 
 
 def _changed(names: Sequence[str], given: np.ndarray, new: np.ndarray) -> list[str]:
@@ -90,18 +114,23 @@ def consistent_state(
     constraint_labels: Sequence[str],
     fixed: Sequence[object] | None = None,
     constraint_names: Sequence[str] | None = None,
-    redundant_constraints: str = "minimum-norm",
+    redundant_constraints: RedundantConstraints = "minimum-norm",
+    velocity_projection: VelocityProjection = "kinetic-energy",
 ) -> InitializationReport:
     """Project ``(q0, qd0)`` onto the constraints and check the KKT matrix there.
 
-    The rank of ``A`` is measured at the projected positions. Dependent constraints
-    raise a :class:`ConstraintError` naming them with ``redundant_constraints="error"``;
-    with ``"minimum-norm"`` they are recorded in the report (``report.rank``).
-    Constraints that leave no degree of freedom always raise.
+    Positions move the least (Gauss-Newton, minimum-norm steps). Velocities, with
+    ``velocity_projection="kinetic-energy"``, become those after a perfectly
+    plastic impact onto the constraints: ``M (qd - qd0) = A^T mu``, ``A qd + b =
+    0``, the projection in the kinetic-energy metric, which does not depend on the
+    units or the scaling of the coordinates (a sphere set sliding on a table starts
+    rolling at 5/7 of its speed whatever its radius); ``"least-change"`` gives the
+    Euclidean nearest ones instead. The rank of ``A`` is measured at the projected
+    positions. Dependent constraints raise a :class:`ConstraintError` naming them
+    with ``redundant_constraints="error"``; with ``"minimum-norm"`` they are
+    recorded in the report (``report.rank``). Constraints that leave no degree of
+    freedom always raise.
     """
-    if redundant_constraints not in REDUNDANT_MODES:
-        raise ValueError(f"redundant_constraints must be one of {REDUNDANT_MODES}, "
-                         f"not {redundant_constraints!r}")
     free = free_mask(fixed, names)
     # Large models with every coordinate free are projected with the sparse solver.
     sparse = StepProjector(num) if num.m > DENSE_MAX and free.all() else None
@@ -111,9 +140,15 @@ def consistent_state(
         if num.m:
             rank = _rank_at(num, t0, q, names, constraint_labels, constraint_names,
                             redundant_constraints)
-        if rank is not None and rank.dependent:
-            sparse = None  # the sparse velocity projection needs independent rows
-        qd = _project_velocities(num, t0, q, qd0, free, sparse)
+        kept = None if rank is None else rank.kept
+        _check_kkt_at(num, t0, q, qd0, kept, names)  # before the impact's KKT solve
+        impulse, lost = None, 0.0
+        if velocity_projection == "kinetic-energy":
+            qd, impulse, lost = plastic_impact(num, t0, q, qd0, free, kept)
+        else:
+            if kept is not None:
+                sparse = None  # the sparse velocity projection needs independent rows
+            qd = _project_velocities(num, t0, q, qd0, free, sparse)
     except np.linalg.LinAlgError as exc:
         raise InitialConditionError(f"could not project the initial state: {exc}") from exc
     except InitialConditionError as exc:
@@ -125,8 +160,82 @@ def consistent_state(
             + ("; or fix fewer coordinates" if held else "")
         ) from exc
     _check_consistent(num, t0, q, qd, free, names)
-    _check_kkt_at(num, t0, q, qd, None if rank is None else rank.kept, names)
-    return InitializationReport(tuple(names), q0, qd0, q, qd, rank)
+    return InitializationReport(tuple(names), q0, qd0, q, qd, rank, velocity_projection,
+                                impulse, lost)
+
+
+def plastic_impact(
+    num: NumericModel, t: float, q: np.ndarray, qd0: np.ndarray,
+    free: np.ndarray | None = None, kept: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Velocities after a perfectly plastic impact of ``qd0`` onto ``A qd + b = 0``.
+
+    The impact's impulse ``A^T mu`` acts along the constraint normals only:
+    ``M (qd - qd0) = A^T mu`` with ``A qd + b = 0``, the KKT system
+
+        [ M  A^T ] [ qd  ]   [ M qd0 ]
+        [ A   0  ] [ -mu ] = [  -b   ]
+
+    which is the projection of ``qd0`` in the kinetic-energy metric (it minimizes
+    ``(qd - qd0)^T M (qd - qd0)``) and stays regular where ``M`` alone is singular
+    (a quaternion's inertia block). Coordinates not ``free`` keep their velocity
+    (rows ``qd_i = qd0_i`` added to ``A``).
+
+    Parameters
+    ----------
+    num
+        The bound numeric model.
+    t, q
+        The time and the (consistent) positions.
+    qd0
+        The velocities given.
+    free
+        Which coordinates may change (default all).
+    kept
+        The independent rows of ``A`` when some are dependent.
+
+    Returns
+    -------
+    qd, impulse, lost
+        The velocities, the generalized impulse ``M (qd - qd0)`` and the kinetic
+        energy the impact removed, ``(qd0 - qd)^T M (qd0 - qd) / 2``.
+
+    Examples
+    --------
+    A particle on the line ``x = y`` moving along ``x`` keeps the part of its momentum
+    along the line (half its speed in each coordinate), whatever its mass:
+
+    >>> import sympy as sp
+    >>> from dalembert import System, Holonomic, coordinates
+    >>> x, y = coordinates("x y")
+    >>> m = sp.Symbol("m")
+    >>> line = System([x, y], kinetic=m / 2 * (x.diff()**2 + y.diff()**2),
+    ...               constraints=[Holonomic(x - y)], parameters={m: 3.0})
+    >>> qd, impulse, lost = plastic_impact(line.numeric(), 0.0, np.zeros(2),
+    ...                                    np.array([1.0, 0.0]))
+    >>> qd, impulse, lost
+    (array([0.5, 0.5]), array([-1.5,  1.5]), 0.75)
+    """
+    n, pat = num.n, num.pattern
+    qd0 = np.asarray(qd0, dtype=float)
+    if num.m == 0:
+        return qd0.copy(), np.zeros(n), 0.0
+    Mv, _, Av, _ = num.kkt_sparse(t, q, qd0)
+    _, b = num.velocity_sparse(t, q)
+    momentum = matvec(pat.M_rows, pat.M_cols, Mv, qd0, n)
+    if free is None or free.all():
+        qd, _ = kkt_solver(pat, kept).solve(Mv, momentum, Av, -b)
+    else:
+        held = np.flatnonzero(~free)
+        A = pat.dense_A(Av)
+        rows = np.arange(num.m) if kept is None else kept
+        A_held = np.vstack([A[rows], np.eye(n)[held]])
+        c_held = np.concatenate([-b[rows], qd0[held]])
+        rank = constraint_rank(A_held, [str(i) for i in range(len(A_held))], n)
+        qd, _ = solve_kkt(pat.dense_M(Mv), momentum, A_held, c_held, rank.kept)
+    change = qd - qd0
+    impulse = matvec(pat.M_rows, pat.M_cols, Mv, change, n)
+    return qd, impulse, 0.5 * float(change @ impulse)
 
 
 def _project_positions(num: NumericModel, t0: float, q0: np.ndarray, free: np.ndarray,

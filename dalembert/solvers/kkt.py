@@ -30,8 +30,6 @@ import scipy.linalg
 from ..errors import SingularSystemError
 from ..numerics.rank import RANK_RTOL, min_norm_multipliers
 
-#: What to do with dependent constraints (the ``redundant_constraints`` option).
-REDUNDANT_MODES = ("minimum-norm", "error")
 #: A dropped (dependent) row may miss ``A qdd = c`` by this much (relative) before the
 #: reduced solve is distrusted and the full least-squares KKT system is solved instead.
 DROPPED_ROW_RTOL = 1e-6

@@ -33,10 +33,10 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
-from scipy.integrate._ivp.rk import MAX_FACTOR, MIN_FACTOR, SAFETY, rk_step
 
-#: The step-size controllers, the default first.
-STEP_CONTROLS = ("PI", "scipy")
+from ..options import StepController
+from .scipy_ivp import MAX_FACTOR, MIN_FACTOR, SAFETY, RungeKutta, rk_step
+
 #: PI.3.4's gains times k: alpha = 0.7 / k, beta = 0.4 / k.
 PI_ALPHA, PI_BETA = 0.7, 0.4
 #: The previous error is never taken below this (Hairer's DOPRI codes): a step with a
@@ -44,14 +44,8 @@ PI_ALPHA, PI_BETA = 0.7, 0.4
 ERROR_FLOOR = 1e-4
 
 
-def check_step_control(step_control: str) -> str:
-    """``step_control`` if it names a controller, else a ``ValueError`` saying which do."""
-    if step_control not in STEP_CONTROLS:
-        raise ValueError(f"step_control must be one of {STEP_CONTROLS}, not {step_control!r}")
-    return step_control
-
-
-def controller_exponents(step_control: str, error_estimator_order: int) -> tuple[float, float]:
+def controller_exponents(step_control: StepController,
+                         error_estimator_order: int) -> tuple[float, float]:
     """``(alpha, beta)`` of the controller for a method with an error estimator of
     that order (``k`` = order + 1); SciPy's own controller is ``(1 / k, 0)``.
 
@@ -59,12 +53,12 @@ def controller_exponents(step_control: str, error_estimator_order: int) -> tuple
     (0.0875, 0.05)
     """
     k = error_estimator_order + 1
-    if check_step_control(step_control) == "scipy":
+    if step_control == "scipy":
         return 1 / k, 0.0
     return PI_ALPHA / k, PI_BETA / k
 
 
-class ControlledSteps:
+class ControlledSteps(RungeKutta):
     """Mixin for a SciPy ``RungeKutta`` subclass: its steps under ``step_control``.
 
     The controller's state is ``err_old``, the error of the last accepted step
@@ -72,7 +66,8 @@ class ControlledSteps:
     integration's, not the state's).
     """
 
-    def __init__(self, fun, t0, y0, t_bound, *, step_control: str = "PI", **options) -> None:
+    def __init__(self, fun, t0, y0, t_bound, *, step_control: StepController = "PI",
+                 **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self.step_control = step_control
         self.alpha, self.beta = controller_exponents(step_control, self.error_estimator_order)
@@ -129,10 +124,10 @@ CONTROLLED: dict[type[OdeSolver], type[OdeSolver]] = {
 }
 
 
-def controlled_class(cls: type[OdeSolver], step_control: str) -> type[OdeSolver]:
+def controlled_class(cls: type[OdeSolver], step_control: StepController) -> type[OdeSolver]:
     """The class that integrates ``cls``'s method under ``step_control``: SciPy's
     explicit Runge-Kutta classes become their controlled versions under PI; other
     solvers (the implicit ones, controlled ones already, a user's) stay as they are."""
-    if check_step_control(step_control) == "PI" and cls in CONTROLLED:
+    if step_control == "PI" and cls in CONTROLLED:
         return CONTROLLED[cls]
     return cls

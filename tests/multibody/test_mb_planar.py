@@ -202,8 +202,8 @@ def test_native_and_python_loops_agree_on_the_planar_chain():
     centers = np.outer(np.arange(5) + 0.5, [0.5, -np.sqrt(0.75)])
     q0, qd0 = mb.initial_state(positions=dict(zip(names, centers)),
                                orientations=dict.fromkeys(names, np.pi / 6))
-    runs = [mb.simulate((0, 2), q0, qd0, t_eval=np.linspace(0, 2, 9), native=native,
-                        rtol=1e-8, atol=1e-10) for native in (True, False)]
+    runs = [mb.simulate((0, 2), q0, qd0, t_eval=np.linspace(0, 2, 9), backend=backend,
+                        rtol=1e-8, atol=1e-10) for backend in ("c", "python")]
     np.testing.assert_allclose(runs[0].q, runs[1].q, atol=1e-9)
     np.testing.assert_allclose(runs[0].multipliers, runs[1].multipliers, rtol=1e-8, atol=1e-8)
 

@@ -18,6 +18,7 @@ from dalembert import Holonomic, Pfaffian, SingularSystemError, System, coordina
 from dalembert.codegen.compiled import SparsePattern
 from dalembert.examples import EXAMPLES, load
 from dalembert.multibody import chain
+from dalembert.options import STEP_CONTROLS
 from dalembert.solvers.dynamics import first_order_rhs
 from dalembert.solvers.integrate import integrate
 from dalembert.solvers.kkt import solve_kkt
@@ -25,7 +26,7 @@ from dalembert.solvers.native import NATIVE_METHODS, NativeSolver, NotApplicable
 from dalembert.solvers.native.structure import BLOCK_MAX, schur_structure
 from dalembert.solvers.outputs import evaluate_outputs
 from dalembert.solvers.projection import StepProjector
-from dalembert.solvers.step_control import STEP_CONTROLS
+from dalembert.solvers.step_control import CONTROLLED
 
 
 def initial(name: str):
@@ -119,7 +120,8 @@ def test_runge_kutta_steps_are_pythons(method, step_control):
     options = dict(rtol=1e-7, atol=1e-9, t_eval=t_eval, step_control=step_control)
     ours = integrate(native.rhs, (0.0, 1.0), y0, method=NATIVE_METHODS[scipy_class],
                      native=native, **options)
-    ref = integrate(first_order_rhs(num), (0.0, 1.0), y0, method=scipy_class, **options)
+    ref = integrate(first_order_rhs(num), (0.0, 1.0), y0, method=CONTROLLED[scipy_class],
+                    **options)
     assert ours.stats["n_steps"] == ref.stats["n_steps"]
     assert ours.stats["nfev"] == ref.stats["nfev"]
     assert np.abs(ours.y - ref.y).max() < 1e-9
@@ -135,8 +137,8 @@ def test_simulation_matches_python_loop(joint):
     q0, qd0 = mb.initial_state(
         positions={k: tilt @ [0, 0, -(i + 0.5)] for i, k in enumerate(names)},
         orientations=dict.fromkeys(names, tilt))
-    runs = [mb.simulate((0, 2), q0, qd0, rtol=1e-9, atol=1e-11, native=native,
-                        t_eval=np.linspace(0, 2, 21)) for native in (True, False)]
+    runs = [mb.simulate((0, 2), q0, qd0, rtol=1e-9, atol=1e-11, backend=backend,
+                        t_eval=np.linspace(0, 2, 21)) for backend in ("c", "python")]
     fast, slow = runs
     # The same method to rounding, which may move a step-size decision: compare at the
     # integration tolerance, not bit for bit.
@@ -153,7 +155,7 @@ def test_native_true_says_why_not():
     with pytest.raises(ValueError, match="does not apply: the constraints are dependent"), \
             warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        module.build().simulate((0, 0.1), native=True, **module.INITIAL)
+        module.build().simulate((0, 0.1), backend="c", **module.INITIAL)
 
 
 def test_singular_constraints_raise():

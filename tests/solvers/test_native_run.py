@@ -1,13 +1,14 @@
 """Whole stretches of the simulation loop in C (``dl_rk_run``) against the step-by-step loop.
 
-Reference: the same simulation with :data:`dalembert.solvers.integrate._RUN_STRETCHES`
-off, where Python takes every step (the native step, the projection, the outputs,
-the restart). Both must take the same steps with the same evaluations; the states
-at step ends are the same computation, the interpolated outputs agree to rounding.
+Reference: the same simulation with the plan's ``stretches`` switched off, where
+Python takes every step (the native step, the projection, the outputs, the
+restart). Both must take the same steps with the same evaluations; the states at
+step ends are the same computation, the interpolated outputs agree to rounding.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import signal
 import warnings
 
@@ -16,7 +17,6 @@ import pytest
 
 from dalembert.examples import load
 from dalembert.multibody import chain
-from dalembert.solvers import integrate as integration
 from dalembert.solvers.native import NativeSolver, run
 from dalembert.solvers.native.run import StretchRunner
 from dalembert.solvers.projection import StepProjector
@@ -49,13 +49,11 @@ def chains():
 
 def simulate(system, initial, *, stretches: bool, **options):
     options = {"t_span": (0.0, T_END), "rtol": 1e-6, "atol": 1e-8, **options}
-    previous, integration._RUN_STRETCHES = integration._RUN_STRETCHES, stretches
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return system.simulate(**initial, **options)
-    finally:
-        integration._RUN_STRETCHES = previous
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plan = system.plan(**initial, **options)
+        assert plan.stretches or plan.options.output.events or plan.options.output.dense_output
+        return system.run(dataclasses.replace(plan, stretches=plan.stretches and stretches))
 
 
 def states(traj) -> np.ndarray:

@@ -3,10 +3,11 @@ stability boundary, the choice checked and carried through simulate."""
 
 import numpy as np
 import pytest
-from scipy.integrate import DOP853, RK23, RK45
+from scipy.integrate import DOP853, RK23, RK45, Radau
 
+from dalembert.options import STEP_CONTROLS, simulation_options
 from dalembert.solvers.integrate import integrate
-from dalembert.solvers.step_control import CONTROLLED, STEP_CONTROLS, controller_exponents
+from dalembert.solvers.step_control import CONTROLLED, controlled_class, controller_exponents
 
 METHODS = [DOP853, RK45, RK23]
 
@@ -69,10 +70,12 @@ def test_controller_exponents():
 
 
 def test_unknown_step_control_names_the_choices():
-    with pytest.raises(ValueError, match=r"step_control must be one of \('PI', 'scipy'\)"):
-        integrate(lambda t, y: -y, (0.0, 1.0), np.ones(1), step_control="PID")
+    with pytest.raises(ValueError, match=r"'step_control' parameter of simulate must be one "
+                                         r"of 'PI', 'scipy'; got 'PID'"):
+        simulation_options((0.0, 1.0), step_control="PID")
 
 
 def test_implicit_methods_keep_their_own_control():
-    result = integrate(lambda t, y: -y, (0.0, 1.0), np.ones(1), method="Radau")
+    assert controlled_class(Radau, "PI") is Radau
+    result = integrate(lambda t, y: -y, (0.0, 1.0), np.ones(1), method=Radau)
     assert result.success and abs(result.y[-1, 0] - np.exp(-1.0)) < 1e-5

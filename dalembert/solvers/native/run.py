@@ -17,6 +17,7 @@ from functools import partial
 import numpy as np
 from scipy.integrate import OdeSolver
 
+from ..scipy_ivp import take_state
 from . import library
 
 #: The budget of one call: CPU seconds (it returns after the step that exceeds them)
@@ -87,10 +88,8 @@ class StretchRunner:
         taken = (run.n_steps, self._t_out[:k].copy(), self._y_out[:k].copy())
         solver.nfev = self._nfev + st.nfev
         if run.n_steps:
-            solver.t, solver.t_old, solver.h_previous = st.t, run.t_old, st.h_previous
-            solver.y, solver.f, solver.h_abs = self._y.copy(), self._K[0].copy(), st.h_abs
+            take_state(solver, t=st.t, t_old=run.t_old, y=self._y.copy(), f=self._K[0].copy(),
+                       h_abs=st.h_abs, h_previous=st.h_previous)
             solver.err_old = st.err_old
-            if solver.direction * (solver.t - solver.t_bound) >= 0:
-                solver.status = "finished"
         self._pending = False
         return taken

@@ -8,42 +8,37 @@ same tableau, the same formulas and constants, so the steps taken are those of
 ``ControlledDOP853`` (SciPy's own under ``step_control="scipy"``) up to rounding
 (tested). Start-up (the initial step), dense output and everything else stay SciPy's.
 
-Beyond single steps, :meth:`~_NativeSteps.stretch_runner` gives a
-:class:`~.run.StretchRunner`, which runs whole stretches of the simulation loop in
-C (the projection after each step, the outputs at ``t_eval``, the restart), for
-:func:`~dalembert.solvers.integrate.integrate` to use when the projection is the
-native one and there are no events and no dense output.
+Beyond single steps, a :class:`~.run.StretchRunner` runs whole stretches of the
+simulation loop in C for them (the projection after each step, the outputs at
+``t_eval``, the restart); the simulation plan (:mod:`dalembert.solvers.plan`)
+decides when.
 """
 
 from __future__ import annotations
 
 import ctypes
-from collections.abc import Callable
 
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
-from scipy.integrate._ivp import dop853_coefficients
-from scipy.integrate._ivp.rk import Dop853DenseOutput
 
+from ..scipy_ivp import INTERPOLATOR_POWER, Dop853DenseOutput, RungeKutta
 from ..step_control import ControlledDOP853, ControlledRK23, ControlledRK45
 from . import library
-from .run import StretchRunner
 from .solver import NativeSolver
 
 
-class _NativeSteps:
+class _NativeSteps(RungeKutta):
     """Mixin for a SciPy ``RungeKutta`` subclass; ``native`` is a :class:`NativeSolver`."""
 
     def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self._native = native
-        self._own_rhs = fun == native.rhs
-        self._keep = [None if a is None else np.ascontiguousarray(a, dtype=float)
+        self._keep = [None if a is None else np.ascontiguousarray(a, dtype=np.float64)
                       for a in self._coefficients()]
         A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in self._keep)
         self._tableau = library.Tableau(self.n_stages, A, B, C, E, E3)
         self._n_rows = self._interpolant(self._tableau)
-        self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=float)
+        self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
                                         rtol=self.rtol, max_step=self.max_step,
                                         atol=self._atol.ctypes.data, alpha=self.alpha,
@@ -61,7 +56,7 @@ class _NativeSteps:
 
     def _interpolant(self, tableau: library.Tableau) -> int:
         """The dense output's coefficients into ``tableau``; the rows of its interpolant."""
-        P = np.ascontiguousarray(self.P, dtype=float)
+        P = np.ascontiguousarray(self.P, dtype=np.float64)
         self._keep.append(P)
         tableau.n_P, tableau.P = P.shape[1], P.ctypes.data
         return P.shape[1]
@@ -70,17 +65,9 @@ class _NativeSteps:
         """The stage buffer the interpolant needs (DOP853: with its extra stages)."""
         return self.K
 
-    def stretch_runner(self, t_eval: np.ndarray | None,
-                       project: Callable | None) -> StretchRunner | None:
-        """A runner of whole stretches of steps in C, if ``project`` is the native
-        solver's projection and ``fun`` its right-hand side (else ``None``)."""
-        if not self._own_rhs or project != self._native.project:
-            return None
-        return StretchRunner(self, t_eval)
-
     def _step_impl(self):
         st, K = self._stepper, self.K  # K: rows of stages, C-contiguous in SciPy's solvers
-        y = np.ascontiguousarray(self.y, dtype=float)
+        y = np.ascontiguousarray(self.y, dtype=np.float64)
         K[0] = self.f
         y_new = np.empty(self.n)
         st.t, st.h_abs, st.err_old, st.nfev = self.t, self.h_abs, self.err_old, 0
@@ -101,13 +88,13 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
     """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
 
     def _interpolant(self, tableau: library.Tableau) -> int:
-        A, C, D = (np.ascontiguousarray(a, dtype=float) for a in (self.A_EXTRA, self.C_EXTRA,
+        A, C, D = (np.ascontiguousarray(a, dtype=np.float64) for a in (self.A_EXTRA, self.C_EXTRA,
                                                                    self.D))
         self._keep.append(D)
         self._extra = [A, C]
         tableau.n_extra, tableau.A_extra, tableau.C_extra = len(C), A.ctypes.data, C.ctypes.data
         tableau.n_D, tableau.D = len(D), D.ctypes.data
-        return dop853_coefficients.INTERPOLATOR_POWER
+        return INTERPOLATOR_POWER
 
     def _stages(self) -> np.ndarray:
         return self.K_extended
@@ -116,7 +103,7 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
         # SciPy's DOP853._dense_output_impl with the three extra stages evaluated in C.
         K, h, s = self.K_extended, self.h_previous, self.n_stages + 1
         A, C = self._extra
-        y_old = np.ascontiguousarray(self.y_old, dtype=float)
+        y_old = np.ascontiguousarray(self.y_old, dtype=np.float64)
         nfev = ctypes.c_int64(0)
         status = self._native.lib.dl_stages(
             self._native._address, A.ctypes.data, A.shape[1], C.ctypes.data, s, s, len(K),
@@ -124,7 +111,7 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
             ctypes.addressof(nfev))
         self.nfev += nfev.value
         self._native._check(status)
-        F = np.empty((dop853_coefficients.INTERPOLATOR_POWER, self.n))
+        F = np.empty((INTERPOLATOR_POWER, self.n))
         f_old, delta_y = K[0], self.y - self.y_old
         F[0] = delta_y
         F[1] = h * f_old - delta_y

@@ -1,0 +1,178 @@
+"""One simulation's plan: every decision about how it runs, made in one place.
+
+:func:`plan_simulation` takes the checked options (:mod:`dalembert.options`), the
+bound numeric model and the consistent initial state, and decides once
+
+- the loop: in C (:mod:`dalembert.solvers.native`: the right-hand side, the steps
+  and the projection in C) where it applies and ``backend`` allows, else in Python,
+  with the reason the C loop does not apply;
+- the solver class: SciPy's method, under the chosen step-size controller
+  (:mod:`.step_control`), stepping in C where the loop is;
+- whether whole stretches of steps run in C (:class:`~.loop.StretchLoop`): with
+  the C loop's projection and neither events nor dense output;
+- the right-hand side, the projection after each step and the trajectory's outputs.
+
+The resulting :class:`SimulationPlan` is a frozen value: :meth:`System.run
+<dalembert.System.run>` executes it, and a variant is ``dataclasses.replace(plan,
+stretches=False)`` (the step-by-step loop, same results to rounding).
+
+Both loops give the same trajectory to rounding (tested).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import partial
+from typing import Literal
+
+import numpy as np
+from scipy.integrate import BDF, OdeSolver, Radau
+
+from ..codegen.compiled import NumericModel
+from ..options import Baumgarte, Projection, SimulationOptions
+from .dynamics import first_order_rhs
+from .initialization import InitializationReport
+from .integrate import IntegrationResult, finite_difference_jacobian, integrate
+from .native import NATIVE_METHODS, NotApplicable, native_solver
+from .outputs import evaluate_outputs
+from .projection import StepProjector
+from .step_control import ControlledSteps, controlled_class
+
+Loop = Literal["c", "python"]
+
+
+@dataclass(frozen=True)
+class SimulationPlan:
+    """How one simulation runs (see :mod:`dalembert.solvers.plan`).
+
+    Attributes
+    ----------
+    options
+        The checked options it was made from.
+    initial
+        The consistent initial state and what making it consistent changed.
+    loop
+        ``"c"`` or ``"python"``: where the right-hand side and projections run.
+    why_python
+        Why the C loop does not apply (empty if it runs, or ``backend="python"``).
+    solver
+        The ``OdeSolver`` class that steps.
+    solver_options
+        Its keyword arguments (tolerances, step limits, controller, Jacobian...).
+    stretches
+        Whether whole stretches of steps run in C.
+    rhs, project, outputs
+        ``rhs(t, y)``; ``project(t, y)`` after each step (``None`` without the
+        projection); ``outputs(t, y)`` the trajectory's derived arrays.
+    events
+        The events as ``event(t, y)``, with their ``terminal``/``direction``.
+    """
+
+    options: SimulationOptions
+    initial: InitializationReport = field(repr=False)
+    loop: Loop
+    why_python: str
+    solver: type[OdeSolver]
+    solver_options: dict[str, object] = field(repr=False)
+    stretches: bool
+    rhs: Callable[[float, np.ndarray], np.ndarray] = field(repr=False)
+    project: Callable[[float, np.ndarray], np.ndarray] | None = field(repr=False)
+    outputs: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]] = field(repr=False)
+    events: tuple[Callable, ...] = field(repr=False)
+
+    @property
+    def y0(self) -> np.ndarray:
+        """The consistent initial state ``[q0, qd0]``."""
+        return np.concatenate([self.initial.q, self.initial.qd])
+
+    def run(self) -> IntegrationResult:
+        """Integrate: the raw states and statistics (``System.run`` adds the rest)."""
+        out = self.options.output
+        return integrate(
+            self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
+            dense_output=out.dense_output, events=self.events, project=self.project,
+            progress=out.progress, stretches=self.stretches, **self.solver_options)
+
+
+def plan_simulation(num: NumericModel, initial: InitializationReport,
+                    options: SimulationOptions) -> SimulationPlan:
+    """Decide how a simulation of ``num`` from ``initial`` runs under ``options``.
+
+    Parameters
+    ----------
+    num
+        The compiled equations bound to parameter values.
+    initial
+        The consistent initial state (with the independent constraint rows, when
+        some are dependent).
+    options
+        The checked options (:func:`dalembert.options.simulation_options`).
+
+    Raises
+    ------
+    ValueError
+        ``backend="c"`` where the C loop does not apply (saying why).
+
+    Examples
+    --------
+    >>> from dalembert.options import simulation_options
+    >>> from dalembert.examples import load
+    >>> system = load("pendulum").build()
+    >>> state = system.consistent_initial_state({"x": 1.0, "y": 0.0})
+    >>> plan = plan_simulation(system.numeric(), state,
+    ...                        simulation_options((0.0, 1.0), backend="python"))
+    >>> plan.loop, plan.solver.__name__, plan.stretches
+    ('python', 'ControlledDOP853', False)
+    """
+    t0, y0 = options.t_span[0], np.concatenate([initial.q, initial.qd])
+    kept = initial.rank.kept if initial.rank is not None else None
+    stabilization = options.stabilization
+    gain = stabilization.gain if isinstance(stabilization, Baumgarte) else 0.0
+    projection = isinstance(stabilization, Projection)
+    native, why = None, ""
+    if options.backend != "python":
+        try:
+            native = native_solver(num, y0, t0, gain, kept)
+        except NotApplicable as exc:
+            if options.backend == "c":
+                raise ValueError(f"backend='c', but the C loop does not apply: {exc}") \
+                    from exc
+            why = str(exc)
+    step = options.step
+    solver = controlled_class(options.method, step.controller)
+    solver_options = step.solver_options()
+    stepper = NATIVE_METHODS.get(options.method) if native is not None else None
+    if native is not None:
+        rhs, outputs = native.rhs, native.outputs
+        project = native.project if projection else None
+        if stepper is not None:
+            solver, solver_options["native"] = stepper, native
+    else:
+        rhs = first_order_rhs(num, gain, kept)
+        project = StepProjector(num, kept) if projection else None
+        outputs = partial(evaluate_outputs, num, kept=kept)
+    if issubclass(solver, ControlledSteps):
+        solver_options["step_control"] = step.controller
+    if solver in (Radau, BDF):
+        solver_options["jac"] = finite_difference_jacobian(rhs)
+    output = options.output
+    stretches = stepper is not None and projection and not output.events \
+        and not output.dense_output
+    n = num.n
+    return SimulationPlan(
+        options=options, initial=initial, loop="c" if native else "python",
+        why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
+        rhs=rhs, project=project, outputs=outputs,
+        events=tuple(_state_event(e, n) for e in output.events))
+
+
+def _state_event(event: Callable, n: int) -> Callable:
+    """Adapt ``event(t, q, qd)`` to SciPy's ``event(t, y)``, keeping its attributes."""
+
+    def wrapped(t: float, y: np.ndarray) -> float:
+        return event(t, y[:n], y[n:])
+
+    wrapped.terminal = getattr(event, "terminal", False)  # type: ignore[attr-defined]
+    wrapped.direction = getattr(event, "direction", 0)  # type: ignore[attr-defined]
+    return wrapped

@@ -1,0 +1,112 @@
+"""The one door to SciPy's private solver internals (``scipy.integrate._ivp``).
+
+Constrained dynamics restarts a solver from a projected state after every step,
+steps SciPy's Runge-Kutta tableaus under its own step-size controller and in C,
+and hands a solver back the state a stretch of steps run in C reached. All of
+that reads or writes attributes SciPy does not document (``h_abs``, ``f``, ``K``,
+``D``...) or imports names from its private modules. They are gathered here, so
+that a SciPy release that renames one breaks one module, and
+``tests/solvers/test_scipy_ivp.py`` says which name moved. ``pyproject.toml``
+bounds SciPy to the releases tested against these names.
+
+>>> from scipy.integrate import DOP853
+>>> import numpy as np
+>>> solver = DOP853(lambda t, y: -y, 0.0, np.ones(2), 1.0)
+>>> restart(solver, np.array([0.5, 0.5]))
+>>> solver.f
+array([-0.5, -0.5])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import BDF, OdeSolver
+from scipy.integrate._ivp import dop853_coefficients
+from scipy.integrate._ivp.rk import (
+    MAX_FACTOR,
+    MIN_FACTOR,
+    SAFETY,
+    Dop853DenseOutput,
+    RungeKutta,
+    rk_step,
+)
+
+__all__ = [
+    "INTERPOLATOR_POWER",
+    "MAX_FACTOR",
+    "MIN_FACTOR",
+    "SAFETY",
+    "Dop853DenseOutput",
+    "RungeKutta",
+    "restart",
+    "restart_second_order",
+    "rk_step",
+    "take_state",
+]
+
+#: The number of rows of DOP853's dense-output polynomial.
+INTERPOLATOR_POWER: int = dop853_coefficients.INTERPOLATOR_POWER
+
+
+def restart(solver: OdeSolver, y: np.ndarray) -> None:
+    """Continue ``solver`` from ``y`` at its current time (a projected state).
+
+    Parameters
+    ----------
+    solver
+        A SciPy solver after an accepted step.
+    y
+        The state to continue from.
+    """
+    solver.y = y.copy()
+    if isinstance(solver, BDF):
+        solver.D[0] = y  # BDF's history: the newest entry is the state
+    elif hasattr(solver, "f"):
+        solver.f = solver.fun(solver.t, solver.y)
+
+
+def restart_second_order(solver: OdeSolver, y: np.ndarray) -> None:
+    """Continue ``solver`` from ``y = [q, qd]`` without evaluating ``f`` again, where
+    that is safe (SciPy's explicit Runge-Kutta solvers); otherwise as :func:`restart`.
+
+    The explicit Runge-Kutta solvers keep ``f = [qd, qdd]`` for their next step's
+    first stage: ``qd`` is the state's, and ``qdd`` its last stage's, at the end
+    before the projection. That ``qdd`` differs from the one at the projected state
+    by about the projection's change ``d``, the size of the step's local error, and
+    enters the next step multiplied by ``h``: a local error ``O(h d)``, an order
+    above the step's own. One evaluation per step saved.
+
+    Parameters
+    ----------
+    solver
+        A SciPy solver after an accepted step.
+    y
+        The projected state ``[q, qd]``.
+    """
+    if isinstance(solver, RungeKutta):
+        n = y.size // 2
+        solver.y = y.copy()
+        solver.f = np.concatenate([y[n:], solver.f[n:]])
+    else:
+        restart(solver, y)
+
+
+def take_state(solver: OdeSolver, *, t: float, t_old: float, y: np.ndarray, f: np.ndarray,
+               h_abs: float, h_previous: float) -> None:
+    """Bring an explicit Runge-Kutta ``solver`` to the end of steps taken elsewhere (in C).
+
+    Parameters
+    ----------
+    solver
+        The SciPy Runge-Kutta solver the steps were taken for.
+    t, t_old
+        The time reached and the start of the last step.
+    y, f
+        The state there and the right-hand side its next step starts from.
+    h_abs, h_previous
+        The next step size and the last one taken.
+    """
+    solver.t, solver.t_old, solver.h_previous = t, t_old, h_previous
+    solver.y, solver.f, solver.h_abs = y, f, h_abs
+    if solver.direction * (solver.t - solver.t_bound) >= 0:
+        solver.status = "finished"
