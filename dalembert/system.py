@@ -229,19 +229,26 @@ class System:
         >>> [round(float(v), 12) for v in (*report.q, *report.qd)]
         [1.0, 0.0, 0.0, -1.0]
         """
+        given: dict[str, object] = {"velocity_projection": velocity_projection}
+        if redundant_constraints is not None:  # None: the System's option
+            given["redundant_constraints"] = redundant_constraints
+        check_parameters(given, SIMULATE_PARAMETERS, "consistent_initial_state")
+        return self._initial_state(self.numeric(parameters), q0, qd0, t0, fixed,
+                                   redundant_constraints or self.redundant_constraints,
+                                   velocity_projection)
+
+    def _initial_state(
+        self, num: NumericModel, q0: CoordinateValues, qd0: CoordinateValues | None,
+        t0: float, fixed: Sequence[object] | None,
+        redundant_constraints: RedundantConstraints, velocity_projection: VelocityProjection,
+    ) -> InitializationReport:
         names = self.coordinate_names
         q = coordinate_values(q0, names, "q0")
         qd = coordinate_values(qd0, names, "qd0")
         labels = _LazyLabels(self.describe_constraint, len(self.constraint_names))
-        if redundant_constraints is None:
-            mode = self.redundant_constraints
-        else:
-            mode = _check_redundant(redundant_constraints)
-        check_parameters({"velocity_projection": velocity_projection}, SIMULATE_PARAMETERS,
-                         "consistent_initial_state")
-        return consistent_state(self.numeric(parameters), t0, q, qd, names, labels, fixed,
+        return consistent_state(num, t0, q, qd, names, labels, fixed,
                                 constraint_names=self.constraint_names,
-                                redundant_constraints=mode,
+                                redundant_constraints=redundant_constraints,
                                 velocity_projection=velocity_projection)
 
     def simulate(
@@ -398,10 +405,9 @@ class System:
               qd0: CoordinateValues | None, parameters: Mapping[object, object] | None,
               fixed: Sequence[object] | None) -> SimulationPlan:
         num = self.numeric(parameters)
-        report = self.consistent_initial_state(
-            q0, qd0, t0=options.t_span[0], fixed=fixed, parameters=parameters,
-            redundant_constraints=options.redundant_constraints,
-            velocity_projection=options.velocity_projection)
+        report = self._initial_state(num, q0, qd0, options.t_span[0], fixed,
+                                     options.redundant_constraints,
+                                     options.velocity_projection)
         # stacklevel 3: the user's call of simulate or plan
         if report.changed:
             warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=3)
@@ -437,8 +443,30 @@ class System:
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:
         """Static equilibrium near ``guess``: ``f(q, 0, t) + A^T lambda = 0``, ``psi(q) = 0``.
 
-        Returns the configuration, the multipliers, the reactions at rest
-        ``A^T lambda`` and the stability; see :func:`dalembert.statics.equilibrium`.
+        Parameters
+        ----------
+        guess
+            A starting configuration: a dict by coordinate or a sequence (it need
+            not satisfy the constraints).
+        options
+            See :func:`dalembert.statics.equilibrium` (``parameters``, ``t``,
+            ``fixed``, tolerances...).
+
+        Returns
+        -------
+        Equilibrium
+            The configuration, the multipliers, the reactions at rest
+            ``A^T lambda`` and the stability.
+
+        Examples
+        --------
+        The Cartesian pendulum hangs straight down, its rod pulling ``m g`` upwards:
+
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> rest = pendulum.equilibrium({"x": 0.1, "y": -1.0})
+        >>> round(abs(rest["x"]), 12), round(rest["y"], 12), rest.stability
+        (0.0, -1.0, 'stable')
         """
         from .statics import equilibrium
 
@@ -447,8 +475,29 @@ class System:
     def linearize(self, q_eq: Any, **options: Any) -> Linearization:
         """Small oscillations about an equilibrium, on the constraint manifold.
 
-        Natural frequencies, mode shapes in the original coordinates and a
-        state-space form; see :func:`dalembert.statics.linearize`.
+        Parameters
+        ----------
+        q_eq
+            The equilibrium: an :class:`~dalembert.statics.Equilibrium` or a
+            configuration (dict by coordinate or sequence).
+        options
+            See :func:`dalembert.statics.linearize`.
+
+        Returns
+        -------
+        Linearization
+            Natural frequencies, mode shapes in the original coordinates and a
+            state-space form.
+
+        Examples
+        --------
+        The pendulum's small oscillations have ``omega = sqrt(g / l)``:
+
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> modes = pendulum.linearize(pendulum.equilibrium({"x": 0.1, "y": -1.0}))
+        >>> bool(abs(modes.natural_frequencies[0] - 9.81**0.5) < 1e-10)
+        True
         """
         from .statics import linearize
 

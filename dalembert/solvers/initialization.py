@@ -18,8 +18,8 @@ from .sparse_kkt import DENSE_MAX, gram_well_conditioned, kkt_condition, kkt_sol
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
 REPORT_TOL = 1e-10
-#: Above this many KKT unknowns the O(size^3) dense diagnosis is not run (its singular
-#: values took 150 ms at 832 unknowns, a 64-link hinge chain: longer than the simulation).
+#: Above this many KKT unknowns the O(size^3) dense diagnosis is not run (for a
+#: 64-link hinge chain its singular values cost more than the simulation).
 DENSE_CHECK_MAX = 500
 #: Estimated 1-norm condition number beyond which a large KKT matrix counts as singular.
 KKT_COND_LIMIT = 1e13
