@@ -79,10 +79,11 @@ def energy_quantity(system: System) -> str:
     quadratic or missing.
     """
     model = system.model
-    if not model.has_energy:
+    kinetic = model.kinetic
+    if not model.has_energy or kinetic is None:
         return "jacobi"
     qd = model.coords.qd
-    euler = sum(v * sp.diff(model.kinetic, v) for v in qd) - 2 * model.kinetic
+    euler = sum(v * sp.diff(kinetic, v) for v in qd) - 2 * kinetic
     return "energy" if sp.simplify(sp.expand(euler)) == 0 else "jacobi"
 
 

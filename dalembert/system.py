@@ -8,7 +8,7 @@ code generated once per System however often it is simulated.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -98,7 +98,7 @@ class System:
 
     def __init__(
         self,
-        coordinates: object,
+        coordinates: Iterable[object],
         *,
         kinetic: object = None,
         potential: object = None,

@@ -21,7 +21,7 @@ from __future__ import annotations
 import ctypes
 import threading
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -76,7 +76,7 @@ def compile_parts(
     holonomic = _holonomic_rows(parts)
     pattern = _pattern(parts, n, m)
     layout = _Layout(pattern, holonomic)
-    kinds = {kind: ([], []) for kind in _KINDS}
+    kinds: dict[str, tuple[list, list]] = {kind: ([], []) for kind in _KINDS}
     for g, part in enumerate(parts):
         for kind, exprs, target in _outputs(part, layout):
             kinds[kind][0].append((f"{kind}_{g}", _arguments(part, kind, parameters), exprs))
@@ -84,7 +84,7 @@ def compile_parts(
     sizes = layout.sizes(n, m)
     indices = [part.coordinates for part in parts]
     use = c_backend.backend() if backend is None else backend
-    functions = None
+    functions: list[Callable] | None = None
     if use == "c":
         try:
             lib = c_backend.scatter_library([(k, kinds[k][0]) for k in _KINDS], {"q", "qd"})
@@ -96,7 +96,8 @@ def compile_parts(
         functions = [_numpy_evaluator(kinds[k][0], indices, kinds[k][1], sizes[k])
                      for k in _KINDS]
     used = "numpy" if isinstance(functions[0], _NumpyEvaluator) else "c"
-    return CompiledEquations(*functions, pattern, tuple(holonomic), used)
+    kkt, velocity, position, energy = functions
+    return CompiledEquations(kkt, velocity, position, energy, pattern, tuple(holonomic), used)
 
 
 _KINDS = ("kkt", "velocity", "position", "energy")
@@ -205,8 +206,9 @@ class _CEvaluator:
         self._cfun = cfun
         self._lock = threading.Lock()
         #: For C loops (:mod:`dalembert.solvers.native`); the tables live as long as self.
-        self.native = c_backend.NativeHandle(ctypes.cast(cfun, ctypes.c_void_p).value,
-                                             *self._args[:3], size, tuple(self._tables[G:]))
+        K, index, target = self._args[:3]
+        self.native = c_backend.NativeHandle(c_backend.function_address(cfun), K, index,
+                                             target, size, tuple(self._tables[G:]))
 
     def __call__(self, time, q, *rest):
         with self._lock:

@@ -56,6 +56,7 @@ import warnings
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -145,7 +146,7 @@ def _numpy_function(name: str, arguments: Arguments, exprs: Sequence[sp.Expr]) -
     def flat(*arrays):
         return fn(*arrays)[0]
 
-    flat.__source__ = fn.__source__
+    flat.__source__ = fn.__source__  # type: ignore[attr-defined]  # the generated code
     return flat
 
 
@@ -370,10 +371,19 @@ def _bind(lib: ctypes.CDLL, name: str, arguments: Arguments, size: int) -> Calla
             cfun(*(a.ctypes.data for a in args), out.ctypes.data)
             return out
 
-    call.library = lib  # keeps the library loaded as long as the function lives
-    #: For C loops (:mod:`dalembert.solvers.native`): address, no scatter tables, size.
-    call.native = NativeHandle(ctypes.cast(cfun, ctypes.c_void_p).value, 0, 0, 0, size)
+    # Generated functions carry their library (kept loaded as long as the function
+    # lives) and, for C loops (:mod:`dalembert.solvers.native`), their address.
+    call.library = lib  # type: ignore[attr-defined]
+    call.native = NativeHandle(function_address(cfun), 0, 0, 0, size)  # type: ignore[attr-defined]
     return call
+
+
+def function_address(cfun: Any) -> int:
+    """The address of a C function loaded with ctypes."""
+    address = ctypes.cast(cfun, ctypes.c_void_p).value
+    if address is None:
+        raise CompileError("a generated C function has no address")
+    return address
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 import sympy as sp
@@ -22,6 +23,8 @@ from ..equations.lagrange import Equations
 from ..equations.sparse import gradient, nonzero_entries
 from ..model.coordinates import t
 from . import c_backend
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,7 +46,7 @@ class SparsePattern:
     A_cols: np.ndarray
     derived: dict = field(default_factory=dict, init=False, repr=False)
 
-    def remember(self, key: object, make: Callable[[], object]) -> object:
+    def remember(self, key: object, make: Callable[[], T]) -> T:
         """``derived[key]``, made by ``make()`` the first time.
 
         >>> p = SparsePattern(1, 0, np.zeros(1, int), np.zeros(1, int), np.zeros(0, int),
@@ -188,7 +191,9 @@ def compile_equations(eqs: Equations, backend: str | None = None) -> CompiledEqu
     use = c_backend.backend() if backend is None else backend
     functions = c_backend.build_flat_functions(specs, use=use)
     used = "c" if hasattr(functions[0], "library") else "numpy"
-    return CompiledEquations(*functions, pattern, cons.holonomic_rows, used)
+    kkt, velocity, position, energy = functions
+    return CompiledEquations(kkt, velocity, position, energy, pattern, cons.holonomic_rows,
+                             used)
 
 
 def _indices(entries: dict) -> tuple[np.ndarray, np.ndarray]:

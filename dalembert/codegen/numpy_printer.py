@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import linecache
 from collections.abc import Callable, Collection, Sequence
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -112,10 +113,10 @@ def _compile(source: str, name: str) -> Callable:
     filename = f"<dalembert-generated {name} {abs(hash(source))}>"
     # Registering the source lets tracebacks and inspect show generated lines.
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    namespace = {"zeros": np.zeros, "ravel": np.ravel, **_numpy_namespace()}
+    namespace: dict[str, Any] = {"zeros": np.zeros, "ravel": np.ravel, **_numpy_namespace()}
     exec(compile(source, filename, "exec"), namespace)
     fn = namespace[name]
-    fn.__source__ = source
+    fn.__source__ = source  # the generated code, for inspection and tracebacks
     return fn
 
 

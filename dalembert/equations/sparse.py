@@ -60,6 +60,8 @@ def _monomial_derivative(term: sp.Expr, v: sp.Symbol) -> sp.Expr:
             power = exp
         else:
             rest.append(f)
+    if power is None:  # v does not occur in the monomial
+        return sp.S.Zero
     return sp.Mul(coeff * power, v ** (power - 1), *rest)
 
 

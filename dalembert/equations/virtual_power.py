@@ -16,7 +16,8 @@ constraints are left out (add ``A^T lambda`` with the same ``A``).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from typing import cast
 
 import sympy as sp
 
@@ -28,7 +29,7 @@ from ..model.forces import PointForce, vector_components
 def virtual_power_equations(
     particles: Sequence[tuple[object, object]],
     forces: Sequence[PointForce],
-    coordinates: object,
+    coordinates: Iterable[object],
     velocities: Sequence[object] | None = None,
 ) -> tuple[sp.Matrix, sp.Matrix]:
     """Mass matrix and right-hand side of ``M qdd = f`` from the virtual power.
@@ -131,7 +132,7 @@ def _components(vec: object, frame: object, what: str) -> list[object]:
 
 def _unpack_particle(particle: object, k: int) -> tuple[object, object]:
     try:
-        mass, position = particle
+        mass, position = cast(Sequence[object], particle)
     except (TypeError, ValueError) as exc:
         raise ModelError(f"particles[{k}] must be a (mass, position) pair, got {particle!r}") \
             from exc

@@ -8,7 +8,9 @@ Both kinds then share one constraint matrix ``A`` whose rows keep the user's ord
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import cast
 
 import sympy as sp
 
@@ -84,7 +86,7 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
     """Check each constraint and assemble the Pfaffian matrices ``A`` and ``b``."""
     if isinstance(constraints, (Holonomic, Pfaffian)):
         constraints = [constraints]
-    items = list(constraints or ())
+    items = list(cast(Iterable[object], constraints or ()))
     names, kinds, exprs, rows_A, rows_b, holonomic = [], [], [], [], [], []
     for i, c in enumerate(items):
         if not isinstance(c, (Holonomic, Pfaffian)):

@@ -62,15 +62,14 @@ class Coordinates:
 
     def to_plain(self, expr: object, what: str) -> sp.Expr:
         """Rewrite ``expr`` in plain symbols; ``what`` names it in error messages."""
-        expr = sympify_checked(expr, what)
-        expr = expr.xreplace(dict(self.user_forms))
-        _reject_leftover_functions(expr, what)
-        accelerations = expr.free_symbols.intersection(self.qdd)
+        plain = sympify_checked(expr, what).xreplace(dict(self.user_forms))
+        _reject_leftover_functions(plain, what)
+        accelerations = plain.free_symbols.intersection(self.qdd)
         if accelerations:
             name = self.names[self.qdd.index(min(accelerations, key=self.qdd.index))]
             raise ModelError(f"{what} contains the acceleration of {name!r}; "
                              "model expressions may hold positions and velocities only")
-        return expr
+        return plain
 
 
 def key_name(key: object) -> str:

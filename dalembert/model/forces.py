@@ -11,8 +11,9 @@ potential energy ``V`` only: repeating one in ``Q`` counts it twice, and
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import sympy as sp
 
@@ -103,7 +104,7 @@ def vector_components(vec: object, frame: object | None, what: str) -> list[obje
             raise ModelError(f"{what} is a SymPy Vector; pass frame= to read its components")
         vec = vec.to_matrix(frame)
     try:
-        comps = list(vec)
+        comps = list(cast(Iterable[object], vec))
     except TypeError as exc:
         raise ModelError(f"{what} must be a vector of components, got {vec!r}") from exc
     if len(comps) not in (2, 3):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import sympy as sp
@@ -36,7 +36,7 @@ class Model:
 
 
 def build_model(
-    coordinates: object,
+    coordinates: Iterable[object],
     *,
     kinetic: object = None,
     potential: object = None,
@@ -62,7 +62,7 @@ def build_model(
 
 
 def build_part_model(
-    coordinates: object,
+    coordinates: Iterable[object],
     *,
     kinetic: object = 0,
     potential: object = 0,
@@ -121,7 +121,8 @@ def _require_velocities(expr: sp.Expr, what: str, coords: Coordinates) -> None:
 
 
 def _generalized_forces(
-    per_coordinate: object, forces: Sequence[PointForce], coords: Coordinates
+    per_coordinate: Mapping[object, object] | Sequence[object] | None,
+    forces: Sequence[PointForce], coords: Coordinates
 ) -> sp.Matrix:
     if isinstance(forces, PointForce):
         forces = [forces]

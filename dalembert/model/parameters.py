@@ -8,6 +8,7 @@ regenerates code.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -17,7 +18,7 @@ from .coordinates import key_name
 
 
 def resolve_parameters(
-    symbols: tuple[sp.Symbol, ...], *value_sets: Mapping[object, object] | None
+    symbols: tuple[sp.Symbol, ...], *value_sets: Mapping[Any, object] | None
 ) -> np.ndarray:
     """Numeric values for ``symbols``, later value sets overriding earlier ones.
 
@@ -58,7 +59,7 @@ def parameter_values(
     return values
 
 
-def _finite_float(name: str, value: object) -> float:
+def _finite_float(name: str, value: Any) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError) as exc:

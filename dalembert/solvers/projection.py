@@ -20,8 +20,6 @@ small singular values at :data:`~dalembert.numerics.rank.RANK_RTOL`).
 
 from __future__ import annotations
 
-from typing import cast
-
 import numpy as np
 
 from ..codegen.compiled import NumericModel, SparsePattern
@@ -85,8 +83,8 @@ class StepProjector:
         self.num = num
         self.fast = kept is None
         n, pat = num.n, num.pattern
-        unit = cast(SparsePattern, pat.remember("unit_mass", lambda: SparsePattern(
-            n, num.m, np.arange(n), np.arange(n), pat.A_rows, pat.A_cols)))
+        unit = pat.remember("unit_mass", lambda: SparsePattern(
+            n, num.m, np.arange(n), np.arange(n), pat.A_rows, pat.A_cols))
         self._ones = np.ones(n)
         self._velocity = kkt_solver(unit)
         rows = np.array(num.holonomic_rows, dtype=np.intp)
