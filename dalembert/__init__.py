@@ -5,23 +5,86 @@ Write ``T``, ``V``, forces and constraints in SymPy; get the constrained equatio
 forces and the constraints held to rounding level.
 """
 
-from . import errors
-from .errors import *  # noqa: F403  (every error and warning, listed in errors.__all__)
+from .errors import (  # every error and warning (errors.__all__)
+    CompileError,
+    ConstraintError,
+    DalembertError,
+    DalembertWarning,
+    DependentConstraintsError,
+    DoubleCountingWarning,
+    EquilibriumNotFoundError,
+    ExtremumConvergenceError,
+    GuessError,
+    InconsistentConstraintsError,
+    InitialConditionError,
+    InitialConditionsAdjusted,
+    IntegrationWarning,
+    JointPointWarning,
+    MarginalStabilityError,
+    MissingParameterError,
+    ModelError,
+    NonholonomicLinearizationError,
+    NotAnEquilibriumError,
+    ParameterError,
+    RedundantConstraintsWarning,
+    SingularSystemError,
+    SymbolicSolveError,
+    TooManyConstraintsError,
+)
 from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
 from .model.forces import PointForce
-from .statics import all_extrema, extremum, stationarity_conditions
 from .system import System
 from .trajectory import Trajectory
 
 __version__ = "0.1.0"
 
+#: Imported on first use: statics pulls in scipy.optimize, slow to import.
+_LAZY = {"all_extrema": "statics", "extremum": "statics", "stationarity_conditions": "statics"}
+
+
+def __getattr__(name: str) -> object:
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 __all__ = [
-    *errors.__all__,
+    "CompileError",
+    "ConstraintError",
+    "DalembertError",
+    "DalembertWarning",
+    "DependentConstraintsError",
+    "DoubleCountingWarning",
+    "EquilibriumNotFoundError",
+    "ExtremumConvergenceError",
+    "GuessError",
     "Holonomic",
+    "InconsistentConstraintsError",
+    "InitialConditionError",
+    "InitialConditionsAdjusted",
+    "IntegrationWarning",
+    "JointPointWarning",
+    "MarginalStabilityError",
+    "MissingParameterError",
+    "ModelError",
+    "NonholonomicLinearizationError",
+    "NotAnEquilibriumError",
+    "ParameterError",
     "Pfaffian",
     "PointForce",
+    "RedundantConstraintsWarning",
+    "SingularSystemError",
+    "SymbolicSolveError",
     "System",
+    "TooManyConstraintsError",
     "Trajectory",
     "all_extrema",
     "coordinates",

@@ -1,7 +1,7 @@
 """The ``dalembert`` command: list, run and print the gallery examples, and the demo.
 
     dalembert list
-    dalembert run EXAMPLE [--t-end T] [--out DIR] [--points N] [--energy auto|energy|jacobi]
+    dalembert run EXAMPLE|PATH.py [--t-end T] [--out DIR] [--points N] [--energy auto|energy|jacobi]
                   [--no-animation] [--html]
     dalembert equations EXAMPLE [--latex]
     dalembert equilibrium EXAMPLE [--out DIR]
@@ -70,7 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(handler=cmd_list)
 
     p = sub.add_parser("run", help="simulate one example, write plots and trajectory.npz")
-    p.add_argument("example", help="example name (see `dalembert list`)")
+    p.add_argument("example", help="example name (see `dalembert list`), or the path of a "
+                   "Python file defining TITLE, build, INITIAL, T_END and checks")
     p.add_argument("--t-end", type=_positive_float, default=None,
                    help="simulated time (default: the example's T_END)")
     p.add_argument("--out", default=None, help="output folder (default: out/EXAMPLE)")
@@ -142,7 +143,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from .report import format_checks, run_example
 
     _load(args.example)
-    out = args.out if args.out is not None else f"out/{args.example}"
+    out = args.out if args.out is not None else f"out/{Path(args.example).stem}"
     run = run_example(args.example, out, t_end=args.t_end, points=args.points,
                       energy=args.energy, animation=args.animation, html=args.html)
     print(f"{args.example}: {run.title}")
@@ -230,6 +231,14 @@ def cmd_gallery(args: argparse.Namespace) -> int:
 
 # -- helpers -------------------------------------------------------------------------
 def _load(name: str) -> ModuleType:
+    if examples.is_path(name):
+        try:
+            return examples.load_file(name)
+        except (FileNotFoundError, AttributeError) as exc:
+            raise _CommandError(str(exc)) from exc
+        except Exception as exc:  # the user's file may fail in any way on import
+            raise _CommandError(f"model file {name!r} does not import: "
+                                f"{type(exc).__name__}: {exc}", EXIT_IMPORT) from exc
     if name not in examples.EXAMPLES:
         raise _CommandError(
             f"unknown example {name!r}; the examples are {', '.join(examples.EXAMPLES)}"

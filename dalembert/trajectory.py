@@ -127,8 +127,15 @@ class Trajectory:
         arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
         try:
+            # mkstemp makes the file 0600; a saved result gets the mode a plain open()
+            # would give it, 0666 less the umask (read back without changing it).
+            umask = os.umask(0)
+            os.umask(umask)
+            os.fchmod(fd, 0o666 & ~umask)
             with os.fdopen(fd, "wb") as fh:
                 np.savez(fh, meta=np.array(json.dumps(meta)), **arrays)
+                fh.flush()
+                os.fsync(fh.fileno())  # on disk before the rename makes it visible
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)

@@ -270,3 +270,34 @@ def test_equilibrium_without_draw_prints_but_writes_nothing(monkeypatch, tmp_pat
     assert cli.main(["equilibrium", "spherical-pendulum", "--out", str(tmp_path)]) == 0
     assert "stable equilibrium" in capsys.readouterr().out
     assert not any(tmp_path.iterdir())
+
+
+def test_run_a_model_file_given_by_path(tmp_path, capsys):
+    """A user's file defining what a gallery example defines runs like one."""
+    import inspect
+
+    model = tmp_path / "my_pendulum.py"
+    # as a user writes it: absolute imports
+    source = inspect.getsource(cartesian_pendulum).replace("from ..", "from dalembert.")
+    model.write_text(source.replace("from .", "from dalembert.examples."))
+    out = tmp_path / "out"
+    assert cli.main(["run", str(model), *SHORT, "--out", str(out), "--no-animation"]) == 0
+    printed = capsys.readouterr().out
+    assert check_value(printed, "tension relative error") < 1e-12
+    traj = Trajectory.load(out / "trajectory.npz")
+    assert np.abs(np.hypot(traj["x"], traj["y"]) - 1.0).max() < 1e-12
+
+
+def test_model_file_missing_or_incomplete_is_named(tmp_path, capsys):
+    assert cli.main(["run", str(tmp_path / "absent.py")]) == 2
+    assert "no model file" in capsys.readouterr().err
+    partial = tmp_path / "partial.py"
+    partial.write_text("TITLE = 'half a model'\n")
+    assert cli.main(["run", str(partial)]) == 2
+    err = capsys.readouterr().err
+    assert "does not define build, INITIAL, T_END, checks" in err
+    assert "Traceback" not in err
+    broken = tmp_path / "broken.py"
+    broken.write_text("import not_a_module_anywhere\n")
+    assert cli.main(["run", str(broken)]) == 1
+    assert "does not import: ModuleNotFoundError" in capsys.readouterr().err

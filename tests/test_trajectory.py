@@ -122,3 +122,18 @@ def test_summary_and_repr(traj):
     assert repr(traj).startswith(f"Trajectory({len(traj)} points, t=0..2, status='finished'")
     text = traj.summary()
     assert "max position residual" in text and "relative change of T + V" in text
+
+
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_saved_file_honours_the_umask(traj, tmp_path, umask, mode):
+    import os
+    import stat
+
+    previous = os.umask(umask)
+    try:
+        path = traj.save(tmp_path / "run.npz")
+        plain = tmp_path / "plain.txt"
+        plain.write_text("x")  # what open() gives under this umask
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE(path.stat().st_mode) == mode == stat.S_IMODE(plain.stat().st_mode)

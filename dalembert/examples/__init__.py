@@ -22,6 +22,9 @@ Optional attributes, used by ``dalembert equilibrium`` and ``dalembert modes``:
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import os
+from pathlib import Path
 from types import ModuleType
 
 #: name -> module (in dalembert.examples), in gallery order.
@@ -45,8 +48,64 @@ EXAMPLES: dict[str, str] = {
 }
 
 
+#: What every example module defines (a user's file given by path too).
+REQUIRED = ("TITLE", "build", "INITIAL", "T_END", "checks")
+
+
+def is_path(name: str) -> bool:
+    """Whether ``name`` names a Python file rather than a gallery example."""
+    return name.endswith(".py") or os.sep in name or "/" in name
+
+
 def load(name: str) -> ModuleType:
-    """The example module called ``name`` (see :data:`EXAMPLES`)."""
+    """The example module called ``name`` (see :data:`EXAMPLES`), or the user's Python
+    file at the path ``name`` (see :func:`load_file`)."""
+    if is_path(name):
+        return load_file(name)
     if name not in EXAMPLES:
         raise KeyError(f"unknown example {name!r}; the examples are {', '.join(EXAMPLES)}")
     return importlib.import_module(f"{__name__}.{EXAMPLES[name]}")
+
+
+def load_file(path: str | os.PathLike) -> ModuleType:
+    """A user's model file that defines what a gallery example does (:data:`REQUIRED`).
+
+    Parameters
+    ----------
+    path
+        A Python file defining ``TITLE``, ``build``, ``INITIAL``, ``T_END`` and
+        ``checks`` (and optionally ``EQUILIBRIUM_GUESS`` and ``draw``).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    AttributeError
+        The file lacks some of :data:`REQUIRED` (all missing ones are named).
+
+    Examples
+    --------
+    >>> import inspect, tempfile
+    >>> source = inspect.getsource(load("pendulum")).replace("from ..", "from dalembert.")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     mine = Path(folder) / "my_pendulum.py"
+    ...     _ = mine.write_text(source)
+    ...     load_file(mine).TITLE == load("pendulum").TITLE
+    True
+    """
+    file = Path(path)
+    if not file.is_file():
+        raise FileNotFoundError(f"no model file {str(file)!r}")
+    spec = importlib.util.spec_from_file_location(f"dalembert_user_model_{file.stem}", file)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"{str(file)!r} cannot be loaded as a Python module")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    missing = [name for name in REQUIRED if not hasattr(module, name)]
+    if missing:
+        raise AttributeError(
+            f"{str(file)!r} does not define {', '.join(missing)}; a model file defines "
+            "TITLE (one line), build(**parameters) -> System, INITIAL (q0/qd0 for "
+            "simulate), T_END (simulated time) and checks(system, traj) -> dict, like "
+            "the gallery's examples (dalembert/examples)")
+    return module
