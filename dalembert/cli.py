@@ -22,10 +22,15 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 from . import examples
 from .errors import DalembertError
 from .report import DEFAULT_POINTS, GALLERY_POINTS, GALLERY_T_END
+
+if TYPE_CHECKING:
+    from .statics import Equilibrium, Linearization
+    from .system import System
 
 EXIT_ERROR = 2
 EXIT_IMPORT = 1
@@ -249,7 +254,7 @@ def _load(name: str) -> ModuleType:
         raise _CommandError(f"example {name!r} does not import: {exc}", EXIT_IMPORT) from exc
 
 
-def _equilibrium(name: str) -> tuple[ModuleType, object, object]:
+def _equilibrium(name: str) -> tuple[ModuleType, System, Equilibrium]:
     """The example module, its System and its equilibrium from ``EQUILIBRIUM_GUESS``."""
     module = _load(name)
     guess = getattr(module, "EQUILIBRIUM_GUESS", None)
@@ -274,7 +279,7 @@ def _with_guess() -> list[str]:
     return names
 
 
-def _mode_line(lin: object, k: int) -> str:
+def _mode_line(lin: Linearization, k: int) -> str:
     """``mode k: f = ... Hz, omega = ... rad/s`` (or the growth rate) and the shape."""
     w = complex(lin.natural_frequencies[k])
     if abs(w.imag) <= 1e-12 * abs(w.real):
