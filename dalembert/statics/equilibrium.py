@@ -25,6 +25,7 @@ tangent space of the constraints, ``Z^T K Z`` (see
 from __future__ import annotations
 
 import math
+import warnings
 import weakref
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -39,12 +40,13 @@ from ..errors import (
     EquilibriumNotFoundError,
     InconsistentConstraintsError,
     MarginalStabilityError,
+    RedundantConstraintsWarning,
 )
 from ..model.coordinates import key_name
 from ..model.coordinates import t as time_symbol
 from ..model.parameters import resolve_parameters
 from ..model.values import coordinate_values, free_mask
-from ..numerics.rank import check_constraint_rank
+from ..numerics.rank import constraint_rank, dependent_error, min_norm_multipliers
 
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
 # acceptance) and its scipy.optimize.root fallback are shared with extremum().
@@ -221,6 +223,10 @@ class Equilibrium:
         Parameter values used, by name.
     fixed : tuple of str
         Coordinates held at their guess values.
+    dependent_constraints : tuple of str
+        Constraints that are combinations of those listed before them at the
+        equilibrium (a closed loop built from 3D joints): ``constraint_forces``
+        ``A^T lambda`` are unique, ``multipliers`` are the minimum-norm ones.
     """
 
     q: Array
@@ -237,6 +243,7 @@ class Equilibrium:
     t: float = 0.0
     parameter_values: dict[str, float] = field(default_factory=dict)
     fixed: tuple[str, ...] = ()
+    dependent_constraints: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         for name in ("q", "multipliers", "constraint_forces", "stiffness_eigenvalues",
@@ -316,6 +323,7 @@ def equilibrium(
     tol: float = 1e-12,
     max_iter: int = 50,
     on_marginal: str = "report",
+    redundant_constraints: str | None = None,
 ) -> Equilibrium:
     """Find a static equilibrium of ``system`` near ``guess`` and classify it.
 
@@ -344,6 +352,11 @@ def equilibrium(
         Newton iterations per attempt.
     on_marginal : {"report", "raise"}
         What to do when the constrained stiffness is singular.
+    redundant_constraints : {"minimum-norm", "error"}, optional
+        Dependent constraints at the equilibrium: reported with a
+        :class:`~dalembert.errors.RedundantConstraintsWarning` and the minimum-norm
+        multipliers (the reactions ``A^T lambda`` are unique), or an error; default
+        the System's option of that name, as in dynamics.
 
     Returns
     -------
@@ -356,7 +369,8 @@ def equilibrium(
     EquilibriumNotFoundError
         No equilibrium found from the projected guess.
     ConstraintError
-        The constraints are dependent at the equilibrium (multipliers not unique).
+        With ``redundant_constraints="error"``, the constraints are dependent at the
+        equilibrium.
     MarginalStabilityError
         With ``on_marginal="raise"``, the constrained stiffness is singular.
 
@@ -381,7 +395,12 @@ def equilibrium(
     problem = _Newton(sm, t, p, q_start, free)
     z0 = np.concatenate([q_start[free], problem.initial_multipliers()])
     attempt = _solve(problem, z0, tol, max_iter, q_guess)
-    return _make_equilibrium(problem, attempt, parameters_by_name(system, p), on_marginal)
+    mode = redundant_constraints or getattr(system, "redundant_constraints", "minimum-norm")
+    if mode not in ("minimum-norm", "error"):
+        raise ValueError(f"redundant_constraints must be 'minimum-norm' or 'error', "
+                         f"got {mode!r}")
+    return _make_equilibrium(problem, attempt, parameters_by_name(system, p), on_marginal,
+                             mode)
 
 
 def parameters_by_name(system: object, p: Array) -> dict[str, float]:
@@ -634,15 +653,26 @@ def _not_found_message(problem: _Newton, z0: Array, attempts: list[Attempt], tol
 
 
 def _make_equilibrium(problem: _Newton, attempt: Attempt, params: dict[str, float],
-                      on_marginal: str) -> Equilibrium:
+                      on_marginal: str, redundant_constraints: str) -> Equilibrium:
     sm, free = problem.sm, problem.free
     q, lam = problem.split(attempt.z)
     _, A, _, _, f0, G = problem.evaluate(q, lam)
+    dependent: tuple[str, ...] = ()
+    forces = A.T @ lam  # unique, whatever multipliers Newton settled on
     if sm.m:
-        check_constraint_rank(A, sm.constraint_labels, f"at the equilibrium "
-                              f"({_point(sm.coordinate_names, q)})")
+        rank = constraint_rank(A, sm.constraint_names)
+        if rank.dependent and redundant_constraints == "error":
+            raise dependent_error([sm.constraint_labels[i] for i in rank.dependent],
+                                  f"at the equilibrium ({_point(sm.coordinate_names, q)})")
+        if rank.dependent:
+            # As dynamics reports them: the minimum-norm multipliers of the same force.
+            # The stiffness on the tangent space does not depend on the choice (the
+            # dependence holds near the equilibrium too, so the extra curvature terms
+            # vanish on the tangent space).
+            lam = min_norm_multipliers(A, forces)
+            dependent = tuple(rank.dependent_names)
+            warnings.warn(str(rank), RedundantConstraintsWarning, stacklevel=4)
     stability, eigenvalues = _stability(sm, A, -G, free, on_marginal)
-    forces = A.T @ lam
     holding = np.where(free, 0.0, -(f0 + forces))
     return Equilibrium(
         q=q, multipliers=lam, constraint_forces=forces, residual=attempt.residual,
@@ -651,6 +681,7 @@ def _make_equilibrium(problem: _Newton, attempt: Attempt, params: dict[str, floa
         coordinate_names=sm.coordinate_names, constraint_names=sm.constraint_names,
         t=problem.t, parameter_values=params,
         fixed=tuple(n for n, f in zip(sm.coordinate_names, free) if not f),
+        dependent_constraints=dependent,
     )
 
 
