@@ -29,6 +29,7 @@ import warnings
 import weakref
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -51,6 +52,10 @@ from ..numerics.rank import constraint_rank, dependent_error, min_norm_multiplie
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
 # acceptance) and its scipy.optimize.root fallback are shared with extremum().
 from .newton import Attempt, check_settings, newton_iterations, root_then_newton
+
+if TYPE_CHECKING:
+    from ..system import System
+
 
 __all__ = [
     "STABILITIES",
@@ -115,7 +120,7 @@ class StaticModel:
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def static_model(system: object) -> StaticModel:
+def static_model(system: System) -> StaticModel:
     """The :class:`StaticModel` of ``system`` (generated on first use, then reused)."""
     cached = _CACHE.get(system)
     if cached is None:
@@ -124,7 +129,7 @@ def static_model(system: object) -> StaticModel:
     return cached
 
 
-def _build_static_model(system: object) -> StaticModel:
+def _build_static_model(system: System) -> StaticModel:
     eqs = system.equations()
     model = eqs.model
     coords, cons = model.coords, model.constraints
@@ -314,7 +319,7 @@ class Equilibrium:
 
 
 def equilibrium(
-    system: object,
+    system: System,
     guess: Mapping[object, float] | Sequence[float] | Array,
     *,
     parameters: Mapping[object, object] | None = None,
@@ -403,7 +408,7 @@ def equilibrium(
                              mode)
 
 
-def parameters_by_name(system: object, p: Array) -> dict[str, float]:
+def parameters_by_name(system: System, p: Array) -> dict[str, float]:
     """The resolved parameter array as a dict by name."""
     return {s.name: float(v) for s, v in zip(system.model.parameters, p)}
 
@@ -411,7 +416,7 @@ def parameters_by_name(system: object, p: Array) -> dict[str, float]:
 def tangent_basis(sm: StaticModel, A: Array, free: Array) -> Array:
     """Orthonormal basis of ``{dq : A_hol dq = 0, dq_fixed = 0}`` (``n x r``)."""
     rows = [A[list(sm.holonomic_rows)]] if sm.holonomic_rows else []
-    rows += [np.eye(sm.n)[~free]]
+    rows += [np.eye(sm.n)[~np.asarray(free, dtype=bool)]]
     blocks = np.vstack([np.zeros((0, sm.n)), *rows])
     return np.eye(sm.n) if blocks.shape[0] == 0 else scipy.linalg.null_space(blocks)
 
@@ -510,7 +515,8 @@ def project_onto_constraints(
 
 
 def _projection_step(
-    sm: StaticModel, t: float, q: Array, cols: Array, step: Array, psi: Array, p: Array
+    sm: StaticModel, t: float, q: Array, cols: NDArray[np.intp], step: Array, psi: Array,
+    p: Array
 ) -> tuple[Array, Array] | None:
     """Backtrack along the Gauss-Newton step until ``|psi|`` (2-norm) decreases."""
     norm = float(np.linalg.norm(psi))

@@ -161,7 +161,7 @@ def _number(name: str, value: object, *, exact: bool) -> sp.Expr:
     if not exact:
         return sp.Float(number)
     if isinstance(value, sp.Basic):
-        return value  # type: ignore[return-value]
+        return value
     return sp.Rational(repr(number))  # shortest decimal: 0.1 -> 1/10
 
 

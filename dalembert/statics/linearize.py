@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import scipy.linalg
@@ -32,7 +33,7 @@ from ..errors import (
     SingularSystemError,
 )
 from ..model.parameters import resolve_parameters
-from ..model.values import coordinate_values, free_mask
+from ..model.values import CoordinateValues, coordinate_values, free_mask
 from .equilibrium import (
     Equilibrium,
     MarginalStabilityError,
@@ -42,6 +43,10 @@ from .equilibrium import (
     static_model,
     tangent_basis,
 )
+
+if TYPE_CHECKING:
+    from ..system import System
+
 
 __all__ = [
     "Linearization",
@@ -124,12 +129,14 @@ class Linearization:
     @property
     def growth_rates(self) -> Array:
         """Exponential growth rate of each mode from the stiffness (0 for oscillating ones)."""
-        return np.abs(np.asarray(self.natural_frequencies).imag)
+        return np.abs(np.asarray(self.natural_frequencies).imag).astype(np.float64)
 
     @property
-    def eigenvalues(self) -> Array:
+    def eigenvalues(self) -> NDArray[np.complex128]:
         """Eigenvalues of ``A_ss`` (include damping and gyroscopic coupling)."""
-        return np.linalg.eigvals(self.A_ss) if self.A_ss.size else np.zeros(0, complex)
+        if not self.A_ss.size:
+            return np.zeros(0, np.complex128)
+        return np.linalg.eigvals(self.A_ss).astype(np.complex128)
 
     @property
     def state_to_coordinates(self) -> Array:
@@ -161,7 +168,7 @@ class Linearization:
 
 
 def linearize(
-    system: object,
+    system: System,
     q_eq: Equilibrium | Mapping[object, float] | Sequence[float] | Array,
     *,
     parameters: Mapping[object, object] | None = None,
@@ -218,7 +225,8 @@ def linearize(
     sm = static_model(system)
     _reject_pfaffian(sm)
     given = q_eq if isinstance(q_eq, Equilibrium) else None
-    q = np.array(given.q) if given else coordinate_values(q_eq, sm.coordinate_names, "q_eq")
+    q = np.array(given.q) if given is not None else coordinate_values(
+        cast(CoordinateValues, q_eq), sm.coordinate_names, "q_eq")
     t = float(given.t if given and t is None else t or 0.0)
     fixed = given.fixed if given and fixed is None else fixed
     p = resolve_parameters(system.model.parameters, system.parameter_values,

@@ -87,7 +87,7 @@ def newton_iterations(
         if _accepted(residual, matrix, z, tol):
             return Attempt(z, max_abs(residual), k, True, label)
         # lstsq, not solve: the KKT matrix may be singular away from the solution.
-        step = np.linalg.lstsq(matrix, -residual, rcond=None)[0]
+        step = np.asarray(np.linalg.lstsq(matrix, -residual, rcond=None)[0], dtype=np.float64)
         found = _line_search(kkt, z, residual, step)
         if found is None:
             return Attempt(z, max_abs(residual), k, False, label, "residual stopped decreasing")

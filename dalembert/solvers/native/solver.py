@@ -41,7 +41,7 @@ class NativeSolver:
         self.num, self.n, self.m = num, num.n, num.m
         self.lib = library.runtime()
         self.structure = schur_structure(num.pattern)
-        self._keep = []  # every array the C struct points to
+        self._keep: list[object] = []  # every array the C struct points to (kept alive)
         self.model = self._model(handles, baumgarte)
         self._address = ctypes.addressof(self.model)
         self._holonomic_mask = self._array(np.isin(np.arange(self.m), num.holonomic_rows),
