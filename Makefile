@@ -1,6 +1,6 @@
 # Two commands do all set-up on a fresh machine:
 #   make demo   simulate the gallery's demo systems, write plots and a report to out/demo
-#   make test   lint (ruff) and the whole test suite (unit, doctests, validation)
+#   make test   lint (ruff), type check (mypy) and the whole test suite (unit, doctests, validation)
 #   make bench  the benchmark suite against SymPy, MuJoCo and Exudyn (JSON + PNG in bench/results)
 #   make bench-quick  the same at small n with short caps (under 5 minutes)
 PYTHON ?= python3
@@ -21,6 +21,7 @@ demo: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/mypy
 
 test: lint
 	$(BIN)/python -m pytest

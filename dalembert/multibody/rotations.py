@@ -17,7 +17,9 @@ virtual work of the generalized force ``2 E^T tau_body = 2 G^T tau_world`` on ``
 Every function takes SymPy input (returning ``sympy.Matrix``) or NumPy input of
 shape ``(..., 4)`` (returning arrays of shape ``(..., 3, 4)`` or ``(..., 3, 3)``).
 
->>> import numpy as np
+>>> from typing import Any
+
+import numpy as np
 >>> b = quaternion_from_matrix(rotation_matrix(np.array([0.5, 0.5, 0.5, 0.5])))
 >>> np.allclose(b, 0.5)
 True
@@ -26,6 +28,7 @@ True
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -33,7 +36,7 @@ import sympy as sp
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
-def _is_symbolic(b: object) -> bool:
+def _is_symbolic(b: Any) -> bool:
     return isinstance(b, sp.MatrixBase) or any(isinstance(v, sp.Basic) for v in b)
 
 
@@ -44,7 +47,7 @@ def _assemble(rows: list[list[object]], symbolic: bool):
                        (0, 1), (-2, -1))
 
 
-def _split(b: object) -> tuple[object, object, object, object]:
+def _split(b: Any) -> tuple[Any, Any, Any, Any]:
     if _is_symbolic(b):
         return tuple(b)
     b = np.asarray(b, dtype=float)
@@ -53,21 +56,21 @@ def _split(b: object) -> tuple[object, object, object, object]:
     return b[..., 0], b[..., 1], b[..., 2], b[..., 3]
 
 
-def E_matrix(b: object):
+def E_matrix(b: Any):
     """Body-frame matrix: ``w_body = 2 E(b) bdot``."""
     b0, b1, b2, b3 = _split(b)
     rows = [[-b1, b0, b3, -b2], [-b2, -b3, b0, b1], [-b3, b2, -b1, b0]]
     return _assemble(rows, _is_symbolic(b))
 
 
-def G_matrix(b: object):
+def G_matrix(b: Any):
     """World-frame matrix: ``w_world = 2 G(b) bdot``."""
     b0, b1, b2, b3 = _split(b)
     rows = [[-b1, b0, -b3, b2], [-b2, b3, b0, -b1], [-b3, -b2, b1, b0]]
     return _assemble(rows, _is_symbolic(b))
 
 
-def rotation_matrix(b: object):
+def rotation_matrix(b: Any):
     """``R(b) = G(b) E(b)^T`` (body to world), written out as quadratic polynomials."""
     b0, b1, b2, b3 = _split(b)
     rows = [
@@ -78,7 +81,7 @@ def rotation_matrix(b: object):
     return _assemble(rows, _is_symbolic(b))
 
 
-def quaternion_from_matrix(R: object) -> np.ndarray:
+def quaternion_from_matrix(R: Any) -> np.ndarray:
     """Unit Euler parameters with ``b0 >= 0`` of a rotation matrix (Shepperd's method).
 
     The largest of ``b0^2..b3^2`` is taken from the trace and diagonal, the others
@@ -110,9 +113,9 @@ def _shepperd(R: np.ndarray) -> np.ndarray:
         v[l] = (R[l, i] + R[i, l]) / (4 * bi)
         b0 = (R[l, j] - R[j, l]) / (4 * bi)
         b = [b0, *v]
-    b = np.array(b)
-    b /= np.linalg.norm(b)
-    return -b if b[0] < 0 else b
+    unit = np.array(b, dtype=float)
+    unit /= np.linalg.norm(unit)
+    return -unit if unit[0] < 0 else unit
 
 
 def elementary_rotation(axis: str, angle: float) -> np.ndarray:
@@ -188,7 +191,7 @@ def dot(a: sp.MatrixBase, b: sp.MatrixBase) -> sp.Expr:
     return sp.Add(*(u * v for u, v in zip(a, b) if u != 0 and v != 0))
 
 
-def skew(v: object):
+def skew(v: Any):
     """The cross-product matrix ``[v]x`` with ``[v]x u = v x u``."""
     x, y, z = v
     rows = [[0, -z, y], [z, 0, -x], [-y, x, 0]]
