@@ -47,6 +47,7 @@ from ..model.coordinates import key_name
 from ..model.coordinates import t as time_symbol
 from ..model.parameters import resolve_parameters
 from ..model.values import coordinate_values, free_mask
+from ..numerics.gauss_newton import ACCEPT_TOL, gauss_newton
 from ..numerics.rank import constraint_rank, dependent_error, min_norm_multipliers
 
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
@@ -72,9 +73,7 @@ STABILITIES = ("stable", "unstable", "marginal", "undetermined")
 
 #: An eigenvalue of ``Z^T K Z`` with ``|k| <= MARGINAL_RTOL * max|K|`` counts as zero.
 MARGINAL_RTOL = 1e-8
-#: Gauss-Newton projection of the guess: target and acceptance (relative to max(1, |q|)).
-_PROJECTION_TOL = 1e-14
-_PROJECTION_ACCEPT = 1e-10
+#: Gauss-Newton iterations of the projection of the guess (a guess may be far off).
 _PROJECTION_ITER = 100
 
 Array = NDArray[np.float64]
@@ -497,44 +496,12 @@ def project_onto_constraints(
     q = np.array(q, dtype=float)
     if not rows:
         return q
-    cols = np.flatnonzero(free)
-    scale = max(1.0, float(np.abs(q).max()))
-    psi, A, *_ = sm.constraints(t, q, p)
-    for _ in range(_PROJECTION_ITER):
-        if _finite_max(psi) <= _PROJECTION_TOL * scale:
-            return q
-        step = np.linalg.lstsq(A[rows][:, cols], psi, rcond=None)[0]
-        found = _projection_step(sm, t, q, cols, step, psi, p)
-        if found is None:
-            break
-        q, psi = found
-        A = sm.constraints(t, q, p)[1]
-    if _finite_max(psi) <= _PROJECTION_ACCEPT * scale:
-        return q
-    raise InconsistentConstraintsError(_inconsistent_message(sm, t, q, free, p))
-
-
-def _projection_step(
-    sm: StaticModel, t: float, q: Array, cols: NDArray[np.intp], step: Array, psi: Array,
-    p: Array
-) -> tuple[Array, Array] | None:
-    """Backtrack along the Gauss-Newton step until ``|psi|`` (2-norm) decreases."""
-    norm = float(np.linalg.norm(psi))
-    alpha = 1.0
-    for _ in range(30):
-        trial = q.copy()
-        trial[cols] -= alpha * step
-        new = sm.constraints(t, trial, p)[0]
-        if np.all(np.isfinite(new)) and np.linalg.norm(new) < norm:
-            return trial, new
-        alpha /= 2
-    return None
-
-
-def _finite_max(values: Array) -> float:
-    if not np.all(np.isfinite(values)):
-        return math.inf
-    return float(np.abs(values).max()) if values.size else 0.0
+    found = gauss_newton(lambda x: sm.constraints(t, x, p)[0],
+                         lambda x: sm.constraints(t, x, p)[1][rows], q, free,
+                         line_search=True, max_iter=_PROJECTION_ITER)
+    if found.converged or found.residual <= ACCEPT_TOL * max(1.0, float(np.abs(q).max())):
+        return found.q
+    raise InconsistentConstraintsError(_inconsistent_message(sm, t, found.q, free, p))
 
 
 def _inconsistent_message(sm: StaticModel, t: float, q: Array, free: Array, p: Array) -> str:
