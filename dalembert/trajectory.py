@@ -29,6 +29,45 @@ class Trajectory:
     (``A^T lambda``, n columns), energies, and the largest position and velocity
     constraint residuals. ``traj["x"]``, ``traj["x_dot"]``, ``traj["x_ddot"]`` give
     one coordinate's column; ``traj.multiplier("name")`` one constraint's.
+    :meth:`System.simulate <dalembert.System.simulate>` makes it.
+
+    Parameters
+    ----------
+    t
+        Output times, shape ``(k,)``.
+    q, qd, qdd
+        Coordinates, velocities and accelerations, shape ``(k, n)``.
+    multipliers
+        Lagrange multipliers, shape ``(k, m)`` (minimum-norm ones where
+        constraints are dependent).
+    constraint_forces
+        Generalized constraint forces ``A^T lambda``, shape ``(k, n)``.
+    kinetic_energy, potential_energy, jacobi_integral
+        ``T``, ``V`` and ``h = qd . dL/dqd - L``, shape ``(k,)``.
+    position_residual, velocity_residual
+        Largest ``|psi|`` and ``|A qd + b|`` at each time.
+    coordinate_names, constraint_names
+        Column names.
+    status, message
+        ``"finished"``, ``"event"``, ``"failed"`` or ``"interrupted"``, and why.
+    stats
+        Evaluations, steps, projections.
+    initialization
+        What making the initial state consistent changed.
+    t_events, y_events
+        Event times and states, one array per event function.
+    sol
+        Dense output ``sol(t)`` (with ``dense_output=True``), else ``None``.
+
+    Examples
+    --------
+    >>> from dalembert.examples import load
+    >>> traj = load("pendulum").build().simulate((0, 1), {"x": 1.0, "y": 0.0},
+    ...                                          t_eval=[0.0, 0.5, 1.0])
+    >>> traj.q.shape, traj.coordinate_names, traj.success
+    ((3, 2), ('x', 'y'), True)
+    >>> bool(abs(traj["x"][0] - 1.0) < 1e-15 and traj.multiplier("rod").shape == (3,))
+    True
     """
 
     t: np.ndarray
@@ -114,7 +153,32 @@ class Trajectory:
         return "\n".join(lines)
 
     def save(self, path: str | os.PathLike) -> Path:
-        """Write every array and name to ``path`` (``.npz``), atomically."""
+        """Write every array and name to ``path`` (``.npz``), atomically.
+
+        The file appears whole or not at all (written beside it, synced, renamed)
+        with the mode a plain ``open`` would give it under the umask.
+
+        Parameters
+        ----------
+        path
+            The file; ``.npz`` is appended if it has another suffix.
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> from pathlib import Path
+        >>> from dalembert.examples import load
+        >>> traj = load("pendulum").build().simulate((0, 0.1), {"x": 1.0, "y": 0.0})
+        >>> with tempfile.TemporaryDirectory() as folder:
+        ...     again = Trajectory.load(traj.save(Path(folder) / "run"))
+        >>> bool((again.q == traj.q).all()), again.constraint_names
+        (True, ('rod',))
+        """
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
@@ -144,7 +208,13 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Trajectory:
-        """Read a trajectory written by :meth:`save`."""
+        """Read a trajectory written by :meth:`save` (see there for an example).
+
+        Parameters
+        ----------
+        path
+            A ``.npz`` file written by :meth:`save`.
+        """
         with np.load(Path(path), allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
             arrays = {name: data[name] for name in _ARRAYS}
