@@ -9,15 +9,14 @@ once) and picks, once per pattern, one of three factorizations:
   order (reverse Cuthill-McKee, see :func:`_band_order`), then LAPACK's band LU
   with partial pivoting (``gbtrf``/``gbtrs``), the values scattered straight into
   its storage. For a chain the band is ~2 links wide whatever the length
-  (``kl = ku = 11`` for spherical quaternion links), so a solve costs ``O(n)``;
-  measured per factorization and solve 20 us (n = 4), 55 us (16), 190 us (64).
+  (``kl = ku = 11`` for spherical quaternion links), so a solve costs ``O(n)``.
 - ``dense`` (small systems whose band is wide): one LAPACK solve.
 - ``splu``: SuperLU with a fill-reducing order (``MMD_AT_PLUS_A``), for large
-  patterns with a wide band (a branching tree); 200-700 us of fixed overhead.
+  patterns with a wide band (a branching tree); it has a fixed overhead, so it
+  is kept for what the band cannot serve.
 
-The old dense path was the bottleneck: a dense LU is ``O(n^3)``, and past ~100
-unknowns OpenBLAS starts threads that on this 2-core machine made the 176 x 176
-solve of a 16-link chain take 3-80 ms instead of 0.3 ms.
+A dense LU is ``O(n^3)`` and, past ~100 unknowns, multithreaded BLAS adds more
+than it saves on small cores: the band path is what keeps a chain linear.
 
 Products with ``A`` and ``A^T`` go through :func:`numpy.bincount` on the pattern:
 ``O(nnz)`` with no sparse-matrix object built.
