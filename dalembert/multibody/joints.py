@@ -233,6 +233,17 @@ class Joint:
 class Spherical(Joint):
     """Ball joint: the two points coincide (3 equations).
 
+    Parameters
+    ----------
+    name
+        The joint's name; its rows are ``<name>_1``, ``<name>_2``, ...
+    body_a, body_b
+        The joined bodies (either may be a :class:`~dalembert.multibody.Ground`).
+    point_a, point_b
+        The joint point on each body, in that body's frame relative to its center.
+
+    Examples
+    --------
     >>> from dalembert.multibody import Ground, Particle
     >>> len(Spherical("ball", Ground(), Particle("p", 1.0)).constraints())
     3
@@ -250,7 +261,26 @@ class Spherical(Joint):
 
 
 class Universal(Joint):
-    """Cardan joint: points coincide and the two axes stay perpendicular (4)."""
+    """Cardan joint: points coincide and the two axes stay perpendicular (4).
+
+    Parameters
+    ----------
+    name
+        The joint's name; its rows are ``<name>_1``, ``<name>_2``, ...
+    body_a, body_b
+        The joined bodies (either may be a :class:`~dalembert.multibody.Ground`).
+    point_a, point_b
+        The joint point on each body, in that body's frame relative to its center.
+    axis_a, axis_b
+        The two cross axes, each in its body's frame (default ``x`` and ``y``).
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, RigidBody
+    >>> shaft = RigidBody("shaft", 1.0, (0.1, 0.1, 0.02))
+    >>> Universal("u", Ground(), shaft).constraint_names
+    ['u_1', 'u_2', 'u_3', 'u_4']
+    """
 
     n_equations = 4
 
@@ -266,7 +296,31 @@ class Universal(Joint):
 
 
 class Revolute(Joint):
-    """Hinge: points coincide, axes stay parallel (5 equations)."""
+    """Hinge: points coincide, axes stay parallel (5 equations).
+
+    Parameters
+    ----------
+    name
+        The joint's name; its rows are ``<name>_1``, ``<name>_2``, ...
+    body_a, body_b
+        The joined bodies (either may be a :class:`~dalembert.multibody.Ground`).
+    point_a, point_b
+        The joint point on each body, in that body's frame relative to its center.
+    axis_a, axis_b
+        The hinge axis in each body's frame (``axis_b`` defaults to ``axis_a``).
+
+    Examples
+    --------
+    A door on a vertical hinge keeps one degree of freedom (6 coordinates and the
+    quaternion's norm give 7; 5 hinge rows leave 1 turning about ``z``):
+
+    >>> from dalembert.multibody import Ground, Multibody, RigidBody
+    >>> door = RigidBody("door", 10.0, (1.0, 1.2, 0.3))
+    >>> hinge = Revolute("hinge", Ground(), door, (0, 0, 0), (-0.5, 0, 0))
+    >>> system = Multibody([door], [hinge]).system
+    >>> len(system.coordinate_names) - len(system.constraint_names)
+    1
+    """
 
     n_equations = 5
     planar_rows = 2
@@ -284,7 +338,26 @@ class Revolute(Joint):
 
 
 class Prismatic(Joint):
-    """Slider: frames locked parallel, point ``b`` moves along the axis of ``a`` (5)."""
+    """Slider: frames locked parallel, point ``b`` moves along the axis of ``a`` (5).
+
+    Parameters
+    ----------
+    name
+        The joint's name; its rows are ``<name>_1``, ``<name>_2``, ...
+    body_a, body_b
+        The joined bodies (either may be a :class:`~dalembert.multibody.Ground`).
+    point_a, point_b
+        The joint point on each body, in that body's frame relative to its center.
+    axis_a
+        The sliding direction in the frame of ``body_a``.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, RigidBody
+    >>> piston = RigidBody("piston", 1.0, (0.1, 0.1, 0.1))
+    >>> len(Prismatic("guide", Ground(), piston, axis_a=(1, 0, 0)).constraints())
+    5
+    """
 
     n_equations = 5
     planar_rows = 2
@@ -304,7 +377,24 @@ class Prismatic(Joint):
 
 
 class Fixed(Joint):
-    """Weld: points coincide and frames locked parallel (6 equations)."""
+    """Weld: points coincide and frames locked parallel (6 equations).
+
+    Parameters
+    ----------
+    name
+        The joint's name; its rows are ``<name>_1``, ``<name>_2``, ...
+    body_a, body_b
+        The joined bodies (either may be a :class:`~dalembert.multibody.Ground`).
+    point_a, point_b
+        The joint point on each body, in that body's frame relative to its center.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, RigidBody
+    >>> plate = RigidBody("plate", 1.0, (0.1, 0.1, 0.2))
+    >>> len(Fixed("weld", Ground(), plate).constraints())
+    6
+    """
 
     n_equations = 6
     planar_rows = 3
@@ -321,7 +411,26 @@ class Fixed(Joint):
 
 
 class Distance(Joint):
-    """Massless rod of length ``length`` between the two points (1 equation)."""
+    """Massless rod of length ``length`` between the two points (1 equation).
+
+    Parameters
+    ----------
+    name, body_a, body_b
+        As for every joint (see :class:`Spherical`).
+    length
+        The rod's length, a positive number.
+    point_a, point_b
+        The rod's ends on each body, in that body's frame.
+
+    Examples
+    --------
+    A particle on a rod of length 2 from the origin is a spherical pendulum:
+
+    >>> from dalembert.multibody import Ground, Particle
+    >>> rod = Distance("rod", Ground(), Particle("bob", 1.0), 2.0)
+    >>> rod.constraints()[0].expr
+    bob_x(t)**2 + bob_y(t)**2 + bob_z(t)**2 - 4.0
+    """
 
     n_equations = 1
     planar_rows = 1
@@ -343,7 +452,24 @@ class Distance(Joint):
 
 
 class PointOnPlane(Joint):
-    """Point ``b`` stays on the plane through point ``a`` with normal ``normal`` (1)."""
+    """Point ``b`` stays on the plane through point ``a`` with normal ``normal`` (1).
+
+    Parameters
+    ----------
+    name, body_a, body_b
+        As for every joint (see :class:`Spherical`); ``body_a`` carries the plane.
+    normal
+        The plane's normal in the frame of ``body_a``.
+    point_a, point_b
+        A point of the plane on ``body_a`` and the constrained point on ``body_b``.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, Particle
+    >>> floor = PointOnPlane("floor", Ground(), Particle("p", 1.0), normal=(0, 0, 1))
+    >>> floor.constraints()[0].expr
+    1.0*p_z(t)
+    """
 
     n_equations = 1
     planar_rows = 1
