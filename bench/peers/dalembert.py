@@ -8,10 +8,10 @@ as planar multibody codes (and Exudyn's 2D bodies) model it.
 Build = ``chain(...)`` + derivation + code generation (``system.compiled``: one
 link and two joint kinds derived and compiled, whatever ``n``). Cold = the model's
 code not in the cache (a fresh ``DALEMBERT_CACHE_DIR``); warm = the same build
-again in the same process, the compiled library found on disk. The C loop
-(``runtime.c``) does not depend on the model and is compiled once per machine, as
-an extension module would be at installation: it is timed first, apart, as
-``runtime_build_s``. The simulation is ``Multibody.simulate`` with its defaults
+again in the same process, the compiled library found on disk. The C loop (the
+sources in ``dalembert/solvers/native``) does not depend on the model and is compiled
+once per machine, as an extension module would be at installation: it is timed first,
+apart, as ``runtime_build_s``. The simulation is ``Multibody.simulate`` with its defaults
 (DOP853 under PI step-size control, projection; the loop in C, see
 ``dalembert.solvers.native``), tolerances tightened from loose until the target is
 met (as MuJoCo's step is halved from 1e-2). One evaluation = one right-hand

@@ -12,8 +12,10 @@ the sparse solver of the dynamics (:class:`~.sparse_kkt.KKTSolver`) and reused
 for every Newton iteration (simplified Newton: the drift after one step is at
 tolerance level, so each iteration gains ~10 digits and one or two reach the
 rounding floor). Velocities are projected with ``A`` at the new positions. With
-dependent constraints, or if the fast path fails, it falls back to the dense
-least-squares functions below (positions through
+dependent constraints the same solves use the independent rows measured at the
+start (``kept``; as the C loop does): where the rank is constant, the zero set of
+the kept rows is that of all rows, and the dropped rows follow. If the fast path
+fails, it falls back to the dense least-squares functions below (positions through
 :func:`~dalembert.numerics.gauss_newton.gauss_newton`, which says why both cut
 small singular values at :data:`~dalembert.numerics.rank.RANK_RTOL`).
 """
@@ -75,31 +77,49 @@ FAST_NEWTON = 4
 class StepProjector:
     """``project(t, y)``: the state projected onto the constraints (see module docstring).
 
-    ``kept`` (indices of independent rows, given when constraints are dependent)
-    selects the dense least-squares path.
+    Parameters
+    ----------
+    num
+        The compiled equations bound to parameter values.
+    kept
+        The independent constraint rows when some are dependent (measured at the
+        initial state), else ``None``: the projections solve with these rows.
+
+    Examples
+    --------
+    >>> from dalembert.examples import cartesian_pendulum
+    >>> num = cartesian_pendulum.build().numeric()
+    >>> y = StepProjector(num)(0.0, np.array([0.1, -1.1, 1.0, 0.0]))
+    >>> round(float(np.hypot(y[0], y[1])), 12), round(float(y[0] * y[2] + y[1] * y[3]), 12)
+    (1.0, 0.0)
     """
 
     def __init__(self, num: NumericModel, kept: np.ndarray | None = None) -> None:
         self.num = num
-        self.fast = kept is None
         n, pat = num.n, num.pattern
         unit = pat.remember("unit_mass", lambda: SparsePattern(
             n, num.m, np.arange(n), np.arange(n), pat.A_rows, pat.A_cols))
         self._ones = np.ones(n)
-        self._velocity = kkt_solver(unit)
-        rows = np.array(num.holonomic_rows, dtype=np.intp)
+        holonomic = np.array(num.holonomic_rows, dtype=np.intp)
+        solved = np.ones(num.m, dtype=bool)
+        if kept is not None:
+            solved[:] = False
+            solved[kept] = True
+        self._rows = None if solved.all() else np.flatnonzero(solved)  # velocities
+        self._psi = solved[holonomic]  # the entries of psi the position steps solve for
+        self._velocity = kkt_solver(unit, self._rows)
+        rows = holonomic[self._psi]
         self._position = kkt_solver(unit, None if len(rows) == num.m else rows)
         self._zeros = np.zeros(n)
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
         n = self.num.n
         q = y[:n]
-        if self.fast:
-            try:
-                q = self.positions(t, q)
-                return np.concatenate([q, self.velocities(t, q, y[n:])])
-            except (SingularSystemError, np.linalg.LinAlgError):
-                pass
+        try:
+            q = self.positions(t, q)
+            return np.concatenate([q, self.velocities(t, q, y[n:])])
+        except (SingularSystemError, np.linalg.LinAlgError):
+            pass
         q = project_positions(self.num, t, q)
         return np.concatenate([q, project_velocities(self.num, t, q, y[n:])])
 
@@ -120,7 +140,7 @@ class StepProjector:
         for _ in range(MAX_NEWTON if refactor else FAST_NEWTON):
             if refactor:
                 solve = self._position.factor(self._ones, num.velocity_sparse(t, q)[0])
-            trial = q + solve(np.concatenate([self._zeros, -psi]))[: num.n]
+            trial = q + solve(np.concatenate([self._zeros, -psi[self._psi]]))[: num.n]
             psi_trial = num.position_constraint(t, trial)
             new_residual = np.abs(psi_trial).max()
             if not new_residual < 0.5 * residual:
@@ -140,5 +160,7 @@ class StepProjector:
         Av, b = num.velocity_sparse(t, q)
         pat = num.pattern
         residual = matvec(pat.A_rows, pat.A_cols, Av, qd, num.m) + b
+        if self._rows is not None:
+            residual = residual[self._rows]
         step = self._velocity.factor(self._ones, Av)(np.concatenate([self._zeros, -residual]))
         return qd + step[: num.n]

@@ -6,7 +6,7 @@ straight into the arrays of ``K = [[M, A^T], [A, 0]]`` (the maps are computed
 once) and picks, once per pattern, one of three factorizations:
 
 - ``band`` (when the band is at most ``BAND_MAX`` wide): a bandwidth-reducing
-  order (reverse Cuthill-McKee, see :func:`_band_order`), then LAPACK's band LU
+  order (:mod:`dalembert.numerics.band`), then LAPACK's band LU
   with partial pivoting (``gbtrf``/``gbtrs``), the values scattered straight into
   its storage. For a chain the band is ~2 links wide whatever the length
   (``kl = ku = 11`` for spherical quaternion links), so a solve costs ``O(n)``.
@@ -24,17 +24,17 @@ Products with ``A`` and ``A^T`` go through :func:`numpy.bincount` on the pattern
 
 from __future__ import annotations
 
-import hashlib
 import warnings
 
 import numpy as np
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 from scipy.linalg import lapack
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..codegen.compiled import SparsePattern
 from ..errors import SingularSystemError
+from ..numerics.band import band_order
+from ..numerics.band import bandwidth as _bandwidth  # noqa: F401 (tests measure with it)
 from ..numerics.rank import min_norm_multipliers
 from .kkt import DROPPED_ROW_RTOL, _dense_solve, _least_squares_kkt, kkt_matrix
 
@@ -234,10 +234,12 @@ class _BandMap:
 
 def _band_layout(rows: np.ndarray, cols: np.ndarray, size: int):
     """``(perm, kl, ku, flat)`` for the entries ``(rows, cols)`` of a symmetric pattern:
-    a bandwidth-reducing order (:func:`_band_order`), the band, and each entry's index
+    a bandwidth-reducing order (:func:`~dalembert.numerics.band.band_order`; SciPy's
+    below ``DENSE_MAX`` unknowns, where the band hardly costs and another order
+    would change the rounding of every result), the band, and each entry's index
     in the flat column-major storage of LAPACK's ``gbtrf`` (entry ``(i, j)`` of the
     permuted matrix at row ``kl + ku + i - j``, column ``j``)."""
-    perm = _band_order(rows, cols, size)
+    perm = band_order(rows, cols, size, peripheral_from=DENSE_MAX + 1)
     inverse = np.empty(size, dtype=np.intp)
     inverse[perm] = np.arange(size)
     i, j = inverse[rows], inverse[cols]
@@ -245,88 +247,6 @@ def _band_layout(rows: np.ndarray, cols: np.ndarray, size: int):
     ku = int(max(0, (j - i).max(initial=0)))
     flat = (kl + ku + i - j) + j * (2 * kl + ku + 1)
     return perm, kl, ku, flat
-
-
-def _band_order(rows: np.ndarray, cols: np.ndarray, size: int) -> np.ndarray:
-    """:func:`_find_band_order`, remembered for recent patterns: a simulation builds
-    several solvers on one pattern (dynamics, projection, initial checks), and the
-    search costs about a second at ten thousand unknowns."""
-    key = hashlib.sha1(rows.astype(np.int64).tobytes() + b"|" + cols.astype(np.int64).tobytes()
-                       + str(size).encode()).hexdigest()
-    perm = _ORDERS.get(key)
-    if perm is None:
-        perm = _find_band_order(rows, cols, size)
-        _ORDERS[key] = perm
-        while len(_ORDERS) > 32:
-            _ORDERS.pop(next(iter(_ORDERS)))
-    return perm
-
-
-_ORDERS: dict[str, np.ndarray] = {}
-
-
-def _find_band_order(rows: np.ndarray, cols: np.ndarray, size: int) -> np.ndarray:
-    """A reverse Cuthill-McKee order: SciPy's (started at a node of least degree) or,
-    past ``DENSE_MAX`` unknowns and if its band is narrower, one started at a
-    pseudo-peripheral node (George and Liu), often several unknowns narrower on long
-    chains. Small systems keep SciPy's order: the band hardly costs there, and another
-    order changes the rounding of every result."""
-    if not len(rows):
-        return np.arange(size)
-    graph = sps.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
-    graph.sum_duplicates()
-    candidates = [reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.intp)]
-    if size > DENSE_MAX:
-        candidates.append(_peripheral_rcm(graph))
-    return min(candidates, key=lambda perm: _bandwidth(rows, cols, perm))
-
-
-def _bandwidth(rows: np.ndarray, cols: np.ndarray, perm: np.ndarray) -> int:
-    inverse = np.empty(len(perm), dtype=np.intp)
-    inverse[perm] = np.arange(len(perm))
-    return int(np.abs(inverse[rows] - inverse[cols]).max(initial=0))
-
-
-def _peripheral_rcm(graph: sps.csr_matrix) -> np.ndarray:
-    """Reverse Cuthill-McKee, each connected component started at a pseudo-peripheral node."""
-    indptr, indices = graph.indptr, graph.indices
-    degree = np.diff(indptr)
-    seen = np.zeros(graph.shape[0], dtype=bool)
-    order: list[int] = []
-    for root in np.argsort(degree, kind="stable").tolist():
-        if seen[root]:
-            continue
-        start, eccentricity = root, -1
-        while True:  # the far end of a breadth-first search, until it stops receding
-            levels = _levels(indptr, indices, start)
-            if len(levels) - 1 <= eccentricity:
-                break
-            eccentricity = len(levels) - 1
-            start = min(levels[-1], key=lambda v: degree[v])
-        component = [start]
-        seen[start] = True
-        for v in component:  # Cuthill-McKee: neighbours by increasing degree
-            new = [u for u in indices[indptr[v]:indptr[v + 1]].tolist() if not seen[u]]
-            new.sort(key=lambda u: degree[u])
-            seen[new] = True
-            component.extend(new)
-        order.extend(reversed(component))
-    return np.array(order, dtype=np.intp)
-
-
-def _levels(indptr: np.ndarray, indices: np.ndarray, start: int) -> list[list[int]]:
-    """Breadth-first levels from ``start``."""
-    levels, seen = [[start]], {start}
-    while True:
-        nxt = []
-        for v in levels[-1]:
-            for u in indices[indptr[v]:indptr[v + 1]].tolist():
-                if u not in seen:
-                    seen.add(u)
-                    nxt.append(u)
-        if not nxt:
-            return levels
-        levels.append(nxt)
 
 
 def _csc_map(rows: np.ndarray, cols: np.ndarray, size: int):

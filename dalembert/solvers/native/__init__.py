@@ -2,9 +2,10 @@
 
 Python around SciPy's integrators costs ~100 us per right-hand side, more than
 the mechanics of a 16-link chain. Here the right-hand side, whole explicit
-Runge-Kutta steps and the projection after each step run in ``runtime.c``
-(hand-written, compiled once per machine, cached like generated code), calling
-the model's generated C functions through pointers.
+Runge-Kutta steps and the projection after each step run in C (``runtime.h`` and
+its sources, hand-written, compiled together once per machine and cached like
+generated code, see :mod:`.library`), calling the model's generated C functions
+through pointers.
 
 What runs where: with the step projection and without events or dense output,
 whole stretches of the loop run in C (``dl_rk_run``, :mod:`.run`): steps, the
@@ -28,9 +29,17 @@ and trees (band Cholesky in reverse Cuthill-McKee order; see :mod:`.structure`).
 This is Baraff's linear-time multiplier method in sparse form. The projections
 solve ``J J^T`` with the same code.
 
+Dependent constraint rows (a planar loop closed with 3D hinges) are handled as the
+Python loop handles them: the rows that depend on others at the initial state are
+dropped for the whole run, the solve and the projections use the kept rows (their
+pairs alone enter the blocks and the band), the dropped rows' multipliers are zero
+during the run and the reported ones are the minimum-norm multipliers over all
+rows. Each solve checks that the accelerations still meet the dropped rows; if the
+rank changed, the C loop stops with an error naming the Python loop.
+
 :func:`native_solver` says when it applies: C-generated model functions, blocks
-of ``M`` and a band of at most 64, independent constraints, ``M`` positive
-definite on each block once folded (checked at the initial state).
+of ``M`` and a band of at most 64, ``M`` positive definite on each block once
+folded (checked at the initial state).
 """
 
 from __future__ import annotations
@@ -40,6 +49,7 @@ import numpy as np
 from ...codegen.c_backend import CompileError
 from ...codegen.compiled import NumericModel
 from ...errors import DalembertError
+from .library import LayoutError
 from .runge_kutta import NATIVE_METHODS, NativeDOP853, NativeRK23, NativeRK45
 from .solver import NativeSolver
 from .structure import NotApplicable
@@ -52,12 +62,27 @@ def native_solver(num: NumericModel, y0: np.ndarray, t0: float = 0.0, baumgarte:
                   kept: np.ndarray | None = None) -> NativeSolver:
     """A :class:`NativeSolver` for ``num``, checked at ``(t0, y0)``.
 
-    Raises :class:`NotApplicable` with the reason when the C loop cannot be used.
+    Parameters
+    ----------
+    num
+        The compiled equations bound to parameter values.
+    y0, t0
+        The initial state ``[q, qd]`` and time, where the solve is tried.
+    baumgarte
+        The Baumgarte gain (0: none).
+    kept
+        The independent constraint rows when some are dependent (measured at the
+        initial state, fixed for the run as in the Python loop), else ``None``.
+
+    Raises
+    ------
+    NotApplicable
+        With the reason, when the C loop cannot be used.
     """
-    if kept is not None:
-        raise NotApplicable("the constraints are dependent (the C loop needs them independent)")
     try:
-        solver = NativeSolver(num, baumgarte)
+        solver = NativeSolver(num, baumgarte, kept)
+    except LayoutError as exc:
+        raise NotApplicable(f"the C runtime does not match its Python mirrors: {exc}") from exc
     except CompileError as exc:
         raise NotApplicable(f"the C runtime could not be compiled: {exc}") from exc
     try:

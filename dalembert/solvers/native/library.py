@@ -1,4 +1,12 @@
-"""Loading ``runtime.c`` and the ctypes mirrors of its structs."""
+"""Loading the C runtime, the ctypes mirrors of its structs, and their check.
+
+The runtime is ``runtime.h`` and the sources listed in :data:`SOURCES`, compiled
+together as one translation unit (the header in place of each ``#include``), so
+the functions one source calls in another inline as before, and the cache key is
+the whole text. Right after loading, :func:`check_layout` compares every mirror
+with the sizes and offsets the library reports (``dl_layout``): a field added,
+moved or retyped on one side only is named, instead of corrupting memory.
+"""
 
 from __future__ import annotations
 
@@ -12,8 +20,16 @@ from ...codegen import c_backend
 
 _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
 
-#: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds).
-OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS = range(6)
+#: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds;
+#: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones).
+OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED = \
+    range(7)
+CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
+         "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
+         "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED}
+#: The runtime's sources, after ``runtime.h``, in the order they are compiled.
+SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "layout.c")
+HEADER = "runtime.h"
 
 
 class Function(ctypes.Structure):
@@ -40,6 +56,8 @@ class Model(ctypes.Structure):
                                     "r", "lambda", "qdd", "q_trial", "elim", "error_work",
                                     "active")),
         ("kkt_in_layout", _i64), ("c", _ptr),
+        ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
+        ("dropped_rtol", _f64),
     ]
 
 
@@ -65,13 +83,83 @@ class Run(ctypes.Structure):
                 *((name, _ptr) for name in ("y_new", "y_end", "rows"))]
 
 
+#: The C struct each mirror stands for.
+MIRRORS: dict[str, type[ctypes.Structure]] = {
+    "dl_function": Function, "dl_model": Model, "dl_tableau": Tableau,
+    "dl_stepper": Stepper, "dl_run": Run}
+
+
+class LayoutError(c_backend.CompileError):
+    """A ctypes mirror does not match its C struct (treated as a failed compile: the C
+    loop does not apply)."""
+
+
+class _Entry(ctypes.Structure):
+    _fields_ = [("name", ctypes.c_char_p), ("value", _i64)]
+
+
+def layout(lib: ctypes.CDLL) -> dict[str, int]:
+    """What ``dl_layout`` reports: ``{"dl_model": sizeof, "dl_model.n": offsetof,
+    ..., "DL_OK": 0, ...}``.
+
+    Parameters
+    ----------
+    lib
+        The loaded runtime.
+    """
+    table = ctypes.POINTER(_Entry)()
+    count = lib.dl_layout(ctypes.byref(table))
+    return {table[k].name.decode(): int(table[k].value) for k in range(count)}
+
+
+def check_layout(reported: dict[str, int],
+                 mirrors: dict[str, type[ctypes.Structure]] | None = None,
+                 codes: dict[str, int] | None = None) -> None:
+    """Raise :class:`LayoutError` naming the first struct and field (or return code)
+    where the mirrors differ from the C library's layout.
+
+    Parameters
+    ----------
+    reported
+        The library's layout (:func:`layout`).
+    mirrors
+        C struct name -> its ctypes mirror (default :data:`MIRRORS`).
+    codes
+        C return code name -> its value here (default :data:`CODES`).
+    """
+    mirrors = MIRRORS if mirrors is None else mirrors
+    codes = CODES if codes is None else codes
+    for struct, mirror in mirrors.items():
+        names = [f[0] for f in mirror._fields_]
+        in_c = [key.split(".", 1)[1] for key in reported if key.startswith(struct + ".")]
+        for name in in_c:
+            if name not in names:
+                raise LayoutError(f"{struct}.{name} is in the C runtime but not in its "
+                                  f"mirror {mirror.__name__}")
+        for name in names:
+            if name not in in_c:
+                raise LayoutError(f"{struct}.{name}: the mirror {mirror.__name__} has a "
+                                  "field the C runtime does not")
+            at, offset = reported[f"{struct}.{name}"], getattr(mirror, name).offset
+            if at != offset:
+                raise LayoutError(f"{struct}.{name} is at byte {at} in C, {offset} in the "
+                                  f"mirror {mirror.__name__}")
+        if reported.get(struct) != ctypes.sizeof(mirror):
+            raise LayoutError(f"{struct} has {reported.get(struct)} bytes in C, "
+                              f"{ctypes.sizeof(mirror)} in the mirror {mirror.__name__}")
+    for name, value in codes.items():
+        if reported.get(name) != value:
+            raise LayoutError(f"return code {name} is {reported.get(name)} in C, {value} here")
+
+
 _LOCK = threading.Lock()
 
 
 def runtime() -> ctypes.CDLL:
     """The compiled runtime (built once per machine and cached like generated code).
 
-    Raises :class:`~dalembert.codegen.c_backend.CompileError` without a C compiler.
+    Raises :class:`~dalembert.codegen.c_backend.CompileError` without a C compiler,
+    and :class:`LayoutError` (one) when a mirror does not match the library.
     """
     with _LOCK:  # one compilation, even when prepare_runtime's thread is at it
         return _runtime()
@@ -97,8 +185,7 @@ def _runtime_if_possible() -> None:
 
 @lru_cache(maxsize=1)
 def _runtime() -> ctypes.CDLL:
-    source = (Path(__file__).with_name("runtime.c")).read_text()
-    lib = c_backend.source_library(source)
+    lib = c_backend.source_library(runtime_source())
     signatures = {
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
         "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
@@ -112,4 +199,18 @@ def _runtime() -> ctypes.CDLL:
         fn = getattr(lib, name)
         fn.restype = ctypes.c_int
         fn.argtypes = argtypes
+    lib.dl_layout.restype, lib.dl_layout.argtypes = _i64, [ctypes.POINTER(ctypes.POINTER(_Entry))]
+    check_layout(layout(lib))
     return lib
+
+
+def runtime_source() -> str:
+    """The runtime as one translation unit: ``runtime.h``, then each source without its
+    ``#include "runtime.h"`` (the text is the cache key, so every file is in it)."""
+    here = Path(__file__).parent
+    include = f'#include "{HEADER}"'
+    parts = [(here / HEADER).read_text()]
+    for name in SOURCES:
+        text = (here / name).read_text().replace(include, "", 1)
+        parts.append(f"/* ---- {name} ---- */\n" + text)
+    return "\n".join(parts)

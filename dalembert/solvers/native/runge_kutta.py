@@ -3,7 +3,7 @@
 :class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) subclass SciPy's
 solvers, through their versions under a choice of step-size controller
 (:mod:`~dalembert.solvers.step_control`), and replace only ``_step_impl``: the
-stages, the error estimate and the step-size control run in ``runtime.c`` with the
+stages, the error estimate and the step-size control run in ``runge_kutta.c`` with the
 same tableau, the same formulas and constants, so the steps taken are those of
 ``ControlledDOP853`` (SciPy's own under ``step_control="scipy"``) up to rounding
 (tested). Start-up (the initial step), dense output and everything else stay SciPy's.

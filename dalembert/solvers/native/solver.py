@@ -8,8 +8,10 @@ import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
+from ...numerics.rank import min_norm_multipliers
+from ..kkt import DROPPED_ROW_RTOL
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
-from ..sparse_kkt import SINGULAR_MESSAGE
+from ..sparse_kkt import SINGULAR_MESSAGE, matvec
 from . import library
 from .structure import NotApplicable, schur_structure
 
@@ -18,6 +20,9 @@ _MESSAGES = {
     library.SINGULAR_MASS: "a block of the mass matrix is singular even with the constraints "
                            "inside it folded in",
     library.SINGULAR_CONSTRAINTS: SINGULAR_MESSAGE,
+    library.RANK_CHANGED: "the dependent constraints measured at the initial state no longer "
+                          "follow from the others (the rank of the constraints changed); "
+                          "the Python loop (backend='python') solves such states",
 }
 
 
@@ -29,9 +34,22 @@ class NativeSolver:
     :mod:`dalembert.solvers.native`. Raises :class:`NotApplicable` (saying why) for
     models it does not cover: NumPy-generated functions, wide mass blocks or bands.
     One instance per simulation: its work buffers are not shared between threads.
+
+    Parameters
+    ----------
+    num
+        The compiled equations bound to parameter values.
+    baumgarte
+        The Baumgarte gain (0: none).
+    kept
+        The independent constraint rows when some are dependent (as the Python loop
+        takes them): accelerations and projections from these rows alone, the
+        multipliers of the others zero in :meth:`solve` and minimum-norm over all rows
+        in :meth:`outputs`, as the Python loop reports them.
     """
 
-    def __init__(self, num: NumericModel, baumgarte: float = 0.0) -> None:
+    def __init__(self, num: NumericModel, baumgarte: float = 0.0,
+                 kept: np.ndarray | None = None) -> None:
         compiled = num.compiled
         handles = [getattr(f, "native", None) for f in (
             compiled.kkt_values, compiled.velocity_values, compiled.position_values,
@@ -40,7 +58,8 @@ class NativeSolver:
             raise NotApplicable("the model's functions were not generated in C")
         self.num, self.n, self.m = num, num.n, num.m
         self.lib = library.runtime()
-        self.structure = schur_structure(num.pattern)
+        self.kept = None if kept is None else np.asarray(kept, dtype=np.int64)
+        self.structure = schur_structure(num.pattern, self.kept)
         self._keep: list[object] = []  # every array the C struct points to (kept alive)
         self.model = self._model(handles, baumgarte)
         self._address = ctypes.addressof(self.model)
@@ -55,7 +74,7 @@ class NativeSolver:
         return array.ctypes.data
 
     def _buffer(self, size: int) -> int:
-        # zeroed: runtime.c's pair vectors rely on it (load_pairs writes only A's slots)
+        # zeroed: kkt.c's pair vectors rely on it (load_pairs writes only A's slots)
         return self._array(np.zeros(max(int(size), 1)), np.float64)
 
     def _model(self, handles, baumgarte: float) -> library.Model:
@@ -65,7 +84,9 @@ class NativeSolver:
         model = library.Model(n=n, m=m, nM=nM, nA=nA, n_hol=len(num.holonomic_rows),
                               p=self._array(num.p, np.float64), baumgarte=baumgarte,
                               holonomic=self._array(num.holonomic_rows),
-                              n_blocks=s.n_blocks, n_pairs=len(s.pair_row), kd=s.kd,
+                              n_blocks=s.n_blocks, n_pairs=s.n_pairs, kd=s.kd,
+                              n_dropped_pairs=s.n_dropped_pairs,
+                              n_dropped=len(s.dropped_rows), dropped_rtol=DROPPED_ROW_RTOL,
                               n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
                               n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
                               n_unit_gram=len(s.unit_gram_target))
@@ -151,7 +172,23 @@ class NativeSolver:
                "velocity_residual": np.zeros(k), "energies": np.zeros((k, 3))}
         self._check(self.lib.dl_outputs(self._address, k, times.ctypes.data, states.ctypes.data,
                                         *(a.ctypes.data for a in out.values())))
+        if self.kept is not None:
+            self._minimum_norm(times, states, out)
         return out
+
+    def _minimum_norm(self, times: np.ndarray, states: np.ndarray,
+                      out: dict[str, np.ndarray]) -> None:
+        """With dependent rows, the multipliers as the Python loop reports them: C left
+        the kept rows' ``mu`` and the force ``A_k^T mu`` (unique); the multipliers are
+        the minimum-norm solution of ``A^T lambda = A_k^T mu`` over all rows (the same
+        function as :func:`~dalembert.solvers.outputs.evaluate_outputs`), and the force
+        is recomputed from them."""
+        pattern, n = self.num.pattern, self.n
+        for i, (t, y) in enumerate(zip(times, states)):
+            Av = self.num.velocity_sparse(t, y[:n])[0]
+            lam = min_norm_multipliers(pattern.dense_A(Av), out["constraint_forces"][i])
+            out["multipliers"][i] = lam
+            out["constraint_forces"][i] = matvec(pattern.A_cols, pattern.A_rows, Av, lam, n)
 
     def projection_arguments(self) -> tuple[int, int, int, float, float]:
         """The arguments of ``dl_project`` after ``(model, t, y)``, as :meth:`project`
@@ -166,5 +203,5 @@ class NativeSolver:
         if status == library.OK:
             return projected
         if self._fallback is None:
-            self._fallback = StepProjector(self.num)
+            self._fallback = StepProjector(self.num, self.kept)
         return self._fallback(t, np.asarray(y, dtype=float))

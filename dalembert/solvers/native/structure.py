@@ -29,9 +29,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 import scipy.sparse as sps
-from scipy.sparse.csgraph import connected_components, reverse_cuthill_mckee
+from scipy.sparse.csgraph import connected_components
 
 from ...codegen.compiled import SparsePattern
+from ...numerics.band import band_order
 
 #: Largest block of ``M`` factored dense (a rigid body has 7 coordinates).
 BLOCK_MAX = 64
@@ -45,7 +46,7 @@ class NotApplicable(ValueError):
 
 @dataclass(frozen=True)
 class SchurStructure:
-    """Tables read by ``runtime.c`` (``dl_model``); all ``int64`` arrays."""
+    """Tables read by the C runtime (``dl_model`` in ``runtime.h``); all ``int64`` arrays."""
 
     block_start: np.ndarray   # n_blocks + 1: first slot of each block
     slot_coord: np.ndarray    # n: global coordinate of each slot
@@ -61,6 +62,7 @@ class SchurStructure:
     elim_blocks: np.ndarray   # the blocks with internal pairs
     row_pos: np.ndarray       # m: place of each row in the band order (-1: internal)
     band_row: np.ndarray      # the row at each place of the band
+    dropped_rows: np.ndarray  # the dependent rows left out of the solve (see schur_structure)
     gram_start: np.ndarray    # n_blocks + 1: block b's products are gram_target[gs[b]:gs[b+1]]
     gram_target: np.ndarray   # band place of each product z_i . z_j of a block's pairs
     # 1 x 1 blocks without internal rows (a particle's or a planar body's coordinate),
@@ -78,35 +80,57 @@ class SchurStructure:
     unit_gram_i: np.ndarray
     unit_gram_j: np.ndarray
     kd: int                   # half bandwidth of S
+    n_dropped_pairs: int      # the dropped rows' pairs, after the others in the pair tables
 
     @property
     def n_blocks(self) -> int:
         return len(self.block_start) - 1
 
+    @property
+    def n_pairs(self) -> int:
+        """The pairs of the rows solved for (the dropped rows' pairs follow them)."""
+        return len(self.pair_row) - self.n_dropped_pairs
+
     def arrays(self) -> dict[str, np.ndarray]:
-        """The tables ``runtime.c`` reads (``row_pos`` is folded into the others)."""
+        """The tables the C runtime reads (``row_pos`` is folded into the others)."""
         return {f.name: getattr(self, f.name) for f in fields(self)
-                if f.name not in ("kd", "row_pos")}
+                if f.name not in ("kd", "row_pos", "n_dropped_pairs")}
 
 
-def schur_structure(pattern: SparsePattern) -> SchurStructure:
+def schur_structure(pattern: SparsePattern, kept: np.ndarray | None = None) -> SchurStructure:
     """The tables for ``pattern``; :class:`NotApplicable` when a block or the band is
     too wide for dense block factors and a band Cholesky to pay off. Computed once per
-    pattern (the verdict included)."""
-    found = pattern.remember("schur_structure", lambda: _structure_or_reason(pattern))
+    pattern and set of kept rows (the verdict included).
+
+    Parameters
+    ----------
+    pattern
+        The sparsity pattern of ``M`` and ``A``.
+    kept
+        The independent constraint rows when some are dependent (see
+        :func:`~dalembert.numerics.rank.constraint_rank`), else ``None``. The other
+        rows are *dropped*: left out of the blocks' eliminations and of the band, so
+        the solve and the projections work on the kept rows alone. Their pairs are
+        still tabled, after the kept ones, so that ``A`` is loaded whole and the
+        dropped rows' residuals can be checked.
+    """
+    rows = None if kept is None else np.asarray(kept, dtype=np.int64)
+    key = ("schur_structure", None if rows is None else rows.tobytes())
+    found = pattern.remember(key, lambda: _structure_or_reason(pattern, rows))
     if isinstance(found, NotApplicable):
         raise found
     return found
 
 
-def _structure_or_reason(pattern: SparsePattern) -> SchurStructure | NotApplicable:
+def _structure_or_reason(pattern: SparsePattern,
+                         kept: np.ndarray | None) -> SchurStructure | NotApplicable:
     try:
-        return _structure(pattern)
+        return _structure(pattern, kept)
     except NotApplicable as reason:
         return reason
 
 
-def _structure(pattern: SparsePattern) -> SchurStructure:
+def _structure(pattern: SparsePattern, kept: np.ndarray | None) -> SchurStructure:
     block, sizes = _blocks(pattern)
     if sizes.max(initial=0) > BLOCK_MAX:
         raise NotApplicable(f"the mass matrix couples {sizes.max()} coordinates in one block "
@@ -118,16 +142,25 @@ def _structure(pattern: SparsePattern) -> SchurStructure:
     block_mat = np.concatenate([[0], np.cumsum(sizes**2)])
     rows, cols = pattern.M_rows, pattern.M_cols
     M_at = block_mat[block[rows]] + local[rows] * sizes[block[rows]] + local[cols]
-    pairs, internal = _pairs(pattern, block, sizes, local)
-    row_pos, band_row, kd = _band_order(pattern.m, pairs, ~internal)
+    dropped = np.zeros(pattern.m, dtype=bool)
+    if kept is not None:
+        dropped[:] = True
+        dropped[kept] = False
+    pairs, internal, n_solved = _pairs(pattern, block, sizes, local, dropped)
+    # the solve sees the kept rows' pairs only
+    solved = {**pairs, "pair_row": pairs["pair_row"][:n_solved],
+              "pair_block": pairs["pair_block"][:n_solved],
+              "pair_vec": pairs["pair_vec"][:n_solved + 1]}
+    row_pos, band_row, kd = _band_order(pattern.m, solved, ~internal, dropped)
     if kd > BAND_MAX:
         raise NotApplicable(f"the constraints couple too widely for a band solve "
                             f"(half bandwidth {kd}, at most {BAND_MAX})")
-    gram = _gram(pairs["pair_row"], pairs["block_external"], pairs["block_pairs"], row_pos, kd)
-    unit = _unit_blocks(sizes, block_start, block_mat, pairs, gram)
+    gram = _gram(solved["pair_row"], pairs["block_external"], pairs["block_pairs"], row_pos, kd)
+    unit = _unit_blocks(sizes, block_start, block_mat, solved, gram)
     return SchurStructure(block_start=block_start, slot_coord=slot_coord, block_mat=block_mat,
                           M_at=M_at, row_pos=row_pos, band_row=band_row, kd=kd, **pairs,
-                          **gram, **unit)
+                          dropped_rows=np.flatnonzero(dropped).astype(np.int64),
+                          n_dropped_pairs=len(pairs["pair_row"]) - n_solved, **gram, **unit)
 
 
 def _blocks(pattern: SparsePattern) -> tuple[np.ndarray, np.ndarray]:
@@ -144,34 +177,41 @@ def _blocks(pattern: SparsePattern) -> tuple[np.ndarray, np.ndarray]:
     return block, np.bincount(block, minlength=len(first)).astype(np.int64)
 
 
-def _pairs(pattern: SparsePattern, block: np.ndarray, sizes: np.ndarray,
-           local: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """The (row, block) pairs' tables, a block's internal pairs first, and the mask of
-    the internal pairs (rows inside one block) in that order."""
+def _pairs(pattern: SparsePattern, block: np.ndarray, sizes: np.ndarray, local: np.ndarray,
+           dropped: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, int]:
+    """The (row, block) pairs' tables, the mask of the internal pairs (a kept row inside
+    one block) and the number of kept rows' pairs. The kept rows' pairs come first,
+    block by block, a block's internal pairs first; the dropped rows' pairs follow
+    (only ``pair_row``, ``pair_block``, ``pair_vec`` and ``A_at`` cover them)."""
     m = max(pattern.m, 1)
     entry_block = block[pattern.A_cols]
     keys = entry_block * m + pattern.A_rows
     unique, entry_pair = np.unique(keys, return_inverse=True)
     pair_block, pair_row = unique // m, unique % m
-    internal = np.bincount(pair_row, minlength=pattern.m)[pair_row] == 1
+    out = dropped[pair_row]
+    internal = ~out & (np.bincount(pair_row[~out], minlength=pattern.m)[pair_row] == 1)
     # block by block, the internal pairs first (the pivots eliminated first), by row
-    order = np.lexsort((pair_row, ~internal, pair_block))
+    order = np.lexsort((pair_row, ~internal, pair_block, out))
     place = np.empty_like(order)
     place[order] = np.arange(len(order))
     pair_block, pair_row, internal = pair_block[order], pair_row[order], internal[order]
     pair_vec = np.concatenate([[0], np.cumsum(sizes[pair_block])])
-    block_pairs = np.searchsorted(pair_block, np.arange(len(sizes) + 1))
-    n_internal = np.bincount(pair_block, weights=internal, minlength=len(sizes)).astype(int)
+    n_solved = int(np.count_nonzero(~out))
+    solved_block = pair_block[:n_solved]
+    block_pairs = np.searchsorted(solved_block, np.arange(len(sizes) + 1))
+    n_internal = np.bincount(solved_block, weights=internal[:n_solved],
+                             minlength=len(sizes)).astype(int)
     # an internal pair's factors: 1 / z_i.z_i, then one alpha per later pair of its block
-    later = block_pairs[pair_block + 1] - np.arange(len(pair_row)) - 1
-    elim_at = np.concatenate([[0], np.cumsum(np.where(internal, 1 + later, 0))])
+    later = block_pairs[solved_block + 1] - np.arange(n_solved) - 1
+    elim_at = np.concatenate([[0], np.cumsum(np.where(internal[:n_solved], 1 + later, 0))])
     tables = {
         "pair_row": pair_row, "pair_block": pair_block, "pair_vec": pair_vec,
         "A_at": pair_vec[place[entry_pair.reshape(-1)]] + local[pattern.A_cols],
         "block_pairs": block_pairs, "block_external": block_pairs[:-1] + n_internal,
         "elim_at": elim_at, "elim_blocks": np.flatnonzero(n_internal),
     }
-    return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}, internal
+    tables = {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}
+    return tables, internal[:n_solved], n_solved
 
 
 def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarray,
@@ -199,15 +239,16 @@ def _unit_blocks(sizes: np.ndarray, block_start: np.ndarray, block_mat: np.ndarr
     return {name: np.asarray(table, dtype=np.int64) for name, table in tables.items()}
 
 
-def _band_order(m: int, pairs: dict[str, np.ndarray],
-                external: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """The band's rows (all but the internal ones; a row without pairs stays, and makes
-    ``S`` singular, as it should) in reverse Cuthill-McKee order of ``S``'s pattern:
-    each row's place (-1 for an internal row), the row at each place, the half
-    bandwidth."""
+def _band_order(m: int, pairs: dict[str, np.ndarray], external: np.ndarray,
+                dropped: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The band's rows (all but the internal and the dropped ones; a row without pairs
+    stays, and makes ``S`` singular, as it should) in a bandwidth-reducing order of
+    ``S``'s pattern: each row's place (-1 for a row not in the band), the row at each
+    place, the half bandwidth."""
     row_pos = np.full(m, -1, dtype=np.int64)
     in_band = np.ones(m, dtype=bool)
     in_band[pairs["pair_row"][~external]] = False
+    in_band[dropped] = False
     kept = np.flatnonzero(in_band)
     if len(kept) == 0:
         return row_pos, kept.astype(np.int64), 0
@@ -217,7 +258,7 @@ def _band_order(m: int, pairs: dict[str, np.ndarray],
     incidence = sps.csr_matrix((np.ones(len(rows)), (rows, blocks)),
                                shape=(len(kept), int(blocks.max(initial=0)) + 1))
     coupling = (incidence @ incidence.T).tocoo()
-    order = reverse_cuthill_mckee(coupling.tocsr(), symmetric_mode=True)
+    order = band_order(coupling.row, coupling.col, len(kept))
     place = np.empty(len(kept), dtype=np.int64)
     place[order] = np.arange(len(kept))
     row_pos[kept] = place
@@ -229,7 +270,7 @@ def _gram(pair_row: np.ndarray, first: np.ndarray, block_pairs: np.ndarray,
           row_pos: np.ndarray, kd: int) -> dict[str, np.ndarray]:
     """Per block, the band place of each product ``z_i . z_j`` (``j <= i``) of its
     external pairs (``first[b]`` on), block after block, ``i`` then ``j`` (the order
-    ``runtime.c`` walks them)."""
+    ``kkt.c`` walks them)."""
     counts = block_pairs[1:] - first
     sizes = counts * (counts + 1) // 2
     gram_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)

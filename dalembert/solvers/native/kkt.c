@@ -1,0 +1,444 @@
+/* The KKT solve (range-space / Schur complement, linear in the mechanism):
+ *   M qdd = f + A^T lam,  A qdd = c.
+ * M is block diagonal (one block per body). Rows lying inside one block (a
+ * quaternion's unit norm) are folded into it, Mt = M_b + w a a^T, f_b += w a c_r:
+ * true for every solution, and it makes a quaternion body's singular block
+ * positive definite. Then, with Y = Mt^-1 A^T and u = Mt^-1 f,
+ *   S lam = c - A u,  S = A Mt^-1 A^T (banded for chains and trees),  qdd = u + Y lam,
+ * computed with the blocks' Cholesky factors Mt = L L^T as S = Z^T Z, Z = L^-1 A^T.
+ * With dependent rows, the kept ones alone are solved (the dropped ones have no place
+ * in the blocks or the band) and the dropped ones are checked (check_dropped).
+ * The same code solves J J^T (M = I) for the projections (factor_schur, solve_schur).
+ */
+#include "runtime.h"
+
+void eval_state(const dl_function *F, double t, const double *q, const double *qd,
+                const double *p, double *out) {
+  if (F->size == 0) return;
+  if (F->K) {
+    memset(out, 0, (size_t)F->size * sizeof(double));
+    ((scatter_state)F->fn)(F->K, F->index, F->target, &t, q, qd, p, out);
+  } else {
+    ((flat_state)F->fn)(&t, q, qd, p, out);
+  }
+}
+
+void eval_static(const dl_function *F, double t, const double *q, const double *p,
+                 double *out) {
+  if (F->size == 0) return;
+  if (F->K) {
+    memset(out, 0, (size_t)F->size * sizeof(double));
+    ((scatter_static)F->fn)(F->K, F->index, F->target, &t, q, p, out);
+  } else {
+    ((flat_static)F->fn)(&t, q, p, out);
+  }
+}
+
+/* Cholesky of a dense n x n block in place (lower triangle, row major); the diagonal
+ * keeps 1 / L_jj, so the solves multiply instead of divide. */
+DL_INLINE int cholesky(double *L, int64_t n) {
+  for (int64_t j = 0; j < n; ++j) {
+    double d = L[j * n + j];
+    const double scale = fabs(d);
+    for (int64_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_MASS;
+    const double inv = 1.0 / sqrt(d);
+    L[j * n + j] = inv;
+    for (int64_t i = j + 1; i < n; ++i) {
+      double s = L[i * n + j];
+      for (int64_t k = 0; k < j; ++k) s -= L[i * n + k] * L[j * n + k];
+      L[i * n + j] = s * inv;
+    }
+  }
+  return DL_OK;
+}
+
+/* x <- L^-1 x */
+DL_INLINE void forward(const double *L, int64_t n, double *x) {
+  for (int64_t i = 0; i < n; ++i) {
+    double s = x[i];
+    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
+/* x <- L^-T x */
+DL_INLINE void backward(const double *L, int64_t n, double *x) {
+  for (int64_t i = n - 1; i >= 0; --i) {
+    double s = x[i];
+    for (int64_t k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
+/* Band Cholesky: S[i * (kd + 1) + (i - j)] holds S_ij for i - kd <= j <= i; the
+ * diagonal keeps 1 / L_jj. */
+static int band_cholesky(double *S, int64_t m, int64_t kd) {
+  const int64_t w = kd + 1;
+  for (int64_t j = 0; j < m; ++j) {
+    const int64_t k0 = j > kd ? j - kd : 0;
+    double *Sj = S + j * w + j;  /* Sj[-k] = S_jk */
+    double d = Sj[-j];
+    const double scale = fabs(d);
+    for (int64_t k = k0; k < j; ++k) d -= Sj[-k] * Sj[-k];
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
+    const double inv = 1.0 / sqrt(d);
+    Sj[-j] = inv;
+    const int64_t i1 = j + kd < m - 1 ? j + kd : m - 1;
+    for (int64_t i = j + 1; i <= i1; ++i) {
+      double *Si = S + i * w + i;
+      const int64_t kk = i > kd ? i - kd : 0;
+      double s = Si[-j];
+      for (int64_t k = kk; k < j; ++k) s -= Si[-k] * Sj[-k];
+      Si[-j] = s * inv;
+    }
+  }
+  return DL_OK;
+}
+
+static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
+  const int64_t w = kd + 1;
+  for (int64_t i = 0; i < m; ++i) {
+    const int64_t k0 = i > kd ? i - kd : 0;
+    const double *Si = S + i * w + i;
+    double s = x[i];
+    for (int64_t k = k0; k < i; ++k) s -= Si[-k] * x[k];
+    x[i] = s * Si[-i];
+  }
+  for (int64_t i = m - 1; i >= 0; --i) {
+    const int64_t k1 = i + kd < m - 1 ? i + kd : m - 1;
+    double s = x[i];
+    for (int64_t k = i + 1; k <= k1; ++k) s -= S[k * w + (k - i)] * x[k];
+    x[i] = s * S[i * w];
+  }
+}
+
+/* Scatter the values of A (pattern order) into the pair vectors. Nothing else writes
+ * them, so the slots no value lands in keep the zeros they were allocated with. */
+void load_pairs(dl_model *md, const double *Av) {
+  for (int64_t e = 0; e < md->nA; ++e) md->a[md->A_at[e]] = Av[e];
+}
+
+/* out[r] += w (A x)_r over every row (the dropped ones too), with A in the pair vectors
+ * and x by global coordinate. */
+void add_A_times(const dl_model *md, const double *x, double w, double *out) {
+  for (int64_t p = 0; p < md->n_pairs + md->n_dropped_pairs; ++p) {
+    const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
+    const double *a = md->a + md->pair_vec[p];
+    double s = 0.0;
+    for (int64_t i = 0; i < nb; ++i) s += a[i] * x[md->slot_coord[s0 + i]];
+    out[md->pair_row[p]] += w * s;
+  }
+}
+
+/* Block b of M (scattered) with its internal rows folded in, factored (Mt = L L^T);
+ * u_b = L^-1 f_b and z_p = L^-1 a_p for its pairs. */
+DL_INLINE int factor_block(dl_model *md, int64_t b, const double *c, int64_t nb) {
+  double *restrict B = md->blocks + md->block_mat[b];
+  double *restrict u = md->u + md->block_start[b];
+  double trace = 0.0;
+  for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
+  const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
+  for (int64_t p = p0; p < md->block_external[b]; ++p) {
+    const double *restrict a = md->a + md->pair_vec[p];
+    const double norm2 = dot(a, a, nb);
+    if (norm2 == 0.0) continue;
+    const double w = trace > 0.0 ? trace / (nb * norm2) : 1.0 / norm2;
+    const double wc = w * c[md->pair_row[p]];
+    for (int64_t i = 0; i < nb; ++i) {
+      u[i] += wc * a[i];
+      for (int64_t j = 0; j <= i; ++j) B[i * nb + j] += w * a[i] * a[j];
+    }
+  }
+  if (cholesky(B, nb) != DL_OK) return DL_SINGULAR_MASS;
+  forward(B, nb, u);
+  const double *restrict a = md->a + md->pair_vec[p0];
+  double *restrict z = md->y + md->pair_vec[p0];
+  for (int64_t k = 0; k < (p1 - p0) * nb; ++k) z[k] = a[k];
+  for (int64_t k = 0; k < p1 - p0; ++k) forward(B, nb, z + k * nb);
+  return DL_OK;
+}
+
+DL_INLINE int is_active(const unsigned char *active, const dl_model *md, int64_t p) {
+  return !active || active[md->pair_row[p]];
+}
+
+/* Block b's internal rows (its first pairs; the active ones) eliminated from S, one
+ * Gaussian pivot after the other: each later pair of the block loses its part along
+ * the pivot (z_p -= alpha z_i, alpha = z_i.z_p / z_i.z_i), so that Z^T Z over the
+ * block's external pairs is S with the pivots eliminated. elim keeps, per pivot,
+ * 1 / z_i.z_i and the alphas (for eliminate_rhs and recover_internal). */
+DL_INLINE int eliminate_internal(dl_model *md, int64_t b, double *z,
+                                 const unsigned char *active, int64_t nb) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  const int several = pe - p0 > 1;
+  if (several)  /* the pivots' scales, before any elimination (one pivot: its own) */
+    for (int64_t i = p0; i < pe; ++i)
+      if (is_active(active, md, i))
+        md->elim[md->elim_at[i]] = dot(z + md->pair_vec[i], z + md->pair_vec[i], nb);
+  for (int64_t i = p0; i < pe; ++i) {
+    if (!is_active(active, md, i)) continue;
+    const double *restrict zi = z + md->pair_vec[i];
+    double *restrict e = md->elim + md->elim_at[i];
+    const double s = dot(zi, zi, nb);
+    if (!(s > 1e-14 * (several ? e[0] : s))) return DL_SINGULAR_CONSTRAINTS;  /* dependent */
+    e[0] = 1.0 / s;
+    for (int64_t p = i + 1; p < p1; ++p) {
+      if (!is_active(active, md, p)) continue;
+      double *restrict zp = z + md->pair_vec[p];
+      const double alpha = dot(zi, zp, nb) * e[0];
+      e[p - i] = alpha;
+      for (int64_t k = 0; k < nb; ++k) zp[k] -= alpha * zi[k];
+    }
+  }
+  return DL_OK;
+}
+
+/* The right-hand side through block b's pivots (as eliminate_internal left them): per
+ * pivot i, c_p -= alpha c_i for the later rows and u_b += beta z_i, beta = (c_i - z_i.u_b)
+ * / z_i.z_i, kept in c_i for recover_internal. Then S lam = c - Z^T u over the external
+ * rows, and u + Z lam over the external pairs is the block's solution (u by slot). */
+DL_INLINE void eliminate_rhs(const dl_model *md, int64_t b, const double *z,
+                             const unsigned char *active, double *c, double *u, int64_t nb) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  double *restrict ub = u + md->block_start[b];
+  for (int64_t i = p0; i < pe; ++i) {
+    if (!is_active(active, md, i)) continue;
+    const double *restrict zi = z + md->pair_vec[i], *restrict e = md->elim + md->elim_at[i];
+    const double ci = c[md->pair_row[i]];
+    for (int64_t p = i + 1; p < p1; ++p)
+      if (is_active(active, md, p)) c[md->pair_row[p]] -= e[p - i] * ci;
+    const double beta = (ci - dot(zi, ub, nb)) * e[0];
+    for (int64_t k = 0; k < nb; ++k) ub[k] += beta * zi[k];
+    c[md->pair_row[i]] = beta;
+  }
+}
+
+/* The multipliers of block b's internal rows from the others', last pivot first:
+ * lam_i = beta_i - sum over the later rows of alpha lam_p (after dl_solve's elimination,
+ * all rows active; the projections do not need these multipliers). */
+static void recover_internal(const dl_model *md, int64_t b, double *lam) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  for (int64_t i = pe - 1; i >= p0; --i) {
+    const double *e = md->elim + md->elim_at[i];
+    double l = lam[md->pair_row[i]];
+    for (int64_t p = i + 1; p < p1; ++p) l -= e[p - i] * lam[md->pair_row[p]];
+    lam[md->pair_row[i]] = l;
+  }
+}
+
+/* S += Z_b^T Z_b over the block's external pairs and the active rows (all when active is
+ * NULL); block b's pair vectors z are contiguous, nb values each. */
+DL_INLINE void gram_block(const dl_model *md, int64_t b, const double *z,
+                          const unsigned char *active, double *S, int64_t nb) {
+  const int64_t p0 = md->block_external[b], pb = md->block_pairs[b + 1] - p0;
+  const double *restrict zb = z + md->pair_vec[p0];
+  const int64_t *restrict target = md->gram_target + md->gram_start[b];
+  if (active) {
+    for (int64_t i = 0, k = 0; i < pb; ++i)
+      for (int64_t j = 0; j <= i; ++j, ++k)
+        if (active[md->pair_row[p0 + i]] && active[md->pair_row[p0 + j]])
+          S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
+  } else {
+    for (int64_t i = 0, k = 0; i < pb; ++i)
+      for (int64_t j = 0; j <= i; ++j, ++k) S[target[k]] += dot(zb + i * nb, zb + j * nb, nb);
+  }
+}
+
+/* rhs[r] -= z_p . x_b over block b's external pairs (x by slot). */
+DL_INLINE void block_residual(const dl_model *md, int64_t b, const double *z, const double *x,
+                              double *rhs, int64_t nb) {
+  const double *restrict xb = x + md->block_start[b];
+  for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p)
+    rhs[md->pair_row[p]] -= dot(z + md->pair_vec[p], xb, nb);
+}
+
+/* x_b += Z_b lam over block b's external pairs (x by slot, lam by row). */
+DL_INLINE void block_update(const dl_model *md, int64_t b, const double *z, const double *lam,
+                            double *x, int64_t nb) {
+  double *restrict xb = x + md->block_start[b];
+  for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p) {
+    const double l = lam[md->pair_row[p]];
+    const double *restrict zp = z + md->pair_vec[p];
+    for (int64_t i = 0; i < nb; ++i) xb[i] += zp[i] * l;
+  }
+}
+
+/* x_b <- L_b^-T x_b (x by slot). */
+DL_INLINE void block_backward(const dl_model *md, int64_t b, double *x, int64_t nb) {
+  backward(md->blocks + md->block_mat[b], nb, x + md->block_start[b]);
+}
+
+static void clear_band(dl_model *md) {
+  memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
+}
+
+/* The rows the gram products leave out get a unit diagonal; S factored. */
+static int factor_band(dl_model *md, const unsigned char *active) {
+  const int64_t w = md->kd + 1;
+  if (active)
+    for (int64_t k = 0; k < md->m_band; ++k)
+      if (!active[md->band_row[k]]) md->S[k * w] = 1.0;
+  return md->m_band ? band_cholesky(md->S, md->m_band, md->kd) : DL_OK;
+}
+
+/* With M = I (the projections): z = a, copied (the elimination changes it), the internal
+ * rows eliminated, S = Z^T Z over the active rows (others get a unit diagonal), factored. */
+int factor_schur(dl_model *md, const unsigned char *active) {
+  double *z = md->y;
+  memcpy(z, md->a, (size_t)md->pair_vec[md->n_pairs] * sizeof(double));
+  md->active = active;
+  for (int64_t k = 0; k < md->n_elim_blocks; ++k) {
+    const int64_t b = md->elim_blocks[k];
+    if (BY_SIZE(block_size(md, b), eliminate_internal, md, b, z, active) != DL_OK)
+      return DL_SINGULAR_CONSTRAINTS;
+  }
+  clear_band(md);
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    BY_SIZE(block_size(md, b), gram_block, md, b, z, active, md->S);
+  return factor_band(md, active);
+}
+
+/* lam = S^-1 rhs over the band's rows (rhs by row, overwritten by lam), then
+ * x += Z lam over the external pairs (x by slot). */
+static void apply_multipliers(dl_model *md, const double *z, double *rhs, double *x) {
+  for (int64_t k = 0; k < md->m_band; ++k) md->r[k] = rhs[md->band_row[k]];
+  band_solve(md->S, md->m_band, md->kd, md->r);
+  for (int64_t k = 0; k < md->m_band; ++k) rhs[md->band_row[k]] = md->r[k];
+  for (int64_t k = 0; k < md->n_unit_pairs; ++k)
+    x[md->unit_pair_slot[k]] += z[md->unit_pair_vec[k]] * rhs[md->unit_pair_row[k]];
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    if (!md->unit[b]) BY_SIZE(block_size(md, b), block_update, md, b, z, rhs, x);
+}
+
+/* With M = I: x = Z lam for the multipliers of rhs (by row, overwritten), from the
+ * factor of factor_schur. */
+void solve_schur(dl_model *md, double *rhs, double *x) {
+  memset(x, 0, (size_t)md->n * sizeof(double));
+  for (int64_t k = 0; k < md->n_elim_blocks; ++k) {
+    const int64_t b = md->elim_blocks[k];
+    BY_SIZE(block_size(md, b), eliminate_rhs, md, b, md->y, md->active, rhs, x);
+  }
+  apply_multipliers(md, md->y, rhs, x);
+}
+
+/* The unit blocks' part of block_pass, in flat loops without per-block branching: the
+ * same operations as factor_block, gram_block and block_residual with nb = 1 (the
+ * block keeps 1 / L), only the order of the sums into S and c differs. */
+static int unit_pass(dl_model *md, double *c) {
+  double *restrict blocks = md->blocks, *restrict u = md->u, *restrict z = md->y;
+  const double *restrict a = md->a;
+  for (int64_t k = 0; k < md->n_unit; ++k) {
+    const double d = blocks[md->unit_mat[k]];
+    if (!(d > 0.0)) return DL_SINGULAR_MASS;
+    const double inv = 1.0 / sqrt(d);
+    blocks[md->unit_mat[k]] = inv;
+    u[md->unit_slot[k]] *= inv;
+  }
+  for (int64_t k = 0; k < md->n_unit_pairs; ++k) {
+    const int64_t v = md->unit_pair_vec[k];
+    z[v] = a[v] * blocks[md->unit_pair_mat[k]];
+  }
+  for (int64_t k = 0; k < md->n_unit_gram; ++k)
+    md->S[md->unit_gram_target[k]] += z[md->unit_gram_i[k]] * z[md->unit_gram_j[k]];
+  for (int64_t k = 0; k < md->n_unit_pairs; ++k)
+    c[md->unit_pair_row[k]] -= z[md->unit_pair_vec[k]] * u[md->unit_pair_slot[k]];
+  return DL_OK;
+}
+
+/* Block b factored, its internal rows eliminated, its gram products into S and its
+ * part of c - Z^T u. */
+DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
+  if (factor_block(md, b, c, nb) != DL_OK) return DL_SINGULAR_MASS;
+  if (md->block_external[b] > md->block_pairs[b]) {
+    if (eliminate_internal(md, b, md->y, NULL, nb) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+    eliminate_rhs(md, b, md->y, NULL, c, md->u, nb);
+  }
+  gram_block(md, b, md->y, NULL, md->S, nb);
+  block_residual(md, b, md->y, md->u, c, nb);
+  return DL_OK;
+}
+
+/* The KKT values [M values, f, A values, c] of a flat kkt function into the solve's
+ * layout (c stays where it is). */
+static void load_kkt(dl_model *md) {
+  const double *Mv = md->values, *f = Mv + md->nM;
+  load_pairs(md, f + md->n);
+  memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
+  for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += Mv[e];
+  for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
+}
+
+/* The KKT values at (t, q, qd), in the solve's layout. */
+void eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
+  eval_state(&md->kkt, t, q, qd, md->p, md->values);
+  if (!md->kkt_in_layout) load_kkt(md);
+}
+
+/* Whether qdd meets the dropped rows, A_d qdd = c_d, as closely as the Python loop asks
+ * (kkt.py's DROPPED_ROW_RTOL, relative to 1 + max|c| + max|A| max|qdd|): a miss means
+ * the rank changed since it was measured, and the reduced solve is no longer the
+ * motion. The solve leaves c_d as it was (the dropped rows have no place in it). */
+static int check_dropped(dl_model *md, const double *qdd, const double *c, double c_max) {
+  double *miss = md->lambda;  /* by row, free during a solve */
+  const int64_t p0 = md->n_pairs, p1 = md->n_pairs + md->n_dropped_pairs;
+  for (int64_t k = 0; k < md->n_dropped; ++k) miss[md->dropped_rows[k]] = -c[md->dropped_rows[k]];
+  for (int64_t p = p0; p < p1; ++p) {
+    const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
+    const double *a = md->a + md->pair_vec[p];
+    for (int64_t i = 0; i < nb; ++i) miss[md->pair_row[p]] += a[i] * qdd[md->slot_coord[s0 + i]];
+  }
+  const double scale = 1.0 + c_max + max_abs(md->a, md->pair_vec[p1]) * max_abs(qdd, md->n);
+  for (int64_t k = 0; k < md->n_dropped; ++k)
+    if (!(fabs(miss[md->dropped_rows[k]]) <= md->dropped_rtol * scale)) return DL_RANK_CHANGED;
+  return DL_OK;
+}
+
+/* qdd and lambda from the KKT values (eval_kkt; c modified in place): S lam = c - Z^T u
+ * with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). One pass over the blocks
+ * factors them, eliminates their internal rows and builds S and the right-hand side. */
+int dl_solve(dl_model *md, double *qdd, double *lambda) {
+  double *c = md->c;
+  /* the scale of check_dropped, before the solve overwrites the kept rows of c */
+  const double c_max = md->n_dropped ? max_abs(c, md->m) : 0.0;
+  clear_band(md);
+  if (unit_pass(md, c) != DL_OK) return DL_SINGULAR_MASS;
+  int status;
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    if (!md->unit[b] && (status = BY_SIZE(block_size(md, b), block_pass, md, b, c)) != DL_OK)
+      return status;
+  if ((status = factor_band(md, NULL)) != DL_OK) return status;
+  apply_multipliers(md, md->y, c, md->u);
+  for (int64_t k = 0; k < md->n_unit; ++k) md->u[md->unit_slot[k]] *= md->blocks[md->unit_mat[k]];
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    if (!md->unit[b]) BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
+  for (int64_t s = 0; s < md->n; ++s) qdd[md->slot_coord[s]] = md->u[s];
+  if (md->n_dropped && (status = check_dropped(md, qdd, c, c_max)) != DL_OK) return status;
+  if (lambda) {
+    for (int64_t k = 0; k < md->n_elim_blocks; ++k) recover_internal(md, md->elim_blocks[k], c);
+    memcpy(lambda, c, (size_t)md->m * sizeof(double));
+    for (int64_t k = 0; k < md->n_dropped; ++k) lambda[md->dropped_rows[k]] = 0.0;
+  }
+  return DL_OK;
+}
+
+/* The Baumgarte terms: c -= 2 w (A qd + b) + w^2 psi (psi on holonomic rows). */
+static void baumgarte(dl_model *md, double t, const double *q, const double *qd, double *c) {
+  const double g = md->baumgarte;
+  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  const double *b = md->vel_values + md->nA;
+  for (int64_t r = 0; r < md->m; ++r) c[r] -= 2.0 * g * b[r];
+  add_A_times(md, qd, -2.0 * g, c);
+  eval_static(&md->position, t, q, md->p, md->psi);
+  for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * md->psi[k];
+}
+
+/* y' = [qd, qdd] at (t, y); lambda may be NULL. */
+int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda) {
+  const int64_t n = md->n;
+  eval_kkt(md, t, y, y + n);
+  if (md->baumgarte != 0.0 && md->m) baumgarte(md, t, y, y + n, md->c);
+  memcpy(ydot, y + n, (size_t)n * sizeof(double));
+  return dl_solve(md, ydot + n, lambda);
+}
+

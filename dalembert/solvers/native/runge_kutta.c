@@ -1,0 +1,250 @@
+/* Explicit Runge-Kutta steps as scipy.integrate's RungeKutta takes them, and whole
+ * stretches of the simulation loop: step, projection, outputs, restart. */
+#include "runtime.h"
+
+/* out = sum_k w[k * stride] K[k] over k < count (rows of K contiguous, zero weights
+ * skipped, count <= DL_MAX_ROWS). Each out[i] is summed in a register in the order of
+ * k: one store per entry instead of one load and store per weight. */
+enum { DL_MAX_ROWS = 32 };
+static void weigh(const double *K, const double *w, int64_t stride, int64_t count,
+                  int64_t n_state, double *out) {
+  const double *rows[DL_MAX_ROWS];
+  double weights[DL_MAX_ROWS];
+  int64_t used = 0;
+  for (int64_t k = 0; k < count; ++k)
+    if (w[k * stride] != 0.0) {
+      rows[used] = K + k * n_state;
+      weights[used++] = w[k * stride];
+    }
+  for (int64_t i = 0; i < n_state; ++i) {
+    double s = 0.0;
+    for (int64_t k = 0; k < used; ++k) s += weights[k] * rows[k][i];
+    out[i] = s;
+  }
+}
+
+/* scipy's error norms; work (2 n_state) holds the estimates. */
+static double error_norm(const dl_tableau *tb, const double *K, int64_t n_state, double h,
+                         const double *scale, double *work) {
+  const int64_t s1 = tb->n_stages + 1;
+  double *x5 = work, *x3 = work + n_state;
+  weigh(K, tb->E, 1, s1, n_state, x5);
+  if (tb->E3) weigh(K, tb->E3, 1, s1, n_state, x3);
+  else memset(x3, 0, (size_t)n_state * sizeof(double));
+  double e5 = 0.0, e3 = 0.0;
+  for (int64_t i = 0; i < n_state; ++i) {
+    const double a = x5[i] / scale[i], b = x3[i] / scale[i];
+    e5 += a * a;
+    e3 += b * b;
+  }
+  if (!tb->E3) return fabs(h) * sqrt(e5 / n_state);
+  if (e5 == 0.0 && e3 == 0.0) return 0.0;
+  return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n_state);
+}
+
+/* out = y + h sum_k w[k] K[k] over k < count. */
+static void combine(const double *y, double h, const double *K, const double *w, int64_t count,
+                    int64_t n_state, double *out) {
+  weigh(K, w, 1, count, n_state, out);
+  for (int64_t i = 0; i < n_state; ++i) out[i] = y[i] + h * out[i];
+}
+
+/* Stages j0 <= j < j1: K[j] = f(t + C[j - row0] h, y + h sum_k A[j - row0][k] K[k]);
+ * A has rows of length lda and starts at stage row0. */
+int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64_t row0,
+              int64_t j0, int64_t j1, double t, double h, const double *y, double *K,
+              double *stage, int64_t *nfev) {
+  const int64_t n_state = 2 * md->n;
+  for (int64_t j = j0; j < j1; ++j) {
+    combine(y, h, K, A + (j - row0) * lda, j, n_state, stage);
+    ++*nfev;
+    const int status = dl_rhs(md, t + C[j - row0] * h, stage, K + j * n_state, NULL);
+    if (status != DL_OK) return status;
+  }
+  return DL_OK;
+}
+
+/* One Runge-Kutta step from (st->t, y, f = K[0] on entry): y_new, f_new = K[s]. */
+static int rk_attempt(dl_model *md, const dl_tableau *tb, dl_stepper *st, double h,
+                      const double *y, double *K, double *y_new, double *stage) {
+  const int64_t n_state = 2 * md->n, s = tb->n_stages;
+  const int status = dl_stages(md, tb->A, s, tb->C, 0, 1, s, st->t, h, y, K, stage, &st->nfev);
+  if (status != DL_OK) return status;
+  combine(y, h, K, tb->B, s, n_state, y_new);
+  st->nfev++;
+  return dl_rhs(md, st->t + h, y_new, K + s * n_state, NULL);
+}
+
+/* Steps from st->t until one is accepted (ControlledSteps._step_impl, which is scipy's
+ * RungeKutta._step_impl under PI control; scipy's own with beta = 0). K[0] must hold
+ * f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced. */
+int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
+               double *y_new, double *stage) {
+  const double SAFETY = 0.9, MIN_FACTOR = 0.2, MAX_FACTOR = 10.0, ERROR_FLOOR = 1e-4;
+  const int64_t n_state = 2 * md->n;
+  const double t = st->t;
+  const double min_step = 10.0 * fabs(nextafter(t, st->direction * INFINITY) - t);
+  double h_abs = st->h_abs;
+  if (h_abs > st->max_step) h_abs = st->max_step;
+  else if (h_abs < min_step) h_abs = min_step;
+  int rejected = 0;
+  for (;;) {
+    if (h_abs < min_step) return DL_STEP_TOO_SMALL;
+    double t_new = t + h_abs * st->direction;
+    if (st->direction * (t_new - st->t_bound) > 0) t_new = st->t_bound;
+    const double h = t_new - t;
+    h_abs = fabs(h);
+    const int status = rk_attempt(md, tb, st, h, y, K, y_new, stage);
+    if (status != DL_OK) return status;
+    for (int64_t i = 0; i < n_state; ++i) {
+      const double big = fabs(y[i]) > fabs(y_new[i]) ? fabs(y[i]) : fabs(y_new[i]);
+      stage[i] = st->atol[i] + big * st->rtol;
+    }
+    const double err = error_norm(tb, K, n_state, h, stage, md->error_work);
+    if (err < 1.0) {
+      double factor = err == 0.0 ? MAX_FACTOR
+                                 : SAFETY * pow(err, -st->alpha) * pow(st->err_old, st->beta);
+      if (factor > MAX_FACTOR) factor = MAX_FACTOR;
+      st->err_old = err > ERROR_FLOOR ? err : ERROR_FLOOR;
+      if (rejected && factor > 1.0) factor = 1.0;
+      st->h_abs = h_abs * factor;
+      st->h_previous = h;
+      st->t = t_new;
+      return DL_OK;
+    }
+    const double shrink = SAFETY * pow(err, -st->alpha);
+    h_abs *= shrink > MIN_FACTOR ? shrink : MIN_FACTOR;
+    rejected = 1;
+  }
+}
+
+/* ---- whole stretches of steps: step, projection, outputs, restart --------------- */
+/* The interpolant of the step t_old -> t_old + h from the solver state before the
+ * restart (y_old, the unprojected y_new, the stages K), made as scipy makes it:
+ * rows = (K^T P)^T for RkDenseOutput; for DOP853 the extra stages go into K, then
+ * rows = F: [dy, h f_old - dy, 2 dy - h (f_new + f_old), h D K]. */
+static int make_interpolant(dl_model *md, const dl_tableau *tb, dl_stepper *st, double t_old,
+                            double h, const double *y_old, const double *y_new, double *K,
+                            double *rows, double *stage) {
+  const int64_t n_state = 2 * md->n, s1 = tb->n_stages + 1;
+  if (!tb->n_extra) {
+    for (int64_t j = 0; j < tb->n_P; ++j)
+      weigh(K, tb->P + j, tb->n_P, s1, n_state, rows + j * n_state);
+    return DL_OK;
+  }
+  const int64_t width = s1 + tb->n_extra;
+  const int status = dl_stages(md, tb->A_extra, width, tb->C_extra, s1, s1, width, t_old, h,
+                               y_old, K, stage, &st->nfev);
+  if (status != DL_OK) return status;
+  const double *f_old = K, *f_new = K + tb->n_stages * n_state;
+  double *F0 = rows, *F1 = rows + n_state, *F2 = rows + 2 * n_state;
+  for (int64_t i = 0; i < n_state; ++i) {
+    const double dy = y_new[i] - y_old[i];
+    F0[i] = dy;
+    F1[i] = h * f_old[i] - dy;
+    F2[i] = 2 * dy - h * (f_new[i] + f_old[i]);
+  }
+  for (int64_t j = 0; j < tb->n_D; ++j) {
+    double *Fj = rows + (3 + j) * n_state;
+    weigh(K, tb->D + j * width, 1, width, n_state, Fj);
+    for (int64_t i = 0; i < n_state; ++i) Fj[i] *= h;
+  }
+  return DL_OK;
+}
+
+/* The interpolant at t, with the operations of scipy's RkDenseOutput (y_old + h Q p,
+ * p = [x, x^2, ...]) or Dop853DenseOutput (Horner-like in x and 1 - x). */
+static void interpolate(const dl_tableau *tb, int64_t n_state, double t_old, double h,
+                        const double *y_old, const double *rows, double t, double *y) {
+  const double x = (t - t_old) / h;
+  memset(y, 0, (size_t)n_state * sizeof(double));
+  if (!tb->n_extra) {
+    double p = x;
+    for (int64_t j = 0; j < tb->n_P; ++j, p *= x)
+      for (int64_t i = 0; i < n_state; ++i) y[i] += rows[j * n_state + i] * p;
+    for (int64_t i = 0; i < n_state; ++i) y[i] = h * y[i] + y_old[i];
+    return;
+  }
+  const int64_t n_F = tb->n_D + 3;
+  for (int64_t k = 0; k < n_F; ++k) {
+    const double *f = rows + (n_F - 1 - k) * n_state, w = k % 2 == 0 ? x : 1 - x;
+    for (int64_t i = 0; i < n_state; ++i) y[i] = (y[i] + f[i]) * w;
+  }
+  for (int64_t i = 0; i < n_state; ++i) y[i] += y_old[i];
+}
+
+static int project(dl_model *md, const dl_run *run, double t, double *y) {
+  return dl_project(md, t, y, run->holonomic, run->max_newton, run->max_full,
+                    run->position_tol, run->accept_tol);
+}
+
+/* One step from (st->t, y, K[0] = f(t, y)), finished as the Python loop finishes it:
+ * the end projected into y_end, the outputs in (t_old, t_new] written after row
+ * run->n_out (interpolated and projected; the one at t_new is the projected end). On
+ * DL_OK the outputs are counted (n_out, next_eval) and the caller restarts from y_end;
+ * on any other status run is as before and the caller restores st. */
+static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run,
+                       const double *y, double *K, double *stage) {
+  const int64_t n_state = 2 * md->n;
+  const double t_old = st->t;
+  int status = dl_rk_step(md, tb, st, y, K, run->y_new, stage);
+  if (status != DL_OK) return status;
+  const double t_new = st->t, d = st->direction;
+  const int every_step = run->n_eval < 0;
+  int64_t hi = run->next_eval;
+  while (hi < run->n_eval && d * run->t_eval[hi] <= d * t_new) ++hi;
+  const int64_t count = every_step ? 1 : hi - run->next_eval;
+  if (run->n_out + count > run->capacity) return DL_OUTPUTS;
+  memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
+  if ((status = project(md, run, t_new, run->y_end)) != DL_OK) return status;
+  int made = 0;
+  for (int64_t k = 0; k < count; ++k) {
+    const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
+    double *row = run->y_out + (run->n_out + k) * n_state;
+    run->t_out[run->n_out + k] = s;
+    if (s == t_new) {
+      memcpy(row, run->y_end, (size_t)n_state * sizeof(double));
+      continue;
+    }
+    if (!made && (status = make_interpolant(md, tb, st, t_old, t_new - t_old, y, run->y_new, K,
+                                            run->rows, stage)) != DL_OK)
+      return status;
+    made = 1;
+    interpolate(tb, n_state, t_old, t_new - t_old, y, run->rows, s, row);
+    if ((status = project(md, run, s, row)) != DL_OK) return status;
+  }
+  run->next_eval = hi;
+  run->n_out += count;
+  return DL_OK;
+}
+
+/* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
+ * until t_bound, the step or time budget, or a full output buffer. On return y,
+ * K[0] and st hold the state after the last finished step; a non-OK status means
+ * the next step could not be finished here (too small, a singular system, a failed
+ * projection, more outputs than the buffer holds): the caller takes that step
+ * itself, from this state, and st->nfev does not count the dropped attempt. */
+int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
+              double *K, double *stage) {
+  const int64_t n_state = 2 * md->n;
+  const clock_t start = clock();
+  run->n_steps = run->n_out = 0;
+  while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
+    if (run->n_steps && (double)(clock() - start) > run->max_seconds * CLOCKS_PER_SEC) break;
+    const dl_stepper before = *st;
+    const int status = finish_step(md, tb, st, run, y, K, stage);
+    if (status != DL_OK) {
+      *st = before;
+      /* a full buffer after some steps just ends this call */
+      return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;
+    }
+    run->t_old = before.t;
+    ++run->n_steps;
+    memcpy(y, run->y_end, (size_t)n_state * sizeof(double));
+    /* f at the restart, as _restart_from makes it (integrate.py says why): [qd, qdd]
+     * with the projected qd and the last stage's qdd, at the end before the projection */
+    memcpy(K, y + md->n, (size_t)md->n * sizeof(double));
+    memcpy(K + md->n, K + tb->n_stages * n_state + md->n, (size_t)md->n * sizeof(double));
+  }
+  return DL_OK;
+}

@@ -1,0 +1,201 @@
+/* The simulation loop of dalembert in C: declarations shared by its sources.
+ *
+ * The model's generated functions (KKT blocks, velocity constraint, position
+ * constraint) are called through pointers; everything else here is hand-written
+ * and model independent. See native/__init__.py for the method and the tables.
+ * The sources, compiled together into one library (library.py):
+ *   kkt.c          the KKT solve (block Cholesky, Schur complement in band form)
+ *   outputs.c      the trajectory's derived quantities at given states
+ *   projection.c   projection of a state onto the constraints
+ *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
+ *   layout.c       sizes, offsets and codes, checked against library.py's mirrors
+ * The structs below are mirrored field by field in library.py (ctypes), which
+ * checks them against dl_layout when it loads the library.
+ */
+#ifndef DL_RUNTIME_H
+#define DL_RUNTIME_H
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <time.h>
+
+/* Return codes (library.py's CODES). DL_RANK_CHANGED: a dropped row no longer follows
+ * from the kept ones (the rank changed since it was measured). */
+enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
+       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6 };
+
+typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
+                              const double *, const double *, const double *, double *);
+typedef void (*scatter_static)(const int64_t *, const void *, const void *, const double *,
+                               const double *, const double *, double *);
+typedef void (*flat_state)(const double *, const double *, const double *, const double *,
+                           double *);
+typedef void (*flat_static)(const double *, const double *, const double *, double *);
+
+/* One generated function: a scatter driver (K != NULL, adds into out) or a flat one. */
+typedef struct {
+  void *fn;
+  const int64_t *K;
+  const void *index;
+  const void *target;
+  int64_t size;
+} dl_function;
+
+typedef struct {
+  int64_t n, m, nM, nA, n_hol;
+  const double *p;
+  dl_function kkt, velocity, position, energy;
+  const int64_t *holonomic;   /* n_hol: constraint row of each psi entry */
+  double baumgarte;
+  /* blocks of M: slots [block_start[b], block_start[b+1]) hold global coordinates */
+  int64_t n_blocks;
+  const int64_t *block_start, *slot_coord, *block_mat, *M_at;
+  /* (row, block) pairs: the part of a constraint row inside one block, by block; a
+   * block's internal pairs (rows inside it) first: [block_pairs[b], block_external[b]) */
+  int64_t n_pairs;
+  const int64_t *pair_row, *pair_block, *pair_vec, *A_at, *block_pairs, *block_external;
+  const int64_t *elim_at;     /* an internal pair's factors in elim (eliminate_internal) */
+  int64_t n_elim_blocks;
+  const int64_t *elim_blocks; /* the blocks with internal pairs */
+  /* Schur complement of the other rows in band storage, band_row[k] at place k */
+  int64_t m_band, kd;
+  const int64_t *band_row;
+  const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i,
+                                             * over its external pairs */
+  /* the 1 x 1 blocks without internal rows, solved in flat loops (see unit_pass) */
+  const int64_t *unit;        /* n_blocks: 1 for such a block */
+  int64_t n_unit, n_unit_pairs, n_unit_gram;
+  const int64_t *unit_slot, *unit_mat;                      /* n_unit */
+  const int64_t *unit_pair_vec, *unit_pair_row, *unit_pair_slot, *unit_pair_mat;
+  const int64_t *unit_gram_target, *unit_gram_i, *unit_gram_j;  /* n_unit_gram */
+  /* work arrays */
+  double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
+  double *elim, *error_work;  /* error_work: 4 n */
+  const unsigned char *active;  /* the rows S was last factored with (NULL: all) */
+  /* kkt_in_layout: the kkt function writes straight into blocks (M), u (f by slot), a
+   * (A) and c, all inside values; else values is [M, f, A, c] and load_kkt moves them */
+  int64_t kkt_in_layout;
+  double *c;                  /* the KKT right-hand side (in values) */
+  /* dependent rows left out of the solve (a closed loop's redundant joint rows): their
+   * pairs follow the others' (n_pairs on) and only load A, the products with A and the
+   * check that qdd still meets them (dropped_rtol, as the Python loop's) see them;
+   * their multipliers are zero */
+  int64_t n_dropped_pairs, n_dropped;
+  const int64_t *dropped_rows;
+  double dropped_rtol;
+} dl_model;
+
+/* One Runge-Kutta method: scipy.integrate's tableau. */
+typedef struct {
+  int64_t n_stages;           /* s: K has s + 1 rows (the last is f at the new point) */
+  const double *A, *B, *C;    /* A: s x s row major, B and C: s */
+  const double *E;            /* s + 1: error weights (E5 for DOP853) */
+  const double *E3;           /* DOP853's second estimator, or NULL */
+  /* The step's interpolant (scipy's dense output), used by dl_rk_run: either
+   * RkDenseOutput's P ((s + 1) x n_P), or DOP853's n_extra extra stages (A_extra:
+   * n_extra rows of length s + 1 + n_extra, C_extra) and D (n_D rows, same length). */
+  int64_t n_P;
+  const double *P;
+  int64_t n_extra;
+  const double *A_extra, *C_extra;
+  int64_t n_D;
+  const double *D;
+} dl_tableau;
+
+typedef struct {
+  double t, h_abs, h_previous, t_bound, direction, rtol, max_step;
+  const double *atol;         /* n_state */
+  int64_t nfev;
+  double alpha, beta;         /* the controller, step_control.py: h *= 0.9 err^-alpha */
+  double err_old;             /* err_old^beta, err_old the last accepted step's error */
+} dl_stepper;
+
+/* One call of dl_rk_run: where the outputs go, how to project, when to return. */
+typedef struct {
+  const double *t_eval;       /* n_eval output times in the direction of integration, or
+                               * n_eval < 0: every step end */
+  int64_t n_eval, next_eval;  /* next_eval: the first output time after st->t */
+  const unsigned char *holonomic;  /* dl_project's arguments */
+  int64_t max_newton, max_full;
+  double position_tol, accept_tol;
+  int64_t max_steps;          /* budget of one call: steps, and CPU seconds */
+  double max_seconds;
+  int64_t capacity;           /* rows of t_out and y_out */
+  double *t_out, *y_out;
+  int64_t n_steps, n_out;     /* done by this call */
+  double t_old;               /* the start of its last step */
+  double *y_new, *y_end;      /* work, n_state each */
+  double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
+} dl_run;
+
+/* Small helpers are inlined where the block size is a constant (see BY_SIZE); the
+ * functions one source calls in another are hidden (not exported, not interposable),
+ * so the compiler may inline them across sources like static ones. */
+#define DL_INLINE static inline __attribute__((always_inline))
+#define DL_INTERNAL __attribute__((visibility("hidden")))
+
+DL_INLINE double dot(const double *x, const double *y, int64_t n) {
+  double s = 0.0;
+  for (int64_t i = 0; i < n; ++i) s += x[i] * y[i];
+  return s;
+}
+
+DL_INLINE double max_abs(const double *x, int64_t n) {
+  double m = 0.0;
+  for (int64_t i = 0; i < n; ++i) m = fabs(x[i]) > m ? fabs(x[i]) : m;
+  return m;
+}
+
+DL_INLINE int64_t block_size(const dl_model *md, int64_t b) {
+  return md->block_start[b + 1] - md->block_start[b];
+}
+
+/* The per-block kernels take the block size nb last; BY_SIZE calls them with a
+ * constant nb for the common small blocks (a diagonal M has 1x1 blocks, a quaternion
+ * body a 4x4 one), so the compiler unrolls their loops and inlines the helpers. */
+#define BY_SIZE(nb, F, ...)                                                               \
+  ((nb) == 1 ? F(__VA_ARGS__, 1) : (nb) == 2 ? F(__VA_ARGS__, 2)                          \
+   : (nb) == 3 ? F(__VA_ARGS__, 3) : (nb) == 4 ? F(__VA_ARGS__, 4) : F(__VA_ARGS__, nb))
+
+/* kkt.c: the generated functions, A's values, the KKT solve */
+DL_INTERNAL void eval_state(const dl_function *F, double t, const double *q, const double *qd,
+                            const double *p, double *out);
+DL_INTERNAL void eval_static(const dl_function *F, double t, const double *q, const double *p,
+                             double *out);
+DL_INTERNAL void load_pairs(dl_model *md, const double *Av);
+DL_INTERNAL void add_A_times(const dl_model *md, const double *x, double w, double *out);
+DL_INTERNAL void eval_kkt(dl_model *md, double t, const double *q, const double *qd);
+DL_INTERNAL int dl_solve(dl_model *md, double *qdd, double *lambda);
+DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active);
+DL_INTERNAL void solve_schur(dl_model *md, double *rhs, double *x);
+int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda);
+
+/* outputs.c */
+int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, double *qdd,
+               double *lambda, double *force, double *position_residual,
+               double *velocity_residual, double *energies);
+
+/* projection.c */
+int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
+               int64_t max_newton, int64_t max_full, double position_tol, double accept_tol);
+
+/* runge_kutta.c */
+int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64_t row0,
+              int64_t j0, int64_t j1, double t, double h, const double *y, double *K,
+              double *stage, int64_t *nfev);
+int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
+               double *y_new, double *stage);
+int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
+              double *K, double *stage);
+
+/* layout.c: one entry per struct size ("dl_model"), field offset ("dl_model.n") and
+ * return code ("DL_OK"), for library.py to compare with its mirrors */
+typedef struct {
+  const char *name;
+  int64_t value;
+} dl_layout_entry;
+int64_t dl_layout(const dl_layout_entry **entries);
+
+#endif
