@@ -23,16 +23,18 @@ import threading
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 import sympy as sp
 
 from ..equations.lagrange import Equations
 from ..equations.sparse import nonzero_entries
+from ..equations.static import static_entries
 from ..model.coordinates import t
 from . import c_backend
 from .compiled import CompiledEquations, SparsePattern, _energy_vector
+from .static import StaticFunctions, StaticPattern
 
 
 @dataclass(frozen=True)
@@ -70,7 +72,8 @@ def compile_parts(
 
     Every coordinate index and constraint row must be in range and every row
     covered exactly once. ``parameters`` are the global parameter symbols, passed to
-    every part.
+    every part. The static function (:mod:`.static`) is generated from the same parts
+    when statics first asks for it.
     """
     _check_rows(parts, m)
     holonomic = _holonomic_rows(parts)
@@ -82,22 +85,83 @@ def compile_parts(
             kinds[kind][0].append((f"{kind}_{g}", _arguments(part, kind, parameters), exprs))
             kinds[kind][1].append(target)
     sizes = layout.sizes(n, m)
-    indices = [part.coordinates for part in parts]
     use = c_backend.backend() if backend is None else backend
-    functions: list[Callable] | None = None
-    if use == "c":
-        try:
-            lib = c_backend.scatter_library([(k, kinds[k][0]) for k in _KINDS], {"q", "qd"})
-            functions = [_CEvaluator(getattr(lib, k), (n, len(parameters), sizes[k]), indices,
-                                     kinds[k][1], k in _STATE, lib) for k in _KINDS]
-        except c_backend.CompileError as exc:
-            warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=2)
-    if functions is None:
-        functions = [_numpy_evaluator(kinds[k][0], indices, kinds[k][1], sizes[k])
-                     for k in _KINDS]
+    functions = _evaluators([(k, *kinds[k], sizes[k], k in _STATE) for k in _KINDS], parts,
+                            n, len(parameters), use)
     used = "numpy" if isinstance(functions[0], _NumpyEvaluator) else "c"
     kkt, velocity, position, energy = functions
-    return CompiledEquations(kkt, velocity, position, energy, pattern, tuple(holonomic), used)
+    return CompiledEquations(kkt, velocity, position, energy, pattern, tuple(holonomic), used,
+                             partial(compile_static_parts, parts, n, m, parameters, used))
+
+
+def compile_static_parts(parts: Sequence[Part], n: int, m: int,
+                         parameters: Sequence[sp.Symbol], use: str) -> StaticFunctions:
+    """The static function (:mod:`.static`) of the model made of ``parts``: each part's
+    derivatives generated once, on its own equations, and added into the global
+    pattern (the union of the parts' entries) at every instance.
+
+    Parameters
+    ----------
+    parts, n, m, parameters
+        As for :func:`compile_parts`.
+    use
+        ``"c"`` or ``"numpy"``.
+    """
+    local = [static_entries(part.equations) for part in parts]
+    keys: list[list[np.ndarray]] = [[], [], [], []]  # per group, per part and entry
+    for part, entries in zip(parts, local):
+        idx, rows, K = part.coordinates, part.rows, part.instances
+        keys[0].append(_keys([idx[:, i] * n + idx[:, j] for i, j in entries.stiffness], K))
+        keys[1].append(_keys([(rows[:, k] * n + idx[:, j]) * n + idx[:, i]
+                              for k, j, i in entries.curvature], K))
+        keys[2].append(_keys([idx[:, i] * n + idx[:, j] for i, j in entries.damping], K))
+        keys[3].append(_keys([rows[:, k] * n + idx[:, j] for k, j in entries.rest], K))
+    unique = [np.unique(np.concatenate([k.reshape(-1) for k in group] or [_NO_INDEX]))
+              for group in keys]
+    offsets = np.cumsum([0, *(len(u) for u in unique)])
+    specs, targets = [], []
+    for g, (part, entries) in enumerate(zip(parts, local)):
+        groups = (entries.stiffness, entries.curvature, entries.damping, entries.rest)
+        exprs = [e for group in groups for e in group.values()]
+        at = [offsets[c] + np.searchsorted(unique[c], keys[c][g]) for c in range(4)]
+        specs.append((f"static_{g}", _arguments(part, "static", parameters), exprs))
+        targets.append(np.concatenate(at, axis=1).reshape(-1))
+    (values,) = _evaluators([("static_values", specs, targets, int(offsets[-1]), False)],
+                           parts, n,
+                            len(parameters), use)
+    rest_rows = sorted(int(r) for part, entries in zip(parts, local)
+                       for k in entries.rest_rows for r in part.rows[:, k])
+    pattern = StaticPattern(
+        n, m, (unique[0] // n, unique[0] % n), (unique[1] // (n * n), unique[1] // n % n,
+                                                 unique[1] % n),
+        (unique[2] // n, unique[2] % n), (unique[3] // n, unique[3] % n), tuple(rest_rows))
+    return StaticFunctions(values, pattern)
+
+
+_NO_INDEX = np.zeros(0, dtype=np.intp)
+
+
+def _keys(columns: list[np.ndarray], K: int) -> np.ndarray:
+    """Per instance, the global keys of a part's entries: shape ``(K, entries)``."""
+    if not columns:
+        return np.zeros((K, 0), dtype=np.intp)
+    return np.stack(columns, axis=1).astype(np.intp)
+
+
+def _evaluators(kinds: Sequence[tuple[str, list, list, int, bool]], parts: Sequence[Part],
+                n: int, n_parameters: int, use: str) -> list[Callable]:
+    """One evaluator per kind ``(name, specs, targets, size, takes_qd)``: a driver of one
+    compiled library when ``use`` is ``"c"`` (NumPy, with a warning, if that fails)."""
+    indices = [part.coordinates for part in parts]
+    if use == "c":
+        try:
+            lib = c_backend.scatter_library([(k, specs) for k, specs, *_ in kinds], {"q", "qd"})
+            return [_CEvaluator(getattr(lib, k), (n, n_parameters, size), indices, targets,
+                                takes_qd, lib) for k, _, targets, size, takes_qd in kinds]
+        except c_backend.CompileError as exc:
+            warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=3)
+    return [_numpy_evaluator(specs, indices, targets, size)
+            for _, specs, targets, size, _ in kinds]
 
 
 _KINDS = ("kkt", "velocity", "position", "energy")
@@ -170,6 +234,7 @@ def _columns(targets: list[np.ndarray], K: int) -> np.ndarray:
 
 
 def _arguments(part: Part, kind: str, parameters: Sequence[sp.Symbol]) -> list:
+    """The kernel's arguments: ``(t, q, [qd,] p)``, ``qd`` for the kinds of the state."""
     coords = part.equations.model.coords
     state = [("t", [t]), ("q", coords.q)]
     if kind in _STATE:

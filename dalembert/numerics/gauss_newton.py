@@ -3,10 +3,11 @@
 The one routine behind every dense projection of positions onto holonomic
 constraints: consistent initial values, the fallback of the per-step projector,
 the start of a static equilibrium search. Each step is ``dq = -J^+ psi`` over the
-coordinates allowed to move (``J = dpsi/dq``), with singular values below
-:data:`~dalembert.numerics.rank.RANK_RTOL` times the largest cut: with dependent
-constraints ``J`` has singular values at rounding level, and LAPACK's default
-cut-off (``eps * max(shape)``) can keep them and divide rounding noise by them.
+coordinates allowed to move (``J = dpsi/dq``; :func:`~.least_squares.min_norm_solve`),
+with singular values below :data:`~dalembert.numerics.rank.RANK_RTOL` times the
+largest cut: with dependent constraints ``J`` has singular values at rounding level,
+and LAPACK's default cut-off (``eps * max(shape)``) can keep them and divide rounding
+noise by them.
 
 Newton stops at :data:`POSITION_TOL` or once a step no longer halves the largest
 residual (the rounding floor of large coordinates); the caller then judges the
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .rank import RANK_RTOL
+from .least_squares import min_norm_solve
 
 #: Target for the largest constraint residual.
 POSITION_TOL = 1e-14
@@ -91,7 +92,7 @@ def gauss_newton(
         if residual <= POSITION_TOL:
             break
         J = np.asarray(jacobian(q), dtype=float)[:, cols]
-        step = np.linalg.lstsq(J, values, rcond=RANK_RTOL)[0]
+        step = min_norm_solve(J, values)
         found = _descend(psi, q, cols, step, values, residual, line_search)
         if found is None:
             break  # rounding floor reached (or divergence, judged below)

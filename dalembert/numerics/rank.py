@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConstraintError
+from .conditioning import gram_well_conditioned
 
 #: Singular values below this fraction of the largest count as zero.
 RANK_RTOL = 1e-10
@@ -123,3 +124,36 @@ def constraint_rank(A: np.ndarray, names: Sequence[str], n: int | None = None) -
         return ConstraintRank(n, m, (), tuple(names))
     dependent = tuple(dependent_rows(A))
     return ConstraintRank(n, m - len(dependent), dependent, tuple(names))
+
+
+#: From this many rows (fewer than the columns), the rank test screens ``A A^T``'s
+#: condition first (:mod:`.conditioning`) and takes the SVD only if that fails.
+SCREEN_FROM = 60
+
+
+def sparse_constraint_rank(rows: np.ndarray, cols: np.ndarray, values: np.ndarray,
+                           shape: tuple[int, int], names: Sequence[str]) -> ConstraintRank:
+    """:func:`constraint_rank` of ``A`` given by its values on a pattern: a
+    well-conditioned ``A A^T`` proves full row rank without the SVD.
+
+    Parameters
+    ----------
+    rows, cols, values
+        The entries of ``A``.
+    shape
+        ``(m, n)``.
+    names
+        One name per row.
+
+    Examples
+    --------
+    >>> r = sparse_constraint_rank(np.array([0, 1]), np.array([0, 0]), np.ones(2), (2, 3), "ab")
+    >>> r.rank, r.dependent_names
+    (1, ['b'])
+    """
+    m, n = shape
+    if SCREEN_FROM < m < n and gram_well_conditioned(rows, cols, values, shape):
+        return ConstraintRank(n, m, (), tuple(names))  # independent: no SVD needed
+    A = np.zeros(shape)
+    np.add.at(A, (rows, cols), values)
+    return constraint_rank(A, names)

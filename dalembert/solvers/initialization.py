@@ -10,11 +10,11 @@ import numpy as np
 from ..codegen.compiled import NumericModel
 from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
-from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error
+from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error, sparse_constraint_rank
 from ..options import RedundantConstraints, VelocityProjection
 from .kkt import check_kkt, solve_kkt
 from .projection import StepProjector, project_positions, project_velocities
-from .sparse_kkt import DENSE_MAX, gram_well_conditioned, kkt_condition, kkt_solver, matvec
+from .sparse_kkt import DENSE_MAX, kkt_condition, kkt_solver, matvec
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
 REPORT_TOL = 1e-10
@@ -296,12 +296,7 @@ def _rank_at(
     Av, _ = num.velocity_sparse(t0, q)
     pat = num.pattern
     label = labels if constraint_names is None else constraint_names
-    if num.m > DENSE_MAX and num.m < num.n and gram_well_conditioned(
-            pat.A_rows, pat.A_cols, Av, (num.m, num.n)):
-        rank = ConstraintRank(num.n, num.m, (), tuple(label))  # independent: no SVD needed
-    else:
-        A = pat.dense_A(Av)
-        rank = constraint_rank(A, label)
+    rank = sparse_constraint_rank(pat.A_rows, pat.A_cols, Av, (num.m, num.n), label)
     if rank.degrees_of_freedom == 0:
         raise ConstraintError(
             f"the constraints leave no degree of freedom at the initial state: rank(A) = "

@@ -35,6 +35,7 @@ from ..codegen.compiled import SparsePattern
 from ..errors import SingularSystemError
 from ..numerics.band import band_order
 from ..numerics.band import bandwidth as _bandwidth  # noqa: F401 (tests measure with it)
+from ..numerics.conditioning import condition_1norm
 from ..numerics.rank import min_norm_multipliers
 from .kkt import DROPPED_ROW_RTOL, _dense_solve, _least_squares_kkt, kkt_matrix
 
@@ -45,8 +46,6 @@ BAND_MAX = 40
 #: SuperLU options: a symmetric fill-reducing order for the symmetric KKT pattern, and
 #: threshold pivoting relaxed so that the order is mostly kept (zero (2,2) block).
 PERMC = "MMD_AT_PLUS_A"
-#: Up to this many constraint rows the rank screen factors ``A A^T`` dense (LAPACK).
-GRAM_DENSE_MAX = 200
 DIAG_PIVOT_THRESH = 0.1
 SINGULAR_MESSAGE = (
     "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are not "
@@ -279,57 +278,4 @@ def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:
         solve = solver.factor(Mv, Av)
     except (SingularSystemError, np.linalg.LinAlgError):
         return np.inf
-    return _condition_1norm(K, solve)
-
-
-def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, shape: tuple,
-                          limit: float = 1e10) -> bool:
-    """``True`` when ``A`` (values on a pattern) surely has full row rank, with
-    ``s_max / s_min < limit``: a screen before the SVD of
-    :func:`~dalembert.numerics.rank.constraint_rank`, from a Cholesky (dense) or LU
-    (sparse) factorization of ``A A^T``, whose condition number is that ratio squared.
-
-    >>> gram_well_conditioned(np.array([0, 1]), np.array([0, 1]), np.ones(2), (2, 3))
-    True
-    >>> gram_well_conditioned(np.array([0, 1]), np.array([0, 0]), np.ones(2), (2, 3))
-    False
-    """
-    if shape[0] <= GRAM_DENSE_MAX:
-        A = np.zeros(shape)
-        np.add.at(A, (rows, cols), Av)
-        cond = _dense_spd_condition(A @ A.T)
-    else:
-        A = sps.csr_matrix((Av, (rows, cols)), shape=shape)
-        cond = _sparse_condition((A @ A.T).tocsc())
-    # cond(G) = cond(A)^2 and the 2-norm condition is at most m times the 1-norm one;
-    # the estimate is reliable only well below 1/eps, hence the cap at 1e13.
-    return bool(cond < min(limit**2 / max(shape[0], 1), 1e13))
-
-
-def _dense_spd_condition(G: np.ndarray) -> float:
-    """Estimated 1-norm condition number of a symmetric positive semidefinite ``G``
-    (LAPACK ``potrf`` and ``pocon``), ``inf`` when its Cholesky factorization fails."""
-    factor, info = lapack.dpotrf(G, lower=1)
-    if info != 0:
-        return np.inf
-    rcond, info = lapack.dpocon(factor, np.abs(G).sum(axis=0).max(), uplo="L")
-    return 1.0 / rcond if info == 0 and rcond > 0.0 else np.inf
-
-
-def _sparse_condition(G: sps.csc_matrix) -> float:
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", spla.MatrixRankWarning)
-            solve = spla.splu(G, permc_spec=PERMC).solve
-    except (RuntimeError, spla.MatrixRankWarning):
-        return np.inf
-    with np.errstate(all="ignore"):
-        return _condition_1norm(G, solve)
-
-
-def _condition_1norm(K: sps.spmatrix, solve) -> float:
-    size = K.shape[0]
-    inverse = spla.LinearOperator((size, size), matvec=solve, rmatvec=solve, dtype=float)
-    with np.errstate(all="ignore"):
-        value = abs(K).sum(axis=0).max() * spla.onenormest(inverse)
-    return float(value) if np.isfinite(value) else np.inf
+    return condition_1norm(K, solve)

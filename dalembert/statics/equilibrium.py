@@ -26,17 +26,14 @@ from __future__ import annotations
 
 import math
 import warnings
-import weakref
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
-import sympy as sp
 from numpy.typing import NDArray
 
-from ..codegen.numpy_printer import generate_function
 from ..errors import (
     EquilibriumNotFoundError,
     InconsistentConstraintsError,
@@ -44,15 +41,14 @@ from ..errors import (
     RedundantConstraintsWarning,
 )
 from ..model.coordinates import key_name
-from ..model.coordinates import t as time_symbol
-from ..model.parameters import resolve_parameters
 from ..model.values import coordinate_values, free_mask
 from ..numerics.gauss_newton import ACCEPT_TOL, gauss_newton
-from ..numerics.rank import constraint_rank, dependent_error, min_norm_multipliers
+from ..numerics.rank import dependent_error, min_norm_multipliers, sparse_constraint_rank
 
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
 # acceptance) and its scipy.optimize.root fallback are shared with extremum().
 from .newton import Attempt, check_settings, newton_iterations, root_then_newton
+from .static_system import StaticSystem, static_system
 
 if TYPE_CHECKING:
     from ..system import System
@@ -61,10 +57,8 @@ if TYPE_CHECKING:
 __all__ = [
     "STABILITIES",
     "Equilibrium",
-    "StaticModel",
     "classify_stiffness",
     "equilibrium",
-    "static_model",
     "tangent_basis",
 ]
 
@@ -77,106 +71,6 @@ MARGINAL_RTOL = 1e-8
 _PROJECTION_ITER = 100
 
 Array = NDArray[np.float64]
-
-
-# --------------------------------------------------------------------------- errors
-
-
-# --------------------------------------------------------------------------- numeric model
-
-
-@dataclass(frozen=True)
-class StaticModel:
-    """Generated functions for statics of one System (built once, cached per System).
-
-    - ``constraints(t, q, p) -> (psi, A, b, db/dq)``: ``psi`` the holonomic rows,
-      ``A`` and ``b`` all rows (``A qd + b = 0``)
-    - ``forces(t, q, lam, p) -> (f0, G)`` with ``f0 = f(q, 0, t)`` and
-      ``G = d(f0 + A^T lam)/dq`` (so the stiffness is ``K = -G``)
-    - ``inertia(t, q, p) -> (M, C)`` with ``C = -df/dqd`` at ``qd = 0``
-    """
-
-    coordinate_names: tuple[str, ...]
-    constraint_names: tuple[str, ...]
-    constraint_labels: tuple[str, ...]
-    holonomic_rows: tuple[int, ...]
-    pfaffian_rows: tuple[int, ...]
-    #: Pfaffian rows whose ``b`` is not identically zero: rest needs ``b_k(q, t) = 0``.
-    rest_rows: tuple[int, ...]
-    constraints: Callable
-    forces: Callable
-    inertia: Callable
-
-    @property
-    def n(self) -> int:
-        return len(self.coordinate_names)
-
-    @property
-    def m(self) -> int:
-        return len(self.constraint_names)
-
-
-_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def static_model(system: System) -> StaticModel:
-    """The :class:`StaticModel` of ``system`` (generated on first use, then reused)."""
-    cached = _CACHE.get(system)
-    if cached is None:
-        cached = _build_static_model(system)
-        _CACHE[system] = cached
-    return cached
-
-
-def _build_static_model(system: System) -> StaticModel:
-    eqs = system.equations()
-    model = eqs.model
-    coords, cons = model.coords, model.constraints
-    at_rest = {v: 0 for v in coords.qd}
-    # Fresh symbols: a user parameter may be called lambda_1.
-    lam = sp.Matrix([sp.Dummy(f"lam{k}") for k in range(cons.m)])
-    f0 = eqs.f.xreplace(at_rest)
-    balance = f0 + eqs.A.T * lam if cons.m else f0
-    damping = -_jacobian(eqs.f, coords.qd).xreplace(at_rest)
-    static = [("t", [time_symbol]), ("q", coords.q)]
-    params = [("p", model.parameters)]
-    constraints = generate_function(
-        "static_constraints", [*static, *params],
-        [("psi", cons.psi), ("A", eqs.A), ("b", eqs.b), ("Jb", _jacobian(eqs.b, coords.q))],
-    )
-    forces = generate_function(
-        "static_forces", [*static, ("lam", tuple(lam)), *params],
-        [("f0", f0), ("G", _jacobian(balance, coords.q))],
-    )
-    inertia = generate_function(
-        "static_inertia", [*static, *params], [("M", eqs.M.xreplace(at_rest)), ("C", damping)]
-    )
-    holonomic = set(cons.holonomic_rows)
-    pfaffian = tuple(i for i in range(cons.m) if i not in holonomic)
-    return StaticModel(
-        coordinate_names=coords.names,
-        constraint_names=cons.names,
-        constraint_labels=tuple(cons.describe(i) for i in range(cons.m)),
-        holonomic_rows=cons.holonomic_rows,
-        pfaffian_rows=pfaffian,
-        rest_rows=tuple(i for i in pfaffian if sp.simplify(eqs.b[i]) != 0),
-        constraints=constraints,
-        forces=forces,
-        inertia=inertia,
-    )
-
-
-def _jacobian(vector: sp.Matrix, symbols: Sequence[sp.Symbol]) -> sp.Matrix:
-    """``d vector / d symbols``, skipping entries that do not contain the symbol.
-
-    Mechanisms are sparse (each constraint involves a few coordinates), and
-    SymPy's ``diff`` costs the same whether or not the result is zero.
-    """
-    rows = []
-    for entry in vector:
-        present = entry.free_symbols
-        rows.append([entry.diff(s) if s in present else 0 for s in symbols])
-    return sp.Matrix(len(rows), len(symbols), [v for row in rows for v in row])
 
 
 # --------------------------------------------------------------------------- result
@@ -390,29 +284,22 @@ def equilibrium(
     check_settings(tol, max_iter)
     _check_on_marginal(on_marginal)
     t = _check_time(t)
-    sm = static_model(system)
-    p = resolve_parameters(system.model.parameters, system.parameter_values, parameters)
+    sm = static_system(system, parameters)
     names = sm.coordinate_names
     q_guess = coordinate_values(guess, names, "guess")
     free = free_mask(fixed, names)
-    q_start = project_onto_constraints(sm, t, q_guess, free, p)
-    problem = _Newton(sm, t, p, q_start, free)
+    q_start = project_onto_constraints(sm, t, q_guess, free)
+    problem = _Newton(sm, t, q_start, free)
     z0 = np.concatenate([q_start[free], problem.initial_multipliers()])
     attempt = _solve(problem, z0, tol, max_iter, q_guess)
     mode = redundant_constraints or getattr(system, "redundant_constraints", "minimum-norm")
     if mode not in ("minimum-norm", "error"):
         raise ValueError(f"redundant_constraints must be 'minimum-norm' or 'error', "
                          f"got {mode!r}")
-    return _make_equilibrium(problem, attempt, parameters_by_name(system, p), on_marginal,
-                             mode)
+    return _make_equilibrium(problem, attempt, on_marginal, mode)
 
 
-def parameters_by_name(system: System, p: Array) -> dict[str, float]:
-    """The resolved parameter array as a dict by name."""
-    return {s.name: float(v) for s, v in zip(system.model.parameters, p)}
-
-
-def tangent_basis(sm: StaticModel, A: Array, free: Array) -> Array:
+def tangent_basis(sm: StaticSystem, A: Array, free: Array) -> Array:
     """Orthonormal basis of ``{dq : A_hol dq = 0, dq_fixed = 0}`` (``n x r``)."""
     rows = [A[list(sm.holonomic_rows)]] if sm.holonomic_rows else []
     rows += [np.eye(sm.n)[~np.asarray(free, dtype=bool)]]
@@ -483,9 +370,7 @@ def _point(names: Sequence[str], q: Array) -> str:
 # --------------------------------------------------------------------------- projection
 
 
-def project_onto_constraints(
-    sm: StaticModel, t: float, q: Array, free: Array, p: Array
-) -> Array:
+def project_onto_constraints(sm: StaticSystem, t: float, q: Array, free: Array) -> Array:
     """Nearest ``q`` (over the ``free`` coordinates) with ``psi(q, t) = 0``.
 
     Gauss-Newton with minimum-norm steps and backtracking; raises
@@ -496,16 +381,16 @@ def project_onto_constraints(
     q = np.array(q, dtype=float)
     if not rows:
         return q
-    found = gauss_newton(lambda x: sm.constraints(t, x, p)[0],
-                         lambda x: sm.constraints(t, x, p)[1][rows], q, free,
+    found = gauss_newton(lambda x: sm.num.position_constraint(t, x),
+                         lambda x: sm.num.velocity_constraint(t, x)[0][rows], q, free,
                          line_search=True, max_iter=_PROJECTION_ITER)
     if found.converged or found.residual <= ACCEPT_TOL * max(1.0, float(np.abs(q).max())):
         return found.q
-    raise InconsistentConstraintsError(_inconsistent_message(sm, t, found.q, free, p))
+    raise InconsistentConstraintsError(_inconsistent_message(sm, t, found.q, free))
 
 
-def _inconsistent_message(sm: StaticModel, t: float, q: Array, free: Array, p: Array) -> str:
-    psi, A, *_ = sm.constraints(t, q, p)
+def _inconsistent_message(sm: StaticSystem, t: float, q: Array, free: Array) -> str:
+    psi, A, *_ = sm.constraints(t, q)
     rows = list(sm.holonomic_rows)
     worst = rows[int(np.argmax(np.abs(psi)))]
     J = A[rows][:, free]
@@ -533,8 +418,8 @@ def _inconsistent_message(sm: StaticModel, t: float, q: Array, free: Array, p: A
 class _Newton:
     """The equilibrium equations over ``z = (q_free, lambda)`` and their Jacobian."""
 
-    def __init__(self, sm: StaticModel, t: float, p: Array, q_start: Array, free: Array):
-        self.sm, self.t, self.p, self.free = sm, t, p, free
+    def __init__(self, sm: StaticSystem, t: float, q_start: Array, free: Array):
+        self.sm, self.t, self.free = sm, t, free
         self.cols = np.flatnonzero(free)
         self.q_template = np.array(q_start, dtype=float)
         self.hol = list(sm.holonomic_rows)
@@ -551,8 +436,8 @@ class _Newton:
         return q, z[len(self.cols):]
 
     def evaluate(self, q: Array, lam: Array):
-        psi, A, b, Jb = self.sm.constraints(self.t, q, self.p)
-        f0, G = self.sm.forces(self.t, q, lam, self.p)
+        psi, A, b, Jb = self.sm.constraints(self.t, q)
+        f0, G = self.sm.forces(self.t, q, lam)
         return psi, A, b, Jb, f0, G
 
     def initial_multipliers(self) -> Array:
@@ -625,15 +510,17 @@ def _not_found_message(problem: _Newton, z0: Array, attempts: list[Attempt], tol
 # --------------------------------------------------------------------------- result
 
 
-def _make_equilibrium(problem: _Newton, attempt: Attempt, params: dict[str, float],
-                      on_marginal: str, redundant_constraints: str) -> Equilibrium:
+def _make_equilibrium(problem: _Newton, attempt: Attempt, on_marginal: str,
+                      redundant_constraints: str) -> Equilibrium:
     sm, free = problem.sm, problem.free
     q, lam = problem.split(attempt.z)
     _, A, _, _, f0, G = problem.evaluate(q, lam)
     dependent: tuple[str, ...] = ()
     forces = A.T @ lam  # unique, whatever multipliers Newton settled on
     if sm.m:
-        rank = constraint_rank(A, sm.constraint_names)
+        pattern, Av = sm.num.pattern, sm.num.velocity_sparse(problem.t, q)[0]
+        rank = sparse_constraint_rank(pattern.A_rows, pattern.A_cols, Av, (sm.m, sm.n),
+                                      sm.constraint_names)
         if rank.dependent and redundant_constraints == "error":
             raise dependent_error([sm.constraint_labels[i] for i in rank.dependent],
                                   f"at the equilibrium ({_point(sm.coordinate_names, q)})")
@@ -652,13 +539,13 @@ def _make_equilibrium(problem: _Newton, attempt: Attempt, params: dict[str, floa
         stability=stability, stiffness_eigenvalues=eigenvalues, holding_forces=holding,
         iterations=attempt.iterations, method=attempt.label,
         coordinate_names=sm.coordinate_names, constraint_names=sm.constraint_names,
-        t=problem.t, parameter_values=params,
+        t=problem.t, parameter_values=dict(sm.parameter_values),
         fixed=tuple(n for n, f in zip(sm.coordinate_names, free) if not f),
         dependent_constraints=dependent,
     )
 
 
-def _stability(sm: StaticModel, A: Array, K: Array, free: Array,
+def _stability(sm: StaticSystem, A: Array, K: Array, free: Array,
                on_marginal: str) -> tuple[str, Array]:
     if sm.pfaffian_rows:
         return "undetermined", np.zeros(0)

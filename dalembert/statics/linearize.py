@@ -32,17 +32,15 @@ from ..errors import (
     NotAnEquilibriumError,
     SingularSystemError,
 )
-from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues, coordinate_values, free_mask
 from .equilibrium import (
     Equilibrium,
     MarginalStabilityError,
-    StaticModel,
     classify_stiffness,
     marginal_message,
-    static_model,
     tangent_basis,
 )
+from .static_system import StaticSystem, static_system
 
 if TYPE_CHECKING:
     from ..system import System
@@ -222,22 +220,20 @@ def linearize(
     """
     if on_marginal not in ("report", "raise"):
         raise ValueError(f"on_marginal must be 'report' or 'raise', not {on_marginal!r}")
-    sm = static_model(system)
-    _reject_pfaffian(sm)
     given = q_eq if isinstance(q_eq, Equilibrium) else None
+    sm = static_system(system, given.parameter_values if given else None, parameters)
+    _reject_pfaffian(sm)
     q = np.array(given.q) if given is not None else coordinate_values(
         cast(CoordinateValues, q_eq), sm.coordinate_names, "q_eq")
     t = float(given.t if given and t is None else t or 0.0)
     fixed = given.fixed if given and fixed is None else fixed
-    p = resolve_parameters(system.model.parameters, system.parameter_values,
-                           given.parameter_values if given else None, parameters)
     free = free_mask(fixed, sm.coordinate_names)
-    _check_on_constraints(sm, t, q, free, p, tol)
-    lam = _static_multipliers(sm, t, q, free, p, tol)
-    return _linearization(sm, t, q, lam, free, p, on_marginal)
+    _check_on_constraints(sm, t, q, tol)
+    lam = _static_multipliers(sm, t, q, free, tol)
+    return _linearization(sm, t, q, lam, free, on_marginal)
 
 
-def _reject_pfaffian(sm: StaticModel) -> None:
+def _reject_pfaffian(sm: StaticSystem) -> None:
     if not sm.pfaffian_rows:
         return
     names = ", ".join(sm.constraint_labels[i] for i in sm.pfaffian_rows)
@@ -251,12 +247,12 @@ def _reject_pfaffian(sm: StaticModel) -> None:
     )
 
 
-def _check_on_constraints(sm: StaticModel, t: float, q: Array, free: Array, p: Array,
-                          tol: float) -> None:
+def _check_on_constraints(sm: StaticSystem, t: float, q: Array, tol: float) -> None:
     rows = list(sm.holonomic_rows)
     if not rows:
         return
-    psi, A, *_ = sm.constraints(t, q, p)
+    psi = sm.num.position_constraint(t, q)
+    A = sm.num.velocity_constraint(t, q)[0]
     # Distance to the constraint set, to first order: the minimum-norm correction.
     distance = np.abs(np.linalg.lstsq(A[rows], psi, rcond=None)[0]).max()
     if not np.isfinite(distance) or distance > tol * max(1.0, float(np.abs(q).max())):
@@ -268,11 +264,11 @@ def _check_on_constraints(sm: StaticModel, t: float, q: Array, free: Array, p: A
         )
 
 
-def _static_multipliers(sm: StaticModel, t: float, q: Array, free: Array, p: Array,
+def _static_multipliers(sm: StaticSystem, t: float, q: Array, free: Array,
                         tol: float) -> Array:
     """``lambda*`` from ``A^T lambda = -f0`` on the free coordinates; check the balance."""
-    _, A, *_ = sm.constraints(t, q, p)
-    f0 = sm.forces(t, q, np.zeros(sm.m), p)[0]
+    A = sm.num.velocity_constraint(t, q)[0]
+    f0 = sm.num.forces_at_rest(t, q)
     lam = np.linalg.lstsq(A[:, free].T, -f0[free], rcond=None)[0] if sm.m else np.zeros(0)
     unbalanced = (f0 + A.T @ lam)[free]
     scale = max(float(np.abs(f0).max(initial=0.0)), float(np.abs(A.T @ lam).max(initial=0.0)))
@@ -288,11 +284,11 @@ def _static_multipliers(sm: StaticModel, t: float, q: Array, free: Array, p: Arr
     return lam
 
 
-def _linearization(sm: StaticModel, t: float, q: Array, lam: Array, free: Array, p: Array,
+def _linearization(sm: StaticSystem, t: float, q: Array, lam: Array, free: Array,
                    on_marginal: str) -> Linearization:
-    _, A, *_ = sm.constraints(t, q, p)
-    K = -sm.forces(t, q, lam, p)[1]
-    M, C = sm.inertia(t, q, p)
+    A = sm.num.velocity_constraint(t, q)[0]
+    K = -sm.forces(t, q, lam)[1]
+    M, C = sm.inertia(t, q)
     Z = tangent_basis(sm, A, free)
     Mr, Kr, Cr = Z.T @ M @ Z, Z.T @ K @ Z, Z.T @ C @ Z
     omega2, vectors = _modes(Mr, Kr)
@@ -306,7 +302,7 @@ def _linearization(sm: StaticModel, t: float, q: Array, lam: Array, free: Array,
     )
 
 
-def _stability(sm: StaticModel, Z: Array, Kr: Array, scale: float, on_marginal: str) -> str:
+def _stability(sm: StaticSystem, Z: Array, Kr: Array, scale: float, on_marginal: str) -> str:
     """Classify from the eigenvalues of ``Kr`` (same test as :func:`equilibrium`)."""
     if Kr.size == 0:
         return "stable"

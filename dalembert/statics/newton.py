@@ -17,10 +17,14 @@ import numpy as np
 import scipy.optimize
 
 from ..errors import ExtremumConvergenceError
+from ..numerics.least_squares import min_norm_solve
 from .classification import dependent_constraints, raise_if_dependent
 from .problem import Array, KKTFunction, Problem, all_finite, max_abs, point_text
 
 _EPS = float(np.finfo(float).eps)
+#: Relative cut of singular values in a Newton step: LAPACK's default for small
+#: systems (``eps * max(shape)``), the sparse solve's regularization for large ones.
+NEWTON_RCOND: float | None = None
 
 
 @dataclass(frozen=True)
@@ -86,8 +90,8 @@ def newton_iterations(
     for k in range(max_iter):
         if _accepted(residual, matrix, z, tol):
             return Attempt(z, max_abs(residual), k, True, label)
-        # lstsq, not solve: the KKT matrix may be singular away from the solution.
-        step = np.asarray(np.linalg.lstsq(matrix, -residual, rcond=None)[0], dtype=np.float64)
+        # the minimum-norm step: the KKT matrix may be singular (see min_norm_solve)
+        step = min_norm_solve(matrix, -residual, rcond=NEWTON_RCOND)
         found = _line_search(kkt, z, residual, step)
         if found is None:
             return Attempt(z, max_abs(residual), k, False, label, "residual stopped decreasing")
