@@ -363,8 +363,19 @@ def _check_time(t: object) -> float:
     return value
 
 
+#: Coordinates a message shows of a point (a long chain's would fill pages).
+SHOWN_COORDINATES = 8
+
+
 def _point(names: Sequence[str], q: Array) -> str:
-    return ", ".join(f"{n}={v:.6g}" for n, v in zip(names, q))
+    """``x=0.1, y=-0.9``, the first :data:`SHOWN_COORDINATES` of them.
+
+    >>> _point([f"q{k}" for k in range(10)], np.arange(10.0))
+    'q0=0, q1=1, q2=2, q3=3, q4=4, q5=5, q6=6, q7=7, ... (2 more)'
+    """
+    shown = ", ".join(f"{n}={v:.6g}" for n, v in list(zip(names, q))[:SHOWN_COORDINATES])
+    rest = len(names) - SHOWN_COORDINATES
+    return shown + (f", ... ({rest} more)" if rest > 0 else "")
 
 
 # --------------------------------------------------------------------------- projection
