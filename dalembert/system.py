@@ -18,10 +18,16 @@ from scipy.integrate import OdeSolver
 from .codegen import compiled as codegen
 from .codegen.compiled import CompiledEquations, NumericModel
 from .equations.lagrange import Equations, derive_equations
-from .errors import InitialConditionsAdjusted, IntegrationWarning, RedundantConstraintsWarning
+from .errors import (
+    InitialConditionsAdjusted,
+    IntegrationWarning,
+    ModelError,
+    RedundantConstraintsWarning,
+)
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
+from .model.sympy_mechanics import from_lagranges_method, is_sympy_method
 from .model.values import CoordinateValues, coordinate_values
 from .options import (
     SIMULATE_PARAMETERS,
@@ -111,6 +117,10 @@ class System:
         name: str = "system",
         redundant_constraints: RedundantConstraints = "minimum-norm",
     ) -> None:
+        if is_sympy_method(coordinates):
+            raise ModelError(
+                f"System takes coordinates, not a {type(coordinates).__name__}: use "
+                "System.from_lagranges_method(method, parameters=...) for a LagrangesMethod")
         self.redundant_constraints = _check_redundant(redundant_constraints)
         self.model: Model = build_model(
             coordinates, kinetic=kinetic, potential=potential, lagrangian=lagrangian,
@@ -118,6 +128,54 @@ class System:
             velocities=velocities, name=name,
         )
         self.parameter_values = parameter_values(self.model.parameters, parameters)
+
+    @classmethod
+    def from_lagranges_method(
+        cls,
+        method: Any,
+        *,
+        parameters: Mapping[object, object] | None = None,
+        name: str = "system",
+        redundant_constraints: RedundantConstraints = "minimum-norm",
+    ) -> System:
+        """The System of a ``sympy.physics.mechanics.LagrangesMethod``.
+
+        Its Lagrangian, coordinates, holonomic constraints (kept at position level),
+        nonholonomic constraints and loads (turned into generalized forces through
+        their partial velocities). The multipliers are those SymPy's
+        ``mass_matrix_full`` / ``forcing_full`` give; its symbolic ``eom`` holds with
+        their opposites (see :mod:`dalembert.model.sympy_mechanics`). The
+        constraints are named ``holonomic_1, ...`` and ``nonholonomic_1, ...``.
+
+        Parameters
+        ----------
+        method
+            The ``LagrangesMethod`` (``form_lagranges_equations`` need not have been
+            called). A ``KanesMethod`` is refused with a message.
+        parameters
+            Numeric values of the model's other symbols.
+        name, redundant_constraints
+            As for :class:`System`.
+
+        Examples
+        --------
+        A pendulum in Cartesian coordinates with its rod as a holonomic constraint:
+
+        >>> import sympy as sp
+        >>> from sympy.physics.mechanics import LagrangesMethod, dynamicsymbols
+        >>> x, y = dynamicsymbols("x y")
+        >>> m, g, l = sp.symbols("m g l")
+        >>> L = m / 2 * (x.diff()**2 + y.diff()**2) - m * g * y
+        >>> lm = LagrangesMethod(L, [x, y], hol_coneqs=[x**2 + y**2 - l**2])
+        >>> pendulum = System.from_lagranges_method(lm, parameters={m: 1, g: 9.81, l: 1})
+        >>> pendulum.constraint_names
+        ('holonomic_1',)
+        """
+        inputs = from_lagranges_method(method)
+        return cls(inputs.coordinates, lagrangian=inputs.lagrangian,
+                   constraints=inputs.constraints,
+                   generalized_forces=inputs.generalized_forces, parameters=parameters,
+                   name=name, redundant_constraints=redundant_constraints)
 
     # -- description -----------------------------------------------------------------
     @property
