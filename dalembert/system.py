@@ -13,6 +13,7 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+import sympy as sp
 from scipy.integrate import OdeSolver
 
 from .codegen import compiled as codegen
@@ -24,6 +25,7 @@ from .errors import (
     ModelError,
     RedundantConstraintsWarning,
 )
+from .model.coordinates import t as time_symbol
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
@@ -43,6 +45,7 @@ from .solvers.initialization import InitializationReport, consistent_state
 from .solvers.integrate import IntegrationResult
 from .solvers.native.library import prepare_runtime
 from .solvers.plan import SimulationPlan, plan_simulation
+from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
 if TYPE_CHECKING:  # statics is imported on first use: it pulls in scipy.optimize
@@ -204,6 +207,13 @@ class System:
         """
         return len(self.coordinate_names) - len(self.constraint_names)
 
+    @property
+    def rheonomic(self) -> bool:
+        """Whether a constraint depends on time explicitly (a driven, prescribed motion:
+        it may leave no degree of freedom)."""
+        return any(time_symbol in sp.sympify(e).free_symbols
+                   for e in self.model.constraints.exprs)
+
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` for a message: its name, kind and equation."""
         return self.model.constraints.describe(i)
@@ -235,6 +245,98 @@ class System:
         """The compiled equations bound to parameter values."""
         p = resolve_parameters(self.parameters, self.parameter_values, parameters)
         return self.compiled.bind(p)
+
+    # -- the dynamics at one state ---------------------------------------------------
+    def accelerations(
+        self, t: float, q: CoordinateValues, qd: CoordinateValues | None = None, *,
+        parameters: Mapping[object, object] | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``qdd`` and the multipliers ``lambda`` at one state, from the KKT system.
+
+        Parameters
+        ----------
+        t
+            The time.
+        q, qd
+            Positions and velocities (dict by coordinate or sequence; left out: 0).
+            They are used as given, not projected onto the constraints.
+        parameters
+            Parameter values overriding the System's.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``qdd`` (coordinate order) and ``lambda`` (constraint order; the
+            minimum-norm ones where the constraints are dependent there).
+
+        Examples
+        --------
+        The pendulum released horizontally falls freely at first, its rod slack:
+
+        >>> from dalembert.examples import load
+        >>> qdd, lam = load("pendulum").build().accelerations(0.0, {"x": 1.0, "y": 0.0})
+        >>> [round(float(v), 12) + 0.0 for v in (*qdd, *lam)]
+        [0.0, -9.81, 0.0]
+        """
+        num = self.numeric(parameters)
+        q_, qd_ = self._state(q, qd)
+        return accelerations_at(num, float(t), q_, qd_)
+
+    def inverse_dynamics(
+        self, t: float, q: CoordinateValues, qd: CoordinateValues | None,
+        qdd: CoordinateValues, *, parameters: Mapping[object, object] | None = None,
+    ) -> InverseDynamics:
+        """The generalized forces a given motion needs at one instant.
+
+        ``M qdd - f`` is split into what the constraints supply, ``A^T lambda``, and
+        ``applied``, orthogonal to the rows of ``A``: what applied forces (actuators)
+        must add along the directions the constraints leave free. A motion fully
+        prescribed by rheonomic constraints needs none, and its multipliers are the
+        driving forces.
+
+        Parameters
+        ----------
+        t
+            The time.
+        q, qd, qdd
+            The motion (dict by coordinate or sequence; left out: 0). ``qdd`` must
+            satisfy the constraints differentiated twice.
+        parameters
+            Parameter values overriding the System's.
+
+        Returns
+        -------
+        InverseDynamics
+            ``multipliers``, ``constraint_forces``, ``applied`` and ``required``.
+
+        Raises
+        ------
+        ValueError
+            ``qdd`` violates a constraint (named).
+
+        Examples
+        --------
+        To hold the pendulum's bob still at 90 degrees takes ``m g`` upwards, all of it
+        applied (a horizontal rod cannot carry it):
+
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> need = pendulum.inverse_dynamics(0.0, {"x": 1.0, "y": 0.0}, None, {})
+        >>> [round(float(v), 12) + 0.0 for v in need.applied]
+        [0.0, 9.81]
+        """
+        num = self.numeric(parameters)
+        q_, qd_ = self._state(q, qd)
+        qdd_ = coordinate_values(qdd, self.coordinate_names, "qdd")
+        names = tuple(self.describe_constraint(i) for i in range(num.m))
+        return inverse_dynamics_at(num, float(t), q_, qd_, qdd_, names)
+
+    def _state(self, q: CoordinateValues,
+               qd: CoordinateValues | None) -> tuple[np.ndarray, np.ndarray]:
+        names = self.coordinate_names
+        q_ = coordinate_values(q, names, "q")
+        qd_ = np.zeros(len(names)) if qd is None else coordinate_values(qd, names, "qd")
+        return q_, qd_
 
     # -- simulation ------------------------------------------------------------------
     def consistent_initial_state(
@@ -307,7 +409,8 @@ class System:
         return consistent_state(num, t0, q, qd, names, labels, fixed,
                                 constraint_names=self.constraint_names,
                                 redundant_constraints=redundant_constraints,
-                                velocity_projection=velocity_projection)
+                                velocity_projection=velocity_projection,
+                                driven=self.rheonomic)
 
     def simulate(
         self,

@@ -56,6 +56,11 @@ class MultibodySystem(System):
     def parameters(self) -> tuple[sp.Symbol, ...]:
         return ()
 
+    @property
+    def rheonomic(self) -> bool:
+        """Whether a joint prescribes a motion in time (a driver)."""
+        return any(getattr(j, "rheonomic", False) for j in self._multibody.joints)
+
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` by name and the joint or body it belongs to (no symbolic
         model is built for a message: for a large mechanism that takes long)."""

@@ -116,6 +116,7 @@ def consistent_state(
     constraint_names: Sequence[str] | None = None,
     redundant_constraints: RedundantConstraints = "minimum-norm",
     velocity_projection: VelocityProjection = "kinetic-energy",
+    driven: bool = False,
 ) -> InitializationReport:
     """Project ``(q0, qd0)`` onto the constraints and check the KKT matrix there.
 
@@ -129,7 +130,8 @@ def consistent_state(
     positions. Dependent constraints raise a :class:`ConstraintError` naming them
     with ``redundant_constraints="error"``; with ``"minimum-norm"`` they are
     recorded in the report (``report.rank``). Constraints that leave no degree of
-    freedom always raise.
+    freedom raise, unless they are ``driven`` (some depend on time: a prescribed
+    motion, whose multipliers are the driving forces).
     """
     free = free_mask(fixed, names)
     # Large models with every coordinate free are projected with the sparse solver.
@@ -139,7 +141,7 @@ def consistent_state(
         q = _project_positions(num, t0, q0, free, sparse)
         if num.m:
             rank = _rank_at(num, t0, q, names, constraint_labels, constraint_names,
-                            redundant_constraints)
+                            redundant_constraints, driven)
         kept = None if rank is None else rank.kept
         _check_kkt_at(num, t0, q, qd0, kept, names)  # before the impact's KKT solve
         impulse, lost = None, 0.0
@@ -291,17 +293,20 @@ def _check_kkt_at(num: NumericModel, t0: float, q: np.ndarray, qd: np.ndarray,
 def _rank_at(
     num: NumericModel, t0: float, q: np.ndarray, names: Sequence[str],
     labels: Sequence[str], constraint_names: Sequence[str] | None, mode: str,
+    driven: bool = False,
 ) -> ConstraintRank:
-    """Measure the rank of ``A`` once; refuse no freedom, and dependence if asked to."""
+    """Measure the rank of ``A`` once; refuse no freedom (unless the constraints are
+    driven: the motion is then prescribed), and dependence if asked to."""
     Av, _ = num.velocity_sparse(t0, q)
     pat = num.pattern
     label = labels if constraint_names is None else constraint_names
     rank = sparse_constraint_rank(pat.A_rows, pat.A_cols, Av, (num.m, num.n), label)
-    if rank.degrees_of_freedom == 0:
+    if rank.degrees_of_freedom == 0 and not driven:
         raise ConstraintError(
             f"the constraints leave no degree of freedom at the initial state: rank(A) = "
             f"{rank.rank} independent constraints ({num.m} given) on {num.n} coordinates "
-            f"({', '.join(names)}); remove constraints or add coordinates"
+            f"({', '.join(names)}); remove constraints or add coordinates (a motion "
+            "prescribed by constraints that depend on time is fine)"
         )
     if rank.dependent and mode == "error":
         raise dependent_error([labels[i] for i in rank.dependent], "at the initial state")
