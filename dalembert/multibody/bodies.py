@@ -32,15 +32,17 @@ from collections.abc import Sequence
 
 import numpy as np
 import sympy as sp
+from numpy.typing import ArrayLike
 from sympy.physics.vector import dynamicsymbols
 
 from ..errors import ModelError
 from ..model.constraints import Holonomic
 from ..model.coordinates import t
 from .rotations import E_matrix, dot, rotation_matrix, times_vector
+from .types import ExprVector, FloatArray
 
 
-def _vector(v: object, what: str) -> sp.Matrix:
+def _vector(v: ExprVector, what: str) -> sp.Matrix:
     """A 3-vector as a SymPy column (numbers or expressions)."""
     try:
         comps = list(v)
@@ -60,14 +62,25 @@ def _check_name(name: object) -> str:
 
 
 class Body:
-    """Common interface: coordinates, point positions, orientation, energy."""
+    """Common interface: coordinates, point positions, orientation, energy.
+
+    The kinds of body are :class:`Ground`, :class:`Particle`, :class:`RigidBody` and
+    :class:`PlanarBody`; :data:`MovingBody` and :data:`TurningBody` name the unions
+    code narrows to with ``isinstance`` (what moves; what turns and has an inertia).
+    """
 
     name: str
     mass: float
+    #: The body's coordinates, SymPy ``dynamicsymbols`` (none for the ground).
     coordinates: tuple[sp.Function, ...] = ()
     has_orientation = True
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+    @property
+    def center(self) -> sp.Matrix:
+        """World position of the mass center as SymPy expressions (a moving body's)."""
+        raise NotImplementedError
+
+    def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
         """World position of a body-fixed point (given in the body frame):
         ``center + R point`` for a body with an orientation."""
         s = _vector(point, f"a point of body {self.name!r}")
@@ -86,25 +99,25 @@ class Body:
         return []
 
     # -- numbers: rows of coordinate values ``c`` (k, len(coordinates)) -----------------
-    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` (body -> world)."""
         c = np.atleast_2d(c)
         return c[:, :3], np.broadcast_to(np.eye(3), (len(c), 3, 3)).copy()
 
-    def center_velocity(self, cd: np.ndarray) -> np.ndarray:
+    def center_velocity(self, cd: FloatArray) -> FloatArray:
         """Mass-center velocities ``(k, 3)`` (world) from the coordinate rates."""
         return np.atleast_2d(cd)[:, :3]
 
-    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+    def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
         """Angular velocities ``(k, 3)`` in body components."""
         return np.zeros((len(np.atleast_2d(c)), 3))
 
-    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         """The torque about the mass center (world) whose virtual work on this body's
         coordinates is the generalized force ``Q`` (k, len(coordinates))."""
         return np.zeros((len(np.atleast_2d(c)), 3))
 
-    def center_force(self, Q: np.ndarray) -> np.ndarray:
+    def center_force(self, Q: FloatArray) -> FloatArray:
         """The force (world) of a generalized force ``Q`` on this body's coordinates."""
         return np.atleast_2d(Q)[:, :3]
 
@@ -127,7 +140,7 @@ class Ground(Body):
         self.name = _check_name(name)
         self.mass = 0.0
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+    def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
         return _vector(point, f"a point of {self.name!r}")
 
     def rotation(self) -> sp.Matrix:
@@ -153,7 +166,7 @@ class Particle(Body):
     def center(self) -> sp.Matrix:
         return sp.Matrix(self.coordinates)
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+    def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
         s = _vector(point, f"a point of particle {self.name!r}")
         if any(c != 0 for c in s):
             raise ModelError(
@@ -188,7 +201,7 @@ class RigidBody(Body):
     ['box_unit_quaternion']
     """
 
-    def __init__(self, name: str, mass: float, inertia: object) -> None:
+    def __init__(self, name: str, mass: float, inertia: ArrayLike) -> None:
         self.name = _check_name(name)
         self.mass = _positive_mass(mass, name)
         self.inertia = _inertia_tensor(inertia, name)
@@ -214,20 +227,20 @@ class RigidBody(Body):
     def kinetic_energy(self) -> sp.Expr:
         v = self.center.diff(t)
         w = self.angular_velocity()
-        inertia = sp.Matrix(3, 3, lambda i, j: _number(self.inertia[i, j]))
+        inertia = sp.Matrix(3, 3, lambda i, j: _number(float(self.inertia[i, j])))
         rot = dot(w, times_vector(inertia, w))
         # expanded: a sum of monomials differentiates much faster than nested products
         return sp.expand(_number(self.mass) / 2 * v.dot(v) + rot / 2)
 
-    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = np.atleast_2d(c)
         return c[:, :3], rotation_matrix(c[:, 3:])
 
-    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+    def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
         b, bd = np.atleast_2d(c)[:, 3:], np.atleast_2d(cd)[:, 3:]
         return 2 * np.einsum("kij,kj->ki", E_matrix(b), bd)
 
-    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         # Q_b = 2 E^T tau_body, and E E^T = I: tau_body = 1/2 E Q_b
         b, Qb = np.atleast_2d(c)[:, 3:], np.atleast_2d(Q)[:, 3:]
         tau_body = 0.5 * np.einsum("kij,kj->ki", E_matrix(b), Qb)
@@ -290,7 +303,7 @@ class PlanarBody(Body):
         return (_number(self.mass) / 2 * (x**2 + y**2)
                 + _number(self.moment) / 2 * theta**2)
 
-    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = np.atleast_2d(c)
         x = np.column_stack([c[:, 0], c[:, 1], np.zeros(len(c))])
         cos, sin = np.cos(c[:, 2]), np.sin(c[:, 2])
@@ -298,28 +311,34 @@ class PlanarBody(Body):
         R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = cos, -sin, sin, cos, 1.0
         return x, R
 
-    def center_velocity(self, cd: np.ndarray) -> np.ndarray:
+    def center_velocity(self, cd: FloatArray) -> FloatArray:
         cd = np.atleast_2d(cd)
         return np.column_stack([cd[:, 0], cd[:, 1], np.zeros(len(cd))])
 
-    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+    def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
         return _along_z(np.atleast_2d(cd)[:, 2])
 
-    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         return _along_z(np.atleast_2d(Q)[:, 2])
 
-    def center_force(self, Q: np.ndarray) -> np.ndarray:
+    def center_force(self, Q: FloatArray) -> FloatArray:
         Q = np.atleast_2d(Q)
         return np.column_stack([Q[:, 0], Q[:, 1], np.zeros(len(Q))])
 
 
-def _along_z(values: np.ndarray) -> np.ndarray:
+#: A body that moves (not the ground): what a ``Multibody``'s ``bodies`` hold.
+MovingBody = Particle | RigidBody | PlanarBody
+#: A body that turns: it has an orientation, an inertia tensor and a body frame.
+TurningBody = RigidBody | PlanarBody
+
+
+def _along_z(values: FloatArray) -> FloatArray:
     out = np.zeros((len(values), 3))
     out[:, 2] = values
     return out
 
 
-def _positive_moment(value: object, name: str) -> float:
+def _positive_moment(value: float, name: str) -> float:
     try:
         moment = float(value)
     except (TypeError, ValueError) as exc:
@@ -336,7 +355,7 @@ def _number(value: float) -> sp.Expr:
     return sp.S.Zero if value == 0 else sp.Float(value)
 
 
-def _positive_mass(mass: object, name: str) -> float:
+def _positive_mass(mass: float, name: str) -> float:
     try:
         value = float(mass)
     except (TypeError, ValueError) as exc:
@@ -346,7 +365,7 @@ def _positive_mass(mass: object, name: str) -> float:
     return value
 
 
-def _inertia_tensor(inertia: object, name: str) -> np.ndarray:
+def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
     try:
         I = np.asarray(inertia, dtype=float)
     except (TypeError, ValueError) as exc:

@@ -9,13 +9,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import cached_property
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 import sympy as sp
 
 from ..errors import ConstraintError, InitialConditionError, ModelError
+from ..model.constraints import Holonomic, Pfaffian
+from ..model.forces import PointForce
+from ..model.values import CoordinateValues
 from ..system import System
-from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
+from ..trajectory import Trajectory
+from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .initial_state import body_state
@@ -23,6 +28,9 @@ from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
 from .parts import gravity_potential
 from .system import MultibodySystem
+from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
+
+_V = TypeVar("_V")
 
 
 class Multibody:
@@ -53,9 +61,9 @@ class Multibody:
 
     def __init__(
         self,
-        bodies: Sequence[Body],
+        bodies: Sequence[MovingBody],
         joints: Sequence[Joint] = (),
-        gravity: Sequence[float] = (0.0, 0.0, -9.81),
+        gravity: Vector = (0.0, 0.0, -9.81),
         forces: Sequence[Force] = (),
         torques: Sequence[Torque] = (),
         springs: Sequence[SpringDamper] = (),
@@ -76,7 +84,7 @@ class Multibody:
             raise ModelError("a Multibody needs at least one moving body")
         names = set()
         for body in self.bodies:
-            if not isinstance(body, (Particle, RigidBody, PlanarBody)):
+            if not isinstance(body, MovingBody):
                 raise ModelError("bodies must be Particle, RigidBody or PlanarBody objects, "
                                  f"got {body!r}")
             if body.name in names:
@@ -91,7 +99,8 @@ class Multibody:
             self._check_members(j.bodies, f"joint {j.name!r}")
         for s in self.springs:
             self._check_members(s.bodies, f"spring {s.name!r}")
-        for load in (*self.forces, *self.torques):
+        loads: tuple[Force | Torque, ...] = (*self.forces, *self.torques)
+        for load in loads:
             self._check_members((load.body,), load.name)
         for j in self.joints:
             check_joint_points(j)
@@ -119,16 +128,20 @@ class Multibody:
     # -- the System ------------------------------------------------------------------
     @property
     def coordinates(self) -> list[sp.Function]:
+        """Every body's coordinates, in the order of ``bodies``."""
         return [c for b in self.bodies for c in b.coordinates]
 
-    def constraints(self) -> list:
-        body_rows = [c for b in self.bodies for c in b.constraints()]
+    def constraints(self) -> list[Holonomic | Pfaffian]:
+        """The bodies' constraints (unit quaternions), then the joints'."""
+        body_rows: list[Holonomic | Pfaffian] = [c for b in self.bodies for c in b.constraints()]
         return body_rows + [c for j in self.joints for c in j.constraints()]
 
     def kinetic_energy(self) -> sp.Expr:
+        """``T``: the sum of the bodies' kinetic energies."""
         return sp.Add(*(b.kinetic_energy() for b in self.bodies))
 
     def potential_energy(self) -> sp.Expr:
+        """``V``: gravity ``-sum m g . x`` and the springs' ``1/2 k (L - L0)^2``."""
         V = sp.Add(*(gravity_potential(b, self.gravity) for b in self.bodies))
         return V + sp.Add(*(s.potential() for s in self.springs))
 
@@ -140,7 +153,7 @@ class Multibody:
                 Q[coord] = Q.get(coord, sp.S.Zero) + value
         return Q
 
-    def point_forces(self) -> list:
+    def point_forces(self) -> list[PointForce]:
         """The forces and the spring dampers as :class:`~dalembert.PointForce` objects."""
         pfs = [f.point_force() for f in self.forces]
         return pfs + [pf for s in self.springs for pf in s.point_forces()]
@@ -154,7 +167,7 @@ class Multibody:
         """
         return MultibodySystem(self)
 
-    def body(self, name: str) -> Body:
+    def body(self, name: str) -> MovingBody:
         """The body called ``name``."""
         for b in self.bodies:
             if b.name == name:
@@ -169,20 +182,24 @@ class Multibody:
         raise KeyError(f"no joint {name!r}; the joints are "
                        f"{', '.join(j.name for j in self.joints) or 'none'}")
 
-    def _resolve(self, key: object) -> Body:
+    def _resolve(self, key: Body | str) -> Body:
         if isinstance(key, Body):
             self._check_members((key,), "initial state")
             return key
         return self.body(str(key))
 
+    def _by_name(self, values: ByBody[_V] | None) -> dict[str, _V]:
+        """``values`` keyed by body name (a body not in this system raises)."""
+        return {self._resolve(key).name: value for key, value in (values or {}).items()}
+
     # -- initial state ---------------------------------------------------------------
     def initial_state(
         self,
-        positions: Mapping[object, Sequence[float]] | None = None,
-        orientations: Mapping[object, object] | None = None,
-        velocities: Mapping[object, Sequence[float]] | None = None,
-        angular_velocities: Mapping[object, Sequence[float]] | None = None,
-        angular_velocity_frame: str = "world",
+        positions: ByBody[Vector] | None = None,
+        orientations: ByBody[Orientation] | None = None,
+        velocities: ByBody[Vector] | None = None,
+        angular_velocities: ByBody[Vector | float] | None = None,
+        angular_velocity_frame: Frame = "world",
     ) -> tuple[dict[str, float], dict[str, float]]:
         """``(q0, qd0)`` dicts for :meth:`dalembert.System.simulate`.
 
@@ -197,22 +214,22 @@ class Multibody:
         """
         if angular_velocity_frame not in ("world", "body"):
             raise ValueError("angular_velocity_frame must be 'world' or 'body'")
-        given: dict[str, dict[str, object]] = {b.name: {} for b in self.bodies}
-        for label, values in (("position", positions), ("orientation", orientations),
-                              ("velocity", velocities), ("angular_velocity", angular_velocities)):
-            for key, value in (values or {}).items():
-                given[self._resolve(key).name][label] = value
+        x, b, v, w = (self._by_name(positions), self._by_name(orientations),
+                      self._by_name(velocities), self._by_name(angular_velocities))
         q0: dict[str, float] = {}
         qd0: dict[str, float] = {}
         for body in self.bodies:
-            q, qd = body_state(body, angular_velocity_frame, **given[body.name])
+            name = body.name
+            q, qd = body_state(body, angular_velocity_frame, x.get(name), b.get(name),
+                               v.get(name), w.get(name))
             q0.update(zip(_names(body), map(float, q)))
             qd0.update(zip(_names(body), map(float, qd)))
         check_initial_joint_points(self, q0)
         return q0, qd0
 
     # -- outputs (see dalembert.multibody.outputs) -----------------------------------
-    def simulate(self, t_span, q0, qd0=None, **kwargs):
+    def simulate(self, t_span: Sequence[float], q0: CoordinateValues,
+                 qd0: CoordinateValues | None = None, **kwargs: Any) -> Trajectory:
         """``self.system.simulate(...)``, with errors about immobility naming the joints.
 
         Joints that leave no degree of freedom at the initial state raise a
@@ -225,12 +242,14 @@ class Multibody:
             self._explain_immobility(q0, t_span, kwargs.get("parameters"), exc)
             raise
 
-    def stick_figure(self, q: Sequence[float]) -> list[np.ndarray]:
+    def stick_figure(self, q: Numbers) -> list[FloatArray]:
         """Polylines ``(k, 3)`` drawing the system at ``q`` (see
         :mod:`dalembert.multibody.drawing`); used by :func:`dalembert.plotting.animate`."""
         return stick_figure(self, np.asarray(q, dtype=float))
 
-    def _explain_immobility(self, q0, t_span, parameters, exc: Exception) -> None:
+    def _explain_immobility(self, q0: CoordinateValues, t_span: Sequence[float],
+                            parameters: Mapping[object, object] | None,
+                            exc: Exception) -> None:
         """Raise the joint-naming error if the failure was a mechanism without freedom."""
         try:
             t0 = float(t_span[0])
@@ -263,7 +282,7 @@ def _names(body: Body) -> list[str]:
     return [c.name for c in body.coordinates]
 
 
-def _gravity(g: Sequence[float]) -> np.ndarray:
+def _gravity(g: Vector) -> FloatArray:
     arr = np.asarray(g, dtype=float)
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise ModelError(f"gravity must be 3 finite numbers (world components), got {g!r}")
@@ -275,8 +294,8 @@ def chain(
     length: float,
     mass: float,
     radius: float,
-    joint: str = "spherical",
-    gravity: Sequence[float] | None = None,
+    joint: Literal["spherical", "revolute"] = "spherical",
+    gravity: Vector | None = None,
     planar: bool = False,
 ) -> Multibody:
     """An ``n``-link chain of uniform cylinders hung from the origin.
@@ -307,6 +326,7 @@ def chain(
     if not (length > 0 and radius > 0):
         raise ModelError(f"length and radius must be positive, got {length}, {radius}")
     transverse = mass * (3 * radius**2 + length**2) / 12
+    links: list[MovingBody]
     if planar:
         links = [PlanarBody(f"link{k + 1}", mass, transverse) for k in range(int(n))]
         axis, down, hinge = 1, (0.0, -9.81, 0.0), (0, 0, 1)
@@ -316,8 +336,8 @@ def chain(
         axis, down, hinge = 2, (0.0, 0.0, -9.81), (0, 1, 0)
     top, bottom = np.zeros(3), np.zeros(3)
     top[axis], bottom[axis] = length / 2, -length / 2
-    joints = []
-    parents = [Ground(), *links[:-1]]
+    joints: list[Joint] = []
+    parents: list[Body] = [Ground(), *links[:-1]]
     for k, (parent, child) in enumerate(zip(parents, links)):
         pa = np.zeros(3) if k == 0 else bottom
         if joint == "spherical":

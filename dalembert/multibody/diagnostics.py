@@ -31,9 +31,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConstraintError, JointPointWarning
+from ..model.values import CoordinateValues, coordinate_values
 from ..numerics.rank import constraint_rank
-from .bodies import Body, Ground, PlanarBody, RigidBody
+from .bodies import Body, Ground, TurningBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
+from .types import FloatArray
 
 if TYPE_CHECKING:
     from .builder import Multibody
@@ -44,9 +46,10 @@ FAR_FACTOR = 10.0
 _COINCIDENT = (Spherical, Universal, Revolute, Fixed)
 
 
-def radius_of_gyration(body: RigidBody | PlanarBody) -> float:
+def radius_of_gyration(body: TurningBody) -> float:
     """``sqrt(I_max / m)``: the body's size as seen by its inertia.
 
+    >>> from dalembert.multibody import RigidBody
     >>> radius_of_gyration(RigidBody("b", 2.0, (0.02, 0.08, 0.08)))
     0.2
     """
@@ -57,7 +60,7 @@ def check_joint_points(joint: Joint) -> None:
     """Warn when a body-frame joint point is implausibly far from the mass center."""
     for side, body, point in (("a", joint.body_a, joint.point_a),
                               ("b", joint.body_b, joint.point_b)):
-        if isinstance(body, Ground) or not body.has_orientation:
+        if not isinstance(body, TurningBody):
             continue
         size = radius_of_gyration(body)
         dist = float(np.linalg.norm(point))
@@ -72,12 +75,12 @@ def check_joint_points(joint: Joint) -> None:
             )
 
 
-def _pose(q0: Mapping[str, float], body: Body) -> tuple[np.ndarray, np.ndarray]:
+def _pose(q0: Mapping[str, float], body: Body) -> tuple[FloatArray, FloatArray]:
     x, R = body.pose(np.array([q0[c.name] for c in body.coordinates]))
     return x[0], R[0]
 
 
-def _world(q0: Mapping[str, float], body: Body, point: np.ndarray) -> np.ndarray:
+def _world(q0: Mapping[str, float], body: Body, point: FloatArray) -> FloatArray:
     if isinstance(body, Ground):
         return point
     x, R = _pose(q0, body)
@@ -91,12 +94,12 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
             continue
         pa, pb = _world(q0, j.body_a, j.point_a), _world(q0, j.body_b, j.point_b)
         gap = float(np.linalg.norm(pb - pa))
-        scale = max(np.linalg.norm(pa), np.linalg.norm(pb), 1e-3)
+        scale = max(float(np.linalg.norm(pa)), float(np.linalg.norm(pb)), 1e-3)
         if gap <= 1e-6 * scale:
             continue
         for side, body, point, other in (("a", j.body_a, j.point_a, pb),
                                          ("b", j.body_b, j.point_b, pa)):
-            if not body.has_orientation or np.linalg.norm(point - other) > 1e-9 * scale:
+            if not isinstance(body, TurningBody) or np.linalg.norm(point - other) > 1e-9 * scale:
                 continue
             x, R = _pose(q0, body)
             fixed = R.T @ (point - x)
@@ -109,11 +112,29 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
             )
 
 
-def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
-                   parameters: Mapping | None = None, cause: BaseException | None = None) -> int:
+def check_mobility(mb: Multibody, q0: CoordinateValues, t0: float = 0.0,
+                   parameters: Mapping[object, object] | None = None,
+                   cause: BaseException | None = None) -> int:
     """Degrees of freedom ``n - rank(A)`` at ``q0``; raise naming the joints when none.
 
-    ``q0`` is a dict by coordinate name or an array in coordinate order.
+    Parameters
+    ----------
+    mb
+        The mechanism.
+    q0
+        The configuration: a dict by coordinate (a coordinate left out is 0) or a
+        sequence in coordinate order.
+    t0
+        The time (for constraints that depend on it).
+    parameters
+        Parameter values overriding the system's.
+    cause
+        An exception to chain the :class:`~dalembert.ConstraintError` to.
+
+    Returns
+    -------
+    int
+        ``n - rank(A)``, when positive.
 
     >>> from dalembert.multibody import chain
     >>> mb = chain(1, 1.0, 1.0, 0.1)
@@ -122,10 +143,7 @@ def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
     """
     system = mb.system
     names = system.coordinate_names
-    if isinstance(q0, Mapping):
-        q = np.array([float(q0.get(n, 0.0)) for n in names])
-    else:
-        q = np.asarray(q0, dtype=float)
+    q = coordinate_values(q0, names, "q0")
     A, _ = system.numeric(parameters).velocity_constraint(t0, q)
     rank = constraint_rank(A, system.constraint_names, len(names))
     if rank.degrees_of_freedom > 0:

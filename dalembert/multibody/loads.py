@@ -13,20 +13,23 @@ derivatives and the time ``dalembert.t``.
 
 from __future__ import annotations
 
+from typing import get_args
+
 import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
 from ..model.coordinates import t
 from ..model.forces import PointForce
-from .bodies import Body, PlanarBody, RigidBody, _vector
+from .bodies import Body, Particle, PlanarBody, TurningBody, _vector
 from .joints import _point
 from .rotations import E_matrix, G_matrix
+from .types import ExprVector, Frame, Vector
 
-FRAMES = ("world", "body")
+FRAMES: tuple[Frame, ...] = get_args(Frame)
 
 
-def _frame(frame: str, what: str) -> str:
+def _frame(frame: Frame, what: str) -> Frame:
     if frame not in FRAMES:
         raise ModelError(f"{what}: frame must be 'world' or 'body', got {frame!r}")
     return frame
@@ -39,14 +42,14 @@ class Force:
     components (a follower force that turns with the body).
     """
 
-    def __init__(self, body: Body, force: object, point: object = (0, 0, 0),
-                 frame: str = "world", name: str | None = None) -> None:
+    def __init__(self, body: Body, force: ExprVector, point: Vector = (0, 0, 0),
+                 frame: Frame = "world", name: str | None = None) -> None:
         self.body = body
         self.name = name or f"force_on_{getattr(body, 'name', '?')}"
         self.force = _vector(force, f"{self.name}: force")
         self.point = _point(point, f"{self.name}: point")
         self.frame = _frame(frame, self.name)
-        if frame == "body" and not body.has_orientation:
+        if frame == "body" and isinstance(body, Particle):
             raise ModelError(f"{self.name}: {body.name!r} is a particle, it has no body frame")
 
     def point_force(self) -> PointForce:
@@ -62,13 +65,13 @@ class Torque:
     body cannot turn about ``x`` or ``y``), so the torque must be along ``z``.
     """
 
-    def __init__(self, body: Body, torque: object, frame: str = "world",
+    def __init__(self, body: TurningBody, torque: ExprVector, frame: Frame = "world",
                  name: str | None = None) -> None:
-        self.body = body
         self.name = name or f"torque_on_{getattr(body, 'name', '?')}"
-        if not isinstance(body, (RigidBody, PlanarBody)):
+        if not isinstance(body, TurningBody):
             raise ModelError(f"{self.name}: a torque needs a RigidBody or PlanarBody, got "
                              f"{body!r}")
+        self.body = body
         self.torque = _vector(torque, f"{self.name}: torque")
         self.frame = _frame(frame, self.name)
         if isinstance(body, PlanarBody) and any(c != 0 for c in self.torque[:2]):
@@ -92,7 +95,7 @@ class SpringDamper:
 
     def __init__(self, name: str, body_a: Body, body_b: Body, stiffness: float,
                  rest_length: float = 0.0, damping: float = 0.0,
-                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+                 point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:
         self.name = name
         self.body_a, self.body_b = body_a, body_b
         self.stiffness = _nonnegative(stiffness, f"spring {name!r}: stiffness")
@@ -129,7 +132,7 @@ class SpringDamper:
                 PointForce(force=list(-F_b), point=list(ra), name=f"{self.name}_damper_a")]
 
 
-def _nonnegative(value: object, what: str) -> float:
+def _nonnegative(value: float, what: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:

@@ -17,20 +17,21 @@ vanishes for a spherical joint. For a
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..trajectory import Trajectory
-from .bodies import Body, Ground
+from .bodies import Body, Ground, TurningBody
 from .builder import Multibody
 from .joints import Joint
 from .rolling import Rolling
 from .rotations import euler_from_matrix
+from .types import FloatArray, Frame, Vector
 
 
-def _columns(traj: Trajectory, body: Body, suffix: str = "") -> np.ndarray:
+def _columns(traj: Trajectory, body: Body, suffix: str = "") -> FloatArray:
     return np.column_stack([traj[f"{c.name}{suffix}"] for c in body.coordinates])
 
 
@@ -38,28 +39,28 @@ def _body(mb: Multibody, body: Body | str) -> Body:
     return mb.body(body) if isinstance(body, str) else body
 
 
-def _pose(traj: Trajectory, body: Body) -> tuple[np.ndarray, np.ndarray]:
+def _pose(traj: Trajectory, body: Body) -> tuple[FloatArray, FloatArray]:
     return body.pose(_columns(traj, body))
 
 
-def _velocity(traj: Trajectory, body: Body) -> np.ndarray:
+def _velocity(traj: Trajectory, body: Body) -> FloatArray:
     return body.center_velocity(_columns(traj, body, "_dot"))
 
 
-def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> np.ndarray:
+def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> FloatArray:
     """``R`` (body -> world) at every time, shape ``(k, 3, 3)``; identity for particles."""
     return _pose(traj, _body(mb, body))[1]
 
 
 def euler_angles(mb: Multibody, traj: Trajectory, body: Body | str,
-                 sequence: str = "ZYX") -> np.ndarray:
+                 sequence: str = "ZYX") -> FloatArray:
     """Euler angles of a body along the trajectory, shape ``(k, 3)`` (see
     :func:`~dalembert.multibody.rotations.euler_from_matrix`)."""
     return euler_from_matrix(rotation_matrices(mb, traj, body), sequence)
 
 
 def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
-                    point: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+                    point: Vector = (0.0, 0.0, 0.0)) -> FloatArray:
     """World positions of a body-fixed point (body frame), shape ``(k, 3)``."""
     body = _body(mb, body)
     if isinstance(body, Ground):
@@ -69,7 +70,7 @@ def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
 
 
 def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
-                       frame: str = "world") -> np.ndarray:
+                       frame: Frame = "world") -> FloatArray:
     """Angular velocity in body (``2 E(b) bdot`` for Euler parameters) or world
     components, shape ``(k, 3)``; zero for particles."""
     body = _body(mb, body)
@@ -82,38 +83,41 @@ def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
     return np.einsum("kij,kj->ki", body.pose(c)[1], w)
 
 
-def linear_momentum(mb: Multibody, traj: Trajectory) -> np.ndarray:
+def linear_momentum(mb: Multibody, traj: Trajectory) -> FloatArray:
     """Total ``sum m v`` (world), shape ``(k, 3)``."""
-    return sum(b.mass * _velocity(traj, b) for b in mb.bodies)
+    P = np.zeros((len(traj), 3))
+    for b in mb.bodies:
+        P += b.mass * _velocity(traj, b)
+    return P
 
 
 def angular_momentum(mb: Multibody, traj: Trajectory,
-                     about: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+                     about: Vector = (0.0, 0.0, 0.0)) -> FloatArray:
     """Total angular momentum about a fixed world point, shape ``(k, 3)``:
     ``sum (x - about) x m v + R I w_body``."""
     H = np.zeros((len(traj), 3))
     for b in mb.bodies:
         x, R = _pose(traj, b)
         H += np.cross(x - np.asarray(about, dtype=float), b.mass * _velocity(traj, b))
-        if b.has_orientation:
+        if isinstance(b, TurningBody):
             w = angular_velocities(mb, traj, b, "body")
             H += np.einsum("kij,jl,kl->ki", R, b.inertia, w)
     return H
 
 
-def kinetic_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
+def kinetic_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
     """``sum 1/2 m v.v + 1/2 w.I w``."""
     T = np.zeros(len(traj))
     for b in mb.bodies:
         v = _velocity(traj, b)
         T += 0.5 * b.mass * np.einsum("ki,ki->k", v, v)
-        if b.has_orientation:
+        if isinstance(b, TurningBody):
             w = angular_velocities(mb, traj, b, "body")
             T += 0.5 * np.einsum("ki,ij,kj->k", w, b.inertia, w)
     return T
 
 
-def potential_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
+def potential_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
     """Gravity ``-sum m g.x`` plus the springs' ``1/2 k (L - L0)^2``."""
     V = np.zeros(len(traj))
     for b in mb.bodies:
@@ -125,7 +129,7 @@ def potential_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
     return V
 
 
-def energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
+def energy(mb: Multibody, traj: Trajectory) -> FloatArray:
     """Total mechanical energy ``T + V`` along the trajectory."""
     return kinetic_energy(mb, traj) + potential_energy(mb, traj)
 
@@ -141,16 +145,16 @@ class JointReaction:
 
     joint: str
     body: str
-    point_world: np.ndarray
-    force_world: np.ndarray
-    torque_world: np.ndarray
-    torque_cm_world: np.ndarray
-    force_body: np.ndarray
-    torque_body: np.ndarray
+    point_world: FloatArray
+    force_world: FloatArray
+    torque_world: FloatArray
+    torque_cm_world: FloatArray
+    force_body: FloatArray
+    torque_body: FloatArray
 
 
 def joint_reactions(
-    mb: Multibody, traj: Trajectory, parameters: dict | None = None
+    mb: Multibody, traj: Trajectory, parameters: Mapping[object, object] | None = None
 ) -> dict[str, dict[str, JointReaction]]:
     """Constraint force and torque of every joint on each of its two bodies.
 
@@ -190,7 +194,7 @@ def joint_reactions(
 
 
 def _application_points(mb: Multibody, traj: Trajectory, joint: Joint, body: Body,
-                        point: np.ndarray) -> np.ndarray:
+                        point: FloatArray) -> FloatArray:
     """Where the joint acts on ``body``: its joint point, or a rolling body's contact point."""
     if isinstance(joint, Rolling):
         return joint.contact_points(*_pose(traj, body))
@@ -198,7 +202,7 @@ def _application_points(mb: Multibody, traj: Trajectory, joint: Joint, body: Bod
 
 
 def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
-              P: np.ndarray, Q: np.ndarray) -> JointReaction:
+              P: FloatArray, Q: FloatArray) -> JointReaction:
     c = _columns(traj, body)
     x, R = body.pose(c)
     F = body.center_force(Q)
@@ -211,7 +215,7 @@ def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
     )
 
 
-def _ground_reaction(joint: str, ground: Ground, point: np.ndarray,
+def _ground_reaction(joint: str, ground: Ground, point: FloatArray,
                      other: JointReaction) -> JointReaction:
     P = np.broadcast_to(np.asarray(point, dtype=float), other.force_world.shape).copy()
     F = -other.force_world

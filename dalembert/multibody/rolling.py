@@ -46,9 +46,10 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from ..model.coordinates import t
-from .bodies import Body, Ground, RigidBody
+from .bodies import Ground, RigidBody
 from .joints import Joint, _sym
 from .rotations import G_matrix
+from .types import FloatArray, Vector
 
 
 class Rolling(Joint):
@@ -80,10 +81,13 @@ class Rolling(Joint):
     """
 
     n_equations = 3
+    #: The plane (its side ``a``) and the rolling body (side ``b``).
+    body_a: Ground
+    body_b: RigidBody
 
-    def __init__(self, name: str, body: Body, radius: float, axis: object = None,
-                 normal: object = (0, 0, 1), point: object = (0, 0, 0),
-                 tangent: object = None, ground: Ground | None = None) -> None:
+    def __init__(self, name: str, body: RigidBody, radius: float, axis: Vector | None = None,
+                 normal: Vector = (0, 0, 1), point: Vector = (0, 0, 0),
+                 tangent: Vector | None = None, ground: Ground | None = None) -> None:
         if not isinstance(body, RigidBody):
             raise ModelError(f"joint {name!r} (Rolling): the rolling body must be a RigidBody, "
                              f"got {body!r}; a particle has no rotation to roll with")
@@ -97,11 +101,11 @@ class Rolling(Joint):
                          axis_b=normal if axis is None else axis, ref_a=tangent)
 
     @property
-    def normal(self) -> np.ndarray:
+    def normal(self) -> FloatArray:
         return self.axis_a
 
     @property
-    def tangents(self) -> tuple[np.ndarray, np.ndarray]:
+    def tangents(self) -> tuple[FloatArray, FloatArray]:
         return self.ref_a, np.cross(self.axis_a, self.ref_a)
 
     # -- symbolic ----------------------------------------------------------------------
@@ -130,7 +134,7 @@ class Rolling(Joint):
                 Pfaffian(slip2, name=f"{self.name}_3")]
 
     # -- numeric -----------------------------------------------------------------------
-    def contact_points(self, x: np.ndarray, R: np.ndarray) -> np.ndarray:
+    def contact_points(self, x: FloatArray, R: FloatArray) -> FloatArray:
         """World contact points for centers ``x`` ``(k, 3)`` and rotations ``R`` ``(k, 3, 3)``."""
         n = self.normal
         if not self.is_disk:
