@@ -73,6 +73,8 @@ class Body:
     mass: float
     #: The body's coordinates, SymPy ``dynamicsymbols`` (none for the ground).
     coordinates: tuple[sp.Function, ...] = ()
+    #: False for a particle. Kept for existing callers; the package itself tells the
+    #: kinds apart with ``isinstance`` (``TurningBody``), which a type checker follows.
     has_orientation = True
 
     @property
@@ -81,8 +83,20 @@ class Body:
         raise NotImplementedError
 
     def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
-        """World position of a body-fixed point (given in the body frame):
-        ``center + R point`` for a body with an orientation."""
+        """World position of a body-fixed point: ``center + R point``.
+
+        Parameters
+        ----------
+        point
+            The point in the body frame, relative to the mass center (3 numbers or
+            SymPy expressions); the default is the mass center.
+
+        Examples
+        --------
+        >>> link = PlanarBody("link", 1.0, 0.1)
+        >>> link.position((0.5, 0, 0)).T
+        Matrix([[link_x(t) + 0.5*cos(link_theta(t)), link_y(t) + 0.5*sin(link_theta(t)), 0]])
+        """
         s = _vector(point, f"a point of body {self.name!r}")
         if all(c == 0 for c in s):
             return self.center
@@ -93,36 +107,108 @@ class Body:
         raise NotImplementedError
 
     def kinetic_energy(self) -> sp.Expr:
+        """``T`` of the body in its coordinates and their rates (SymPy)."""
         return sp.S.Zero
 
     def constraints(self) -> list[Holonomic]:
+        """The body's own constraints (a rigid body's unit quaternion)."""
         return []
 
     # -- numbers: rows of coordinate values ``c`` (k, len(coordinates)) -----------------
     def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` (body -> world)."""
+        """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` (body -> world).
+
+        Parameters
+        ----------
+        c
+            Values of the body's coordinates, one row per instant ``(k, n)`` (or one
+            configuration ``(n,)``), in the order of :attr:`coordinates`.
+
+        Examples
+        --------
+        A rigid body at ``(1, 2, 3)`` turned a half turn about ``z``:
+
+        >>> x, R = RigidBody("box", 1.0, (1, 1, 1)).pose(np.array([1, 2, 3, 0, 0, 0, 1.0]))
+        >>> x.tolist(), R[0].round(12).tolist()
+        ([[1.0, 2.0, 3.0]], [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]])
+        """
         c = np.atleast_2d(c)
         return c[:, :3], np.broadcast_to(np.eye(3), (len(c), 3, 3)).copy()
 
     def center_velocity(self, cd: FloatArray) -> FloatArray:
-        """Mass-center velocities ``(k, 3)`` (world) from the coordinate rates."""
+        """Mass-center velocities ``(k, 3)`` (world) from the coordinate rates.
+
+        Parameters
+        ----------
+        cd
+            Rates of the body's coordinates, ``(k, n)`` or ``(n,)``.
+
+        Examples
+        --------
+        >>> PlanarBody("link", 1.0, 0.1).center_velocity(np.array([1.0, 2.0, 5.0])).tolist()
+        [[1.0, 2.0, 0.0]]
+        """
         return np.atleast_2d(cd)[:, :3]
 
     def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
-        """Angular velocities ``(k, 3)`` in body components."""
+        """Angular velocities ``(k, 3)`` in body components (zero for a particle).
+
+        Parameters
+        ----------
+        c, cd
+            Values and rates of the body's coordinates, ``(k, n)`` or ``(n,)`` each.
+
+        Examples
+        --------
+        A planar body turning at 5 rad/s:
+
+        >>> PlanarBody("link", 1.0, 0.1).angular_velocity_at(np.zeros(3), [0, 0, 5.0]).tolist()
+        [[0.0, 0.0, 5.0]]
+        """
         return np.zeros((len(np.atleast_2d(c)), 3))
 
     def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         """The torque about the mass center (world) whose virtual work on this body's
-        coordinates is the generalized force ``Q`` (k, len(coordinates))."""
+        coordinates is the generalized force ``Q``.
+
+        Parameters
+        ----------
+        c
+            Values of the body's coordinates, ``(k, n)`` or ``(n,)``.
+        Q
+            Generalized forces on those coordinates, the same shape.
+
+        Examples
+        --------
+        On a rigid body at rest, ``Q_b = 2 E(b)^T tau`` on its Euler parameters comes
+        back as the torque ``tau``:
+
+        >>> from dalembert.multibody.rotations import E_matrix
+        >>> body, c = RigidBody("box", 1.0, (1, 1, 1)), np.array([0, 0, 0, 1.0, 0, 0, 0])
+        >>> Q = np.concatenate([np.zeros(3), 2 * E_matrix(c[3:]).T @ [0.0, 0.0, 3.0]])
+        >>> body.center_torque(c, Q).tolist()
+        [[0.0, 0.0, 3.0]]
+        """
         return np.zeros((len(np.atleast_2d(c)), 3))
 
     def center_force(self, Q: FloatArray) -> FloatArray:
-        """The force (world) of a generalized force ``Q`` on this body's coordinates."""
+        """The force (world) of a generalized force ``Q`` on this body's coordinates.
+
+        Parameters
+        ----------
+        Q
+            Generalized forces on the body's coordinates, ``(k, n)`` or ``(n,)``.
+
+        Examples
+        --------
+        >>> Particle("bob", 1.0).center_force(np.array([0.0, 0.0, -9.81])).tolist()
+        [[0.0, 0.0, -9.81]]
+        """
         return np.atleast_2d(Q)[:, :3]
 
     @property
     def constraint_names(self) -> list[str]:
+        """The names of :meth:`constraints`, without building them."""
         return []
 
     def __repr__(self) -> str:
@@ -132,6 +218,13 @@ class Body:
 class Ground(Body):
     """The fixed world frame; its points are given in world coordinates.
 
+    Parameters
+    ----------
+    name
+        Its name in messages (any ``Ground`` object is the same ground).
+
+    Examples
+    --------
     >>> Ground().position((1, 2, 3)).T
     Matrix([[1, 2, 3]])
     """
@@ -150,6 +243,15 @@ class Ground(Body):
 class Particle(Body):
     """A point mass with coordinates ``<name>_x, <name>_y, <name>_z``.
 
+    Parameters
+    ----------
+    name
+        Prefix of the coordinate names.
+    mass
+        Positive mass.
+
+    Examples
+    --------
     >>> p = Particle("bob", 2.0)
     >>> [str(c) for c in p.coordinates]
     ['bob_x(t)', 'bob_y(t)', 'bob_z(t)']
@@ -196,6 +298,8 @@ class RigidBody(Body):
         Inertia tensor about the mass center in the body frame: a symmetric
         positive-definite 3x3 matrix, or its 3 principal values.
 
+    Examples
+    --------
     >>> body = RigidBody("box", 1.0, (1.0, 2.0, 3.0))
     >>> [c.name for c in body.constraints()]
     ['box_unit_quaternion']
@@ -273,6 +377,8 @@ class PlanarBody(Body):
     inertia
         Moment of inertia about the ``z`` axis through the mass center (> 0).
 
+    Examples
+    --------
     >>> link = PlanarBody("link", 1.0, 0.1)
     >>> [c.name for c in link.coordinates], link.constraints()
     (['link_x', 'link_y', 'link_theta'], [])
@@ -390,4 +496,16 @@ def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
 
 
 def body_names(bodies: Sequence[Body]) -> list[str]:
+    """The names of ``bodies``, in order.
+
+    Parameters
+    ----------
+    bodies
+        Any bodies.
+
+    Examples
+    --------
+    >>> body_names([Ground(), Particle("bob", 1.0)])
+    ['ground', 'bob']
+    """
     return [b.name for b in bodies]

@@ -39,14 +39,16 @@ class Multibody:
     Parameters
     ----------
     bodies
-        The moving bodies (:class:`Particle`, :class:`RigidBody`). ``Ground`` is
-        implicit; any ``Ground`` instance may appear in joints and springs.
+        The moving bodies (:class:`Particle`, :class:`RigidBody`, :class:`PlanarBody`).
+        ``Ground`` is implicit; any ``Ground`` instance may appear in joints and springs.
     joints
         :mod:`dalembert.multibody.joints` objects between listed bodies or ground.
     gravity
         Uniform field (world components), as the potential ``-sum m g . x``.
     forces, torques, springs
         :class:`Force`, :class:`Torque`, :class:`SpringDamper` loads.
+    name
+        The system's name (in titles and messages).
 
     Examples
     --------
@@ -168,14 +170,36 @@ class Multibody:
         return MultibodySystem(self)
 
     def body(self, name: str) -> MovingBody:
-        """The body called ``name``."""
+        """The body called ``name``.
+
+        Parameters
+        ----------
+        name
+            A body's name; a ``KeyError`` lists the names there are.
+
+        Examples
+        --------
+        >>> chain(2, 1.0, 1.0, 0.1).body("link2")
+        RigidBody('link2')
+        """
         for b in self.bodies:
             if b.name == name:
                 return b
         raise KeyError(f"no body {name!r}; the bodies are {', '.join(b.name for b in self.bodies)}")
 
     def joint(self, name: str) -> Joint:
-        """The joint called ``name``."""
+        """The joint called ``name``.
+
+        Parameters
+        ----------
+        name
+            A joint's name; a ``KeyError`` lists the names there are.
+
+        Examples
+        --------
+        >>> chain(2, 1.0, 1.0, 0.1).joint("joint1")
+        Spherical('joint1', 'ground', 'link1')
+        """
         for j in self.joints:
             if j.name == name:
                 return j
@@ -201,16 +225,42 @@ class Multibody:
         angular_velocities: ByBody[Vector | float] | None = None,
         angular_velocity_frame: Frame = "world",
     ) -> tuple[dict[str, float], dict[str, float]]:
-        """``(q0, qd0)`` dicts for :meth:`dalembert.System.simulate`.
+        """``(q0, qd0)`` dicts by coordinate name for :meth:`dalembert.System.simulate`.
 
-        Keys are bodies or body names. ``positions``/``velocities`` are of the mass
-        center (world); ``orientations`` are rotation matrices (body -> world) or
-        Euler parameters (a non-unit quaternion is normalized with an
-        :class:`~dalembert.InitialConditionsAdjusted` warning); angular velocities
-        are in world or body components (``angular_velocity_frame``). A planar
-        body also takes 2-vectors, its angle about ``z`` as the orientation and
-        ``w_z`` as the angular velocity. Unlisted bodies start at the origin,
-        unrotated, at rest (see :mod:`~dalembert.multibody.initial_state`).
+        Each argument maps bodies (or body names) to values; unlisted bodies start
+        at the origin, unrotated, at rest (see :mod:`~dalembert.multibody.initial_state`).
+
+        Parameters
+        ----------
+        positions, velocities
+            The mass center's position and velocity (world); a planar body also
+            takes 2 numbers.
+        orientations
+            Rotation matrices (body -> world) or Euler parameters (a non-unit
+            quaternion is normalized with an
+            :class:`~dalembert.InitialConditionsAdjusted` warning); a planar body's
+            angle about ``z``.
+        angular_velocities
+            In world or body components (``angular_velocity_frame``); a planar
+            body's ``w_z``.
+        angular_velocity_frame
+            ``"world"`` (default) or ``"body"``.
+
+        Returns
+        -------
+        tuple of dict
+            ``q0`` and ``qd0``; a rigid body's Euler parameter rates are
+            ``bdot = 1/2 E(b)^T w_body``.
+
+        Examples
+        --------
+        A body turning about ``z`` at 2 rad/s: ``bdot_3 = 1/2 w_z`` at ``b = (1, 0, 0, 0)``:
+
+        >>> mb = Multibody([RigidBody("box", 1.0, (1, 1, 1))])
+        >>> q0, qd0 = mb.initial_state(positions={"box": (0, 0, 1)},
+        ...                            angular_velocities={"box": (0, 0, 2.0)})
+        >>> q0["box_z"], q0["box_b0"], qd0["box_b3"]
+        (1.0, 1.0, 1.0)
         """
         if angular_velocity_frame not in ("world", "body"):
             raise ValueError("angular_velocity_frame must be 'world' or 'body'")
@@ -235,6 +285,25 @@ class Multibody:
         Joints that leave no degree of freedom at the initial state raise a
         :class:`~dalembert.ConstraintError` listing every joint, its rows and those
         rows that depend on the others (see :func:`check_mobility`).
+
+        Parameters
+        ----------
+        t_span, q0, qd0
+            As in :meth:`dalembert.System.simulate` (``q0``, ``qd0`` e.g. from
+            :meth:`initial_state`).
+        kwargs
+            :meth:`dalembert.System.simulate`'s keywords.
+
+        Examples
+        --------
+        A particle thrown sideways falls on a parabola:
+
+        >>> from dalembert.multibody import Particle
+        >>> mb = Multibody([Particle("p", 1.0)], gravity=(0.0, 0.0, -10.0))
+        >>> traj = mb.simulate((0.0, 1.0), *mb.initial_state(velocities={"p": (2, 0, 0)}),
+        ...                    t_eval=[1.0])
+        >>> [round(float(traj[name][0]), 9) for name in ("p_x", "p_z")]
+        [2.0, -5.0]
         """
         try:
             return self.system.simulate(t_span, q0, qd0, **kwargs)
@@ -244,7 +313,24 @@ class Multibody:
 
     def stick_figure(self, q: Numbers) -> list[FloatArray]:
         """Polylines ``(k, 3)`` drawing the system at ``q`` (see
-        :mod:`dalembert.multibody.drawing`); used by :func:`dalembert.plotting.animate`."""
+        :func:`dalembert.multibody.drawing.stick_figure`, which has an example); used by
+        :func:`dalembert.plotting.animate`.
+
+        Parameters
+        ----------
+        q
+            The configuration, in the order of ``self.system.coordinate_names``.
+
+        Examples
+        --------
+        A link hanging from the origin: its axes, and the line from its center to each
+        joint point (the ground's a single point):
+
+        >>> mb = chain(1, 1.0, 1.0, 0.1)
+        >>> q0, _ = mb.initial_state(positions={"link1": (0, 0, -0.5)})
+        >>> [len(line) for line in mb.stick_figure([q0[n] for n in mb.system.coordinate_names])]
+        [1, 2, 2, 2, 2]
+        """
         return stick_figure(self, np.asarray(q, dtype=float))
 
     def _explain_immobility(self, q0: CoordinateValues, t_span: Sequence[float],
@@ -267,6 +353,14 @@ class Multibody:
 def multibody_of(system: System) -> Multibody:
     """The :class:`Multibody` whose ``.system`` is ``system``.
 
+    Parameters
+    ----------
+    system
+        A System from :attr:`Multibody.system` (any other raises
+        :class:`~dalembert.ModelError`).
+
+    Examples
+    --------
     >>> from dalembert.multibody import chain
     >>> mb = chain(1, 1.0, 1.0, 0.1)
     >>> multibody_of(mb.system) is mb
@@ -312,6 +406,21 @@ def chain(
     ``k`` hangs at ``(0, -(k - 1/2) length)`` and gravity defaults to
     ``(0, -9.81, 0)``.
 
+    Parameters
+    ----------
+    n
+        The number of links.
+    length, mass, radius
+        Each link's length, mass and radius (a solid cylinder's inertia).
+    joint
+        ``"spherical"`` or ``"revolute"``.
+    gravity
+        The field, world components (default: see above).
+    planar
+        Planar links (revolute joints only).
+
+    Examples
+    --------
     >>> chain(2, 1.0, 1.0, 0.05, joint="revolute").system.degrees_of_freedom
     2
     >>> len(chain(2, 1.0, 1.0, 0.05, joint="revolute", planar=True).system.coordinate_names)

@@ -49,6 +49,13 @@ _COINCIDENT = (Spherical, Universal, Revolute, Fixed)
 def radius_of_gyration(body: TurningBody) -> float:
     """``sqrt(I_max / m)``: the body's size as seen by its inertia.
 
+    Parameters
+    ----------
+    body
+        A rigid or planar body.
+
+    Examples
+    --------
     >>> from dalembert.multibody import RigidBody
     >>> radius_of_gyration(RigidBody("b", 2.0, (0.02, 0.08, 0.08)))
     0.2
@@ -57,7 +64,27 @@ def radius_of_gyration(body: TurningBody) -> float:
 
 
 def check_joint_points(joint: Joint) -> None:
-    """Warn when a body-frame joint point is implausibly far from the mass center."""
+    """Warn when a body-frame joint point is implausibly far from the mass center.
+
+    Parameters
+    ----------
+    joint
+        The joint whose points are checked (``Multibody`` checks every joint).
+
+    Examples
+    --------
+    A hinge point 5 m from the center of a 10 cm box, given in world coordinates
+    by mistake:
+
+    >>> import warnings
+    >>> from dalembert.multibody import Ground, Revolute, RigidBody
+    >>> box = RigidBody("box", 1.0, (0.002, 0.002, 0.002))
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     check_joint_points(Revolute("hinge", Ground(), box, (5, 0, 0), (5, 0, 0)))
+    >>> [type(w.message).__name__ for w in caught]
+    ['JointPointWarning']
+    """
     for side, body, point in (("a", joint.body_a, joint.point_a),
                               ("b", joint.body_b, joint.point_b)):
         if not isinstance(body, TurningBody):
@@ -88,7 +115,31 @@ def _world(q0: Mapping[str, float], body: Body, point: FloatArray) -> FloatArray
 
 
 def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
-    """Warn when a joint's points do not meet at ``q0`` but would with one read as world."""
+    """Warn when a joint's points do not meet at ``q0`` but would with one read as world.
+
+    Parameters
+    ----------
+    mb
+        The mechanism.
+    q0
+        Its coordinates by name (as :meth:`Multibody.initial_state` gives them, which
+        calls this check).
+
+    Examples
+    --------
+    A link hung from the world point ``(0, 0, 1)``, its own point given as that
+    world point too:
+
+    >>> import warnings
+    >>> from dalembert.multibody import Ground, Multibody, RigidBody, Spherical
+    >>> link = RigidBody("link", 1.0, (0.1, 0.1, 0.01))
+    >>> mb = Multibody([link], [Spherical("ball", Ground(), link, (0, 0, 1), (0, 0, 1))])
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     _ = mb.initial_state(positions={"link": (0, 0, 0.5)})
+    >>> "use point_b=(0.0, 0.0, 0.5)" in str(caught[-1].message)
+    True
+    """
     for j in mb.joints:
         if not isinstance(j, _COINCIDENT):
             continue
@@ -136,10 +187,22 @@ def check_mobility(mb: Multibody, q0: CoordinateValues, t0: float = 0.0,
     int
         ``n - rank(A)``, when positive.
 
+    Examples
+    --------
+    A link on a ball joint turns three ways:
+
     >>> from dalembert.multibody import chain
     >>> mb = chain(1, 1.0, 1.0, 0.1)
     >>> check_mobility(mb, mb.initial_state(positions={"link1": (0, 0, -0.5)})[0])
     3
+
+    ``q0`` is read as everywhere else (:func:`dalembert.model.values.coordinate_values`):
+    a name that is not a coordinate is an error, not a value silently left out:
+
+    >>> check_mobility(mb, {"link1_z": -0.5, "link1_b0": 1.0, "link2_z": -1.5})
+    Traceback (most recent call last):
+    ...
+    dalembert.errors.InitialConditionError: q0 names 'link2_z', which is not a coordinate ...
     """
     system = mb.system
     names = system.coordinate_names

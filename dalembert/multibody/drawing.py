@@ -63,6 +63,15 @@ def _rim(joint: Rolling, x: FloatArray, R: FloatArray) -> FloatArray:
 def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
     """Polylines ``(k, 3)`` (world) of ``mb`` at the configuration ``q``.
 
+    Parameters
+    ----------
+    mb
+        The mechanism.
+    q
+        Its configuration, in the order of ``mb.system.coordinate_names``.
+
+    Examples
+    --------
     >>> from dalembert.multibody import chain
     >>> mb = chain(2, 1.0, 1.0, 0.1)
     >>> q0, _ = mb.initial_state(positions={"link1": (0, 0, -0.5), "link2": (0, 0, -1.5)})

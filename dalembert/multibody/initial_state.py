@@ -25,7 +25,30 @@ def body_state(body: MovingBody, frame: Frame, position: Vector | None = None,
                orientation: Orientation | None = None, velocity: Vector | None = None,
                angular_velocity: Vector | float | None = None) -> Values:
     """``(coordinates, rates)`` of ``body``; ``None`` means at the origin, unrotated, at
-    rest. ``frame`` (``"world"``/``"body"``) is that of the angular velocity."""
+    rest.
+
+    Parameters
+    ----------
+    body
+        A particle, rigid body or planar body.
+    frame
+        ``"world"`` or ``"body"``: the components of ``angular_velocity``.
+    position, velocity
+        The mass center's (world; 2 numbers for a planar body).
+    orientation
+        A rotation matrix or Euler parameters; a planar body's angle about ``z``.
+    angular_velocity
+        3 components; a planar body's ``w_z``.
+
+    Examples
+    --------
+    A planar body: ``x, y`` and the angle, their rates:
+
+    >>> from dalembert.multibody import PlanarBody
+    >>> q, qd = body_state(PlanarBody("link", 1.0, 0.1), "world", (1, 2), 0.5, (0, 3), 4.0)
+    >>> [float(v) for v in q], [float(v) for v in qd]
+    ([1.0, 2.0, 0.5], [0.0, 3.0, 4.0])
+    """
     if isinstance(body, PlanarBody):
         return _planar(body, position, orientation, velocity, angular_velocity)
     x = _triple(position, f"position of {body.name!r}")

@@ -114,6 +114,20 @@ class Joint:
         Joint axis on each body (body frame); ``axis_b`` defaults to ``axis_a``.
     ref_a, ref_b
         Reference directions perpendicular to the axes (see the module docstring).
+
+    Examples
+    --------
+    A joint kind is a subclass with its equations; every joint checks its points and
+    axes and names its rows:
+
+    >>> from dalembert.multibody import Ground, Particle
+    >>> class OnSphere(Joint):  # point b on the sphere of radius 2 about point a
+    ...     n_equations, uses_orientation = 1, False
+    ...     def equations(self):
+    ...         d = self.separation()
+    ...         return [d.dot(d) - 4]
+    >>> OnSphere("shell", Ground(), Particle("p", 1.0)).constraints()[0].expr
+    p_x(t)**2 + p_y(t)**2 + p_z(t)**2 - 4
     """
 
     #: The number of equations (rows) of the joint.
@@ -158,6 +172,7 @@ class Joint:
 
     @property
     def bodies(self) -> tuple[Body, Body]:
+        """``(body_a, body_b)``."""
         return self.body_a, self.body_b
 
     def _check_bodies(self) -> None:
@@ -206,7 +221,23 @@ class Joint:
         return self.body_b.position(self.point_b) - self.body_a.position(self.point_a)
 
     def frame(self, side: Side) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
-        """World components of ``(u, v, w)`` on side ``"a"`` or ``"b"``."""
+        """World components of ``(u, v, w)`` on side ``"a"`` or ``"b"``.
+
+        Parameters
+        ----------
+        side
+            ``"a"`` or ``"b"``.
+
+        Examples
+        --------
+        On the ground the frame is the given one: the axis ``w`` along ``z``, the
+        reference ``u`` by default the world axis least aligned with it:
+
+        >>> from dalembert.multibody import Ground, RigidBody
+        >>> hinge = Revolute("hinge", Ground(), RigidBody("door", 1.0, (1, 1, 1)))
+        >>> [[float(c) for c in e] for e in hinge.frame("a")]
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        """
         body = self.body_a if side == "a" else self.body_b
         w = self.axis_a if side == "a" else self.axis_b
         u = self.ref_a if side == "a" else self.ref_b
@@ -220,6 +251,7 @@ class Joint:
 
     # -- constraints -----------------------------------------------------------------
     def equations(self) -> list[sp.Expr]:
+        """The joint's equations ``psi = 0`` (``n_equations`` of them, SymPy)."""
         raise NotImplementedError
 
     def planar_equations(self) -> list[sp.Expr]:
@@ -233,6 +265,7 @@ class Joint:
 
     @property
     def constraint_names(self) -> list[str]:
+        """``<name>_1 .. <name>_n``, without building the constraints."""
         return [f"{self.name}_{k + 1}" for k in range(self.n_equations)]
 
     def __repr__(self) -> str:

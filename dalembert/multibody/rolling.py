@@ -71,6 +71,9 @@ class Rolling(Joint):
     tangent
         ``t1``, a direction in the plane (default: the world axis least aligned
         with ``normal``, made perpendicular).
+    ground
+        The :class:`~dalembert.multibody.Ground` the plane belongs to (its side
+        ``a``; default a new one).
 
     Examples
     --------
@@ -102,10 +105,12 @@ class Rolling(Joint):
 
     @property
     def normal(self) -> FloatArray:
+        """The plane's unit normal ``n`` (world)."""
         return self.axis_a
 
     @property
     def tangents(self) -> tuple[FloatArray, FloatArray]:
+        """``t1`` and ``t2 = n x t1``, spanning the plane (world)."""
         return self.ref_a, np.cross(self.axis_a, self.ref_a)
 
     # -- symbolic ----------------------------------------------------------------------
@@ -135,7 +140,26 @@ class Rolling(Joint):
 
     # -- numeric -----------------------------------------------------------------------
     def contact_points(self, x: FloatArray, R: FloatArray) -> FloatArray:
-        """World contact points for centers ``x`` ``(k, 3)`` and rotations ``R`` ``(k, 3, 3)``."""
+        """World contact points for centers ``x`` ``(k, 3)`` and rotations ``R`` ``(k, 3, 3)``.
+
+        Parameters
+        ----------
+        x, R
+            The body's poses, as :meth:`~dalembert.multibody.Body.pose` gives them.
+
+        Examples
+        --------
+        A wheel of radius 0.5 (axis body ``y``) leaning 30 degrees about ``x``, its
+        center at height ``r cos 30``, touches the table ``r sin 30`` to the side:
+
+        >>> from dalembert.multibody import RigidBody
+        >>> from dalembert.multibody.rotations import elementary_rotation
+        >>> wheel = Rolling("roll", RigidBody("w", 1.0, (1, 2, 1)), 0.5, axis=(0, 1, 0))
+        >>> R = elementary_rotation("x", np.pi / 6)
+        >>> P = wheel.contact_points(np.array([[0, 0, 0.5 * np.cos(np.pi / 6)]]), R[None])
+        >>> (P.round(12) + 0.0).tolist()
+        [[0.0, 0.25, 0.0]]
+        """
         n = self.normal
         if not self.is_disk:
             return x - self.radius * n

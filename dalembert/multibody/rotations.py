@@ -63,6 +63,13 @@ def _split(b: Any) -> tuple[Any, Any, Any, Any]:
 def E_matrix(b: Quaternions) -> MatrixOrArray:
     """Body-frame matrix: ``w_body = 2 E(b) bdot``.
 
+    Parameters
+    ----------
+    b
+        Euler parameters: SymPy (a matrix or 4 expressions) or numbers ``(..., 4)``.
+
+    Examples
+    --------
     >>> bool(np.array_equal(E_matrix(np.array([1.0, 0.0, 0.0, 0.0]))[:, 1:], np.eye(3)))
     True
     """
@@ -74,6 +81,13 @@ def E_matrix(b: Quaternions) -> MatrixOrArray:
 def G_matrix(b: Quaternions) -> MatrixOrArray:
     """World-frame matrix: ``w_world = 2 G(b) bdot``.
 
+    Parameters
+    ----------
+    b
+        Euler parameters: SymPy (a matrix or 4 expressions) or numbers ``(..., 4)``.
+
+    Examples
+    --------
     >>> b = sp.symbols("b0:4")
     >>> G_matrix(b) * sp.Matrix(b) == sp.zeros(3, 1)   # G b = 0
     True
@@ -86,6 +100,13 @@ def G_matrix(b: Quaternions) -> MatrixOrArray:
 def rotation_matrix(b: Quaternions) -> MatrixOrArray:
     """``R(b) = G(b) E(b)^T`` (body to world), written out as quadratic polynomials.
 
+    Parameters
+    ----------
+    b
+        Euler parameters: SymPy (a matrix or 4 expressions) or numbers ``(..., 4)``.
+
+    Examples
+    --------
     A half turn about ``z``, ``b = (cos 90deg, 0, 0, sin 90deg)``:
 
     >>> rotation_matrix(np.array([0.0, 0.0, 0.0, 1.0])).tolist()
@@ -106,6 +127,13 @@ def quaternion_from_matrix(R: ArrayLike) -> FloatArray:
     The largest of ``b0^2..b3^2`` is taken from the trace and diagonal, the others
     from off-diagonal sums, so no division by a small number occurs.
 
+    Parameters
+    ----------
+    R
+        Rotation matrices ``(..., 3, 3)``.
+
+    Examples
+    --------
     >>> quaternion_from_matrix(np.diag([-1.0, -1.0, 1.0])).tolist()
     [0.0, 0.0, 0.0, 1.0]
     """
@@ -143,6 +171,15 @@ def _shepperd(R: FloatArray) -> FloatArray:
 def elementary_rotation(axis: str, angle: float) -> FloatArray:
     """Rotation by ``angle`` about the coordinate axis ``"x"``, ``"y"`` or ``"z"``.
 
+    Parameters
+    ----------
+    axis
+        ``"x"``, ``"y"`` or ``"z"`` (either case).
+    angle
+        In radians, counterclockwise seen from the axis' tip.
+
+    Examples
+    --------
     >>> (elementary_rotation("z", np.pi / 2) @ [1.0, 0.0, 0.0]).round(12).tolist()
     [0.0, 1.0, 0.0]
     """
@@ -160,6 +197,15 @@ def matrix_from_euler(angles: Sequence[float], sequence: str = "ZYX") -> FloatAr
     Upper case (``"ZYX"``) is intrinsic (rotations about the moving axes, so
     ``R = R1 R2 R3``), lower case (``"xyz"``) extrinsic (fixed axes, ``R = R3 R2 R1``).
 
+    Parameters
+    ----------
+    angles
+        The three angles (radians), in the order of ``sequence``.
+    sequence
+        Three axes, no two neighbours equal, all upper or all lower case.
+
+    Examples
+    --------
     >>> np.allclose(matrix_from_euler([np.pi / 2, 0, 0], "ZYX") @ [1, 0, 0], [0, 1, 0])
     True
     """
@@ -174,6 +220,15 @@ def euler_from_matrix(R: ArrayLike, sequence: str = "ZYX") -> FloatArray:
     """Euler angles (radians) of rotation matrices ``(..., 3, 3)``; inverse of
     :func:`matrix_from_euler` (SciPy's conventions and gimbal-lock handling).
 
+    Parameters
+    ----------
+    R
+        Rotation matrices ``(..., 3, 3)``.
+    sequence
+        As in :func:`matrix_from_euler`.
+
+    Examples
+    --------
     >>> euler_from_matrix(matrix_from_euler([0.3, -0.2, 0.1])).round(12).tolist()
     [0.3, -0.2, 0.1]
     """
@@ -204,6 +259,15 @@ def times_vector(R: sp.MatrixBase, v: sp.MatrixBase) -> sp.Matrix:
     ``0 * oo = nan``) and asks each such product whether it is finite: for a joint's
     frames and points that query was much of the time taken to write the equations.
 
+    Parameters
+    ----------
+    R
+        A SymPy matrix.
+    v
+        A SymPy column with as many entries as ``R`` has columns.
+
+    Examples
+    --------
     >>> b = sp.symbols("b0:4")
     >>> times_vector(rotation_matrix(b), sp.Matrix([0, 0, 1])) == rotation_matrix(b)[:, 2]
     True
@@ -214,6 +278,13 @@ def times_vector(R: sp.MatrixBase, v: sp.MatrixBase) -> sp.Matrix:
 def dot(a: sp.MatrixBase, b: sp.MatrixBase) -> sp.Expr:
     """``a . b`` of two SymPy vectors without the products that have a zero factor.
 
+    Parameters
+    ----------
+    a, b
+        SymPy vectors of equal length.
+
+    Examples
+    --------
     >>> x, y = sp.symbols("x y")
     >>> dot(sp.Matrix([x, 0, 2]), sp.Matrix([y, x, 1]))
     x*y + 2
@@ -224,6 +295,13 @@ def dot(a: sp.MatrixBase, b: sp.MatrixBase) -> sp.Expr:
 def skew(v: Sequence[float | sp.Expr] | sp.MatrixBase | FloatArray) -> MatrixOrArray:
     """The cross-product matrix ``[v]x`` with ``[v]x u = v x u``.
 
+    Parameters
+    ----------
+    v
+        3 numbers (an array comes back) or SymPy expressions (a ``sympy.Matrix``).
+
+    Examples
+    --------
     >>> (skew([1.0, 2.0, 3.0]) @ [4.0, 5.0, 6.0]).tolist(), np.cross([1, 2, 3], [4, 5, 6]).tolist()
     ([-3.0, 6.0, -3.0], [-3, 6, -3])
     """
@@ -235,6 +313,17 @@ def skew(v: Sequence[float | sp.Expr] | sp.MatrixBase | FloatArray) -> MatrixOrA
 def check_rotation(R: ArrayLike, what: str, tol: float = 1e-9) -> FloatArray:
     """``R`` as a float array after checking it is a proper rotation; errors name ``what``.
 
+    Parameters
+    ----------
+    R
+        The matrix.
+    what
+        What it is, for the ``ValueError`` messages.
+    tol
+        Largest ``|R^T R - I|`` accepted.
+
+    Examples
+    --------
     >>> check_rotation(np.diag([1.0, 1.0, -1.0]), "the mirror")
     Traceback (most recent call last):
     ...

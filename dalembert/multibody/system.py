@@ -48,6 +48,7 @@ class MultibodySystem(System):
 
     @property
     def name(self) -> str:
+        """The Multibody's name."""
         return self._multibody.name
 
     @property
@@ -64,7 +65,19 @@ class MultibodySystem(System):
 
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` by name and the joint or body it belongs to (no symbolic
-        model is built for a message: for a large mechanism that takes long)."""
+        model is built for a message: for a large mechanism that takes long).
+
+        Parameters
+        ----------
+        i
+            The row, in the order of :attr:`constraint_names`.
+
+        Examples
+        --------
+        >>> from dalembert.multibody import chain
+        >>> chain(2, 1.0, 1.0, 0.05).system.describe_constraint(5)
+        "constraint 'joint2_1' (Spherical 'joint2')"
+        """
         mb, name = self._multibody, self._rows[i]
         owners = [*((b, b.constraint_names) for b in mb.bodies),
                   *((j, j.constraint_names) for j in mb.joints)]

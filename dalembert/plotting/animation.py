@@ -49,6 +49,15 @@ Lines = list[NDArray[np.float64]]
 def frame_indices(n_points: int, frames: int) -> NDArray[np.intp]:
     """At most ``frames`` evenly spread output indices, first and last included.
 
+    Parameters
+    ----------
+    n_points
+        The number of outputs.
+    frames
+        The most frames wanted (at least 1).
+
+    Examples
+    --------
     >>> frame_indices(11, 3).tolist()
     [0, 5, 10]
     """

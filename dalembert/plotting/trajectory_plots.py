@@ -51,6 +51,18 @@ def plot_coordinates(
     -------
     Path
         ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_coordinates(traj, pathlib.Path(folder) / "q.png", system=system)
+    ...     png.name, png.stat().st_size > 0
+    ('q.png', True)
     """
     fig, ax = _figure()
     for i, name in enumerate(traj.coordinate_names):
@@ -64,6 +76,13 @@ def plot_coordinates(
 def relative_drift(values: ArrayLike) -> NDArray[np.float64]:
     """``|e(t) - e(0)| / |e(0)|`` (absolute change when ``e(0) == 0``).
 
+    Parameters
+    ----------
+    values
+        The quantity along the trajectory (``e(0)`` first).
+
+    Examples
+    --------
     >>> relative_drift(np.array([2.0, 2.0, 2.5]))
     array([0.  , 0.  , 0.25])
     """
@@ -95,6 +114,18 @@ def plot_energy_error(
     -------
     Path
         ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_energy_error(traj, pathlib.Path(folder) / "e.png", system=system)
+    ...     png.stat().st_size > 0
+    True
     """
     if quantity not in ENERGY_QUANTITIES:
         raise ValueError(f"quantity must be one of {ENERGY_QUANTITIES}, not {quantity!r}")
@@ -119,7 +150,35 @@ def plot_residuals(
 
     Exact zeros are drawn at :data:`LOG_FLOOR`. With a ``system`` that has only
     Pfaffian constraints the (identically zero) position residual is left out.
-    Arguments as in :func:`plot_coordinates`.
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        The PNG to write (parent folders are created).
+    system
+        Optional :class:`~dalembert.System`, for the default title and to tell
+        whether it has holonomic constraints (without it both residuals are drawn).
+    title
+        Figure title (default: the system's name).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_residuals(traj, pathlib.Path(folder) / "r.png", system=system)
+    ...     png.stat().st_size > 0
+    True
     """
     fig, ax = _figure()
     if traj.constraint_names:
@@ -141,7 +200,33 @@ def plot_multipliers(
 ) -> Path:
     """Each constraint's Lagrange multiplier against time, labelled by constraint name.
 
-    Arguments as in :func:`plot_coordinates`.
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        The PNG to write (parent folders are created).
+    system
+        Optional :class:`~dalembert.System`, used for the default title.
+    title
+        Figure title (default: the system's name).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_multipliers(traj, pathlib.Path(folder) / "m.png", system=system)
+    ...     png.stat().st_size > 0
+    True
     """
     fig, ax = _figure()
     for name in traj.constraint_names:
@@ -163,10 +248,29 @@ def plot_path(
 
     Parameters
     ----------
+    traj, path
+        As in :func:`plot_coordinates`.
     x, y
         Coordinate names (velocities such as ``"x_dot"`` work too).
+    system, title
+        As in :func:`plot_coordinates`.
 
-    Other arguments as in :func:`plot_coordinates`.
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_path(traj, pathlib.Path(folder) / "xy.png", x="x", y="y")
+    ...     png.stat().st_size > 0
+    True
     """
     xs, ys = traj[x], traj[y]
     fig, ax = _figure()
@@ -190,6 +294,35 @@ def plot_all(
     Writes ``coordinates.png``, ``energy.png`` (drift of ``energy``, see
     :func:`plot_energy_error`), ``residuals.png``, ``multipliers.png`` and, when
     ``path_xy = (x, y)`` is given, ``path.png``.
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    out_dir
+        The folder to write to (created if need be).
+    system
+        Optional :class:`~dalembert.System`, for the titles.
+    energy
+        ``"energy"`` or ``"jacobi"`` (see :func:`plot_energy_error`).
+    path_xy
+        Two coordinate names for a path plot.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     [png.name for png in plot_all(traj, folder, system=system)]
+    ['coordinates.png', 'energy.png', 'residuals.png', 'multipliers.png']
     """
     out = Path(out_dir)
     paths = [
