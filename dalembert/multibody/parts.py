@@ -48,7 +48,21 @@ _T = TypeVar("_T")
 
 
 def gravity_potential(body: Body, gravity: FloatArray) -> sp.Expr:
-    """``-m g . x`` of the body's mass center (exact zeros drop out)."""
+    """``-m g . x`` of the body's mass center (exact zeros drop out).
+
+    Parameters
+    ----------
+    body
+        A moving body.
+    gravity
+        The field, world components.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Particle
+    >>> gravity_potential(Particle("p", 2.0), np.array([0.0, 0.0, -9.81]))
+    19.62*p_z(t)
+    """
     g = sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in gravity])
     return -sp.Float(body.mass) * g.dot(body.center)
 
@@ -58,6 +72,20 @@ def multibody_parts(mb: Multibody) -> list[Part]:
 
     Global coordinates and constraint rows are in the order of ``mb.coordinates``
     and ``mb.constraints()``: bodies' rows (unit quaternions) first, then joints'.
+
+    Parameters
+    ----------
+    mb
+        The mechanism.
+
+    Examples
+    --------
+    Three equal links on ball joints: one body part placed three times, one part
+    for the ground joint and one for the two joints between links:
+
+    >>> from dalembert.multibody import chain
+    >>> [part.instances for part in multibody_parts(chain(3, 1.0, 1.0, 0.1))]
+    [3, 1, 2]
     """
     offsets = _consecutive(mb.bodies, lambda b: len(b.coordinates))
     rows = _consecutive([*mb.bodies, *mb.joints], lambda o: len(o.constraint_names))
@@ -217,8 +245,11 @@ def _load_part(mb: Multibody, offsets: dict[int, Indices]) -> Part | None:
     potential = sp.Add(*(s.potential() for s in mb.springs))
     generalized = mb.generalized_forces()
     point_forces = mb.point_forces()
-    used = _coordinates_in(mb.bodies, [potential, *generalized.values(),
-                                       *(sp.Matrix([pf.force, pf.point]) for pf in point_forces)])
+    # a generalized force involves the coordinate it acts on even when constant (a
+    # constant torque on a planar body's angle)
+    used = set(generalized) | _coordinates_in(
+        mb.bodies, [potential, *generalized.values(),
+                    *(sp.Matrix([pf.force, pf.point]) for pf in point_forces)])
     coords = [c for body in mb.bodies for c in body.coordinates if c in used]
     index = {c: i for body in mb.bodies
              for c, i in zip(body.coordinates, offsets[id(body)])}
