@@ -18,6 +18,16 @@ def test_import_leaves_statics_and_plotting_out():
     assert loaded == "[]"
 
 
+def test_multibody_leaves_plotting_and_statics_out():
+    # building mechanisms needs neither drawings nor statics; the stick figure's
+    # drawing and Euler angles (scipy.spatial) import what they need when called
+    heavy = ("dalembert.statics", "dalembert.plotting", "matplotlib", "mpl_toolkits", "PIL",
+             "pandas", "tqdm")
+    loaded = fresh(f"import sys, dalembert.multibody; print(sorted(m for m in sys.modules "
+                   f"if m.split('.')[0] in {heavy!r} or m in {heavy!r}))")
+    assert loaded == "[]"
+
+
 def test_lazy_names_work_and_are_listed():
     out = fresh("import dalembert; print(callable(dalembert.extremum), "
                 "'extremum' in dir(dalembert), 'extremum' in dalembert.__all__)")

@@ -53,13 +53,39 @@ REQUIRED = ("TITLE", "build", "INITIAL", "T_END", "checks")
 
 
 def is_path(name: str) -> bool:
-    """Whether ``name`` names a Python file rather than a gallery example."""
+    """Whether ``name`` names a Python file rather than a gallery example.
+
+    Parameters
+    ----------
+    name
+        A gallery name (see :data:`EXAMPLES`) or a path.
+
+    Examples
+    --------
+    >>> is_path("four-bar"), is_path("models/my_crane.py")
+    (False, True)
+    """
     return name.endswith(".py") or os.sep in name or "/" in name
 
 
 def load(name: str) -> ModuleType:
     """The example module called ``name`` (see :data:`EXAMPLES`), or the user's Python
-    file at the path ``name`` (see :func:`load_file`)."""
+    file at the path ``name`` (see :func:`load_file`).
+
+    Parameters
+    ----------
+    name
+        A gallery name or a path; an unknown name raises ``KeyError`` listing the
+        gallery.
+
+    Examples
+    --------
+    >>> example = load("pendulum")
+    >>> example.TITLE
+    'Pendulum in Cartesian x, y with the rod x^2 + y^2 = l^2'
+    >>> sorted(example.INITIAL)
+    ['q0', 'qd0']
+    """
     if is_path(name):
         return load_file(name)
     if name not in EXAMPLES:

@@ -30,6 +30,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates, t
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Bead on a hoop spinning about the vertical (rheonomic constraints)"
 m, g, R, Omega = sp.symbols("m g R Omega", positive=True)
@@ -86,14 +87,14 @@ def build(
     )
 
 
-def rotating_frame_energy(system: System, traj) -> np.ndarray:
+def rotating_frame_energy(system: System, traj: Trajectory) -> np.ndarray:
     """``T + V - Omega L_z``: the conserved Jacobi integral of the minimal description."""
     p = system.parameter_values
     lz = p["m"] * (traj["x"] * traj["y_dot"] - traj["y"] * traj["x_dot"])
     return traj.energy - p["Omega"] * lz
 
 
-def _frame(system: System, traj) -> tuple[dict[str, float], np.ndarray, np.ndarray]:
+def _frame(system: System, traj: Trajectory) -> tuple[dict[str, float], np.ndarray, np.ndarray]:
     """Parameter values, ``rho`` and ``rho'`` (``rho`` along the hoop's in-plane horizontal)."""
     p = system.parameter_values
     a = p["Omega"] * traj.t
@@ -103,18 +104,18 @@ def _frame(system: System, traj) -> tuple[dict[str, float], np.ndarray, np.ndarr
     return p, rho, rho_dot
 
 
-def closed_form_plane_multiplier(system: System, traj) -> np.ndarray:
+def closed_form_plane_multiplier(system: System, traj: Trajectory) -> np.ndarray:
     """``lambda_plane = 2 m Omega rho'``: the azimuthal (Coriolis) force the hoop exerts."""
     p, _, rho_dot = _frame(system, traj)
     return 2.0 * p["m"] * p["Omega"] * rho_dot
 
 
-def normal_force(system: System, traj) -> np.ndarray:
+def normal_force(system: System, traj: Trajectory) -> np.ndarray:
     """Inward normal force of the hoop from the multiplier, ``-2 lambda_hoop R``."""
     return -2.0 * traj.multiplier("hoop") * system.parameter_values["R"]
 
 
-def closed_form_normal_force(system: System, traj) -> np.ndarray:
+def closed_form_normal_force(system: System, traj: Trajectory) -> np.ndarray:
     """``m |v_rel|^2 / R - m g z / R + m Omega^2 rho^2 / R`` (rotating-frame radial balance)."""
     p, rho, _ = _frame(system, traj)
     w = p["Omega"]
@@ -127,7 +128,7 @@ def _relative_error(value: np.ndarray, ref: np.ndarray) -> float:
     return float(np.abs(value - ref).max() / np.abs(ref).max())
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Jacobi integral, reactions against closed forms, energy variation, residuals."""
     h, e = rotating_frame_energy(system, traj), traj.energy
     scale = system.parameter_values["m"] * system.parameter_values["g"] * \

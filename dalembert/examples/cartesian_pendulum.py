@@ -14,6 +14,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Pendulum in Cartesian x, y with the rod x^2 + y^2 = l^2"
 m, g, l = sp.symbols("m g l", positive=True)
@@ -51,12 +52,12 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return [np.array([[0.0, 0.0], [q[0], q[1]]])]
 
 
-def tension(system: System, traj) -> np.ndarray:
+def tension(system: System, traj: Trajectory) -> np.ndarray:
     """Rod tension from the multiplier, ``-2 lambda l``."""
     return -2.0 * traj.multiplier("rod") * system.parameter_values["l"]
 
 
-def closed_form_tension(system: System, traj) -> np.ndarray:
+def closed_form_tension(system: System, traj: Trajectory) -> np.ndarray:
     """``m v^2 / l + m g cos(theta)`` with ``theta`` measured from the downward vertical."""
     p = system.parameter_values
     v2 = traj["x_dot"] ** 2 + traj["y_dot"] ** 2
@@ -64,7 +65,7 @@ def closed_form_tension(system: System, traj) -> np.ndarray:
     return p["m"] * v2 / p["l"] + p["m"] * p["g"] * cos_theta
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Tension against the closed form, energy conservation, constraint residual."""
     ref = closed_form_tension(system, traj)
     e = traj.energy

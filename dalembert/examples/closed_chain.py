@@ -22,6 +22,7 @@ from ..multibody.bodies import Ground, RigidBody
 from ..multibody.builder import Multibody
 from ..multibody.joints import Spherical
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Closed loop: six rods on spherical joints pinned to the ground at both ends"
 N_LINKS, LENGTH, MASS, RADIUS = 6, 1.0, 1.0, 0.05
@@ -61,7 +62,7 @@ def _orientation(phi: float) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
-def initial_state(turn: float = TURN_RATE, spin: float = SPIN_RATE) -> dict[str, dict]:
+def initial_state(turn: float = TURN_RATE, spin: float = SPIN_RATE) -> dict[str, dict[str, float]]:
     """Consistent ``q0``/``qd0``: the polygon turning rigidly about ``x``, link 3 spinning.
 
     >>> state = initial_state()
@@ -86,7 +87,7 @@ def initial_state(turn: float = TURN_RATE, spin: float = SPIN_RATE) -> dict[str,
 INITIAL = initial_state()
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Energy and constraint residuals (the loop stays closed at both pins)."""
     e = traj.energy
     return {

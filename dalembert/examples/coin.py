@@ -24,6 +24,7 @@ import numpy as np
 from ..multibody import Multibody, RigidBody, Rolling, joint_reactions, multibody_of
 from ..multibody.rotations import elementary_rotation, rotation_matrix
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Coin rolling on a table: quaternion rigid body with the Rolling joint"
 M, G, R_COIN = 1.0, 9.81, 0.1
@@ -60,7 +61,7 @@ def steady_rate(theta: float, radius: float, g: float = G, r: float = R_COIN) ->
 
 
 def steady_state(theta: float = THETA0, radius: float = RADIUS, g: float = G,
-                 r: float = R_COIN) -> dict:
+                 r: float = R_COIN) -> dict[str, dict[str, float]]:
     """``q0``/``qd0`` of steady rolling: center over the origin, heading ``+x``."""
     omega = steady_rate(theta, radius, g, r)
     spin = omega * radius / r
@@ -81,7 +82,7 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return multibody_of(system).stick_figure(q)
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Steady rolling from :data:`INITIAL`: tilt, circle, contact force, energy, norm.
 
     The steady motion (tilt, ``Omega``, ``R``) is read from the initial state, so the
@@ -89,6 +90,7 @@ def checks(system: System, traj) -> dict[str, float]:
     """
     mb = multibody_of(system)
     coin, roll = mb.bodies[0], mb.joints[0]
+    assert isinstance(roll, Rolling)  # as model() builds it
     m, g, r = coin.mass, -mb.gravity[2], roll.radius
     b = np.column_stack([traj[f"coin_b{i}"] for i in range(4)])
     theta = np.arcsin(rotation_matrix(b)[:, 2, 1])   # the axis (body y) against the table
@@ -119,7 +121,7 @@ def checks(system: System, traj) -> dict[str, float]:
     }
 
 
-def _radius(traj, speed: float) -> float:
+def _radius(traj: Trajectory, speed: float) -> float:
     """Signed circle radius ``v / Omega`` from the initial precession (heading rate)."""
     vx, vy = traj["coin_x_dot"][0], traj["coin_y_dot"][0]
     ax, ay = traj.qdd[0, 0], traj.qdd[0, 1]

@@ -16,6 +16,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Double pendulum in Cartesian x1, y1, x2, y2 with two rigid rods"
 m, g, l = sp.symbols("m g l", positive=True)
@@ -25,7 +26,8 @@ NAMES = ("x1", "y1", "x2", "y2")
 THETA0 = (0.6, -0.4)
 
 
-def positions_from_angles(theta1: float, theta2: float, length: float = 1.0) -> dict:
+def positions_from_angles(theta1: float, theta2: float,
+                          length: float = 1.0) -> dict[str, float]:
     """Coordinates of both bobs for rod angles measured from the downward vertical.
 
     >>> {k: round(v, 12) for k, v in positions_from_angles(0.0, 0.0).items()}
@@ -73,7 +75,7 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return [np.array([[0.0, 0.0], [q[0], q[1]], [q[2], q[3]]])]
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Energy conservation and constraint residuals."""
     e = traj.energy
     return {

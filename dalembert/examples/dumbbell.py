@@ -17,6 +17,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Dumbbell thrown under gravity: two masses on a rigid rod |r1 - r2| = d"
 m1, m2, g, d = sp.symbols("m1 m2 g d", positive=True)
@@ -52,12 +53,12 @@ def build(
     )
 
 
-def positions(traj) -> tuple[np.ndarray, np.ndarray]:
+def positions(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
     """Positions of the two particles, arrays of shape (len(t), 3)."""
     return traj.q[:, :3], traj.q[:, 3:]
 
 
-def velocities(traj) -> tuple[np.ndarray, np.ndarray]:
+def velocities(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
     """Velocities of the two particles, arrays of shape (len(t), 3)."""
     return traj.qd[:, :3], traj.qd[:, 3:]
 
@@ -68,7 +69,7 @@ def center_of_mass(system: System, r1: np.ndarray, r2: np.ndarray) -> np.ndarray
     return (p["m1"] * r1 + p["m2"] * r2) / (p["m1"] + p["m2"])
 
 
-def closed_form_center_of_mass(system: System, traj) -> np.ndarray:
+def closed_form_center_of_mass(system: System, traj: Trajectory) -> np.ndarray:
     """The free-fall parabola ``c0 + w0 t - g t^2 / 2 e_z`` from the first output state."""
     c0 = center_of_mass(system, *positions(traj))[0]
     w0 = center_of_mass(system, *velocities(traj))[0]
@@ -78,12 +79,12 @@ def closed_form_center_of_mass(system: System, traj) -> np.ndarray:
     return c
 
 
-def tension(system: System, traj) -> np.ndarray:
+def tension(system: System, traj: Trajectory) -> np.ndarray:
     """Rod tension from the multiplier, ``-2 lambda d``."""
     return -2.0 * traj.multiplier("rod") * system.parameter_values["d"]
 
 
-def closed_form_tension(system: System, traj) -> np.ndarray:
+def closed_form_tension(system: System, traj: Trajectory) -> np.ndarray:
     """``mu d omega^2 = mu |v1 - v2|^2 / d`` (the relative velocity is perpendicular to the rod)."""
     p = system.parameter_values
     v1, v2 = velocities(traj)
@@ -91,7 +92,7 @@ def closed_form_tension(system: System, traj) -> np.ndarray:
     return mu * np.sum((v1 - v2) ** 2, axis=1) / p["d"]
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Tension and centre of mass against the closed forms, energy, constraint residuals."""
     ref = closed_form_tension(system, traj)
     c = center_of_mass(system, *positions(traj))

@@ -32,9 +32,12 @@ from ..multibody.builder import Multibody
 from ..multibody.joints import Revolute
 from ..multibody.rotations import rotation_matrix
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Planar four-bar linkage from 3D revolute joints (3 redundant constraints)"
-LENGTHS = (1.0, 3.0, 2.5, 3.0)  # crank a, coupler b, rocker c, ground d
+#: Link lengths ``(a, b, c, d)``: crank, coupler, rocker, ground.
+Lengths = tuple[float, float, float, float]
+LENGTHS: Lengths = (1.0, 3.0, 2.5, 3.0)  # crank a, coupler b, rocker c, ground d
 LINKS = ("crank", "coupler", "rocker")
 DENSITY, RADIUS = 1.0, 0.02  # kg/m of each link, link radius (m)
 THETA2_0, OMEGA2_0 = np.pi / 3, 6.0  # initial crank angle (rad) and rate (rad/s)
@@ -43,7 +46,8 @@ T_END = 10.0
 DEPENDENT = ("J4_2", "J4_4", "J4_5")
 
 
-def freudenstein(theta2: np.ndarray, lengths: tuple = LENGTHS, branch: int = 1) -> np.ndarray:
+def freudenstein(theta2: float | np.ndarray, lengths: Lengths = LENGTHS,
+                 branch: int = 1) -> float | np.ndarray:
     """Rocker angle ``th4`` from the crank angle (closed form; ``branch`` = +-1).
 
     ``P cos(th4) + Q sin(th4) + R = 0`` with ``P = K1 - cos th2``, ``Q = -sin th2``,
@@ -61,7 +65,7 @@ def freudenstein(theta2: np.ndarray, lengths: tuple = LENGTHS, branch: int = 1) 
     return np.arctan2(q, p) + branch * np.arccos(-r / np.hypot(p, q))
 
 
-def link_angles(theta2: float, lengths: tuple = LENGTHS) -> tuple[float, float, float]:
+def link_angles(theta2: float, lengths: Lengths = LENGTHS) -> tuple[float, float, float]:
     """``(th2, th3, th4)`` of the open assembly (``B`` above the ground line)."""
     a, _, c, d = lengths
     th4 = float(freudenstein(theta2, lengths))
@@ -70,7 +74,8 @@ def link_angles(theta2: float, lengths: tuple = LENGTHS) -> tuple[float, float, 
     return theta2, float(th3), th4
 
 
-def link_rates(angles: tuple, omega2: float, lengths: tuple = LENGTHS) -> tuple:
+def link_rates(angles: tuple[float, float, float], omega2: float,
+               lengths: Lengths = LENGTHS) -> tuple[float, float, float]:
     """``(w2, w3, w4)`` from the loop's velocity relation ``a w2 i e2 + b w3 i e3 = c w4 i e4``."""
     a, b, c, _ = lengths
     th2, th3, th4 = angles
@@ -86,7 +91,7 @@ def _about_y(phi: float) -> np.ndarray:
     return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
 
 
-def build_multibody(lengths: tuple = LENGTHS, gravity: float = 9.81) -> Multibody:
+def build_multibody(lengths: Lengths = LENGTHS, gravity: float = 9.81) -> Multibody:
     """The linkage as a ``Multibody``; each link a uniform rod along its body ``x``."""
     a, b, c, d = lengths
     bodies = []
@@ -105,7 +110,7 @@ def build_multibody(lengths: tuple = LENGTHS, gravity: float = 9.81) -> Multibod
     return Multibody(bodies, joints, gravity=(0.0, 0.0, -gravity), name="four-bar")
 
 
-def build(lengths: tuple = LENGTHS, gravity: float = 9.81) -> System:
+def build(lengths: Lengths = LENGTHS, gravity: float = 9.81) -> System:
     """The linkage's ``System`` (21 coordinates, 23 constraints, 1 degree of freedom).
 
     >>> system = build()
@@ -116,7 +121,7 @@ def build(lengths: tuple = LENGTHS, gravity: float = 9.81) -> System:
 
 
 def initial_state(
-    theta2: float = THETA2_0, omega2: float = OMEGA2_0, lengths: tuple = LENGTHS
+    theta2: float = THETA2_0, omega2: float = OMEGA2_0, lengths: Lengths = LENGTHS
 ) -> dict[str, dict[str, float]]:
     """Consistent ``q0``/``qd0`` from the closed-form position and velocity analysis."""
     a, b, c, d = lengths
@@ -138,20 +143,20 @@ def initial_state(
 INITIAL = initial_state()
 
 
-def angle(traj, link: str) -> np.ndarray:
+def angle(traj: Trajectory, link: str) -> np.ndarray:
     """A link's angle from ``+x`` towards ``+z`` along the trajectory (from its quaternion)."""
     b = np.column_stack([traj[f"{link}_b{k}"] for k in range(4)])
     R = rotation_matrix(b)
     return np.arctan2(R[:, 2, 0], R[:, 0, 0])
 
 
-def freudenstein_error(traj) -> float:
+def freudenstein_error(traj: Trajectory) -> float:
     """Largest ``|th4 - th4(th2)|`` (wrapped) over the output times."""
     diff = angle(traj, "rocker") - freudenstein(angle(traj, "crank"))
     return float(np.abs(np.angle(np.exp(1j * diff))).max())
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Freudenstein's relation, energy, constraint residuals."""
     e = traj.energy
     return {

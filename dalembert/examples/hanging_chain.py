@@ -24,6 +24,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Hanging chain: 20 masses on 21 rigid rods pinned at both ends (a closed loop)"
 N_MASSES = 20
@@ -135,7 +136,7 @@ def support_reactions(system: System, q: np.ndarray,
     return left, right
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Energy conservation and constraint residuals."""
     e = traj.energy
     return {

@@ -30,6 +30,7 @@ from ..multibody import (
 )
 from ..multibody.rotations import elementary_rotation
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Heavy symmetric top on a pivot: steady precession (quaternions, ball joint)"
 M, L, A0, C, G = 1.0, 0.2, 0.03, 0.04, 9.81
@@ -66,7 +67,8 @@ def precession_rates(theta: float = THETA0, spin: float = SPIN, m: float = M, l:
     return (c * spin - disc) / (2 * a), (c * spin + disc) / (2 * a)
 
 
-def steady_state(theta: float = THETA0, spin: float = SPIN, omega: float | None = None) -> dict:
+def steady_state(theta: float = THETA0, spin: float = SPIN,
+                 omega: float | None = None) -> dict[str, dict[str, float]]:
     """Tilted about world ``y`` by ``theta`` and precessing at ``omega`` about world ``z``."""
     omega = precession_rates(theta, spin)[0] if omega is None else omega
     R = elementary_rotation("y", theta)
@@ -87,10 +89,11 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return multibody_of(system).stick_figure(q)
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Steady precession from the initial state: tilt, rate, condition, pivot force, energy."""
     mb = multibody_of(system)
     top, pivot = mb.bodies[0], mb.joints[0]
+    assert isinstance(top, RigidBody)  # as model() builds it
     m, l, g = top.mass, -pivot.point_b[2], -mb.gravity[2]
     a0, c = top.inertia[0, 0], top.inertia[2, 2]
     x = np.column_stack([traj["top_x"], traj["top_y"], traj["top_z"]])

@@ -28,6 +28,7 @@ import sympy as sp
 from ..model.constraints import Pfaffian
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Knife edge / Chaplygin sled: a blade that cannot slide sideways (nonholonomic)"
 m, J, a = sp.symbols("m J a", real=True)
@@ -59,13 +60,13 @@ def build(m_value: float = 2.0, J_value: float = 0.3, a_value: float = 0.0) -> S
     )
 
 
-def forward_speed(traj) -> np.ndarray:
+def forward_speed(traj: Trajectory) -> np.ndarray:
     """Speed of the contact point along the blade, ``u``."""
     th = traj["theta"]
     return traj["x_dot"] * np.cos(th) + traj["y_dot"] * np.sin(th)
 
 
-def closed_form_lateral_force(system: System, traj) -> np.ndarray:
+def closed_form_lateral_force(system: System, traj: Trajectory) -> np.ndarray:
     """``m (u omega + a omega_dot)`` with the sled's ``omega_dot`` (Newton along the normal)."""
     p = system.parameter_values
     u, om = forward_speed(traj), traj["theta_dot"]
@@ -73,14 +74,14 @@ def closed_form_lateral_force(system: System, traj) -> np.ndarray:
     return p["m"] * (u * om + p["a"] * om_dot)
 
 
-def circle_center(traj) -> tuple[float, float, float]:
+def circle_center(traj: Trajectory) -> tuple[float, float, float]:
     """Center and signed radius ``u / omega`` of the knife edge's circle, from the start."""
     u0, om0, th0 = forward_speed(traj)[0], traj["theta_dot"][0], traj["theta"][0]
     radius = u0 / om0
     return traj["x"][0] - radius * np.sin(th0), traj["y"][0] + radius * np.cos(th0), radius
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Lateral force, energy; for the knife edge also the constant rates and the circle."""
     ref = closed_form_lateral_force(system, traj)
     e = traj.energy

@@ -34,6 +34,7 @@ import sympy as sp
 from ..model.constraints import Holonomic, Pfaffian
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Rolling disk (coin) on a plane: two rolling constraints and the contact height"
 m, g, r = sp.symbols("m g r", positive=True)
@@ -87,7 +88,7 @@ def steady_precession(theta0: float, radius: float, g_value: float, r_value: flo
 
 def steady_state(
     theta0: float = -0.3, radius: float = 0.5, g_value: float = 9.81, r_value: float = 0.1
-) -> dict:
+) -> dict[str, dict[str, float]]:
     """``q0``/``qd0`` of steady rolling with the center at the origin, heading along ``x``.
 
     ``radius > 0`` puts the circle's center at ``(0, radius)``; the disk then leans
@@ -108,7 +109,7 @@ INITIAL = steady_state(THETA0, RADIUS)
 T_END = 5.0
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Steady rolling from the start: tilt, precession, circle, contact force, energy.
 
     The steady motion is taken from the initial state (tilt, ``Omega = psi_dot``,

@@ -31,9 +31,12 @@ from ..multibody import (
     multibody_of,
 )
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Offset slider-crank from planar bodies: crank, connecting rod and piston on a guide"
-GEOMETRY = (1.0, 3.0, 0.25)  # crank a, rod b, guide offset e (m)
+#: ``(a, b, e)``: crank and rod lengths, guide offset.
+Geometry = tuple[float, float, float]
+GEOMETRY: Geometry = (1.0, 3.0, 0.25)  # crank a, rod b, guide offset e (m)
 LINKS = ("crank", "rod")
 DENSITY = 1.0  # kg/m of each link (uniform slender rods)
 PISTON_MASS, PISTON_INERTIA = 2.0, 0.01  # kg, kg m^2 (the piston does not turn)
@@ -42,7 +45,7 @@ G = 9.81
 T_END = 10.0
 
 
-def piston_position(theta: np.ndarray, geometry: tuple = GEOMETRY) -> np.ndarray:
+def piston_position(theta: float | np.ndarray, geometry: Geometry = GEOMETRY) -> np.ndarray:
     """``x_B`` from the crank angle (closed form).
 
     >>> float(piston_position(0.0, (1.0, 3.0, 0.0)))
@@ -52,8 +55,9 @@ def piston_position(theta: np.ndarray, geometry: tuple = GEOMETRY) -> np.ndarray
     return a * np.cos(theta) + np.sqrt(b**2 - (a * np.sin(theta) - e) ** 2)
 
 
-def rod_kinematics(theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray,
-                   geometry: tuple = GEOMETRY) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def rod_kinematics(theta: float | np.ndarray, omega: float | np.ndarray,
+                   alpha: float | np.ndarray,
+                   geometry: Geometry = GEOMETRY) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rod's ``(phi, phi', phi'')`` from the crank's angle, rate and acceleration.
 
     From ``b sin(phi) = e - a sin(th)``, differentiated once and twice.
@@ -66,7 +70,7 @@ def rod_kinematics(theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray,
     return phi, rate, accel
 
 
-def build_multibody(geometry: tuple = GEOMETRY, piston_mass: float = PISTON_MASS,
+def build_multibody(geometry: Geometry = GEOMETRY, piston_mass: float = PISTON_MASS,
                     gravity: float = G) -> Multibody:
     """The mechanism as a ``Multibody``; each link a uniform rod along its body ``x``."""
     a, b, e = geometry
@@ -84,7 +88,7 @@ def build_multibody(geometry: tuple = GEOMETRY, piston_mass: float = PISTON_MASS
                      name="slider-crank")
 
 
-def build(geometry: tuple = GEOMETRY, piston_mass: float = PISTON_MASS,
+def build(geometry: Geometry = GEOMETRY, piston_mass: float = PISTON_MASS,
           gravity: float = G) -> System:
     """The mechanism's ``System`` (9 coordinates, 8 constraints, 1 degree of freedom).
 
@@ -96,7 +100,7 @@ def build(geometry: tuple = GEOMETRY, piston_mass: float = PISTON_MASS,
 
 
 def initial_state(theta: float = THETA_0, omega: float = OMEGA_0,
-                  geometry: tuple = GEOMETRY) -> dict[str, dict[str, float]]:
+                  geometry: Geometry = GEOMETRY) -> dict[str, dict[str, float]]:
     """Consistent ``q0``/``qd0`` from the closed-form position and velocity analysis."""
     a, b = geometry[:2]
     phi, rate, _ = rod_kinematics(theta, omega, 0.0, geometry)
@@ -138,12 +142,12 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return [np.array([[0.0, 0.0], a * np.array([np.cos(th), np.sin(th)]), piston]), block, rail]
 
 
-def piston_error(traj, geometry: tuple = GEOMETRY) -> float:
+def piston_error(traj: Trajectory, geometry: Geometry = GEOMETRY) -> float:
     """Largest ``|x_B - x_B(th)|`` (closed form at the simulated crank angle)."""
     return float(np.abs(traj["piston_x"] - piston_position(traj["crank_theta"], geometry)).max())
 
 
-def guide_force(mb: Multibody, traj) -> np.ndarray:
+def guide_force(mb: Multibody, traj: Trajectory) -> np.ndarray:
     """The guide's normal force ``N`` on the piston from Newton-Euler, given the crank's motion.
 
     The guide is frictionless, so the pin ``J3`` alone pushes the piston along ``x``:
@@ -154,6 +158,7 @@ def guide_force(mb: Multibody, traj) -> np.ndarray:
     geometry = geometry_of(mb)
     a, b, _ = geometry
     rod, piston = mb.bodies[1], mb.bodies[2]
+    assert isinstance(rod, PlanarBody)  # as build_multibody() builds it
     g = -float(mb.gravity[1])
     th, w, al = traj["crank_theta"], traj["crank_theta_dot"], traj["crank_theta_ddot"]
     phi, dphi, ddphi = rod_kinematics(th, w, al, geometry)
@@ -170,7 +175,7 @@ def guide_force(mb: Multibody, traj) -> np.ndarray:
     return piston.mass * g + rest / (2 * half[0])
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Closed-form piston position, guide force, piston force balance, energy, residuals."""
     mb = multibody_of(system)
     reactions = joint_reactions(mb, traj)

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..multibody import Multibody, angular_momentum, chain, energy, multibody_of
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Chain of rigid links on ball joints swinging in 3D (quaternions, 4 links)"
 N, LENGTH, MASS, RADIUS = 4, 0.5, 1.0, 0.03
@@ -34,7 +35,8 @@ def build(n: int = N, length: float = LENGTH, mass: float = MASS,
     return model(n, length, mass, radius).system
 
 
-def bent_state(mb: Multibody, length: float = LENGTH, spin: float = SPIN) -> dict:
+def bent_state(mb: Multibody, length: float = LENGTH,
+               spin: float = SPIN) -> dict[str, dict[str, float]]:
     """Links pointing down and outwards at growing azimuths, turning rigidly about ``z``."""
     n = len(mb.bodies)
     positions, orientations, velocities, rates = {}, {}, {}, {}
@@ -64,7 +66,7 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return multibody_of(system).stick_figure(q)
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Energy and the vertical angular momentum are conserved; constraint residuals."""
     mb = multibody_of(system)
     e = energy(mb, traj)

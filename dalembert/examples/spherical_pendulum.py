@@ -15,6 +15,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Spherical pendulum in Cartesian x, y, z with the rod x^2 + y^2 + z^2 = l^2"
 m, g, l = sp.symbols("m g l", positive=True)
@@ -64,24 +65,24 @@ def build(m_value: float = 1.0, g_value: float = 9.81, l_value: float = 1.0) -> 
     )
 
 
-def vertical_angular_momentum(system: System, traj) -> np.ndarray:
+def vertical_angular_momentum(system: System, traj: Trajectory) -> np.ndarray:
     """``L_z = m (x y' - y x')``, conserved because gravity and the rod exert no torque about z."""
     return system.parameter_values["m"] * (traj["x"] * traj["y_dot"] - traj["y"] * traj["x_dot"])
 
 
-def tension(system: System, traj) -> np.ndarray:
+def tension(system: System, traj: Trajectory) -> np.ndarray:
     """Rod tension from the multiplier, ``-2 lambda l``."""
     return -2.0 * traj.multiplier("rod") * system.parameter_values["l"]
 
 
-def closed_form_tension(system: System, traj) -> np.ndarray:
+def closed_form_tension(system: System, traj: Trajectory) -> np.ndarray:
     """``m v^2 / l + m g cos(theta)`` (radial balance of the bob; ``cos(theta) = -z / l``)."""
     p = system.parameter_values
     v2 = traj["x_dot"] ** 2 + traj["y_dot"] ** 2 + traj["z_dot"] ** 2
     return p["m"] * v2 / p["l"] - p["m"] * p["g"] * traj["z"] / p["l"]
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Energy and ``L_z`` conservation, tension against the closed form, constraint residuals."""
     e = traj.energy
     lz = vertical_angular_momentum(system, traj)

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..multibody import Multibody, RigidBody, angular_momentum, energy, multibody_of
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Tumbling rigid body: torque-free spin near the intermediate axis flips over"
 MASS, INERTIA = 2.0, (1.0, 2.0, 3.0)
@@ -24,13 +25,13 @@ OMEGA0 = (0.01, 2.0, 0.01)
 T_END = 20.0
 
 
-def model(mass: float = MASS, inertia: tuple = INERTIA) -> Multibody:
+def model(mass: float = MASS, inertia: tuple[float, float, float] = INERTIA) -> Multibody:
     """One rigid body, no joints, no gravity."""
     return Multibody([RigidBody("body", mass, inertia)], gravity=(0.0, 0.0, 0.0),
                      name="tumbling body")
 
 
-def build(mass: float = MASS, inertia: tuple = INERTIA) -> System:
+def build(mass: float = MASS, inertia: tuple[float, float, float] = INERTIA) -> System:
     """The body as a System: 7 coordinates, the unit-quaternion constraint.
 
     >>> build().degrees_of_freedom
@@ -39,7 +40,7 @@ def build(mass: float = MASS, inertia: tuple = INERTIA) -> System:
     return model(mass, inertia).system
 
 
-def _initial() -> dict:
+def _initial() -> dict[str, dict[str, float]]:
     q0, qd0 = model().initial_state(angular_velocities={"body": OMEGA0},
                                     angular_velocity_frame="body")
     return {"q0": q0, "qd0": qd0}
@@ -53,7 +54,7 @@ def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
     return multibody_of(system).stick_figure(q)
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Conservation of energy and world angular momentum; unit Euler parameters."""
     mb = multibody_of(system)
     e, h = energy(mb, traj), angular_momentum(mb, traj)

@@ -22,6 +22,7 @@ import sympy as sp
 from ..model.constraints import Holonomic
 from ..model.coordinates import coordinates, t
 from ..system import System
+from ..trajectory import Trajectory
 
 TITLE = "Particle on a string pulled in through a hole: a rheonomic constraint"
 m, l0, v, d, nu = sp.symbols("m l0 v d nu", real=True)
@@ -63,7 +64,7 @@ def length(system: System, time: np.ndarray, order: int = 0) -> np.ndarray:
 def initial_state(
     l0_value: float = 1.0, v_value: float = 0.05, d_value: float = 0.05, nu_value: float = 2.0,
     omega0: float = OMEGA0,
-) -> dict:
+) -> dict[str, dict[str, float]]:
     """``q0``/``qd0`` on the positive ``x`` axis, turning at ``omega0``, radial speed ``l'(0)``."""
     return {
         "q0": {"x": l0_value, "y": 0.0},
@@ -74,17 +75,17 @@ def initial_state(
 INITIAL = initial_state()
 
 
-def tension(system: System, traj) -> np.ndarray:
+def tension(system: System, traj: Trajectory) -> np.ndarray:
     """String tension from the multiplier, ``-2 lambda l``."""
     return -2.0 * traj.multiplier("string") * length(system, traj.t)
 
 
-def angular_momentum(traj) -> np.ndarray:
+def angular_momentum(traj: Trajectory) -> np.ndarray:
     """Angular momentum per unit mass about the hole, ``x y_dot - y x_dot``."""
     return traj["x"] * traj["y_dot"] - traj["y"] * traj["x_dot"]
 
 
-def checks(system: System, traj) -> dict[str, float]:
+def checks(system: System, traj: Trajectory) -> dict[str, float]:
     """Tension, angular momentum and kinetic energy against the closed forms."""
     p = system.parameter_values
     h = angular_momentum(traj)

@@ -9,6 +9,7 @@ coordinate a mapping leaves out is zero.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -16,7 +17,9 @@ from ..errors import InitialConditionError
 from .coordinates import key_name
 
 #: What users pass for ``q0``, ``qd0``, a guess: by coordinate, in order, or nothing.
-CoordinateValues = Mapping[object, float] | Sequence[float] | np.ndarray | None
+#: A mapping's keys are coordinates (SymPy, which has no types) or their names; its key
+#: type is invariant, so ``Mapping[object, float]`` would refuse a ``dict[str, float]``.
+CoordinateValues = Mapping[Any, float] | Sequence[float] | np.ndarray | None
 
 
 def coordinate_values(values: CoordinateValues, names: Sequence[str], what: str) -> np.ndarray:

@@ -32,15 +32,17 @@ from collections.abc import Sequence
 
 import numpy as np
 import sympy as sp
+from numpy.typing import ArrayLike
 from sympy.physics.vector import dynamicsymbols
 
 from ..errors import ModelError
 from ..model.constraints import Holonomic
 from ..model.coordinates import t
 from .rotations import E_matrix, dot, rotation_matrix, times_vector
+from .types import ExprVector, FloatArray
 
 
-def _vector(v: object, what: str) -> sp.Matrix:
+def _vector(v: ExprVector, what: str) -> sp.Matrix:
     """A 3-vector as a SymPy column (numbers or expressions)."""
     try:
         comps = list(v)
@@ -60,16 +62,41 @@ def _check_name(name: object) -> str:
 
 
 class Body:
-    """Common interface: coordinates, point positions, orientation, energy."""
+    """Common interface: coordinates, point positions, orientation, energy.
+
+    The kinds of body are :class:`Ground`, :class:`Particle`, :class:`RigidBody` and
+    :class:`PlanarBody`; :data:`MovingBody` and :data:`TurningBody` name the unions
+    code narrows to with ``isinstance`` (what moves; what turns and has an inertia).
+    """
 
     name: str
     mass: float
+    #: The body's coordinates, SymPy ``dynamicsymbols`` (none for the ground).
     coordinates: tuple[sp.Function, ...] = ()
+    #: False for a particle. Kept for existing callers; the package itself tells the
+    #: kinds apart with ``isinstance`` (``TurningBody``), which a type checker follows.
     has_orientation = True
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
-        """World position of a body-fixed point (given in the body frame):
-        ``center + R point`` for a body with an orientation."""
+    @property
+    def center(self) -> sp.Matrix:
+        """World position of the mass center as SymPy expressions (a moving body's)."""
+        raise NotImplementedError
+
+    def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
+        """World position of a body-fixed point: ``center + R point``.
+
+        Parameters
+        ----------
+        point
+            The point in the body frame, relative to the mass center (3 numbers or
+            SymPy expressions); the default is the mass center.
+
+        Examples
+        --------
+        >>> link = PlanarBody("link", 1.0, 0.1)
+        >>> link.position((0.5, 0, 0)).T
+        Matrix([[link_x(t) + 0.5*cos(link_theta(t)), link_y(t) + 0.5*sin(link_theta(t)), 0]])
+        """
         s = _vector(point, f"a point of body {self.name!r}")
         if all(c == 0 for c in s):
             return self.center
@@ -80,36 +107,108 @@ class Body:
         raise NotImplementedError
 
     def kinetic_energy(self) -> sp.Expr:
+        """``T`` of the body in its coordinates and their rates (SymPy)."""
         return sp.S.Zero
 
     def constraints(self) -> list[Holonomic]:
+        """The body's own constraints (a rigid body's unit quaternion)."""
         return []
 
     # -- numbers: rows of coordinate values ``c`` (k, len(coordinates)) -----------------
-    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` (body -> world)."""
+    def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` (body -> world).
+
+        Parameters
+        ----------
+        c
+            Values of the body's coordinates, one row per instant ``(k, n)`` (or one
+            configuration ``(n,)``), in the order of :attr:`coordinates`.
+
+        Examples
+        --------
+        A rigid body at ``(1, 2, 3)`` turned a half turn about ``z``:
+
+        >>> x, R = RigidBody("box", 1.0, (1, 1, 1)).pose(np.array([1, 2, 3, 0, 0, 0, 1.0]))
+        >>> x.tolist(), R[0].round(12).tolist()
+        ([[1.0, 2.0, 3.0]], [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]])
+        """
         c = np.atleast_2d(c)
         return c[:, :3], np.broadcast_to(np.eye(3), (len(c), 3, 3)).copy()
 
-    def center_velocity(self, cd: np.ndarray) -> np.ndarray:
-        """Mass-center velocities ``(k, 3)`` (world) from the coordinate rates."""
+    def center_velocity(self, cd: FloatArray) -> FloatArray:
+        """Mass-center velocities ``(k, 3)`` (world) from the coordinate rates.
+
+        Parameters
+        ----------
+        cd
+            Rates of the body's coordinates, ``(k, n)`` or ``(n,)``.
+
+        Examples
+        --------
+        >>> PlanarBody("link", 1.0, 0.1).center_velocity(np.array([1.0, 2.0, 5.0])).tolist()
+        [[1.0, 2.0, 0.0]]
+        """
         return np.atleast_2d(cd)[:, :3]
 
-    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
-        """Angular velocities ``(k, 3)`` in body components."""
+    def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
+        """Angular velocities ``(k, 3)`` in body components (zero for a particle).
+
+        Parameters
+        ----------
+        c, cd
+            Values and rates of the body's coordinates, ``(k, n)`` or ``(n,)`` each.
+
+        Examples
+        --------
+        A planar body turning at 5 rad/s:
+
+        >>> PlanarBody("link", 1.0, 0.1).angular_velocity_at(np.zeros(3), [0, 0, 5.0]).tolist()
+        [[0.0, 0.0, 5.0]]
+        """
         return np.zeros((len(np.atleast_2d(c)), 3))
 
-    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         """The torque about the mass center (world) whose virtual work on this body's
-        coordinates is the generalized force ``Q`` (k, len(coordinates))."""
+        coordinates is the generalized force ``Q``.
+
+        Parameters
+        ----------
+        c
+            Values of the body's coordinates, ``(k, n)`` or ``(n,)``.
+        Q
+            Generalized forces on those coordinates, the same shape.
+
+        Examples
+        --------
+        On a rigid body at rest, ``Q_b = 2 E(b)^T tau`` on its Euler parameters comes
+        back as the torque ``tau``:
+
+        >>> from dalembert.multibody.rotations import E_matrix
+        >>> body, c = RigidBody("box", 1.0, (1, 1, 1)), np.array([0, 0, 0, 1.0, 0, 0, 0])
+        >>> Q = np.concatenate([np.zeros(3), 2 * E_matrix(c[3:]).T @ [0.0, 0.0, 3.0]])
+        >>> body.center_torque(c, Q).tolist()
+        [[0.0, 0.0, 3.0]]
+        """
         return np.zeros((len(np.atleast_2d(c)), 3))
 
-    def center_force(self, Q: np.ndarray) -> np.ndarray:
-        """The force (world) of a generalized force ``Q`` on this body's coordinates."""
+    def center_force(self, Q: FloatArray) -> FloatArray:
+        """The force (world) of a generalized force ``Q`` on this body's coordinates.
+
+        Parameters
+        ----------
+        Q
+            Generalized forces on the body's coordinates, ``(k, n)`` or ``(n,)``.
+
+        Examples
+        --------
+        >>> Particle("bob", 1.0).center_force(np.array([0.0, 0.0, -9.81])).tolist()
+        [[0.0, 0.0, -9.81]]
+        """
         return np.atleast_2d(Q)[:, :3]
 
     @property
     def constraint_names(self) -> list[str]:
+        """The names of :meth:`constraints`, without building them."""
         return []
 
     def __repr__(self) -> str:
@@ -119,6 +218,13 @@ class Body:
 class Ground(Body):
     """The fixed world frame; its points are given in world coordinates.
 
+    Parameters
+    ----------
+    name
+        Its name in messages (any ``Ground`` object is the same ground).
+
+    Examples
+    --------
     >>> Ground().position((1, 2, 3)).T
     Matrix([[1, 2, 3]])
     """
@@ -127,7 +233,7 @@ class Ground(Body):
         self.name = _check_name(name)
         self.mass = 0.0
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+    def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
         return _vector(point, f"a point of {self.name!r}")
 
     def rotation(self) -> sp.Matrix:
@@ -137,6 +243,15 @@ class Ground(Body):
 class Particle(Body):
     """A point mass with coordinates ``<name>_x, <name>_y, <name>_z``.
 
+    Parameters
+    ----------
+    name
+        Prefix of the coordinate names.
+    mass
+        Positive mass.
+
+    Examples
+    --------
     >>> p = Particle("bob", 2.0)
     >>> [str(c) for c in p.coordinates]
     ['bob_x(t)', 'bob_y(t)', 'bob_z(t)']
@@ -153,7 +268,7 @@ class Particle(Body):
     def center(self) -> sp.Matrix:
         return sp.Matrix(self.coordinates)
 
-    def position(self, point: object = (0, 0, 0)) -> sp.Matrix:
+    def position(self, point: ExprVector = (0, 0, 0)) -> sp.Matrix:
         s = _vector(point, f"a point of particle {self.name!r}")
         if any(c != 0 for c in s):
             raise ModelError(
@@ -183,12 +298,14 @@ class RigidBody(Body):
         Inertia tensor about the mass center in the body frame: a symmetric
         positive-definite 3x3 matrix, or its 3 principal values.
 
+    Examples
+    --------
     >>> body = RigidBody("box", 1.0, (1.0, 2.0, 3.0))
     >>> [c.name for c in body.constraints()]
     ['box_unit_quaternion']
     """
 
-    def __init__(self, name: str, mass: float, inertia: object) -> None:
+    def __init__(self, name: str, mass: float, inertia: ArrayLike) -> None:
         self.name = _check_name(name)
         self.mass = _positive_mass(mass, name)
         self.inertia = _inertia_tensor(inertia, name)
@@ -214,20 +331,20 @@ class RigidBody(Body):
     def kinetic_energy(self) -> sp.Expr:
         v = self.center.diff(t)
         w = self.angular_velocity()
-        inertia = sp.Matrix(3, 3, lambda i, j: _number(self.inertia[i, j]))
+        inertia = sp.Matrix(3, 3, lambda i, j: _number(float(self.inertia[i, j])))
         rot = dot(w, times_vector(inertia, w))
         # expanded: a sum of monomials differentiates much faster than nested products
         return sp.expand(_number(self.mass) / 2 * v.dot(v) + rot / 2)
 
-    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = np.atleast_2d(c)
         return c[:, :3], rotation_matrix(c[:, 3:])
 
-    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+    def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
         b, bd = np.atleast_2d(c)[:, 3:], np.atleast_2d(cd)[:, 3:]
         return 2 * np.einsum("kij,kj->ki", E_matrix(b), bd)
 
-    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         # Q_b = 2 E^T tau_body, and E E^T = I: tau_body = 1/2 E Q_b
         b, Qb = np.atleast_2d(c)[:, 3:], np.atleast_2d(Q)[:, 3:]
         tau_body = 0.5 * np.einsum("kij,kj->ki", E_matrix(b), Qb)
@@ -260,6 +377,8 @@ class PlanarBody(Body):
     inertia
         Moment of inertia about the ``z`` axis through the mass center (> 0).
 
+    Examples
+    --------
     >>> link = PlanarBody("link", 1.0, 0.1)
     >>> [c.name for c in link.coordinates], link.constraints()
     (['link_x', 'link_y', 'link_theta'], [])
@@ -290,7 +409,7 @@ class PlanarBody(Body):
         return (_number(self.mass) / 2 * (x**2 + y**2)
                 + _number(self.moment) / 2 * theta**2)
 
-    def pose(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = np.atleast_2d(c)
         x = np.column_stack([c[:, 0], c[:, 1], np.zeros(len(c))])
         cos, sin = np.cos(c[:, 2]), np.sin(c[:, 2])
@@ -298,28 +417,34 @@ class PlanarBody(Body):
         R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = cos, -sin, sin, cos, 1.0
         return x, R
 
-    def center_velocity(self, cd: np.ndarray) -> np.ndarray:
+    def center_velocity(self, cd: FloatArray) -> FloatArray:
         cd = np.atleast_2d(cd)
         return np.column_stack([cd[:, 0], cd[:, 1], np.zeros(len(cd))])
 
-    def angular_velocity_at(self, c: np.ndarray, cd: np.ndarray) -> np.ndarray:
+    def angular_velocity_at(self, c: FloatArray, cd: FloatArray) -> FloatArray:
         return _along_z(np.atleast_2d(cd)[:, 2])
 
-    def center_torque(self, c: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    def center_torque(self, c: FloatArray, Q: FloatArray) -> FloatArray:
         return _along_z(np.atleast_2d(Q)[:, 2])
 
-    def center_force(self, Q: np.ndarray) -> np.ndarray:
+    def center_force(self, Q: FloatArray) -> FloatArray:
         Q = np.atleast_2d(Q)
         return np.column_stack([Q[:, 0], Q[:, 1], np.zeros(len(Q))])
 
 
-def _along_z(values: np.ndarray) -> np.ndarray:
+#: A body that moves (not the ground): what a ``Multibody``'s ``bodies`` hold.
+MovingBody = Particle | RigidBody | PlanarBody
+#: A body that turns: it has an orientation, an inertia tensor and a body frame.
+TurningBody = RigidBody | PlanarBody
+
+
+def _along_z(values: FloatArray) -> FloatArray:
     out = np.zeros((len(values), 3))
     out[:, 2] = values
     return out
 
 
-def _positive_moment(value: object, name: str) -> float:
+def _positive_moment(value: float, name: str) -> float:
     try:
         moment = float(value)
     except (TypeError, ValueError) as exc:
@@ -336,7 +461,7 @@ def _number(value: float) -> sp.Expr:
     return sp.S.Zero if value == 0 else sp.Float(value)
 
 
-def _positive_mass(mass: object, name: str) -> float:
+def _positive_mass(mass: float, name: str) -> float:
     try:
         value = float(mass)
     except (TypeError, ValueError) as exc:
@@ -346,7 +471,7 @@ def _positive_mass(mass: object, name: str) -> float:
     return value
 
 
-def _inertia_tensor(inertia: object, name: str) -> np.ndarray:
+def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
     try:
         I = np.asarray(inertia, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -371,4 +496,16 @@ def _inertia_tensor(inertia: object, name: str) -> np.ndarray:
 
 
 def body_names(bodies: Sequence[Body]) -> list[str]:
+    """The names of ``bodies``, in order.
+
+    Parameters
+    ----------
+    bodies
+        Any bodies.
+
+    Examples
+    --------
+    >>> body_names([Ground(), Particle("bob", 1.0)])
+    ['ground', 'bob']
+    """
     return [b.name for b in bodies]

@@ -9,13 +9,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import cached_property
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 import sympy as sp
 
 from ..errors import ConstraintError, InitialConditionError, ModelError
+from ..model.constraints import Holonomic, Pfaffian
+from ..model.forces import PointForce
+from ..model.values import CoordinateValues
 from ..system import System
-from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
+from ..trajectory import Trajectory
+from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .initial_state import body_state
@@ -23,6 +28,9 @@ from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
 from .parts import gravity_potential
 from .system import MultibodySystem
+from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
+
+_V = TypeVar("_V")
 
 
 class Multibody:
@@ -31,14 +39,16 @@ class Multibody:
     Parameters
     ----------
     bodies
-        The moving bodies (:class:`Particle`, :class:`RigidBody`). ``Ground`` is
-        implicit; any ``Ground`` instance may appear in joints and springs.
+        The moving bodies (:class:`Particle`, :class:`RigidBody`, :class:`PlanarBody`).
+        ``Ground`` is implicit; any ``Ground`` instance may appear in joints and springs.
     joints
         :mod:`dalembert.multibody.joints` objects between listed bodies or ground.
     gravity
         Uniform field (world components), as the potential ``-sum m g . x``.
     forces, torques, springs
         :class:`Force`, :class:`Torque`, :class:`SpringDamper` loads.
+    name
+        The system's name (in titles and messages).
 
     Examples
     --------
@@ -53,9 +63,9 @@ class Multibody:
 
     def __init__(
         self,
-        bodies: Sequence[Body],
+        bodies: Sequence[MovingBody],
         joints: Sequence[Joint] = (),
-        gravity: Sequence[float] = (0.0, 0.0, -9.81),
+        gravity: Vector = (0.0, 0.0, -9.81),
         forces: Sequence[Force] = (),
         torques: Sequence[Torque] = (),
         springs: Sequence[SpringDamper] = (),
@@ -76,7 +86,7 @@ class Multibody:
             raise ModelError("a Multibody needs at least one moving body")
         names = set()
         for body in self.bodies:
-            if not isinstance(body, (Particle, RigidBody, PlanarBody)):
+            if not isinstance(body, MovingBody):
                 raise ModelError("bodies must be Particle, RigidBody or PlanarBody objects, "
                                  f"got {body!r}")
             if body.name in names:
@@ -91,7 +101,8 @@ class Multibody:
             self._check_members(j.bodies, f"joint {j.name!r}")
         for s in self.springs:
             self._check_members(s.bodies, f"spring {s.name!r}")
-        for load in (*self.forces, *self.torques):
+        loads: tuple[Force | Torque, ...] = (*self.forces, *self.torques)
+        for load in loads:
             self._check_members((load.body,), load.name)
         for j in self.joints:
             check_joint_points(j)
@@ -119,16 +130,20 @@ class Multibody:
     # -- the System ------------------------------------------------------------------
     @property
     def coordinates(self) -> list[sp.Function]:
+        """Every body's coordinates, in the order of ``bodies``."""
         return [c for b in self.bodies for c in b.coordinates]
 
-    def constraints(self) -> list:
-        body_rows = [c for b in self.bodies for c in b.constraints()]
+    def constraints(self) -> list[Holonomic | Pfaffian]:
+        """The bodies' constraints (unit quaternions), then the joints'."""
+        body_rows: list[Holonomic | Pfaffian] = [c for b in self.bodies for c in b.constraints()]
         return body_rows + [c for j in self.joints for c in j.constraints()]
 
     def kinetic_energy(self) -> sp.Expr:
+        """``T``: the sum of the bodies' kinetic energies."""
         return sp.Add(*(b.kinetic_energy() for b in self.bodies))
 
     def potential_energy(self) -> sp.Expr:
+        """``V``: gravity ``-sum m g . x`` and the springs' ``1/2 k (L - L0)^2``."""
         V = sp.Add(*(gravity_potential(b, self.gravity) for b in self.bodies))
         return V + sp.Add(*(s.potential() for s in self.springs))
 
@@ -140,7 +155,7 @@ class Multibody:
                 Q[coord] = Q.get(coord, sp.S.Zero) + value
         return Q
 
-    def point_forces(self) -> list:
+    def point_forces(self) -> list[PointForce]:
         """The forces and the spring dampers as :class:`~dalembert.PointForce` objects."""
         pfs = [f.point_force() for f in self.forces]
         return pfs + [pf for s in self.springs for pf in s.point_forces()]
@@ -154,70 +169,141 @@ class Multibody:
         """
         return MultibodySystem(self)
 
-    def body(self, name: str) -> Body:
-        """The body called ``name``."""
+    def body(self, name: str) -> MovingBody:
+        """The body called ``name``.
+
+        Parameters
+        ----------
+        name
+            A body's name; a ``KeyError`` lists the names there are.
+
+        Examples
+        --------
+        >>> chain(2, 1.0, 1.0, 0.1).body("link2")
+        RigidBody('link2')
+        """
         for b in self.bodies:
             if b.name == name:
                 return b
         raise KeyError(f"no body {name!r}; the bodies are {', '.join(b.name for b in self.bodies)}")
 
     def joint(self, name: str) -> Joint:
-        """The joint called ``name``."""
+        """The joint called ``name``.
+
+        Parameters
+        ----------
+        name
+            A joint's name; a ``KeyError`` lists the names there are.
+
+        Examples
+        --------
+        >>> chain(2, 1.0, 1.0, 0.1).joint("joint1")
+        Spherical('joint1', 'ground', 'link1')
+        """
         for j in self.joints:
             if j.name == name:
                 return j
         raise KeyError(f"no joint {name!r}; the joints are "
                        f"{', '.join(j.name for j in self.joints) or 'none'}")
 
-    def _resolve(self, key: object) -> Body:
+    def _resolve(self, key: Body | str) -> Body:
         if isinstance(key, Body):
             self._check_members((key,), "initial state")
             return key
         return self.body(str(key))
 
+    def _by_name(self, values: ByBody[_V] | None) -> dict[str, _V]:
+        """``values`` keyed by body name (a body not in this system raises)."""
+        return {self._resolve(key).name: value for key, value in (values or {}).items()}
+
     # -- initial state ---------------------------------------------------------------
     def initial_state(
         self,
-        positions: Mapping[object, Sequence[float]] | None = None,
-        orientations: Mapping[object, object] | None = None,
-        velocities: Mapping[object, Sequence[float]] | None = None,
-        angular_velocities: Mapping[object, Sequence[float]] | None = None,
-        angular_velocity_frame: str = "world",
+        positions: ByBody[Vector] | None = None,
+        orientations: ByBody[Orientation] | None = None,
+        velocities: ByBody[Vector] | None = None,
+        angular_velocities: ByBody[Vector | float] | None = None,
+        angular_velocity_frame: Frame = "world",
     ) -> tuple[dict[str, float], dict[str, float]]:
-        """``(q0, qd0)`` dicts for :meth:`dalembert.System.simulate`.
+        """``(q0, qd0)`` dicts by coordinate name for :meth:`dalembert.System.simulate`.
 
-        Keys are bodies or body names. ``positions``/``velocities`` are of the mass
-        center (world); ``orientations`` are rotation matrices (body -> world) or
-        Euler parameters (a non-unit quaternion is normalized with an
-        :class:`~dalembert.InitialConditionsAdjusted` warning); angular velocities
-        are in world or body components (``angular_velocity_frame``). A planar
-        body also takes 2-vectors, its angle about ``z`` as the orientation and
-        ``w_z`` as the angular velocity. Unlisted bodies start at the origin,
-        unrotated, at rest (see :mod:`~dalembert.multibody.initial_state`).
+        Each argument maps bodies (or body names) to values; unlisted bodies start
+        at the origin, unrotated, at rest (see :mod:`~dalembert.multibody.initial_state`).
+
+        Parameters
+        ----------
+        positions, velocities
+            The mass center's position and velocity (world); a planar body also
+            takes 2 numbers.
+        orientations
+            Rotation matrices (body -> world) or Euler parameters (a non-unit
+            quaternion is normalized with an
+            :class:`~dalembert.InitialConditionsAdjusted` warning); a planar body's
+            angle about ``z``.
+        angular_velocities
+            In world or body components (``angular_velocity_frame``); a planar
+            body's ``w_z``.
+        angular_velocity_frame
+            ``"world"`` (default) or ``"body"``.
+
+        Returns
+        -------
+        tuple of dict
+            ``q0`` and ``qd0``; a rigid body's Euler parameter rates are
+            ``bdot = 1/2 E(b)^T w_body``.
+
+        Examples
+        --------
+        A body turning about ``z`` at 2 rad/s: ``bdot_3 = 1/2 w_z`` at ``b = (1, 0, 0, 0)``:
+
+        >>> mb = Multibody([RigidBody("box", 1.0, (1, 1, 1))])
+        >>> q0, qd0 = mb.initial_state(positions={"box": (0, 0, 1)},
+        ...                            angular_velocities={"box": (0, 0, 2.0)})
+        >>> q0["box_z"], q0["box_b0"], qd0["box_b3"]
+        (1.0, 1.0, 1.0)
         """
         if angular_velocity_frame not in ("world", "body"):
             raise ValueError("angular_velocity_frame must be 'world' or 'body'")
-        given: dict[str, dict[str, object]] = {b.name: {} for b in self.bodies}
-        for label, values in (("position", positions), ("orientation", orientations),
-                              ("velocity", velocities), ("angular_velocity", angular_velocities)):
-            for key, value in (values or {}).items():
-                given[self._resolve(key).name][label] = value
+        x, b, v, w = (self._by_name(positions), self._by_name(orientations),
+                      self._by_name(velocities), self._by_name(angular_velocities))
         q0: dict[str, float] = {}
         qd0: dict[str, float] = {}
         for body in self.bodies:
-            q, qd = body_state(body, angular_velocity_frame, **given[body.name])
+            name = body.name
+            q, qd = body_state(body, angular_velocity_frame, x.get(name), b.get(name),
+                               v.get(name), w.get(name))
             q0.update(zip(_names(body), map(float, q)))
             qd0.update(zip(_names(body), map(float, qd)))
         check_initial_joint_points(self, q0)
         return q0, qd0
 
     # -- outputs (see dalembert.multibody.outputs) -----------------------------------
-    def simulate(self, t_span, q0, qd0=None, **kwargs):
+    def simulate(self, t_span: Sequence[float], q0: CoordinateValues,
+                 qd0: CoordinateValues | None = None, **kwargs: Any) -> Trajectory:
         """``self.system.simulate(...)``, with errors about immobility naming the joints.
 
         Joints that leave no degree of freedom at the initial state raise a
         :class:`~dalembert.ConstraintError` listing every joint, its rows and those
         rows that depend on the others (see :func:`check_mobility`).
+
+        Parameters
+        ----------
+        t_span, q0, qd0
+            As in :meth:`dalembert.System.simulate` (``q0``, ``qd0`` e.g. from
+            :meth:`initial_state`).
+        kwargs
+            :meth:`dalembert.System.simulate`'s keywords.
+
+        Examples
+        --------
+        A particle thrown sideways falls on a parabola:
+
+        >>> from dalembert.multibody import Particle
+        >>> mb = Multibody([Particle("p", 1.0)], gravity=(0.0, 0.0, -10.0))
+        >>> traj = mb.simulate((0.0, 1.0), *mb.initial_state(velocities={"p": (2, 0, 0)}),
+        ...                    t_eval=[1.0])
+        >>> [round(float(traj[name][0]), 9) for name in ("p_x", "p_z")]
+        [2.0, -5.0]
         """
         try:
             return self.system.simulate(t_span, q0, qd0, **kwargs)
@@ -225,12 +311,31 @@ class Multibody:
             self._explain_immobility(q0, t_span, kwargs.get("parameters"), exc)
             raise
 
-    def stick_figure(self, q: Sequence[float]) -> list[np.ndarray]:
+    def stick_figure(self, q: Numbers) -> list[FloatArray]:
         """Polylines ``(k, 3)`` drawing the system at ``q`` (see
-        :mod:`dalembert.multibody.drawing`); used by :func:`dalembert.plotting.animate`."""
+        :func:`dalembert.multibody.drawing.stick_figure`, which has an example); used by
+        :func:`dalembert.plotting.animate`.
+
+        Parameters
+        ----------
+        q
+            The configuration, in the order of ``self.system.coordinate_names``.
+
+        Examples
+        --------
+        A link hanging from the origin: its axes, and the line from its center to each
+        joint point (the ground's a single point):
+
+        >>> mb = chain(1, 1.0, 1.0, 0.1)
+        >>> q0, _ = mb.initial_state(positions={"link1": (0, 0, -0.5)})
+        >>> [len(line) for line in mb.stick_figure([q0[n] for n in mb.system.coordinate_names])]
+        [1, 2, 2, 2, 2]
+        """
         return stick_figure(self, np.asarray(q, dtype=float))
 
-    def _explain_immobility(self, q0, t_span, parameters, exc: Exception) -> None:
+    def _explain_immobility(self, q0: CoordinateValues, t_span: Sequence[float],
+                            parameters: Mapping[object, object] | None,
+                            exc: Exception) -> None:
         """Raise the joint-naming error if the failure was a mechanism without freedom."""
         try:
             t0 = float(t_span[0])
@@ -248,6 +353,14 @@ class Multibody:
 def multibody_of(system: System) -> Multibody:
     """The :class:`Multibody` whose ``.system`` is ``system``.
 
+    Parameters
+    ----------
+    system
+        A System from :attr:`Multibody.system` (any other raises
+        :class:`~dalembert.ModelError`).
+
+    Examples
+    --------
     >>> from dalembert.multibody import chain
     >>> mb = chain(1, 1.0, 1.0, 0.1)
     >>> multibody_of(mb.system) is mb
@@ -263,7 +376,7 @@ def _names(body: Body) -> list[str]:
     return [c.name for c in body.coordinates]
 
 
-def _gravity(g: Sequence[float]) -> np.ndarray:
+def _gravity(g: Vector) -> FloatArray:
     arr = np.asarray(g, dtype=float)
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise ModelError(f"gravity must be 3 finite numbers (world components), got {g!r}")
@@ -275,8 +388,8 @@ def chain(
     length: float,
     mass: float,
     radius: float,
-    joint: str = "spherical",
-    gravity: Sequence[float] | None = None,
+    joint: Literal["spherical", "revolute"] = "spherical",
+    gravity: Vector | None = None,
     planar: bool = False,
 ) -> Multibody:
     """An ``n``-link chain of uniform cylinders hung from the origin.
@@ -293,6 +406,21 @@ def chain(
     ``k`` hangs at ``(0, -(k - 1/2) length)`` and gravity defaults to
     ``(0, -9.81, 0)``.
 
+    Parameters
+    ----------
+    n
+        The number of links.
+    length, mass, radius
+        Each link's length, mass and radius (a solid cylinder's inertia).
+    joint
+        ``"spherical"`` or ``"revolute"``.
+    gravity
+        The field, world components (default: see above).
+    planar
+        Planar links (revolute joints only).
+
+    Examples
+    --------
     >>> chain(2, 1.0, 1.0, 0.05, joint="revolute").system.degrees_of_freedom
     2
     >>> len(chain(2, 1.0, 1.0, 0.05, joint="revolute", planar=True).system.coordinate_names)
@@ -307,6 +435,7 @@ def chain(
     if not (length > 0 and radius > 0):
         raise ModelError(f"length and radius must be positive, got {length}, {radius}")
     transverse = mass * (3 * radius**2 + length**2) / 12
+    links: list[MovingBody]
     if planar:
         links = [PlanarBody(f"link{k + 1}", mass, transverse) for k in range(int(n))]
         axis, down, hinge = 1, (0.0, -9.81, 0.0), (0, 0, 1)
@@ -316,8 +445,8 @@ def chain(
         axis, down, hinge = 2, (0.0, 0.0, -9.81), (0, 1, 0)
     top, bottom = np.zeros(3), np.zeros(3)
     top[axis], bottom[axis] = length / 2, -length / 2
-    joints = []
-    parents = [Ground(), *links[:-1]]
+    joints: list[Joint] = []
+    parents: list[Body] = [Ground(), *links[:-1]]
     for k, (parent, child) in enumerate(zip(parents, links)):
         pa = np.zeros(3) if k == 0 else bottom
         if joint == "spherical":

@@ -29,9 +29,20 @@ def directional_derivative(expr: sp.Expr, direction: Mapping[sp.Symbol, sp.Expr]
     """``sum_k d expr/d x_k * direction[x_k]`` of ``expr`` (a polynomial, possibly in
     sines and cosines), kept factored.
 
-    Symbols not in ``direction`` are constants. ``memo`` holds the derivatives of
-    the nodes already seen along this ``direction`` (share it between expressions).
+    Parameters
+    ----------
+    expr
+        The expression.
+    direction
+        ``{x_k: direction[x_k]}``; symbols not in it are constants.
+    memo
+        The derivatives of the nodes already seen along this ``direction`` (share it
+        between expressions; start with ``{}``).
 
+    Raises :class:`NotPolynomial` for an expression of another kind.
+
+    Examples
+    --------
     >>> x, y, u = sp.symbols("x y u")
     >>> directional_derivative((x + y) ** 2 * y, {x: u}, {})
     u*y*(2*x + 2*y)
@@ -76,6 +87,15 @@ def holonomic_rates(exprs: Sequence[sp.Expr], q: Sequence[sp.Symbol],
     scleronomic holonomic constraint (``b = 0``), as equal polynomials. Raises
     :class:`NotPolynomial` for any other expression.
 
+    Parameters
+    ----------
+    exprs
+        The constraint functions ``psi(q)``.
+    q, qd
+        The coordinate and velocity symbols.
+
+    Examples
+    --------
     >>> x, y, xd, yd = sp.symbols("x y x_dot y_dot")
     >>> holonomic_rates([x**2 + y**2 - 1], [x, y], [xd, yd])
     (Matrix([[2*x, 2*y]]), Matrix([[-2*x_dot**2 - 2*y_dot**2]]))

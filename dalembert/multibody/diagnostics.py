@@ -31,9 +31,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConstraintError, JointPointWarning
+from ..model.values import CoordinateValues, coordinate_values
 from ..numerics.rank import constraint_rank
-from .bodies import Body, Ground, PlanarBody, RigidBody
+from .bodies import Body, Ground, TurningBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
+from .types import FloatArray
 
 if TYPE_CHECKING:
     from .builder import Multibody
@@ -44,9 +46,17 @@ FAR_FACTOR = 10.0
 _COINCIDENT = (Spherical, Universal, Revolute, Fixed)
 
 
-def radius_of_gyration(body: RigidBody | PlanarBody) -> float:
+def radius_of_gyration(body: TurningBody) -> float:
     """``sqrt(I_max / m)``: the body's size as seen by its inertia.
 
+    Parameters
+    ----------
+    body
+        A rigid or planar body.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import RigidBody
     >>> radius_of_gyration(RigidBody("b", 2.0, (0.02, 0.08, 0.08)))
     0.2
     """
@@ -54,10 +64,30 @@ def radius_of_gyration(body: RigidBody | PlanarBody) -> float:
 
 
 def check_joint_points(joint: Joint) -> None:
-    """Warn when a body-frame joint point is implausibly far from the mass center."""
+    """Warn when a body-frame joint point is implausibly far from the mass center.
+
+    Parameters
+    ----------
+    joint
+        The joint whose points are checked (``Multibody`` checks every joint).
+
+    Examples
+    --------
+    A hinge point 5 m from the center of a 10 cm box, given in world coordinates
+    by mistake:
+
+    >>> import warnings
+    >>> from dalembert.multibody import Ground, Revolute, RigidBody
+    >>> box = RigidBody("box", 1.0, (0.002, 0.002, 0.002))
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     check_joint_points(Revolute("hinge", Ground(), box, (5, 0, 0), (5, 0, 0)))
+    >>> [type(w.message).__name__ for w in caught]
+    ['JointPointWarning']
+    """
     for side, body, point in (("a", joint.body_a, joint.point_a),
                               ("b", joint.body_b, joint.point_b)):
-        if isinstance(body, Ground) or not body.has_orientation:
+        if not isinstance(body, TurningBody):
             continue
         size = radius_of_gyration(body)
         dist = float(np.linalg.norm(point))
@@ -72,12 +102,12 @@ def check_joint_points(joint: Joint) -> None:
             )
 
 
-def _pose(q0: Mapping[str, float], body: Body) -> tuple[np.ndarray, np.ndarray]:
+def _pose(q0: Mapping[str, float], body: Body) -> tuple[FloatArray, FloatArray]:
     x, R = body.pose(np.array([q0[c.name] for c in body.coordinates]))
     return x[0], R[0]
 
 
-def _world(q0: Mapping[str, float], body: Body, point: np.ndarray) -> np.ndarray:
+def _world(q0: Mapping[str, float], body: Body, point: FloatArray) -> FloatArray:
     if isinstance(body, Ground):
         return point
     x, R = _pose(q0, body)
@@ -85,18 +115,42 @@ def _world(q0: Mapping[str, float], body: Body, point: np.ndarray) -> np.ndarray
 
 
 def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
-    """Warn when a joint's points do not meet at ``q0`` but would with one read as world."""
+    """Warn when a joint's points do not meet at ``q0`` but would with one read as world.
+
+    Parameters
+    ----------
+    mb
+        The mechanism.
+    q0
+        Its coordinates by name (as :meth:`Multibody.initial_state` gives them, which
+        calls this check).
+
+    Examples
+    --------
+    A link hung from the world point ``(0, 0, 1)``, its own point given as that
+    world point too:
+
+    >>> import warnings
+    >>> from dalembert.multibody import Ground, Multibody, RigidBody, Spherical
+    >>> link = RigidBody("link", 1.0, (0.1, 0.1, 0.01))
+    >>> mb = Multibody([link], [Spherical("ball", Ground(), link, (0, 0, 1), (0, 0, 1))])
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     _ = mb.initial_state(positions={"link": (0, 0, 0.5)})
+    >>> "use point_b=(0.0, 0.0, 0.5)" in str(caught[-1].message)
+    True
+    """
     for j in mb.joints:
         if not isinstance(j, _COINCIDENT):
             continue
         pa, pb = _world(q0, j.body_a, j.point_a), _world(q0, j.body_b, j.point_b)
         gap = float(np.linalg.norm(pb - pa))
-        scale = max(np.linalg.norm(pa), np.linalg.norm(pb), 1e-3)
+        scale = max(float(np.linalg.norm(pa)), float(np.linalg.norm(pb)), 1e-3)
         if gap <= 1e-6 * scale:
             continue
         for side, body, point, other in (("a", j.body_a, j.point_a, pb),
                                          ("b", j.body_b, j.point_b, pa)):
-            if not body.has_orientation or np.linalg.norm(point - other) > 1e-9 * scale:
+            if not isinstance(body, TurningBody) or np.linalg.norm(point - other) > 1e-9 * scale:
                 continue
             x, R = _pose(q0, body)
             fixed = R.T @ (point - x)
@@ -109,23 +163,50 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
             )
 
 
-def check_mobility(mb: Multibody, q0: object, t0: float = 0.0,
-                   parameters: Mapping | None = None, cause: BaseException | None = None) -> int:
+def check_mobility(mb: Multibody, q0: CoordinateValues, t0: float = 0.0,
+                   parameters: Mapping[object, object] | None = None,
+                   cause: BaseException | None = None) -> int:
     """Degrees of freedom ``n - rank(A)`` at ``q0``; raise naming the joints when none.
 
-    ``q0`` is a dict by coordinate name or an array in coordinate order.
+    Parameters
+    ----------
+    mb
+        The mechanism.
+    q0
+        The configuration: a dict by coordinate (a coordinate left out is 0) or a
+        sequence in coordinate order.
+    t0
+        The time (for constraints that depend on it).
+    parameters
+        Parameter values overriding the system's.
+    cause
+        An exception to chain the :class:`~dalembert.ConstraintError` to.
+
+    Returns
+    -------
+    int
+        ``n - rank(A)``, when positive.
+
+    Examples
+    --------
+    A link on a ball joint turns three ways:
 
     >>> from dalembert.multibody import chain
     >>> mb = chain(1, 1.0, 1.0, 0.1)
     >>> check_mobility(mb, mb.initial_state(positions={"link1": (0, 0, -0.5)})[0])
     3
+
+    ``q0`` is read as everywhere else (:func:`dalembert.model.values.coordinate_values`):
+    a name that is not a coordinate is an error, not a value silently left out:
+
+    >>> check_mobility(mb, {"link1_z": -0.5, "link1_b0": 1.0, "link2_z": -1.5})
+    Traceback (most recent call last):
+    ...
+    dalembert.errors.InitialConditionError: q0 names 'link2_z', which is not a coordinate ...
     """
     system = mb.system
     names = system.coordinate_names
-    if isinstance(q0, Mapping):
-        q = np.array([float(q0.get(n, 0.0)) for n in names])
-    else:
-        q = np.asarray(q0, dtype=float)
+    q = coordinate_values(q0, names, "q0")
     A, _ = system.numeric(parameters).velocity_constraint(t0, q)
     rank = constraint_rank(A, system.constraint_names, len(names))
     if rank.degrees_of_freedom > 0:

@@ -19,18 +19,23 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .bodies import Body, Ground
+from .bodies import Body, Ground, TurningBody
+from .diagnostics import radius_of_gyration
 from .rolling import Rolling
+from .types import FloatArray, Numbers
 
 if TYPE_CHECKING:
     from .builder import Multibody
 
 _RIM_POINTS = 25
+#: ``{body name: (center, R)}``: each moving body's pose at one configuration.
+Poses = dict[str, tuple[FloatArray, FloatArray]]
 
 
-def _poses(mb: Multibody, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def _poses(mb: Multibody, q: FloatArray) -> Poses:
     """``{body name: (center, R)}`` from a state vector in coordinate order."""
-    out, k = {}, 0
+    out: Poses = {}
+    k = 0
     for body in mb.bodies:
         n = len(body.coordinates)
         x, R = body.pose(q[k:k + n])
@@ -39,14 +44,14 @@ def _poses(mb: Multibody, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarr
     return out
 
 
-def _point(poses: dict, body: Body, point: np.ndarray) -> np.ndarray:
+def _point(poses: Poses, body: Body, point: FloatArray) -> FloatArray:
     if isinstance(body, Ground):
         return np.asarray(point, dtype=float)
     x, R = poses[body.name]
     return x + R @ point
 
 
-def _rim(joint: Rolling, x: np.ndarray, R: np.ndarray) -> np.ndarray:
+def _rim(joint: Rolling, x: FloatArray, R: FloatArray) -> FloatArray:
     a = R @ joint.axis_b
     e1 = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
     e1 /= np.linalg.norm(e1)
@@ -55,9 +60,18 @@ def _rim(joint: Rolling, x: np.ndarray, R: np.ndarray) -> np.ndarray:
     return x + joint.radius * (np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2))
 
 
-def stick_figure(mb: Multibody, q: np.ndarray) -> list[np.ndarray]:
+def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
     """Polylines ``(k, 3)`` (world) of ``mb`` at the configuration ``q``.
 
+    Parameters
+    ----------
+    mb
+        The mechanism.
+    q
+        Its configuration, in the order of ``mb.system.coordinate_names``.
+
+    Examples
+    --------
     >>> from dalembert.multibody import chain
     >>> mb = chain(2, 1.0, 1.0, 0.1)
     >>> q0, _ = mb.initial_state(positions={"link1": (0, 0, -0.5), "link2": (0, 0, -1.5)})
@@ -65,9 +79,8 @@ def stick_figure(mb: Multibody, q: np.ndarray) -> list[np.ndarray]:
     >>> lines[1].tolist()
     [[0.0, 0.0, -0.5], [0.0, 0.0, 0.0]]
     """
-    q = np.asarray(q, dtype=float)
-    poses = _poses(mb, q)
-    lines: list[np.ndarray] = []
+    poses = _poses(mb, np.asarray(q, dtype=float))
+    lines: list[FloatArray] = []
     for j in mb.joints:
         if isinstance(j, Rolling):
             x, R = poses[j.body_b.name]
@@ -86,9 +99,9 @@ def stick_figure(mb: Multibody, q: np.ndarray) -> list[np.ndarray]:
                                _point(poses, s.body_b, s.point_b)]))
     for body in mb.bodies:
         x, R = poses[body.name]
-        if not body.has_orientation:
+        if not isinstance(body, TurningBody):
             lines.append(x[None].copy())
             continue
-        k = np.sqrt(np.linalg.eigvalsh(body.inertia)[-1] / body.mass)
+        k = radius_of_gyration(body)
         lines.extend(np.array([x - k * R[:, i], x + k * R[:, i]]) for i in range(3))
     return lines

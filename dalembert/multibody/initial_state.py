@@ -14,16 +14,41 @@ import warnings
 import numpy as np
 
 from ..errors import InitialConditionError, InitialConditionsAdjusted
-from .bodies import Body, PlanarBody, RigidBody
+from .bodies import MovingBody, PlanarBody, RigidBody
 from .rotations import E_matrix, check_rotation, quaternion_from_matrix, rotation_matrix
+from .types import FloatArray, Frame, Orientation, Vector
 
 Values = tuple[list[float], list[float]]
 
 
-def body_state(body: Body, frame: str, position: object = None, orientation: object = None,
-               velocity: object = None, angular_velocity: object = None) -> Values:
+def body_state(body: MovingBody, frame: Frame, position: Vector | None = None,
+               orientation: Orientation | None = None, velocity: Vector | None = None,
+               angular_velocity: Vector | float | None = None) -> Values:
     """``(coordinates, rates)`` of ``body``; ``None`` means at the origin, unrotated, at
-    rest. ``frame`` (``"world"``/``"body"``) is that of the angular velocity."""
+    rest.
+
+    Parameters
+    ----------
+    body
+        A particle, rigid body or planar body.
+    frame
+        ``"world"`` or ``"body"``: the components of ``angular_velocity``.
+    position, velocity
+        The mass center's (world; 2 numbers for a planar body).
+    orientation
+        A rotation matrix or Euler parameters; a planar body's angle about ``z``.
+    angular_velocity
+        3 components; a planar body's ``w_z``.
+
+    Examples
+    --------
+    A planar body: ``x, y`` and the angle, their rates:
+
+    >>> from dalembert.multibody import PlanarBody
+    >>> q, qd = body_state(PlanarBody("link", 1.0, 0.1), "world", (1, 2), 0.5, (0, 3), 4.0)
+    >>> [float(v) for v in q], [float(v) for v in qd]
+    ([1.0, 2.0, 0.5], [0.0, 3.0, 4.0])
+    """
     if isinstance(body, PlanarBody):
         return _planar(body, position, orientation, velocity, angular_velocity)
     x = _triple(position, f"position of {body.name!r}")
@@ -42,7 +67,7 @@ def body_state(body: Body, frame: str, position: object = None, orientation: obj
     return [*x, *b], [*v, *(0.5 * E_matrix(b).T @ w)]
 
 
-def _triple(value: object, what: str) -> np.ndarray:
+def _triple(value: Vector | float | None, what: str) -> FloatArray:
     if value is None:
         return np.zeros(3)
     arr = np.asarray(value, dtype=float)
@@ -51,7 +76,7 @@ def _triple(value: object, what: str) -> np.ndarray:
     return arr
 
 
-def _quaternion(value: object, name: str) -> np.ndarray:
+def _quaternion(value: Orientation, name: str) -> FloatArray:
     """Euler parameters of an orientation given as a matrix or a quaternion."""
     arr = np.asarray(value, dtype=float)
     if arr.shape == (3, 3):
@@ -73,15 +98,15 @@ def _quaternion(value: object, name: str) -> np.ndarray:
     return arr / norm
 
 
-def _rotation(R: np.ndarray, name: str) -> np.ndarray:
+def _rotation(R: FloatArray, name: str) -> FloatArray:
     try:
         return check_rotation(R, f"the orientation of {name!r}")
     except ValueError as exc:
         raise InitialConditionError(str(exc)) from exc
 
 
-def _planar(body: PlanarBody, position: object, orientation: object, velocity: object,
-            angular_velocity: object) -> Values:
+def _planar(body: PlanarBody, position: Vector | None, orientation: Orientation | None,
+            velocity: Vector | None, angular_velocity: Vector | float | None) -> Values:
     x = _in_plane(position, f"position of {body.name!r}")
     v = _in_plane(velocity, f"velocity of {body.name!r}")
     theta = _angle(orientation, body.name)
@@ -89,7 +114,7 @@ def _planar(body: PlanarBody, position: object, orientation: object, velocity: o
     return [*x, theta], [*v, w]
 
 
-def _in_plane(value: object, what: str) -> np.ndarray:
+def _in_plane(value: Vector | None, what: str) -> FloatArray:
     """``(x, y)`` of a vector given as 2 numbers or 3 with ``z = 0``."""
     if value is None:
         return np.zeros(2)
@@ -102,7 +127,7 @@ def _in_plane(value: object, what: str) -> np.ndarray:
     return arr[:2]
 
 
-def _angle(orientation: object, name: str) -> float:
+def _angle(orientation: Orientation | None, name: str) -> float:
     """The angle about ``z`` of a number or a rotation matrix about ``z``."""
     if orientation is None:
         return 0.0
@@ -123,7 +148,7 @@ def _angle(orientation: object, name: str) -> float:
     return float(np.arctan2(R[1, 0], R[0, 0]))
 
 
-def _about_z(value: object, what: str) -> float:
+def _about_z(value: Vector | float | None, what: str) -> float:
     """``w_z`` of an angular velocity given as a number or ``(0, 0, w_z)``."""
     if value is None:
         return 0.0

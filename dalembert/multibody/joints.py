@@ -46,16 +46,22 @@ on ``a`` and ``b`` are equal and opposite (see
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
-from ..model.constraints import Holonomic
-from .bodies import Body, Ground, PlanarBody
+from ..model.constraints import Holonomic, Pfaffian
+from .bodies import Body, Ground, Particle, PlanarBody
 from .rotations import dot, times_vector
+from .types import FloatArray, Vector
+
+#: A joint's two sides: body ``a`` and body ``b``.
+Side = Literal["a", "b"]
 
 
-def _unit(v: object, what: str) -> np.ndarray:
+def _unit(v: Vector, what: str) -> FloatArray:
     try:
         arr = np.asarray(v, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -68,7 +74,7 @@ def _unit(v: object, what: str) -> np.ndarray:
     return arr / norm
 
 
-def _perpendicular(w: np.ndarray, ref: object, what: str) -> np.ndarray:
+def _perpendicular(w: FloatArray, ref: Vector | None, what: str) -> FloatArray:
     """``ref`` made perpendicular to ``w`` (default: the axis least aligned with ``w``)."""
     if ref is None:
         ref = np.eye(3)[int(np.argmin(np.abs(w)))]
@@ -79,7 +85,7 @@ def _perpendicular(w: np.ndarray, ref: object, what: str) -> np.ndarray:
     return u / np.linalg.norm(u)
 
 
-def _point(p: object, what: str) -> np.ndarray:
+def _point(p: Vector, what: str) -> FloatArray:
     try:
         arr = np.asarray(p, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -89,7 +95,7 @@ def _point(p: object, what: str) -> np.ndarray:
     return arr
 
 
-def _sym(v: np.ndarray) -> sp.Matrix:
+def _sym(v: FloatArray) -> sp.Matrix:
     return sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in v])
 
 
@@ -108,24 +114,42 @@ class Joint:
         Joint axis on each body (body frame); ``axis_b`` defaults to ``axis_a``.
     ref_a, ref_b
         Reference directions perpendicular to the axes (see the module docstring).
+
+    Examples
+    --------
+    A joint kind is a subclass with its equations; every joint checks its points and
+    axes and names its rows:
+
+    >>> from dalembert.multibody import Ground, Particle
+    >>> class OnSphere(Joint):  # point b on the sphere of radius 2 about point a
+    ...     n_equations, uses_orientation = 1, False
+    ...     def equations(self):
+    ...         d = self.separation()
+    ...         return [d.dot(d) - 4]
+    >>> OnSphere("shell", Ground(), Particle("p", 1.0)).constraints()[0].expr
+    p_x(t)**2 + p_y(t)**2 + p_z(t)**2 - 4
     """
 
+    #: The number of equations (rows) of the joint.
     n_equations = 0
+    #: Whether the joint constrains its bodies' orientations (then no particle may join).
     uses_orientation = True
     #: Rows between planar bodies (``None``: no planar form).
     planar_rows: int | None = None
+    body_a: Body
+    body_b: Body
 
     def __init__(
         self,
         name: str,
         body_a: Body,
         body_b: Body,
-        point_a: object = (0, 0, 0),
-        point_b: object = (0, 0, 0),
-        axis_a: object = (0, 0, 1),
-        axis_b: object = None,
-        ref_a: object = None,
-        ref_b: object = None,
+        point_a: Vector = (0, 0, 0),
+        point_b: Vector = (0, 0, 0),
+        axis_a: Vector = (0, 0, 1),
+        axis_b: Vector | None = None,
+        ref_a: Vector | None = None,
+        ref_b: Vector | None = None,
     ) -> None:
         if not isinstance(name, str) or not name.isidentifier():
             raise ModelError(f"a joint name must be an identifier-like string, got {name!r}")
@@ -148,13 +172,14 @@ class Joint:
 
     @property
     def bodies(self) -> tuple[Body, Body]:
+        """``(body_a, body_b)``."""
         return self.body_a, self.body_b
 
     def _check_bodies(self) -> None:
         if not self.uses_orientation:
             return
         for body in self.bodies:
-            if not body.has_orientation:
+            if isinstance(body, Particle):
                 raise ModelError(
                     f"joint {self.name!r} ({type(self).__name__}) constrains the orientation "
                     f"of {body.name!r}, but a particle has none; use a RigidBody"
@@ -195,8 +220,24 @@ class Joint:
         """``d``: from point ``a`` to point ``b``."""
         return self.body_b.position(self.point_b) - self.body_a.position(self.point_a)
 
-    def frame(self, side: str) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
-        """World components of ``(u, v, w)`` on side ``"a"`` or ``"b"``."""
+    def frame(self, side: Side) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
+        """World components of ``(u, v, w)`` on side ``"a"`` or ``"b"``.
+
+        Parameters
+        ----------
+        side
+            ``"a"`` or ``"b"``.
+
+        Examples
+        --------
+        On the ground the frame is the given one: the axis ``w`` along ``z``, the
+        reference ``u`` by default the world axis least aligned with it:
+
+        >>> from dalembert.multibody import Ground, RigidBody
+        >>> hinge = Revolute("hinge", Ground(), RigidBody("door", 1.0, (1, 1, 1)))
+        >>> [[float(c) for c in e] for e in hinge.frame("a")]
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        """
         body = self.body_a if side == "a" else self.body_b
         w = self.axis_a if side == "a" else self.axis_b
         u = self.ref_a if side == "a" else self.ref_b
@@ -210,19 +251,21 @@ class Joint:
 
     # -- constraints -----------------------------------------------------------------
     def equations(self) -> list[sp.Expr]:
+        """The joint's equations ``psi = 0`` (``n_equations`` of them, SymPy)."""
         raise NotImplementedError
 
     def planar_equations(self) -> list[sp.Expr]:
         """The equations between planar bodies (``planar_rows`` of them)."""
         raise NotImplementedError
 
-    def constraints(self) -> list[Holonomic]:
+    def constraints(self) -> list[Holonomic | Pfaffian]:
         """The joint's equations as named ``Holonomic`` constraints ``<name>_<k>``."""
         eqs = self.planar_equations() if self.planar else self.equations()
         return [Holonomic(e, name=f"{self.name}_{k + 1}") for k, e in enumerate(eqs)]
 
     @property
     def constraint_names(self) -> list[str]:
+        """``<name>_1 .. <name>_n``, without building the constraints."""
         return [f"{self.name}_{k + 1}" for k in range(self.n_equations)]
 
     def __repr__(self) -> str:
@@ -284,9 +327,9 @@ class Universal(Joint):
 
     n_equations = 4
 
-    def __init__(self, name: str, body_a: Body, body_b: Body, point_a: object = (0, 0, 0),
-                 point_b: object = (0, 0, 0), axis_a: object = (1, 0, 0),
-                 axis_b: object = (0, 1, 0)) -> None:
+    def __init__(self, name: str, body_a: Body, body_b: Body, point_a: Vector = (0, 0, 0),
+                 point_b: Vector = (0, 0, 0), axis_a: Vector = (1, 0, 0),
+                 axis_b: Vector = (0, 1, 0)) -> None:
         super().__init__(name, body_a, body_b, point_a, point_b, axis_a, axis_b)
 
     def equations(self) -> list[sp.Expr]:
@@ -437,7 +480,7 @@ class Distance(Joint):
     uses_orientation = False
 
     def __init__(self, name: str, body_a: Body, body_b: Body, length: float,
-                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+                 point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:
         length = float(length)
         if not (np.isfinite(length) and length > 0):
             raise ModelError(f"joint {name!r}: the length must be positive, got {length}")
@@ -474,12 +517,12 @@ class PointOnPlane(Joint):
     n_equations = 1
     planar_rows = 1
 
-    def __init__(self, name: str, body_a: Body, body_b: Body, normal: object = (0, 0, 1),
-                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+    def __init__(self, name: str, body_a: Body, body_b: Body, normal: Vector = (0, 0, 1),
+                 point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:
         super().__init__(name, body_a, body_b, point_a, point_b, axis_a=normal)
 
     def _check_bodies(self) -> None:
-        if not self.body_a.has_orientation:
+        if isinstance(self.body_a, Particle):
             raise ModelError(f"joint {self.name!r}: the plane's body {self.body_a.name!r} is "
                              "a particle, which has no orientation")
 

@@ -13,20 +13,23 @@ derivatives and the time ``dalembert.t``.
 
 from __future__ import annotations
 
+from typing import get_args
+
 import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
 from ..model.coordinates import t
 from ..model.forces import PointForce
-from .bodies import Body, PlanarBody, RigidBody, _vector
+from .bodies import Body, Particle, PlanarBody, TurningBody, _vector
 from .joints import _point
 from .rotations import E_matrix, G_matrix
+from .types import ExprVector, Frame, Vector
 
-FRAMES = ("world", "body")
+FRAMES: tuple[Frame, ...] = get_args(Frame)
 
 
-def _frame(frame: str, what: str) -> str:
+def _frame(frame: Frame, what: str) -> Frame:
     if frame not in FRAMES:
         raise ModelError(f"{what}: frame must be 'world' or 'body', got {frame!r}")
     return frame
@@ -35,21 +38,45 @@ def _frame(frame: str, what: str) -> str:
 class Force:
     """A force on ``body`` at the body-fixed ``point`` (body frame).
 
-    ``frame="world"`` gives the force in world components, ``"body"`` in body
-    components (a follower force that turns with the body).
+    Parameters
+    ----------
+    body
+        The body pushed.
+    force
+        3 components: numbers or SymPy expressions in the coordinates (the bodies'
+        ``dynamicsymbols``), their rates and the time ``dalembert.t``.
+    point
+        Where it acts, in the body frame (default the mass center).
+    frame
+        ``"world"`` (default): world components; ``"body"``: body components (a
+        follower force that turns with the body).
+    name
+        Its name (default ``force_on_<body>``).
+
+    Examples
+    --------
+    A push of 2 N along ``x`` on a particle:
+
+    >>> from dalembert.multibody import Multibody, Particle
+    >>> p = Particle("p", 1.0)
+    >>> mb = Multibody([p], forces=[Force(p, (2.0, 0, 0))], gravity=(0, 0, 0))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(), t_eval=[1.0])
+    >>> round(float(traj["p_x"][0]), 9)   # a t^2 / 2 with a = 2
+    1.0
     """
 
-    def __init__(self, body: Body, force: object, point: object = (0, 0, 0),
-                 frame: str = "world", name: str | None = None) -> None:
+    def __init__(self, body: Body, force: ExprVector, point: Vector = (0, 0, 0),
+                 frame: Frame = "world", name: str | None = None) -> None:
         self.body = body
         self.name = name or f"force_on_{getattr(body, 'name', '?')}"
         self.force = _vector(force, f"{self.name}: force")
         self.point = _point(point, f"{self.name}: point")
         self.frame = _frame(frame, self.name)
-        if frame == "body" and not body.has_orientation:
+        if frame == "body" and isinstance(body, Particle):
             raise ModelError(f"{self.name}: {body.name!r} is a particle, it has no body frame")
 
     def point_force(self) -> PointForce:
+        """The force as a :class:`~dalembert.PointForce` (world components)."""
         F = self.force if self.frame == "world" else self.body.rotation() * self.force
         return PointForce(force=list(F), point=list(self.body.position(self.point)),
                           name=self.name)
@@ -60,15 +87,38 @@ class Torque:
 
     On a :class:`~dalembert.multibody.PlanarBody` only ``tau_z`` does work (the
     body cannot turn about ``x`` or ``y``), so the torque must be along ``z``.
+
+    Parameters
+    ----------
+    body
+        A :class:`~dalembert.multibody.RigidBody` or
+        :class:`~dalembert.multibody.PlanarBody`.
+    torque
+        3 components: numbers or SymPy expressions (as for :class:`Force`).
+    frame
+        ``"world"`` (default) or ``"body"`` components.
+    name
+        Its name (default ``torque_on_<body>``).
+
+    Examples
+    --------
+    A torque of 3 N m about ``z`` spins up a planar body of moment 0.5 at 6 rad/s^2:
+
+    >>> from dalembert.multibody import Multibody, PlanarBody
+    >>> disk = PlanarBody("disk", 1.0, 0.5)
+    >>> mb = Multibody([disk], torques=[Torque(disk, (0, 0, 3.0))], gravity=(0, 0, 0))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(), t_eval=[1.0])
+    >>> round(float(traj["disk_theta_dot"][0]), 9)
+    6.0
     """
 
-    def __init__(self, body: Body, torque: object, frame: str = "world",
+    def __init__(self, body: TurningBody, torque: ExprVector, frame: Frame = "world",
                  name: str | None = None) -> None:
-        self.body = body
         self.name = name or f"torque_on_{getattr(body, 'name', '?')}"
-        if not isinstance(body, (RigidBody, PlanarBody)):
+        if not isinstance(body, TurningBody):
             raise ModelError(f"{self.name}: a torque needs a RigidBody or PlanarBody, got "
                              f"{body!r}")
+        self.body = body
         self.torque = _vector(torque, f"{self.name}: torque")
         self.frame = _frame(frame, self.name)
         if isinstance(body, PlanarBody) and any(c != 0 for c in self.torque[:2]):
@@ -77,7 +127,14 @@ class Torque:
 
     def generalized_forces(self) -> dict[object, sp.Expr]:
         """``{b_k: Q_k}`` with ``Q = 2 E^T tau_body`` (or ``2 G^T tau_world``); a planar
-        body's ``{theta: tau_z}`` (world and body ``z`` are the same axis)."""
+        body's ``{theta: tau_z}`` (world and body ``z`` are the same axis).
+
+        Examples
+        --------
+        >>> from dalembert.multibody import PlanarBody
+        >>> Torque(PlanarBody("disk", 1.0, 0.5), (0, 0, 3)).generalized_forces()
+        {disk_theta(t): 3}
+        """
         if isinstance(self.body, PlanarBody):
             return {self.body.angle: self.torque[2]}
         b = self.body.quaternion
@@ -88,11 +145,37 @@ class Torque:
 
 class SpringDamper:
     """Linear spring (stiffness ``k``, rest length ``rest_length``) and damper ``c``
-    between ``point_a`` on ``body_a`` and ``point_b`` on ``body_b`` (body frames)."""
+    between ``point_a`` on ``body_a`` and ``point_b`` on ``body_b`` (body frames).
+
+    Parameters
+    ----------
+    name
+        Its name (damper forces ``<name>_damper_a``, ``<name>_damper_b``).
+    body_a, body_b
+        The bodies joined; either may be a :class:`~dalembert.multibody.Ground`.
+    stiffness, rest_length, damping
+        ``k``, ``L0`` and ``c``, each finite and ``>= 0``.
+    point_a, point_b
+        The ends, each in its body's frame.
+
+    Examples
+    --------
+    A mass of 1 on a spring of stiffness 4 swings at ``omega = 2``: at a quarter
+    period it passes the rest position at ``omega`` times the amplitude:
+
+    >>> import numpy as np
+    >>> from dalembert.multibody import Ground, Multibody, Particle
+    >>> p = Particle("p", 1.0)
+    >>> mb = Multibody([p], springs=[SpringDamper("k", Ground(), p, 4.0)], gravity=(0, 0, 0))
+    >>> traj = mb.simulate((0, np.pi / 4), *mb.initial_state(positions={p: (0.1, 0, 0)}),
+    ...                    t_eval=[np.pi / 4])
+    >>> round(float(traj["p_x"][0]), 9), round(float(traj["p_x_dot"][0]), 9)
+    (0.0, -0.2)
+    """
 
     def __init__(self, name: str, body_a: Body, body_b: Body, stiffness: float,
                  rest_length: float = 0.0, damping: float = 0.0,
-                 point_a: object = (0, 0, 0), point_b: object = (0, 0, 0)) -> None:
+                 point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:
         self.name = name
         self.body_a, self.body_b = body_a, body_b
         self.stiffness = _nonnegative(stiffness, f"spring {name!r}: stiffness")
@@ -103,6 +186,7 @@ class SpringDamper:
 
     @property
     def bodies(self) -> tuple[Body, Body]:
+        """``(body_a, body_b)``."""
         return self.body_a, self.body_b
 
     def _geometry(self) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Expr]:
@@ -112,6 +196,7 @@ class SpringDamper:
         return ra, rb, d, sp.sqrt(d.dot(d))
 
     def potential(self) -> sp.Expr:
+        """The elastic energy ``1/2 k (L - L0)^2`` (SymPy)."""
         *_, L = self._geometry()
         if self.rest_length == 0:
             # (L - 0)^2 = d.d: no square root, smooth through L = 0
@@ -120,6 +205,7 @@ class SpringDamper:
         return sp.Float(self.stiffness) / 2 * (L - sp.Float(self.rest_length)) ** 2
 
     def point_forces(self) -> list[PointForce]:
+        """The damper's two opposite forces (none without damping)."""
         if self.damping == 0:
             return []
         ra, rb, d, _ = self._geometry()
@@ -129,7 +215,7 @@ class SpringDamper:
                 PointForce(force=list(-F_b), point=list(ra), name=f"{self.name}_damper_a")]
 
 
-def _nonnegative(value: object, what: str) -> float:
+def _nonnegative(value: float, what: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:

@@ -17,20 +17,21 @@ vanishes for a spherical joint. For a
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..trajectory import Trajectory
-from .bodies import Body, Ground
+from .bodies import Body, Ground, TurningBody
 from .builder import Multibody
 from .joints import Joint
 from .rolling import Rolling
 from .rotations import euler_from_matrix
+from .types import FloatArray, Frame, Vector
 
 
-def _columns(traj: Trajectory, body: Body, suffix: str = "") -> np.ndarray:
+def _columns(traj: Trajectory, body: Body, suffix: str = "") -> FloatArray:
     return np.column_stack([traj[f"{c.name}{suffix}"] for c in body.coordinates])
 
 
@@ -38,29 +39,93 @@ def _body(mb: Multibody, body: Body | str) -> Body:
     return mb.body(body) if isinstance(body, str) else body
 
 
-def _pose(traj: Trajectory, body: Body) -> tuple[np.ndarray, np.ndarray]:
+def _pose(traj: Trajectory, body: Body) -> tuple[FloatArray, FloatArray]:
     return body.pose(_columns(traj, body))
 
 
-def _velocity(traj: Trajectory, body: Body) -> np.ndarray:
+def _velocity(traj: Trajectory, body: Body) -> FloatArray:
     return body.center_velocity(_columns(traj, body, "_dot"))
 
 
-def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> np.ndarray:
-    """``R`` (body -> world) at every time, shape ``(k, 3, 3)``; identity for particles."""
+def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> FloatArray:
+    """``R`` (body -> world) at every time, shape ``(k, 3, 3)``; identity for particles.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+    body
+        A body or its name.
+
+    Examples
+    --------
+    A box turning about ``z`` at 1 rad/s, a quarter turn later:
+
+    >>> from dalembert.multibody import Multibody, RigidBody
+    >>> mb = Multibody([RigidBody("box", 1.0, (1, 2, 3))], gravity=(0, 0, 0))
+    >>> q0, qd0 = mb.initial_state(angular_velocities={"box": (0, 0, 1.0)})
+    >>> traj = mb.simulate((0, np.pi / 2), q0, qd0, t_eval=[np.pi / 2])
+    >>> rotation_matrices(mb, traj, "box")[0].round(9) + 0.0
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.],
+           [ 0.,  0.,  1.]])
+    """
     return _pose(traj, _body(mb, body))[1]
 
 
 def euler_angles(mb: Multibody, traj: Trajectory, body: Body | str,
-                 sequence: str = "ZYX") -> np.ndarray:
+                 sequence: str = "ZYX") -> FloatArray:
     """Euler angles of a body along the trajectory, shape ``(k, 3)`` (see
-    :func:`~dalembert.multibody.rotations.euler_from_matrix`)."""
+    :func:`~dalembert.multibody.rotations.euler_from_matrix`).
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+    body
+        A body or its name.
+    sequence
+        Three axes in SciPy's naming: upper case intrinsic (``"ZYX"``, default),
+        lower case extrinsic.
+
+    Examples
+    --------
+    A box turning about ``z`` at 1 rad/s, a quarter turn later:
+
+    >>> from dalembert.multibody import Multibody, RigidBody
+    >>> mb = Multibody([RigidBody("box", 1.0, (1, 2, 3))], gravity=(0, 0, 0))
+    >>> q0, qd0 = mb.initial_state(angular_velocities={"box": (0, 0, 1.0)})
+    >>> traj = mb.simulate((0, np.pi / 2), q0, qd0, t_eval=[np.pi / 2])
+    >>> euler_angles(mb, traj, "box").round(9).tolist() == [[round(np.pi / 2, 9), 0.0, 0.0]]
+    True
+    """
     return euler_from_matrix(rotation_matrices(mb, traj, body), sequence)
 
 
 def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
-                    point: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
-    """World positions of a body-fixed point (body frame), shape ``(k, 3)``."""
+                    point: Vector = (0.0, 0.0, 0.0)) -> FloatArray:
+    """World positions of a body-fixed point (body frame), shape ``(k, 3)``.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+    body
+        A body or its name.
+    point
+        The point in the body frame (default the mass center).
+
+    Examples
+    --------
+    A box turning about ``z`` at 1 rad/s, a quarter turn later:
+
+    >>> from dalembert.multibody import Multibody, RigidBody
+    >>> mb = Multibody([RigidBody("box", 1.0, (1, 2, 3))], gravity=(0, 0, 0))
+    >>> q0, qd0 = mb.initial_state(angular_velocities={"box": (0, 0, 1.0)})
+    >>> traj = mb.simulate((0, np.pi / 2), q0, qd0, t_eval=[np.pi / 2])
+    >>> (point_positions(mb, traj, "box", (1, 0, 0)).round(9) + 0.0).tolist()
+    [[0.0, 1.0, 0.0]]
+    """
     body = _body(mb, body)
     if isinstance(body, Ground):
         return np.broadcast_to(np.asarray(point, float), (len(traj), 3)).copy()
@@ -69,9 +134,30 @@ def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
 
 
 def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
-                       frame: str = "world") -> np.ndarray:
+                       frame: Frame = "world") -> FloatArray:
     """Angular velocity in body (``2 E(b) bdot`` for Euler parameters) or world
-    components, shape ``(k, 3)``; zero for particles."""
+    components, shape ``(k, 3)``; zero for particles.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+    body
+        A body or its name.
+    frame
+        ``"world"`` (default) or ``"body"`` components.
+
+    Examples
+    --------
+    A box turning about ``z`` at 1 rad/s, a quarter turn later:
+
+    >>> from dalembert.multibody import Multibody, RigidBody
+    >>> mb = Multibody([RigidBody("box", 1.0, (1, 2, 3))], gravity=(0, 0, 0))
+    >>> q0, qd0 = mb.initial_state(angular_velocities={"box": (0, 0, 1.0)})
+    >>> traj = mb.simulate((0, np.pi / 2), q0, qd0, t_eval=[np.pi / 2])
+    >>> (angular_velocities(mb, traj, "box").round(9) + 0.0).tolist()
+    [[0.0, 0.0, 1.0]]
+    """
     body = _body(mb, body)
     if frame not in ("world", "body"):
         raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
@@ -82,39 +168,112 @@ def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
     return np.einsum("kij,kj->ki", body.pose(c)[1], w)
 
 
-def linear_momentum(mb: Multibody, traj: Trajectory) -> np.ndarray:
-    """Total ``sum m v`` (world), shape ``(k, 3)``."""
-    return sum(b.mass * _velocity(traj, b) for b in mb.bodies)
+def linear_momentum(mb: Multibody, traj: Trajectory) -> FloatArray:
+    """Total ``sum m v`` (world), shape ``(k, 3)``.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+
+    Examples
+    --------
+    A 2 kg particle thrown at 1 m/s along ``x`` under ``g = 10``, after 1 s:
+
+    >>> from dalembert.multibody import Multibody, Particle
+    >>> mb = Multibody([Particle("p", 2.0)], gravity=(0, 0, -10.0))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(velocities={"p": (1, 0, 0)}),
+    ...                    t_eval=[0.0, 1.0])
+    >>> (linear_momentum(mb, traj)[1].round(9) + 0.0).tolist()
+    [2.0, 0.0, -20.0]
+    """
+    P = np.zeros((len(traj), 3))
+    for b in mb.bodies:
+        P += b.mass * _velocity(traj, b)
+    return P
 
 
 def angular_momentum(mb: Multibody, traj: Trajectory,
-                     about: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+                     about: Vector = (0.0, 0.0, 0.0)) -> FloatArray:
     """Total angular momentum about a fixed world point, shape ``(k, 3)``:
-    ``sum (x - about) x m v + R I w_body``."""
+    ``sum (x - about) x m v + R I w_body``.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+    about
+        The world point (default the origin).
+
+    Examples
+    --------
+    The box turning about its axis of inertia 3 at 1 rad/s:
+
+    >>> from dalembert.multibody import Multibody, RigidBody
+    >>> mb = Multibody([RigidBody("box", 1.0, (1, 2, 3))], gravity=(0, 0, 0))
+    >>> q0, qd0 = mb.initial_state(angular_velocities={"box": (0, 0, 1.0)})
+    >>> traj = mb.simulate((0, np.pi / 2), q0, qd0, t_eval=[np.pi / 2])
+    >>> (angular_momentum(mb, traj).round(9) + 0.0).tolist()
+    [[0.0, 0.0, 3.0]]
+    """
     H = np.zeros((len(traj), 3))
     for b in mb.bodies:
         x, R = _pose(traj, b)
         H += np.cross(x - np.asarray(about, dtype=float), b.mass * _velocity(traj, b))
-        if b.has_orientation:
+        if isinstance(b, TurningBody):
             w = angular_velocities(mb, traj, b, "body")
             H += np.einsum("kij,jl,kl->ki", R, b.inertia, w)
     return H
 
 
-def kinetic_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
-    """``sum 1/2 m v.v + 1/2 w.I w``."""
+def kinetic_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
+    """``sum 1/2 m v.v + 1/2 w.I w``, evaluated from the bodies' states.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+
+    Examples
+    --------
+    A 2 kg particle thrown at 1 m/s along ``x`` under ``g = 10``, after 1 s:
+
+    >>> from dalembert.multibody import Multibody, Particle
+    >>> mb = Multibody([Particle("p", 2.0)], gravity=(0, 0, -10.0))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(velocities={"p": (1, 0, 0)}),
+    ...                    t_eval=[0.0, 1.0])
+    >>> kinetic_energy(mb, traj).round(9).tolist()   # 1/2 2 (1^2 + 10^2) at t = 1
+    [1.0, 101.0]
+    """
     T = np.zeros(len(traj))
     for b in mb.bodies:
         v = _velocity(traj, b)
         T += 0.5 * b.mass * np.einsum("ki,ki->k", v, v)
-        if b.has_orientation:
+        if isinstance(b, TurningBody):
             w = angular_velocities(mb, traj, b, "body")
             T += 0.5 * np.einsum("ki,ij,kj->k", w, b.inertia, w)
     return T
 
 
-def potential_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
-    """Gravity ``-sum m g.x`` plus the springs' ``1/2 k (L - L0)^2``."""
+def potential_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
+    """Gravity ``-sum m g.x`` plus the springs' ``1/2 k (L - L0)^2``.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+
+    Examples
+    --------
+    A 2 kg particle thrown at 1 m/s along ``x`` under ``g = 10``, after 1 s:
+
+    >>> from dalembert.multibody import Multibody, Particle
+    >>> mb = Multibody([Particle("p", 2.0)], gravity=(0, 0, -10.0))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(velocities={"p": (1, 0, 0)}),
+    ...                    t_eval=[0.0, 1.0])
+    >>> potential_energy(mb, traj).round(9).tolist()   # 2 10 z, z = -5 at t = 1
+    [0.0, -100.0]
+    """
     V = np.zeros(len(traj))
     for b in mb.bodies:
         V -= b.mass * _pose(traj, b)[0] @ mb.gravity
@@ -125,8 +284,25 @@ def potential_energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
     return V
 
 
-def energy(mb: Multibody, traj: Trajectory) -> np.ndarray:
-    """Total mechanical energy ``T + V`` along the trajectory."""
+def energy(mb: Multibody, traj: Trajectory) -> FloatArray:
+    """Total mechanical energy ``T + V`` along the trajectory.
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+
+    Examples
+    --------
+    A 2 kg particle thrown at 1 m/s along ``x`` under ``g = 10``, after 1 s:
+
+    >>> from dalembert.multibody import Multibody, Particle
+    >>> mb = Multibody([Particle("p", 2.0)], gravity=(0, 0, -10.0))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(velocities={"p": (1, 0, 0)}),
+    ...                    t_eval=[0.0, 1.0])
+    >>> energy(mb, traj).round(9).tolist()
+    [1.0, 1.0]
+    """
     return kinetic_energy(mb, traj) + potential_energy(mb, traj)
 
 
@@ -141,16 +317,16 @@ class JointReaction:
 
     joint: str
     body: str
-    point_world: np.ndarray
-    force_world: np.ndarray
-    torque_world: np.ndarray
-    torque_cm_world: np.ndarray
-    force_body: np.ndarray
-    torque_body: np.ndarray
+    point_world: FloatArray
+    force_world: FloatArray
+    torque_world: FloatArray
+    torque_cm_world: FloatArray
+    force_body: FloatArray
+    torque_body: FloatArray
 
 
 def joint_reactions(
-    mb: Multibody, traj: Trajectory, parameters: dict | None = None
+    mb: Multibody, traj: Trajectory, parameters: Mapping[object, object] | None = None
 ) -> dict[str, dict[str, JointReaction]]:
     """Constraint force and torque of every joint on each of its two bodies.
 
@@ -158,6 +334,27 @@ def joint_reactions(
     come from the multipliers; the reaction on ``Ground`` is the opposite wrench
     of the other body's (a joint's equations are invariant under a common rigid
     motion, so its constraint wrench on the pair is self-equilibrated).
+
+    Parameters
+    ----------
+    mb, traj
+        The mechanism and a trajectory of its ``system``.
+    parameters
+        The parameter values ``traj`` was simulated with, if not the system's.
+
+    Examples
+    --------
+    A 2 kg bob hanging at rest on a rod: the rod holds it up with ``m g``, and
+    pulls the pivot down as much:
+
+    >>> from dalembert.multibody import Distance, Ground, Multibody, Particle
+    >>> bob = Particle("bob", 2.0)
+    >>> mb = Multibody([bob], [Distance("rod", Ground(), bob, 1.0)], gravity=(0, 0, -10))
+    >>> traj = mb.simulate((0, 1), *mb.initial_state(positions={bob: (0, 0, -1)}),
+    ...                    t_eval=[1.0])
+    >>> rod = joint_reactions(mb, traj)["rod"]
+    >>> [(rod[side].force_world[0].round(9) + 0.0).tolist() for side in ("bob", "ground")]
+    [[0.0, 0.0, 20.0], [0.0, 0.0, -20.0]]
     """
     system = mb.system
     num = system.numeric(parameters)
@@ -190,7 +387,7 @@ def joint_reactions(
 
 
 def _application_points(mb: Multibody, traj: Trajectory, joint: Joint, body: Body,
-                        point: np.ndarray) -> np.ndarray:
+                        point: FloatArray) -> FloatArray:
     """Where the joint acts on ``body``: its joint point, or a rolling body's contact point."""
     if isinstance(joint, Rolling):
         return joint.contact_points(*_pose(traj, body))
@@ -198,7 +395,7 @@ def _application_points(mb: Multibody, traj: Trajectory, joint: Joint, body: Bod
 
 
 def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
-              P: np.ndarray, Q: np.ndarray) -> JointReaction:
+              P: FloatArray, Q: FloatArray) -> JointReaction:
     c = _columns(traj, body)
     x, R = body.pose(c)
     F = body.center_force(Q)
@@ -211,7 +408,7 @@ def _reaction(mb: Multibody, traj: Trajectory, joint: str, body: Body,
     )
 
 
-def _ground_reaction(joint: str, ground: Ground, point: np.ndarray,
+def _ground_reaction(joint: str, ground: Ground, point: FloatArray,
                      other: JointReaction) -> JointReaction:
     P = np.broadcast_to(np.asarray(point, dtype=float), other.force_world.shape).copy()
     F = -other.force_world

@@ -20,33 +20,72 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Hashable, Sequence
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 import sympy as sp
+from numpy.typing import NDArray
 from sympy.core.function import AppliedUndef
 
 from ..codegen.assembly import Part
 from ..equations.lagrange import Equations, derive_equations
-from ..model.constraints import ConstraintSet, Holonomic
+from ..model.constraints import ConstraintSet, Holonomic, Pfaffian
 from ..model.coordinates import Coordinates, t
 from ..model.forces import warn_double_counting
 from ..model.model import Model, build_part_model
-from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
+from .bodies import Body, Ground, MovingBody, Particle, PlanarBody, RigidBody
 from .derivatives import NotPolynomial, holonomic_rates
+from .joints import Joint
+from .types import FloatArray
+
+if TYPE_CHECKING:
+    from .builder import Multibody
+
+#: Global indices (of coordinates or constraint rows).
+Indices = NDArray[np.intp]
+_T = TypeVar("_T")
 
 
-def gravity_potential(body: Body, gravity: np.ndarray) -> sp.Expr:
-    """``-m g . x`` of the body's mass center (exact zeros drop out)."""
+def gravity_potential(body: Body, gravity: FloatArray) -> sp.Expr:
+    """``-m g . x`` of the body's mass center (exact zeros drop out).
+
+    Parameters
+    ----------
+    body
+        A moving body.
+    gravity
+        The field, world components.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Particle
+    >>> gravity_potential(Particle("p", 2.0), np.array([0.0, 0.0, -9.81]))
+    19.62*p_z(t)
+    """
     g = sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in gravity])
     return -sp.Float(body.mass) * g.dot(body.center)
 
 
-def multibody_parts(mb) -> list[Part]:
+def multibody_parts(mb: Multibody) -> list[Part]:
     """The parts of ``mb`` (a Multibody): bodies, then joints, then loads.
 
     Global coordinates and constraint rows are in the order of ``mb.coordinates``
     and ``mb.constraints()``: bodies' rows (unit quaternions) first, then joints'.
+
+    Parameters
+    ----------
+    mb
+        The mechanism.
+
+    Examples
+    --------
+    Three equal links on ball joints: one body part placed three times, one part
+    for the ground joint and one for the two joints between links:
+
+    >>> from dalembert.multibody import chain
+    >>> [part.instances for part in multibody_parts(chain(3, 1.0, 1.0, 0.1))]
+    [3, 1, 2]
     """
     offsets = _consecutive(mb.bodies, lambda b: len(b.coordinates))
     rows = _consecutive([*mb.bodies, *mb.joints], lambda o: len(o.constraint_names))
@@ -56,9 +95,10 @@ def multibody_parts(mb) -> list[Part]:
     return parts + ([loads] if loads is not None else [])
 
 
-def _consecutive(items: Sequence, size) -> dict[int, np.ndarray]:
+def _consecutive(items: Sequence[_T], size: Callable[[_T], int]) -> dict[int, Indices]:
     """Consecutive global indices, ``size(item)`` of them per item, keyed by ``id(item)``."""
-    out, start = {}, 0
+    out: dict[int, Indices] = {}
+    start = 0
     for item in items:
         k = size(item)
         out[id(item)] = np.arange(start, start + k)
@@ -66,16 +106,16 @@ def _consecutive(items: Sequence, size) -> dict[int, np.ndarray]:
     return out
 
 
-def _grouped(items: Sequence, signature) -> list[list]:
+def _grouped(items: Sequence[_T], signature: Callable[[_T], Hashable]) -> list[list[_T]]:
     """Items with equal ``signature(item)`` together, in order of first appearance."""
-    groups: dict[tuple, list] = {}
+    groups: dict[Hashable, list[_T]] = {}
     for item in items:
         groups.setdefault(signature(item), []).append(item)
     return list(groups.values())
 
 
-def _body_parts(bodies: Sequence[Body], gravity: np.ndarray, offsets: dict[int, np.ndarray],
-                rows: dict[int, np.ndarray]) -> list[Part]:
+def _body_parts(bodies: Sequence[MovingBody], gravity: FloatArray, offsets: dict[int, Indices],
+                rows: dict[int, Indices]) -> list[Part]:
     parts = []
     for members in _grouped(bodies, _body_signature):
         template = _template_body(members[0], "body", keep_mass=True)
@@ -84,12 +124,12 @@ def _body_parts(bodies: Sequence[Body], gravity: np.ndarray, offsets: dict[int, 
             potential=gravity_potential(template, gravity), constraints=template.constraints(),
             name=f"body {members[0].name}",
         )
-        parts.append(Part(derive_equations(model), [offsets[id(b)] for b in members],
-                          [rows[id(b)] for b in members]))
+        parts.append(Part(derive_equations(model), np.array([offsets[id(b)] for b in members]),
+                          np.array([rows[id(b)] for b in members])))
     return parts
 
 
-def _body_signature(body: Body) -> tuple:
+def _body_signature(body: MovingBody) -> Hashable:
     inertia = getattr(body, "inertia", None)
     return type(body), body.mass, None if inertia is None else tuple(inertia.ravel())
 
@@ -108,8 +148,8 @@ def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
     raise TypeError(f"no template for {body!r}")
 
 
-def _joint_parts(joints: Sequence, offsets: dict[int, np.ndarray],
-                 rows: dict[int, np.ndarray]) -> list[Part]:
+def _joint_parts(joints: Sequence[Joint], offsets: dict[int, Indices],
+                 rows: dict[int, Indices]) -> list[Part]:
     parts = []
     for members in _grouped(joints, _signature):
         template = copy.copy(members[0])
@@ -118,12 +158,13 @@ def _joint_parts(joints: Sequence, offsets: dict[int, np.ndarray],
         coords = [*template.body_a.coordinates, *template.body_b.coordinates]
         equations = _constraint_equations(coords, template.constraints(),
                                           f"joint {members[0].name}")
-        places = [_joint_coordinates(j, offsets) for j in members]
-        parts.append(Part(equations, places, [rows[id(j)] for j in members]))
+        places = np.array([_joint_coordinates(j, offsets) for j in members])
+        parts.append(Part(equations, places, np.array([rows[id(j)] for j in members])))
     return parts
 
 
-def _constraint_equations(coordinates: Sequence, constraints: Sequence, name: str) -> Equations:
+def _constraint_equations(coordinates: Sequence[sp.Function],
+                          constraints: Sequence[Holonomic | Pfaffian], name: str) -> Equations:
     """What :func:`derive_equations` gives a part that is constraints only (a joint).
 
     Holonomic constraints without time that are polynomials (also in the sines and
@@ -143,7 +184,8 @@ def _constraint_equations(coordinates: Sequence, constraints: Sequence, name: st
     return derive_equations(build_part_model(coordinates, constraints=constraints, name=name))
 
 
-def _polynomial_equations(model: Model, constraints: Sequence) -> Equations | None:
+def _polynomial_equations(model: Model,
+                          constraints: Sequence[Holonomic | Pfaffian]) -> Equations | None:
     """``model`` (coordinates only) with ``constraints`` and their derivatives, or ``None``
     when they need the general route."""
     coords = model.coords
@@ -171,12 +213,12 @@ def _scleronomic(expr: sp.Expr, coords: Coordinates) -> bool:
     return bool(free & set(coords.q)) and not free & {t, *coords.qd}
 
 
-def _joint_coordinates(joint, offsets: dict[int, np.ndarray]) -> np.ndarray:
+def _joint_coordinates(joint: Joint, offsets: dict[int, Indices]) -> Indices:
     return np.concatenate([offsets.get(id(b), np.zeros(0, dtype=np.intp))
                            for b in joint.bodies]).astype(np.intp)
 
 
-def _signature(joint) -> tuple:
+def _signature(joint: Joint) -> Hashable:
     """What a joint's equations depend on: its type, geometry and the kinds of its bodies."""
     items = tuple((k, _freeze(v)) for k, v in sorted(vars(joint).items()) if k != "name")
     return type(joint), items
@@ -196,34 +238,37 @@ def _freeze(value: object) -> object:
     return value
 
 
-def _load_part(mb, offsets: dict[int, np.ndarray]) -> Part | None:
+def _load_part(mb: Multibody, offsets: dict[int, Indices]) -> Part | None:
     """Forces, torques and springs as one part in the coordinates they involve."""
     if not (mb.forces or mb.torques or mb.springs):
         return None
     potential = sp.Add(*(s.potential() for s in mb.springs))
     generalized = mb.generalized_forces()
     point_forces = mb.point_forces()
-    used = _coordinates_in(mb.bodies, [potential, *generalized.values(),
-                                       *(e for pf in point_forces for e in (*pf.force,
-                                                                            *pf.point))])
+    # a generalized force involves the coordinate it acts on even when constant (a
+    # constant torque on a planar body's angle)
+    used = set(generalized) | _coordinates_in(
+        mb.bodies, [potential, *generalized.values(),
+                    *(sp.Matrix([pf.force, pf.point]) for pf in point_forces)])
     coords = [c for body in mb.bodies for c in body.coordinates if c in used]
     index = {c: i for body in mb.bodies
              for c, i in zip(body.coordinates, offsets[id(body)])}
     model = build_part_model(coords, potential=potential, generalized_forces=generalized,
                              forces=point_forces, name="loads")
     _warn_double_counting(mb, model, used)
-    return Part(derive_equations(model), [[index[c] for c in coords]], np.zeros((1, 0)))
+    return Part(derive_equations(model), np.array([[index[c] for c in coords]], dtype=np.intp),
+                np.zeros((1, 0)))
 
 
-def _coordinates_in(bodies: Sequence[Body], exprs: Sequence[object]) -> set:
+def _coordinates_in(bodies: Sequence[Body], exprs: Sequence[object]) -> set[sp.Function]:
     every = {c for body in bodies for c in body.coordinates}
-    found = set()
+    found: set[sp.Function] = set()
     for e in exprs:
         found |= sp.sympify(e).atoms(AppliedUndef) & every
     return found
 
 
-def _warn_double_counting(mb, loads: Model, used: set) -> None:
+def _warn_double_counting(mb: Multibody, loads: Model, used: set[sp.Function]) -> None:
     """Gravity (in the bodies' potential) given again as an applied force."""
     every = sp.Add(*(gravity_potential(b, mb.gravity) for b in mb.bodies))
     # only the terms in the loads' coordinates (each is -m g_k x_k of one coordinate)

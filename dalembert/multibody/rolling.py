@@ -46,9 +46,10 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from ..model.coordinates import t
-from .bodies import Body, Ground, RigidBody
+from .bodies import Ground, RigidBody
 from .joints import Joint, _sym
 from .rotations import G_matrix
+from .types import FloatArray, Vector
 
 
 class Rolling(Joint):
@@ -70,6 +71,9 @@ class Rolling(Joint):
     tangent
         ``t1``, a direction in the plane (default: the world axis least aligned
         with ``normal``, made perpendicular).
+    ground
+        The :class:`~dalembert.multibody.Ground` the plane belongs to (its side
+        ``a``; default a new one).
 
     Examples
     --------
@@ -80,10 +84,13 @@ class Rolling(Joint):
     """
 
     n_equations = 3
+    #: The plane (its side ``a``) and the rolling body (side ``b``).
+    body_a: Ground
+    body_b: RigidBody
 
-    def __init__(self, name: str, body: Body, radius: float, axis: object = None,
-                 normal: object = (0, 0, 1), point: object = (0, 0, 0),
-                 tangent: object = None, ground: Ground | None = None) -> None:
+    def __init__(self, name: str, body: RigidBody, radius: float, axis: Vector | None = None,
+                 normal: Vector = (0, 0, 1), point: Vector = (0, 0, 0),
+                 tangent: Vector | None = None, ground: Ground | None = None) -> None:
         if not isinstance(body, RigidBody):
             raise ModelError(f"joint {name!r} (Rolling): the rolling body must be a RigidBody, "
                              f"got {body!r}; a particle has no rotation to roll with")
@@ -97,11 +104,13 @@ class Rolling(Joint):
                          axis_b=normal if axis is None else axis, ref_a=tangent)
 
     @property
-    def normal(self) -> np.ndarray:
+    def normal(self) -> FloatArray:
+        """The plane's unit normal ``n`` (world)."""
         return self.axis_a
 
     @property
-    def tangents(self) -> tuple[np.ndarray, np.ndarray]:
+    def tangents(self) -> tuple[FloatArray, FloatArray]:
+        """``t1`` and ``t2 = n x t1``, spanning the plane (world)."""
         return self.ref_a, np.cross(self.axis_a, self.ref_a)
 
     # -- symbolic ----------------------------------------------------------------------
@@ -130,8 +139,27 @@ class Rolling(Joint):
                 Pfaffian(slip2, name=f"{self.name}_3")]
 
     # -- numeric -----------------------------------------------------------------------
-    def contact_points(self, x: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """World contact points for centers ``x`` ``(k, 3)`` and rotations ``R`` ``(k, 3, 3)``."""
+    def contact_points(self, x: FloatArray, R: FloatArray) -> FloatArray:
+        """World contact points for centers ``x`` ``(k, 3)`` and rotations ``R`` ``(k, 3, 3)``.
+
+        Parameters
+        ----------
+        x, R
+            The body's poses, as :meth:`~dalembert.multibody.Body.pose` gives them.
+
+        Examples
+        --------
+        A wheel of radius 0.5 (axis body ``y``) leaning 30 degrees about ``x``, its
+        center at height ``r cos 30``, touches the table ``r sin 30`` to the side:
+
+        >>> from dalembert.multibody import RigidBody
+        >>> from dalembert.multibody.rotations import elementary_rotation
+        >>> wheel = Rolling("roll", RigidBody("w", 1.0, (1, 2, 1)), 0.5, axis=(0, 1, 0))
+        >>> R = elementary_rotation("x", np.pi / 6)
+        >>> P = wheel.contact_points(np.array([[0, 0, 0.5 * np.cos(np.pi / 6)]]), R[None])
+        >>> (P.round(12) + 0.0).tolist()
+        [[0.0, 0.25, 0.0]]
+        """
         n = self.normal
         if not self.is_disk:
             return x - self.radius * n

@@ -17,9 +17,6 @@ virtual work of the generalized force ``2 E^T tau_body = 2 G^T tau_world`` on ``
 Every function takes SymPy input (returning ``sympy.Matrix``) or NumPy input of
 shape ``(..., 4)`` (returning arrays of shape ``(..., 3, 4)`` or ``(..., 3, 3)``).
 
->>> from typing import Any
-
-import numpy as np
 >>> b = quaternion_from_matrix(rotation_matrix(np.array([0.5, 0.5, 0.5, 0.5])))
 >>> np.allclose(b, 0.5)
 True
@@ -28,19 +25,26 @@ True
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 import sympy as sp
+from numpy.typing import ArrayLike
+
+from .types import FloatArray
 
 _AXES = {"x": 0, "y": 1, "z": 2}
+#: Euler parameters: SymPy (a matrix or 4 expressions) or numbers of shape ``(..., 4)``.
+Quaternions: TypeAlias = sp.MatrixBase | Sequence[sp.Expr] | ArrayLike
+#: A ``sympy.Matrix`` for SymPy input, else an array.
+MatrixOrArray: TypeAlias = sp.Matrix | FloatArray
 
 
 def _is_symbolic(b: Any) -> bool:
     return isinstance(b, sp.MatrixBase) or any(isinstance(v, sp.Basic) for v in b)
 
 
-def _assemble(rows: list[list[object]], symbolic: bool):
+def _assemble(rows: list[list[Any]], symbolic: bool) -> MatrixOrArray:
     if symbolic:
         return sp.Matrix(rows)
     return np.moveaxis(np.array([[np.asarray(v, dtype=float) for v in r] for r in rows]),
@@ -56,22 +60,58 @@ def _split(b: Any) -> tuple[Any, Any, Any, Any]:
     return b[..., 0], b[..., 1], b[..., 2], b[..., 3]
 
 
-def E_matrix(b: Any):
-    """Body-frame matrix: ``w_body = 2 E(b) bdot``."""
+def E_matrix(b: Quaternions) -> MatrixOrArray:
+    """Body-frame matrix: ``w_body = 2 E(b) bdot``.
+
+    Parameters
+    ----------
+    b
+        Euler parameters: SymPy (a matrix or 4 expressions) or numbers ``(..., 4)``.
+
+    Examples
+    --------
+    >>> bool(np.array_equal(E_matrix(np.array([1.0, 0.0, 0.0, 0.0]))[:, 1:], np.eye(3)))
+    True
+    """
     b0, b1, b2, b3 = _split(b)
     rows = [[-b1, b0, b3, -b2], [-b2, -b3, b0, b1], [-b3, b2, -b1, b0]]
     return _assemble(rows, _is_symbolic(b))
 
 
-def G_matrix(b: Any):
-    """World-frame matrix: ``w_world = 2 G(b) bdot``."""
+def G_matrix(b: Quaternions) -> MatrixOrArray:
+    """World-frame matrix: ``w_world = 2 G(b) bdot``.
+
+    Parameters
+    ----------
+    b
+        Euler parameters: SymPy (a matrix or 4 expressions) or numbers ``(..., 4)``.
+
+    Examples
+    --------
+    >>> b = sp.symbols("b0:4")
+    >>> G_matrix(b) * sp.Matrix(b) == sp.zeros(3, 1)   # G b = 0
+    True
+    """
     b0, b1, b2, b3 = _split(b)
     rows = [[-b1, b0, -b3, b2], [-b2, b3, b0, -b1], [-b3, -b2, b1, b0]]
     return _assemble(rows, _is_symbolic(b))
 
 
-def rotation_matrix(b: Any):
-    """``R(b) = G(b) E(b)^T`` (body to world), written out as quadratic polynomials."""
+def rotation_matrix(b: Quaternions) -> MatrixOrArray:
+    """``R(b) = G(b) E(b)^T`` (body to world), written out as quadratic polynomials.
+
+    Parameters
+    ----------
+    b
+        Euler parameters: SymPy (a matrix or 4 expressions) or numbers ``(..., 4)``.
+
+    Examples
+    --------
+    A half turn about ``z``, ``b = (cos 90deg, 0, 0, sin 90deg)``:
+
+    >>> rotation_matrix(np.array([0.0, 0.0, 0.0, 1.0])).tolist()
+    [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
+    """
     b0, b1, b2, b3 = _split(b)
     rows = [
         [b0**2 + b1**2 - b2**2 - b3**2, 2 * (b1 * b2 - b0 * b3), 2 * (b1 * b3 + b0 * b2)],
@@ -81,11 +121,21 @@ def rotation_matrix(b: Any):
     return _assemble(rows, _is_symbolic(b))
 
 
-def quaternion_from_matrix(R: Any) -> np.ndarray:
+def quaternion_from_matrix(R: ArrayLike) -> FloatArray:
     """Unit Euler parameters with ``b0 >= 0`` of a rotation matrix (Shepperd's method).
 
     The largest of ``b0^2..b3^2`` is taken from the trace and diagonal, the others
     from off-diagonal sums, so no division by a small number occurs.
+
+    Parameters
+    ----------
+    R
+        Rotation matrices ``(..., 3, 3)``.
+
+    Examples
+    --------
+    >>> quaternion_from_matrix(np.diag([-1.0, -1.0, 1.0])).tolist()
+    [0.0, 0.0, 0.0, 1.0]
     """
     R = np.asarray(R, dtype=float)
     if R.shape[-2:] != (3, 3):
@@ -95,7 +145,7 @@ def quaternion_from_matrix(R: Any) -> np.ndarray:
     return out.reshape((*R.shape[:-2], 4))
 
 
-def _shepperd(R: np.ndarray) -> np.ndarray:
+def _shepperd(R: FloatArray) -> FloatArray:
     tr = np.trace(R)
     d = [tr, R[0, 0], R[1, 1], R[2, 2]]
     k = int(np.argmax(d))
@@ -118,8 +168,21 @@ def _shepperd(R: np.ndarray) -> np.ndarray:
     return -unit if unit[0] < 0 else unit
 
 
-def elementary_rotation(axis: str, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` about the coordinate axis ``"x"``, ``"y"`` or ``"z"``."""
+def elementary_rotation(axis: str, angle: float) -> FloatArray:
+    """Rotation by ``angle`` about the coordinate axis ``"x"``, ``"y"`` or ``"z"``.
+
+    Parameters
+    ----------
+    axis
+        ``"x"``, ``"y"`` or ``"z"`` (either case).
+    angle
+        In radians, counterclockwise seen from the axis' tip.
+
+    Examples
+    --------
+    >>> (elementary_rotation("z", np.pi / 2) @ [1.0, 0.0, 0.0]).round(12).tolist()
+    [0.0, 1.0, 0.0]
+    """
     c, s = np.cos(angle), np.sin(angle)
     i = _AXES[axis.lower()]
     j, k = (i + 1) % 3, (i + 2) % 3
@@ -128,12 +191,21 @@ def elementary_rotation(axis: str, angle: float) -> np.ndarray:
     return R
 
 
-def matrix_from_euler(angles: Sequence[float], sequence: str = "ZYX") -> np.ndarray:
+def matrix_from_euler(angles: Sequence[float], sequence: str = "ZYX") -> FloatArray:
     """Rotation matrix of Euler angles, SciPy's naming of ``sequence``.
 
     Upper case (``"ZYX"``) is intrinsic (rotations about the moving axes, so
     ``R = R1 R2 R3``), lower case (``"xyz"``) extrinsic (fixed axes, ``R = R3 R2 R1``).
 
+    Parameters
+    ----------
+    angles
+        The three angles (radians), in the order of ``sequence``.
+    sequence
+        Three axes, no two neighbours equal, all upper or all lower case.
+
+    Examples
+    --------
     >>> np.allclose(matrix_from_euler([np.pi / 2, 0, 0], "ZYX") @ [1, 0, 0], [0, 1, 0])
     True
     """
@@ -144,9 +216,22 @@ def matrix_from_euler(angles: Sequence[float], sequence: str = "ZYX") -> np.ndar
     return mats[2] @ mats[1] @ mats[0]
 
 
-def euler_from_matrix(R: object, sequence: str = "ZYX") -> np.ndarray:
+def euler_from_matrix(R: ArrayLike, sequence: str = "ZYX") -> FloatArray:
     """Euler angles (radians) of rotation matrices ``(..., 3, 3)``; inverse of
-    :func:`matrix_from_euler` (SciPy's conventions and gimbal-lock handling)."""
+    :func:`matrix_from_euler` (SciPy's conventions and gimbal-lock handling).
+
+    Parameters
+    ----------
+    R
+        Rotation matrices ``(..., 3, 3)``.
+    sequence
+        As in :func:`matrix_from_euler`.
+
+    Examples
+    --------
+    >>> euler_from_matrix(matrix_from_euler([0.3, -0.2, 0.1])).round(12).tolist()
+    [0.3, -0.2, 0.1]
+    """
     from scipy.spatial.transform import Rotation
 
     _check_sequence(sequence)
@@ -174,6 +259,15 @@ def times_vector(R: sp.MatrixBase, v: sp.MatrixBase) -> sp.Matrix:
     ``0 * oo = nan``) and asks each such product whether it is finite: for a joint's
     frames and points that query was much of the time taken to write the equations.
 
+    Parameters
+    ----------
+    R
+        A SymPy matrix.
+    v
+        A SymPy column with as many entries as ``R`` has columns.
+
+    Examples
+    --------
     >>> b = sp.symbols("b0:4")
     >>> times_vector(rotation_matrix(b), sp.Matrix([0, 0, 1])) == rotation_matrix(b)[:, 2]
     True
@@ -184,6 +278,13 @@ def times_vector(R: sp.MatrixBase, v: sp.MatrixBase) -> sp.Matrix:
 def dot(a: sp.MatrixBase, b: sp.MatrixBase) -> sp.Expr:
     """``a . b`` of two SymPy vectors without the products that have a zero factor.
 
+    Parameters
+    ----------
+    a, b
+        SymPy vectors of equal length.
+
+    Examples
+    --------
     >>> x, y = sp.symbols("x y")
     >>> dot(sp.Matrix([x, 0, 2]), sp.Matrix([y, x, 1]))
     x*y + 2
@@ -191,15 +292,43 @@ def dot(a: sp.MatrixBase, b: sp.MatrixBase) -> sp.Expr:
     return sp.Add(*(u * v for u, v in zip(a, b) if u != 0 and v != 0))
 
 
-def skew(v: Any):
-    """The cross-product matrix ``[v]x`` with ``[v]x u = v x u``."""
+def skew(v: Sequence[float | sp.Expr] | sp.MatrixBase | FloatArray) -> MatrixOrArray:
+    """The cross-product matrix ``[v]x`` with ``[v]x u = v x u``.
+
+    Parameters
+    ----------
+    v
+        3 numbers (an array comes back) or SymPy expressions (a ``sympy.Matrix``).
+
+    Examples
+    --------
+    >>> (skew([1.0, 2.0, 3.0]) @ [4.0, 5.0, 6.0]).tolist(), np.cross([1, 2, 3], [4, 5, 6]).tolist()
+    ([-3.0, 6.0, -3.0], [-3, 6, -3])
+    """
     x, y, z = v
     rows = [[0, -z, y], [z, 0, -x], [-y, x, 0]]
     return sp.Matrix(rows) if _is_symbolic(v) else np.array(rows, dtype=float)
 
 
-def check_rotation(R: object, what: str, tol: float = 1e-9) -> np.ndarray:
-    """``R`` as a float array after checking it is a proper rotation; errors name ``what``."""
+def check_rotation(R: ArrayLike, what: str, tol: float = 1e-9) -> FloatArray:
+    """``R`` as a float array after checking it is a proper rotation; errors name ``what``.
+
+    Parameters
+    ----------
+    R
+        The matrix.
+    what
+        What it is, for the ``ValueError`` messages.
+    tol
+        Largest ``|R^T R - I|`` accepted.
+
+    Examples
+    --------
+    >>> check_rotation(np.diag([1.0, 1.0, -1.0]), "the mirror")
+    Traceback (most recent call last):
+    ...
+    ValueError: the mirror: det R = -1, a reflection, not a rotation
+    """
     R = np.asarray(R, dtype=float)
     if R.shape != (3, 3):
         raise ValueError(f"{what}: a rotation matrix is 3x3, got shape {R.shape}")

@@ -10,15 +10,19 @@ message -- is made on first use and gives the same equations.
 
 from __future__ import annotations
 
-from functools import cached_property
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from ..codegen.assembly import compile_parts
 from ..codegen.compiled import CompiledEquations
 from ..model.model import Model, build_model
+from ..options import RedundantConstraints
 from ..system import System, _check_redundant
 from .parts import multibody_parts
+
+if TYPE_CHECKING:
+    from .builder import Multibody
 
 
 class MultibodySystem(System):
@@ -30,8 +34,10 @@ class MultibodySystem(System):
     (21, 12)
     """
 
-    def __init__(self, multibody, redundant_constraints: str = "minimum-norm") -> None:
+    def __init__(self, multibody: Multibody,
+                 redundant_constraints: RedundantConstraints = "minimum-norm") -> None:
         self._multibody = multibody
+        self._model: Model | None = None
         self.redundant_constraints = _check_redundant(redundant_constraints)
         self.parameter_values: dict[str, float] = {}
         self._names = tuple(c.name for c in multibody.coordinates)
@@ -42,6 +48,7 @@ class MultibodySystem(System):
 
     @property
     def name(self) -> str:
+        """The Multibody's name."""
         return self._multibody.name
 
     @property
@@ -63,22 +70,41 @@ class MultibodySystem(System):
 
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` by name and the joint or body it belongs to (no symbolic
-        model is built for a message: for a large mechanism that takes long)."""
+        model is built for a message: for a large mechanism that takes long).
+
+        Parameters
+        ----------
+        i
+            The row, in the order of :attr:`constraint_names`.
+
+        Examples
+        --------
+        >>> from dalembert.multibody import chain
+        >>> chain(2, 1.0, 1.0, 0.05).system.describe_constraint(5)
+        "constraint 'joint2_1' (Spherical 'joint2')"
+        """
         mb, name = self._multibody, self._rows[i]
         owners = [*((b, b.constraint_names) for b in mb.bodies),
                   *((j, j.constraint_names) for j in mb.joints)]
         owner = next(o for o, names in owners if name in names)
         return f"constraint {name!r} ({type(owner).__name__} {owner.name!r})"
 
-    @cached_property
+    @property
     def model(self) -> Model:
         """The global symbolic model (built on first use; the numerics do not need it)."""
-        mb = self._multibody
-        return build_model(
-            mb.coordinates, kinetic=mb.kinetic_energy(), potential=mb.potential_energy(),
-            constraints=mb.constraints(), generalized_forces=mb.generalized_forces() or None,
-            forces=mb.point_forces(), name=mb.name,
-        )
+        if self._model is None:
+            mb = self._multibody
+            self._model = build_model(
+                mb.coordinates, kinetic=mb.kinetic_energy(), potential=mb.potential_energy(),
+                constraints=mb.constraints(), generalized_forces=mb.generalized_forces() or None,
+                forces=mb.point_forces(), name=mb.name,
+            )
+        return self._model
+
+    @model.setter
+    def model(self, value: Model) -> None:
+        # settable, as System.model is (and as the functools.cached_property this was)
+        self._model = value
 
     def _compile(self) -> CompiledEquations:
         """One kernel per kind of body, joint and the loads."""

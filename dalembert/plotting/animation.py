@@ -22,23 +22,42 @@ from __future__ import annotations
 import base64
 import io
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from matplotlib.artist import Artist
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from numpy.typing import ArrayLike, NDArray
 from PIL import Image
 
 from ..trajectory import Trajectory
+from .modes import PLANES, Plane
 
-PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 SUFFIXES = (".gif", ".html")
+#: ``draw(system, q)``: the polylines of the mechanism at ``q`` (in coordinate order),
+#: each a ``(k, 2)`` or ``(k, 3)`` array; ``system`` is what :func:`animate` was given.
+AnimationDraw = Callable[[Any, NDArray[np.float64]], Sequence[ArrayLike]]
+#: The polylines of one frame.
+Lines = list[NDArray[np.float64]]
 
 
-def frame_indices(n_points: int, frames: int) -> np.ndarray:
+def frame_indices(n_points: int, frames: int) -> NDArray[np.intp]:
     """At most ``frames`` evenly spread output indices, first and last included.
 
+    Parameters
+    ----------
+    n_points
+        The number of outputs.
+    frames
+        The most frames wanted (at least 1).
+
+    Examples
+    --------
     >>> frame_indices(11, 3).tolist()
     [0, 5, 10]
     """
@@ -47,11 +66,14 @@ def frame_indices(n_points: int, frames: int) -> np.ndarray:
     return np.unique(np.linspace(0, n_points - 1, min(frames, n_points)).round().astype(int))
 
 
-def _drawer(system: object, draw: Callable | None) -> Callable[[np.ndarray], list]:
+def _drawer(system: object,
+            draw: AnimationDraw | None) -> Callable[[NDArray[np.float64]], Sequence[ArrayLike]]:
     if draw is not None:
         return lambda q: draw(system, q)
-    mb = system if hasattr(system, "stick_figure") else getattr(system, "_multibody", None)
-    if mb is None:
+    from ..multibody.builder import Multibody  # only a multibody draws itself
+
+    mb = system if isinstance(system, Multibody) else getattr(system, "_multibody", None)
+    if not isinstance(mb, Multibody):
         raise ValueError(
             "nothing to draw: give draw=draw(system, q) returning polylines, or a system "
             "built by dalembert.multibody.Multibody (or the Multibody itself)"
@@ -59,9 +81,15 @@ def _drawer(system: object, draw: Callable | None) -> Callable[[np.ndarray], lis
     return mb.stick_figure
 
 
-def mechanism_frames(traj: Trajectory, system: object = None, draw: Callable | None = None,
-                     frames: int = 40, plane: str | None = None) -> tuple[np.ndarray, list]:
+def mechanism_frames(traj: Trajectory, system: object = None, draw: AnimationDraw | None = None,
+                     frames: int = 40,
+                     plane: Plane | None = None) -> tuple[NDArray[np.intp], list[Lines]]:
     """The output indices and, for each, the polylines (2 or 3 columns each).
+
+    Parameters
+    ----------
+    traj, system, draw, frames, plane
+        As in :func:`animate`.
 
     Only ``traj.t`` and ``traj.q`` are used:
 
@@ -77,7 +105,7 @@ def mechanism_frames(traj: Trajectory, system: object = None, draw: Callable | N
         raise ValueError("the trajectory has no points to animate")
     render = _drawer(system, draw)
     idx = frame_indices(len(traj.t), frames)
-    out = []
+    out: list[Lines] = []
     for i in idx:
         lines = [np.atleast_2d(np.asarray(p, dtype=float)) for p in render(traj.q[i])]
         if plane is not None:
@@ -86,7 +114,7 @@ def mechanism_frames(traj: Trajectory, system: object = None, draw: Callable | N
     return idx, out
 
 
-def _limits(all_lines: list) -> np.ndarray:
+def _limits(all_lines: list[Lines]) -> NDArray[np.float64]:
     pts = np.vstack([p for lines in all_lines for p in lines])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     half = max(float((hi - lo).max()) / 2, 1e-9) * 1.1
@@ -94,9 +122,11 @@ def _limits(all_lines: list) -> np.ndarray:
     return np.column_stack([mid - half, mid + half])   # equal scale on every axis
 
 
-def _figure(dim: int, limits: np.ndarray, plane: str | None):
+def _figure(dim: int, limits: NDArray[np.float64],
+            plane: Plane | None) -> tuple[Figure, FigureCanvasAgg, Axes]:
+    """The figure, its Agg canvas and its axes (3D axes when ``dim`` is 3)."""
     fig = Figure(figsize=(4.8, 4.8), dpi=80)
-    FigureCanvasAgg(fig)
+    canvas = FigureCanvasAgg(fig)
     if dim == 3:
         ax = fig.add_subplot(projection="3d")
         ax.set_xlim(*limits[0])
@@ -115,7 +145,7 @@ def _figure(dim: int, limits: np.ndarray, plane: str | None):
         ax.set_xlabel(labels[0])
         ax.set_ylabel(labels[1])
         ax.grid(True, alpha=0.3)
-    return fig, ax
+    return fig, canvas, ax
 
 
 def animate(
@@ -123,10 +153,10 @@ def animate(
     path: str | os.PathLike,
     *,
     system: object = None,
-    draw: Callable | None = None,
+    draw: AnimationDraw | None = None,
     frames: int = 40,
     fps: float = 15.0,
-    plane: str | None = None,
+    plane: Plane | None = None,
     title: str | None = None,
 ) -> Path:
     """Write an animation of the mechanism along ``traj`` to ``path`` (``.gif``/``.html``).
@@ -174,23 +204,19 @@ def animate(
     if not dims <= {2, 3} or len(dims) != 1:
         raise ValueError(f"draw must return polylines with 2 or 3 columns, all alike; got {dims}")
     dim = dims.pop()
-    fig, ax = _figure(dim, _limits(all_lines), plane)
+    fig, canvas, ax = _figure(dim, _limits(all_lines), plane)
     n_lines = max(len(lines) for lines in all_lines)
     artists = [ax.plot(*([[]] * dim), "o-", lw=2, ms=3)[0] for _ in range(n_lines)]
     label = ax.set_title("")
 
-    def update(k: int) -> list:
+    def update(k: int) -> list[Artist]:
         lines = all_lines[k]
         for j, artist in enumerate(artists):
-            p = lines[j] if j < len(lines) else np.empty((0, dim))
-            if dim == 3:
-                artist.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
-            else:
-                artist.set_data(p[:, 0], p[:, 1])
+            _set_points(artist, lines[j] if j < len(lines) else np.empty((0, dim)))
         label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}")
         return [*artists, label]
 
-    images = _render(fig, [*artists, label], update, len(idx))
+    images = _render(fig, canvas, [*artists, label], update, len(idx))
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
         # one palette, from the first frame, for all: quantizing each frame anew is
@@ -204,12 +230,23 @@ def animate(
     return path
 
 
-def _render(fig: Figure, animated: list, update: Callable, n: int) -> list:
+def _set_points(line: Line2D, p: NDArray[np.float64]) -> None:
+    """Give a line its points ``(k, 2)``, or ``(k, 3)`` for a line of 3D axes."""
+    if p.shape[1] == 3:
+        from mpl_toolkits.mplot3d.art3d import Line3D  # loaded with the 3D axes
+
+        assert isinstance(line, Line3D)  # what a 3D axes plots
+        line.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
+    else:
+        line.set_data(p[:, 0], p[:, 1])
+
+
+def _render(fig: Figure, canvas: FigureCanvasAgg, animated: list[Artist],
+            update: Callable[[int], list[Artist]], n: int) -> list[Image.Image]:
     """The ``n`` frames as RGB images: the static figure once, the ``animated`` artists
     drawn over a copy of it per frame."""
     for artist in animated:
         artist.set_animated(True)   # left out of the full draw below
-    canvas = fig.canvas
     canvas.draw()
     background = canvas.copy_from_bbox(fig.bbox)
     images = []
@@ -241,7 +278,7 @@ show(0);
 """
 
 
-def _html_player(images: list, fps: float, title: str) -> str:
+def _html_player(images: list[Image.Image], fps: float, title: str) -> str:
     """A self-contained page: the frames as base64 PNGs and a few lines of JavaScript."""
     urls = []
     for image in images:

@@ -11,19 +11,28 @@ projected on a coordinate plane, ``"xz"`` by default (``z`` up). As in
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InitialConditionError
 from .trajectory_plots import _save
 
-#: ``draw(system, q) -> list of (k, 2) arrays``.
-DrawFunction = Callable[[object, np.ndarray], Sequence[np.ndarray]]
+if TYPE_CHECKING:
+    from ..statics import Equilibrium, Linearization
+    from ..system import System
+
+#: ``draw(system, q) -> list of (k, 2) arrays`` (or ``(k, 3)``), ``q`` in coordinate order.
+DrawFunction = Callable[["System", NDArray[np.float64]], Sequence[ArrayLike]]
+#: A coordinate plane a 3D drawing is projected on.
+Plane = Literal["xy", "xz", "yz"]
 #: Coordinate planes a 3D drawing can be projected on.
-PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+PLANES: dict[Plane, tuple[int, int]] = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 #: Default largest coordinate displacement of a drawn mode, relative to the drawing's size.
 MODE_FRACTION = 0.1
 _HALVINGS = 8
@@ -31,8 +40,8 @@ _DPI = 110
 
 
 def plot_mechanism(
-    draw: DrawFunction, system: object, q: Sequence[float] | np.ndarray,
-    path: str | os.PathLike, *, title: str | None = None, plane: str = "xz",
+    draw: DrawFunction, system: System, q: ArrayLike,
+    path: str | os.PathLike, *, title: str | None = None, plane: Plane = "xz",
 ) -> Path:
     """Draw the mechanism at the configuration ``q`` (equal axis scales).
 
@@ -74,9 +83,9 @@ def plot_mechanism(
 
 
 def plot_mode_shapes(
-    draw: DrawFunction, system: object, linearization: object, equilibrium: object,
+    draw: DrawFunction, system: System, linearization: Linearization, equilibrium: Equilibrium,
     path: str | os.PathLike, *, mode: int = 0, amplitude: float | None = None,
-    title: str | None = None, plane: str = "xz",
+    title: str | None = None, plane: Plane = "xz",
 ) -> Path:
     """Draw one mode: the mechanism at equilibrium and displaced by +- the mode shape.
 
@@ -149,8 +158,8 @@ def plot_mode_shapes(
 
 
 # -- helpers -------------------------------------------------------------------------
-def _polylines(draw: DrawFunction, system: object, q: np.ndarray,
-               plane: str) -> list[np.ndarray]:
+def _polylines(draw: DrawFunction, system: System, q: ArrayLike,
+               plane: Plane) -> list[NDArray[np.float64]]:
     if plane not in PLANES:
         raise ValueError(f"plane must be one of {', '.join(PLANES)}, not {plane!r}")
     lines = [np.asarray(line, dtype=float) for line in draw(system, np.asarray(q, dtype=float))]
@@ -161,24 +170,27 @@ def _polylines(draw: DrawFunction, system: object, q: np.ndarray,
     return [line[:, list(PLANES[plane])] if line.shape[1] == 3 else line for line in lines]
 
 
-def _labels(draw: DrawFunction, system: object, q: np.ndarray, plane: str) -> str:
+def _labels(draw: DrawFunction, system: System, q: ArrayLike, plane: Plane) -> str:
     """Axis names: ``x, y`` for a planar drawing, the plane's for a projected 3D one."""
     three_d = any(np.shape(line)[-1] == 3 for line in draw(system, np.asarray(q, dtype=float)))
     return plane if three_d else "xy"
 
 
-def _on_constraints(system: object, equilibrium: object, q: np.ndarray) -> np.ndarray:
+def _on_constraints(system: System, equilibrium: Equilibrium,
+                    q: NDArray[np.float64]) -> NDArray[np.float64]:
     """The least change of ``q`` that satisfies the constraints (same parameters and
     fixed coordinates as the equilibrium)."""
-    report = system.consistent_initial_state(
-        q, parameters=getattr(equilibrium, "parameter_values", None) or None,
-        fixed=getattr(equilibrium, "fixed", None) or None,
-    )
+    # copied by items: a dict[str, float] is no Mapping[object, object] to a type checker
+    # (a mapping's key type is invariant)
+    parameters: Mapping[object, object] = dict(equilibrium.parameter_values.items())
+    report = system.consistent_initial_state(q, parameters=parameters or None,
+                                             fixed=equilibrium.fixed or None)
     return np.asarray(report.q, dtype=float)
 
 
-def _reachable(system: object, equilibrium: object, q_eq: np.ndarray, v: np.ndarray,
-               amplitude: float, attempts: int) -> list[np.ndarray]:
+def _reachable(system: System, equilibrium: Equilibrium, q_eq: NDArray[np.float64],
+               v: NDArray[np.float64], amplitude: float,
+               attempts: int) -> list[NDArray[np.float64]]:
     """``q* +- amplitude v`` on the constraints, halving ``amplitude`` until both project
     (an inextensible chain cannot follow a large linear displacement)."""
     for _ in range(attempts):
@@ -193,13 +205,13 @@ def _reachable(system: object, equilibrium: object, q_eq: np.ndarray, v: np.ndar
     ) from error
 
 
-def _size(lines: list[np.ndarray]) -> float:
+def _size(lines: list[NDArray[np.float64]]) -> float:
     points = np.vstack(lines)
     size = float(np.ptp(points, axis=0).max())
     return size if size > 0 else 1.0
 
 
-def _mode_title(system: object, linearization: object, mode: int) -> str:
+def _mode_title(system: System, linearization: Linearization, mode: int) -> str:
     w = complex(np.asarray(linearization.natural_frequencies)[mode])
     if abs(w.imag) <= 1e-12 * abs(w.real):
         what = f"mode {mode + 1}: {w.real / (2 * np.pi):.4g} Hz ({w.real:.4g} rad/s)"
@@ -208,23 +220,24 @@ def _mode_title(system: object, linearization: object, mode: int) -> str:
     return _name(system, what)
 
 
-def _name(system: object, what: str) -> str:
-    name = getattr(getattr(system, "model", None), "name", None)
-    return f"{name}: {what}" if name else what
+def _name(system: System, what: str) -> str:
+    # the name, not system.model.name (a large Multibody's model takes long to build)
+    return f"{system.name}: {what}" if system.name else what
 
 
-def _draw_lines(ax, lines: list[np.ndarray], *, label: str, **style) -> None:
+def _draw_lines(ax: Axes, lines: list[NDArray[np.float64]], *, label: str,
+                **style: Any) -> None:
     for i, line in enumerate(lines):
         ax.plot(line[:, 0], line[:, 1], marker="o", ms=3, label=label if i == 0 else None,
                 **style)
 
 
-def _figure():
+def _figure() -> tuple[Figure, Axes]:
     fig = Figure(figsize=(6.0, 5.0), dpi=_DPI)
     return fig, fig.add_subplot()
 
 
-def _finish(ax, title: str, labels: str) -> None:
+def _finish(ax: Axes, title: str, labels: str) -> None:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])

@@ -11,20 +11,27 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
 
 from ..trajectory import Trajectory
 
+if TYPE_CHECKING:
+    from ..system import System
+
 #: Exact zeros are drawn at this value on log axes (a residual of exactly 0.0).
 LOG_FLOOR = 1e-18
+#: What :func:`plot_energy_error` can show: ``T + V`` or the Jacobi integral.
 ENERGY_QUANTITIES = ("energy", "jacobi")
 _DPI = 110
 
 
 def plot_coordinates(
-    traj: Trajectory, path: str | os.PathLike, *, system: object = None,
+    traj: Trajectory, path: str | os.PathLike, *, system: System | None = None,
     title: str | None = None,
 ) -> Path:
     """Every coordinate against time, one line each.
@@ -44,6 +51,18 @@ def plot_coordinates(
     -------
     Path
         ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_coordinates(traj, pathlib.Path(folder) / "q.png", system=system)
+    ...     png.name, png.stat().st_size > 0
+    ('q.png', True)
     """
     fig, ax = _figure()
     for i, name in enumerate(traj.coordinate_names):
@@ -54,9 +73,16 @@ def plot_coordinates(
     return _save(fig, path)
 
 
-def relative_drift(values: np.ndarray) -> np.ndarray:
+def relative_drift(values: ArrayLike) -> NDArray[np.float64]:
     """``|e(t) - e(0)| / |e(0)|`` (absolute change when ``e(0) == 0``).
 
+    Parameters
+    ----------
+    values
+        The quantity along the trajectory (``e(0)`` first).
+
+    Examples
+    --------
     >>> relative_drift(np.array([2.0, 2.0, 2.5]))
     array([0.  , 0.  , 0.25])
     """
@@ -67,7 +93,7 @@ def relative_drift(values: np.ndarray) -> np.ndarray:
 
 def plot_energy_error(
     traj: Trajectory, path: str | os.PathLike, *, quantity: str = "energy",
-    system: object = None, title: str | None = None,
+    system: System | None = None, title: str | None = None,
 ) -> Path:
     """Relative drift of a conserved quantity against time (log scale).
 
@@ -88,6 +114,18 @@ def plot_energy_error(
     -------
     Path
         ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_energy_error(traj, pathlib.Path(folder) / "e.png", system=system)
+    ...     png.stat().st_size > 0
+    True
     """
     if quantity not in ENERGY_QUANTITIES:
         raise ValueError(f"quantity must be one of {ENERGY_QUANTITIES}, not {quantity!r}")
@@ -105,14 +143,42 @@ def plot_energy_error(
 
 
 def plot_residuals(
-    traj: Trajectory, path: str | os.PathLike, *, system: object = None,
+    traj: Trajectory, path: str | os.PathLike, *, system: System | None = None,
     title: str | None = None,
 ) -> Path:
     """Largest position and velocity constraint residuals against time (log scale).
 
     Exact zeros are drawn at :data:`LOG_FLOOR`. With a ``system`` that has only
     Pfaffian constraints the (identically zero) position residual is left out.
-    Arguments as in :func:`plot_coordinates`.
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        The PNG to write (parent folders are created).
+    system
+        Optional :class:`~dalembert.System`, for the default title and to tell
+        whether it has holonomic constraints (without it both residuals are drawn).
+    title
+        Figure title (default: the system's name).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_residuals(traj, pathlib.Path(folder) / "r.png", system=system)
+    ...     png.stat().st_size > 0
+    True
     """
     fig, ax = _figure()
     if traj.constraint_names:
@@ -129,12 +195,38 @@ def plot_residuals(
 
 
 def plot_multipliers(
-    traj: Trajectory, path: str | os.PathLike, *, system: object = None,
+    traj: Trajectory, path: str | os.PathLike, *, system: System | None = None,
     title: str | None = None,
 ) -> Path:
     """Each constraint's Lagrange multiplier against time, labelled by constraint name.
 
-    Arguments as in :func:`plot_coordinates`.
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    path
+        The PNG to write (parent folders are created).
+    system
+        Optional :class:`~dalembert.System`, used for the default title.
+    title
+        Figure title (default: the system's name).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_multipliers(traj, pathlib.Path(folder) / "m.png", system=system)
+    ...     png.stat().st_size > 0
+    True
     """
     fig, ax = _figure()
     for name in traj.constraint_names:
@@ -150,16 +242,35 @@ def plot_multipliers(
 
 def plot_path(
     traj: Trajectory, path: str | os.PathLike, *, x: str = "x", y: str = "y",
-    system: object = None, title: str | None = None,
+    system: System | None = None, title: str | None = None,
 ) -> Path:
     """The path ``(x(t), y(t))`` of two coordinates, with equal axis scales.
 
     Parameters
     ----------
+    traj, path
+        As in :func:`plot_coordinates`.
     x, y
         Coordinate names (velocities such as ``"x_dot"`` work too).
+    system, title
+        As in :func:`plot_coordinates`.
 
-    Other arguments as in :func:`plot_coordinates`.
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = plot_path(traj, pathlib.Path(folder) / "xy.png", x="x", y="y")
+    ...     png.stat().st_size > 0
+    True
     """
     xs, ys = traj[x], traj[y]
     fig, ax = _figure()
@@ -175,7 +286,7 @@ def plot_path(
 
 
 def plot_all(
-    traj: Trajectory, out_dir: str | os.PathLike, *, system: object = None,
+    traj: Trajectory, out_dir: str | os.PathLike, *, system: System | None = None,
     energy: str = "energy", path_xy: Sequence[str] | None = None,
 ) -> list[Path]:
     """The standard set of plots in ``out_dir``; returns their paths.
@@ -183,6 +294,35 @@ def plot_all(
     Writes ``coordinates.png``, ``energy.png`` (drift of ``energy``, see
     :func:`plot_energy_error`), ``residuals.png``, ``multipliers.png`` and, when
     ``path_xy = (x, y)`` is given, ``path.png``.
+
+    Parameters
+    ----------
+    traj
+        The simulated trajectory.
+    out_dir
+        The folder to write to (created if need be).
+    system
+        Optional :class:`~dalembert.System`, for the titles.
+    energy
+        ``"energy"`` or ``"jacobi"`` (see :func:`plot_energy_error`).
+    path_xy
+        Two coordinate names for a path plot.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum")
+    >>> system = pendulum.build()
+    >>> traj = system.simulate((0, 1), **pendulum.INITIAL, t_eval=[0.0, 0.5, 1.0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     [png.name for png in plot_all(traj, folder, system=system)]
+    ['coordinates.png', 'energy.png', 'residuals.png', 'multipliers.png']
     """
     out = Path(out_dir)
     paths = [
@@ -198,37 +338,39 @@ def plot_all(
 
 
 # -- helpers -------------------------------------------------------------------------
-def _figure():
+def _figure() -> tuple[Figure, Axes]:
     fig = Figure(figsize=(7.0, 4.2), dpi=_DPI)
     # fixed margins (room for 1e-15 tick labels): tight_layout would draw twice
     fig.subplots_adjust(left=0.13, right=0.97, bottom=0.12, top=0.91)
     return fig, fig.add_subplot()
 
 
-def _title(title: str | None, system: object, what: str) -> str:
+def _title(title: str | None, system: System | None, what: str) -> str:
     if title is not None:
         return title
-    name = getattr(getattr(system, "model", None), "name", None)
+    # the name, not system.model.name: a Multibody's System builds its symbolic model
+    # only on request, which for a large mechanism takes long
+    name = system.name if system is not None else None
     return f"{name}: {what}" if name else what
 
 
-def _finish(ax, title: str, *, legend: bool) -> None:
+def _finish(ax: Axes, title: str, *, legend: bool) -> None:
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     if legend:
         ax.legend(loc="best", fontsize="small")
 
 
-def _has_holonomic(system: object) -> bool:
+def _has_holonomic(system: System | None) -> bool:
     model = getattr(system, "model", None)
     return model is None or bool(model.constraints.holonomic_rows)
 
 
-def _note(ax, text: str) -> None:
+def _note(ax: Axes, text: str) -> None:
     ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes)
 
 
-def _floored(values: np.ndarray) -> np.ndarray:
+def _floored(values: ArrayLike) -> NDArray[np.float64]:
     # log axes cannot show 0; a residual of exactly 0.0 is drawn at the floor
     return np.maximum(np.asarray(values, dtype=float), LOG_FLOOR)
 
