@@ -362,8 +362,8 @@ def _finish(ax: Axes, title: str, *, legend: bool) -> None:
 
 
 def _has_holonomic(system: System | None) -> bool:
-    model = getattr(system, "model", None)
-    return model is None or bool(model.constraints.holonomic_rows)
+    # from the compiled equations: a Multibody's symbolic model is not built for this
+    return system is None or bool(system.compiled.holonomic_rows)
 
 
 def _note(ax: Axes, text: str) -> None:
