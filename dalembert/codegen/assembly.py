@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import ctypes
 import threading
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -91,7 +90,7 @@ def compile_parts(
             functions = [_CEvaluator(getattr(lib, k), (n, len(parameters), sizes[k]), indices,
                                      kinds[k][1], k in _STATE, lib) for k in _KINDS]
         except c_backend.CompileError as exc:
-            warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=2)
+            c_backend.warn_unavailable(c_backend.MODEL_CODE, exc)
     if functions is None:
         functions = [_numpy_evaluator(kinds[k][0], indices, kinds[k][1], sizes[k])
                      for k in _KINDS]
