@@ -209,9 +209,10 @@ class Trajectory:
         path
             A ``.npz`` file written by :meth:`save`.
         max_bytes
-            The most bytes its arrays may take once read (default: 16 times the
-            file's size, at least 64 MiB; a file written by :meth:`save` reads to
-            about its own size).
+            The most bytes its arrays may take once read (default:
+            :data:`~dalembert.trajectory_file.MAX_EXPANSION` times the file's size,
+            at least :data:`~dalembert.trajectory_file.MIN_LIMIT`; a file written by
+            :meth:`save` reads to about its own size).
 
         Raises
         ------

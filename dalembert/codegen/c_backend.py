@@ -380,8 +380,11 @@ def _compile(source: Callable[[], str], compiler: str, flags: Sequence[str],
     """Compile ``source()`` into ``folder`` as the cache expects (its probe appended)."""
     src = folder / cache.SOURCE
     src.write_text(source() + cache.PROBE_SOURCE)
-    run = subprocess.run([compiler, *flags, str(src), "-o", str(folder / cache.LIBRARY), "-lm"],
-                         capture_output=True, text=True)
+    try:
+        run = subprocess.run([compiler, *flags, str(src), "-o", str(folder / cache.LIBRARY),
+                              "-lm"], capture_output=True, text=True)
+    except OSError as exc:  # not the cache's fault: the compiler cannot be run
+        raise CompileError(f"cannot run the C compiler {compiler}: {exc}") from exc
     if run.returncode != 0:
         raise CompileError(f"{compiler} failed: {run.stderr.strip()[:500]}")
 

@@ -291,6 +291,8 @@ class _Entry:
         try:
             build(work)
             library, source = work / LIBRARY, work / SOURCE
+            if not library.is_file():
+                raise CompileError(f"the build wrote no library {LIBRARY}")
             data = _private_and_synced(library)
             _test_load(library)
             record = work / "record"
