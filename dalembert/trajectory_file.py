@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import fcntl
 import json
+import math
 import os
 import re
 import stat
@@ -205,6 +206,9 @@ it has no 'meta' member (Trajectory.save writes one)
         if events is None or f"y_events_{e}" not in members:
             raise bad(f"the events of event function {e}", "are missing (t_events_0, y_events_0, "
                       "... come in pairs, numbered from 0)")
+        if events.ndim != 1:
+            raise bad(f"the array 't_events_{e}'", f"has shape {events.shape}, not one time per "
+                      "event")
         shapes[f"t_events_{e}"] = (len(events),)
         shapes[f"y_events_{e}"] = (len(events), 2 * n)
     for name, array in members.items():
@@ -225,9 +229,9 @@ def _read_members(path: Path, max_bytes: int | None) -> dict[str, np.ndarray]:
     """Every member of the archive, read only once its declared sizes are within bounds."""
     try:
         archive = zipfile.ZipFile(path)
-    except zipfile.BadZipFile as exc:
+    except (zipfile.BadZipFile, NotImplementedError, ValueError, EOFError) as exc:
         raise TrajectoryFileError(f"{path} is not a trajectory file: it is not an .npz archive "
-                                  "(Trajectory.save writes those)") from exc
+                                  f"(Trajectory.save writes those): {exc}") from exc
     with archive:
         infos = archive.infolist()
         names = [info.filename for info in infos]
@@ -263,7 +267,7 @@ def _read_array(archive: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> 
         if dtype.hasobject:
             raise TrajectoryFileError(f"{path} is not a trajectory file: its member {name!r} "
                                       "holds Python objects (they are never unpickled)")
-        size = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
+        size = math.prod(shape) * dtype.itemsize  # exact, however large the shape claimed
         if fh.tell() + size != info.file_size:
             raise TrajectoryFileError(
                 f"{path} is not a valid trajectory file: its member {name!r} declares shape "

@@ -213,6 +213,8 @@ def test_load_names_the_bad_metadata_field(traj, tmp_path, meta, drop, message):
     ({}, ("qd",), "the array 'qd' is missing"),
     ({}, ("y_events_0",), "the events of event function 0 are missing"),
     ({"y_events_1": np.zeros((0, 4))}, (), "the array 'y_events_1' has no t_events of the same"),
+    ({"t_events_0": np.float64(0.5)}, (), r"the array 't_events_0' has shape \(\), not one time "
+                                          "per event"),
 ])
 def test_load_names_the_inconsistent_array(traj, tmp_path, arrays, drop, message):
     path = crafted(traj, tmp_path, None, drop, **arrays)
@@ -380,3 +382,23 @@ def test_a_save_killed_midway_leaves_the_old_file_and_a_later_save_cleans_up(tra
         fcntl.flock(held, fcntl.LOCK_EX)
         traj.save(path)
         assert sorted(p.name for p in tmp_path.iterdir()) == ["run.npz", busy.name, "started"]
+
+
+def test_a_damaged_file_loads_or_raises_the_one_error(traj, tmp_path):
+    """200 files with a few bytes changed (half of them in the zip directory, at the end):
+    each loads, or raises TrajectoryFileError, never another exception."""
+    good = traj.save(tmp_path / "good.npz").read_bytes()
+    rng = np.random.default_rng(0)
+    path, outcomes = tmp_path / "damaged.npz", {"loaded": 0, "refused": 0}
+    for _ in range(200):
+        data = bytearray(good)
+        low = len(data) - 400 if rng.random() < 0.5 else 0
+        for _ in range(rng.integers(1, 6)):
+            data[rng.integers(low, len(data))] = rng.integers(256)
+        path.write_bytes(bytes(data))
+        try:
+            Trajectory.load(path)
+            outcomes["loaded"] += 1
+        except TrajectoryFileError:
+            outcomes["refused"] += 1
+    assert outcomes["refused"] > 150  # the damage was mostly seen
