@@ -486,7 +486,7 @@ def test_a_damaged_cached_library_is_rebuilt(pend, cache):
     truncated.write_bytes(library.read_bytes()[:1000])
     truncated.replace(library)
     with pytest.warns(BadCacheEntryWarning, match=(
-            rf"the cached library {library} is truncated \(1000 of \d+ bytes\); it is not loaded "
+            rf"the cached library {library} is truncated \(1000 of \d+ bytes\); it was not loaded "
             "but rebuilt")):
         again = compile_equations(pend.equations(), backend="c")
     assert again.backend == "c"

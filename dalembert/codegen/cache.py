@@ -127,14 +127,20 @@ def load_library(key: str, build: Callable[[Path], None],
     entry = _Entry(folder, key)
     problem = entry.problem()
     if problem is not None:
-        with entry.locked(problem):
-            problem = entry.problem()  # another process may have built it meanwhile
-            if problem is not None:
-                if problem is not _MISSING:
-                    warnings.warn(f"the cached library {entry.library} {problem}; it is not "
-                                  "loaded but rebuilt", BadCacheEntryWarning, stacklevel=3)
-                _remove_stale_temporaries(folder, key)
-                entry.build(build)
+        try:
+            with entry.locked():
+                problem = entry.problem()  # another process may have built it meanwhile
+                if problem is not None:
+                    _remove_stale_temporaries(folder, key)
+                    entry.build(build)
+        except CompileError as exc:
+            if problem is _MISSING:
+                raise
+            raise CompileError(f"the cached library {entry.library} {problem} and cannot be "
+                               f"rebuilt: {exc}") from exc
+        if problem is not None and problem is not _MISSING:
+            warnings.warn(f"the cached library {entry.library} {problem}; it was not loaded "
+                          "but rebuilt", BadCacheEntryWarning, stacklevel=3)
     try:
         return ctypes.CDLL(str(entry.library))
     except OSError as exc:
@@ -265,21 +271,23 @@ class _Entry:
         return None
 
     @contextmanager
-    def locked(self, problem: str) -> Iterator[None]:
-        """Hold the entry's lock (waiting for a build in another process to end)."""
-        try:
+    def locked(self) -> Iterator[None]:
+        """Hold the entry's lock, waiting for a build in another process to end.
+
+        Where no lock can be had (a read-only cache, which nobody can build in, or
+        a file system without locks), the build goes ahead unlocked: a failure
+        then names its cause, and a concurrent build only duplicates work, since
+        each stores its files by renaming.
+        """
+        fd = None
+        with suppress(OSError):
             fd = os.open(self.lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
-        except OSError as exc:
-            error = _unwritable(self.folder, exc)
-            if problem is not _MISSING:
-                error = CompileError(f"the cached library {self.library} {problem} and cannot "
-                                     f"be rebuilt: {error}")
-            raise error from exc
-        try:
             fcntl.flock(fd, fcntl.LOCK_EX)
+        try:
             yield
         finally:
-            os.close(fd)  # releases the lock
+            if fd is not None:
+                os.close(fd)  # releases the lock
 
     def build(self, build: Callable[[Path], None]) -> None:
         """Build, test-load, record and store the entry (with its lock held)."""
