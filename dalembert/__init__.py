@@ -6,6 +6,7 @@ forces and the constraints held to rounding level.
 """
 
 from .errors import (  # every error and warning (errors.__all__)
+    BadCacheEntryWarning,
     CompileError,
     ConstraintError,
     DalembertError,
@@ -23,6 +24,7 @@ from .errors import (  # every error and warning (errors.__all__)
     MarginalStabilityError,
     MissingParameterError,
     ModelError,
+    NativeUnavailableWarning,
     NonholonomicLinearizationError,
     NotAnEquilibriumError,
     ParameterError,
@@ -30,6 +32,8 @@ from .errors import (  # every error and warning (errors.__all__)
     SingularSystemError,
     SymbolicSolveError,
     TooManyConstraintsError,
+    TrajectoryFileError,
+    UnsafeCacheError,
 )
 from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
@@ -57,6 +61,7 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
+    "BadCacheEntryWarning",
     "CompileError",
     "ConstraintError",
     "DalembertError",
@@ -75,6 +80,7 @@ __all__ = [
     "MarginalStabilityError",
     "MissingParameterError",
     "ModelError",
+    "NativeUnavailableWarning",
     "NonholonomicLinearizationError",
     "NotAnEquilibriumError",
     "ParameterError",
@@ -86,6 +92,8 @@ __all__ = [
     "System",
     "TooManyConstraintsError",
     "Trajectory",
+    "TrajectoryFileError",
+    "UnsafeCacheError",
     "all_extrema",
     "coordinates",
     "extremum",

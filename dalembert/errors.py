@@ -72,6 +72,15 @@ class CompileError(DalembertError, RuntimeError):
     """The C route is unavailable for these expressions (unsupported function, no compiler)."""
 
 
+class UnsafeCacheError(CompileError):
+    """The code cache folder belongs to another user or is writable by others, so a
+    library planted there could run as you; it is not used."""
+
+
+class TrajectoryFileError(DalembertError, ValueError):
+    """A file is not a trajectory ``Trajectory.load`` can read (or ``save`` cannot write it)."""
+
+
 class ExtremumConvergenceError(DalembertError, RuntimeError):
     """No stationary point of the augmented function was found near the guess."""
 
@@ -119,7 +128,16 @@ class JointPointWarning(DalembertWarning):
     """A joint point looks as if it were given in the wrong frame."""
 
 
+class NativeUnavailableWarning(DalembertWarning):
+    """The C runtime or a model's C code is unavailable, so a slower path is taken."""
+
+
+class BadCacheEntryWarning(DalembertWarning):
+    """A cached library was found damaged or foreign; it was not loaded but rebuilt."""
+
+
 __all__ = [
+    "BadCacheEntryWarning",
     "CompileError",
     "ConstraintError",
     "DalembertError",
@@ -137,6 +155,7 @@ __all__ = [
     "MarginalStabilityError",
     "MissingParameterError",
     "ModelError",
+    "NativeUnavailableWarning",
     "NonholonomicLinearizationError",
     "NotAnEquilibriumError",
     "ParameterError",
@@ -144,4 +163,6 @@ __all__ = [
     "SingularSystemError",
     "SymbolicSolveError",
     "TooManyConstraintsError",
+    "TrajectoryFileError",
+    "UnsafeCacheError",
 ]

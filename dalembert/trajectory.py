@@ -2,22 +2,20 @@
 
 A :class:`Trajectory` is plain NumPy data (one row per output time) with access
 by coordinate and constraint name, lossless ``save``/``load`` (``.npz``, written
-atomically) and ``to_dataframe`` when pandas is installed.
+atomically, read back checked: :mod:`dalembert.trajectory_file`) and
+``to_dataframe`` when pandas is installed.
 """
 
 from __future__ import annotations
 
-import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-_ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_energy",
-           "potential_energy", "jacobi_integral", "position_residual", "velocity_residual")
+from . import trajectory_file
 
 
 @dataclass(eq=False)
@@ -153,20 +151,28 @@ class Trajectory:
         return "\n".join(lines)
 
     def save(self, path: str | os.PathLike) -> Path:
-        """Write every array and name to ``path`` (``.npz``), atomically.
+        """Write every array and name to ``path`` (a NumPy ``.npz`` file), atomically.
 
         The file appears whole or not at all (written beside it, synced, renamed)
-        with the mode a plain ``open`` would give it under the umask.
+        with the mode a plain ``open`` would give it under the umask; a save killed
+        midway leaves the previous file as it was (and its temporary file is
+        removed by a later save to the same path).
 
         Parameters
         ----------
         path
-            The file; ``.npz`` is appended if it has another suffix.
+            The file; it must end in ``.npz``, the only format written (for a
+            table, ``traj.to_dataframe().to_csv(...)``).
 
         Returns
         -------
         Path
             The file written.
+
+        Raises
+        ------
+        TrajectoryFileError
+            ``path`` does not end in ``.npz`` (nothing is written).
 
         Examples
         --------
@@ -175,55 +181,46 @@ class Trajectory:
         >>> from dalembert.examples import load
         >>> traj = load("pendulum").build().simulate((0, 0.1), {"x": 1.0, "y": 0.0})
         >>> with tempfile.TemporaryDirectory() as folder:
-        ...     again = Trajectory.load(traj.save(Path(folder) / "run"))
+        ...     again = Trajectory.load(traj.save(Path(folder) / "run.npz"))
         >>> bool((again.q == traj.q).all()), again.constraint_names
         (True, ('rod',))
         """
         path = Path(path)
-        if path.suffix != ".npz":
-            path = path.with_suffix(".npz")
         meta = {"coordinate_names": list(self.coordinate_names),
                 "constraint_names": list(self.constraint_names), "status": self.status,
                 "message": self.message, "stats": self.stats,
                 "initialization": self.initialization}
-        arrays = {name: getattr(self, name) for name in _ARRAYS}
+        arrays = {name: getattr(self, name) for name in trajectory_file.ARRAYS}
         arrays.update({f"t_events_{k}": v for k, v in enumerate(self.t_events)})
         arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-        try:
-            # mkstemp makes the file 0600; a saved result gets the mode a plain open()
-            # would give it, 0666 less the umask (read back without changing it).
-            umask = os.umask(0)
-            os.umask(umask)
-            os.fchmod(fd, 0o666 & ~umask)
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, meta=np.array(json.dumps(meta)), **arrays)
-                fh.flush()
-                os.fsync(fh.fileno())  # on disk before the rename makes it visible
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        trajectory_file.write(path, arrays, meta)
         return path
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> Trajectory:
+    def load(cls, path: str | os.PathLike, *, max_bytes: int | None = None) -> Trajectory:
         """Read a trajectory written by :meth:`save` (see there for an example).
+
+        The file is not trusted: nothing in it is unpickled, its declared sizes are
+        bounded before anything is decompressed, and its metadata and array shapes
+        are checked (:mod:`dalembert.trajectory_file`).
 
         Parameters
         ----------
         path
             A ``.npz`` file written by :meth:`save`.
+        max_bytes
+            The most bytes its arrays may take once read (default:
+            :data:`~dalembert.trajectory_file.MAX_EXPANSION` times the file's size,
+            at least :data:`~dalembert.trajectory_file.MIN_LIMIT`; a file written by
+            :meth:`save` reads to about its own size).
+
+        Raises
+        ------
+        TrajectoryFileError
+            The file is not a trajectory file, would take more than ``max_bytes``,
+            or holds inconsistent data (the message names the member or field).
         """
-        with np.load(Path(path), allow_pickle=False) as data:
-            meta = json.loads(str(data["meta"]))
-            arrays = {name: data[name] for name in _ARRAYS}
-            n_events = sum(1 for k in data.files if k.startswith("t_events_"))
-            t_events = [data[f"t_events_{k}"] for k in range(n_events)]
-            y_events = [data[f"y_events_{k}"] for k in range(n_events)]
-        meta["coordinate_names"] = tuple(meta["coordinate_names"])
-        meta["constraint_names"] = tuple(meta["constraint_names"])
-        return cls(**arrays, **meta, t_events=t_events, y_events=y_events)
+        return cls(**trajectory_file.read(Path(path), max_bytes))
 
     def to_dataframe(self):
         """A pandas DataFrame indexed by time: coordinates, velocities, multipliers, checks."""

@@ -12,21 +12,30 @@ import pytest
 import sympy as sp
 
 from dalembert import (
+    BadCacheEntryWarning,
     ConstraintError,
     DoubleCountingWarning,
     Holonomic,
     InitialConditionError,
     IntegrationWarning,
     ModelError,
+    NativeUnavailableWarning,
     ParameterError,
     Pfaffian,
     PointForce,
     SingularSystemError,
     System,
+    Trajectory,
+    TrajectoryFileError,
+    UnsafeCacheError,
     coordinates,
     t,
 )
+from dalembert.codegen import c_backend
+from dalembert.codegen import cache as cache_module
+from dalembert.codegen.compiled import compile_equations
 from dalembert.errors import RedundantConstraintsWarning
+from dalembert.solvers.native import library
 
 x, y, z = coordinates("x y z")
 m, g, l = sp.symbols("m g l", positive=True)
@@ -439,3 +448,116 @@ def test_t_eval_holding_nan(pend):
 def test_other_options_get_the_uniform_message(pend, name, value):
     with pytest.raises(ValueError, match=rf"The '{name}' parameter of simulate must be .*; got"):
         pend.simulate((0, 1), q0=[1.0, 0.0], **{name: value})
+
+
+# -- the code cache and the C routes ---------------------------------------------------
+needs_cc = pytest.mark.skipif(c_backend.find_compiler() is None, reason="no C compiler found")
+
+
+@pytest.fixture()
+def cache(tmp_path, monkeypatch):
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("DALEMBERT_CACHE_DIR", str(folder))
+    monkeypatch.setattr(c_backend, "_WARNED", set())  # each test sees its warnings
+    return folder
+
+
+@needs_cc
+def test_a_shared_code_cache_is_refused(pend, cache):
+    cache.mkdir(mode=0o777)
+    cache.chmod(0o777)
+    with pytest.warns(NativeUnavailableWarning, match=(
+            rf"the model's C code is unavailable, using NumPy instead \(slower\): the code cache "
+            rf"{cache} is writable by group or others \(mode 0777\): a library planted there "
+            rf"would run as you. Make it private \(chmod 700 {cache}\) or set "
+            "DALEMBERT_CACHE_DIR to a folder of your own")):
+        compiled = compile_equations(pend.equations(), backend="c")
+    assert compiled.backend == "numpy" and list(cache.iterdir()) == []
+    with pytest.raises(UnsafeCacheError):
+        c_backend.source_library("int f(void) { return 0; }")
+
+
+@needs_cc
+def test_a_damaged_cached_library_is_rebuilt(pend, cache):
+    assert compile_equations(pend.equations(), backend="c").backend == "c"
+    (library,) = (cache / "c").glob("*.so")
+    # A new file in its place: the one this process has loaded stays as it was.
+    truncated = library.with_name("truncated")
+    truncated.write_bytes(library.read_bytes()[:1000])
+    truncated.replace(library)
+    with pytest.warns(BadCacheEntryWarning, match=(
+            rf"the cached library {library} is truncated \(1000 of \d+ bytes\); it was not loaded "
+            "but rebuilt")):
+        again = compile_equations(pend.equations(), backend="c")
+    assert again.backend == "c"
+
+
+@needs_cc
+def test_a_read_only_code_cache_names_the_cause(pend, cache, monkeypatch):
+    def read_only(*args, **kwargs):
+        raise OSError(30, "Read-only file system")
+
+    monkeypatch.setattr(cache_module.tempfile, "mkdtemp", read_only)
+    with pytest.warns(NativeUnavailableWarning, match=(
+            rf"cannot write to the code cache {cache / 'c'}: Read-only file system; set "
+            "DALEMBERT_CACHE_DIR to a writable folder")):
+        assert compile_equations(pend.equations(), backend="c").backend == "numpy"
+
+
+def test_no_c_compiler_is_said(cache, monkeypatch):
+    monkeypatch.setattr(c_backend, "find_compiler", lambda: None)
+    with pytest.warns(NativeUnavailableWarning, match=r"using NumPy instead \(slower\): no C "
+                                                      r"compiler found .*DALEMBERT_BACKEND=numpy"):
+        assert c_backend.backend() == "numpy"
+
+
+@needs_cc
+def test_an_unavailable_c_loop_is_said(pend, cache, monkeypatch):
+    monkeypatch.setattr(library, "runtime_source", lambda: "#error no runtime")
+    library._runtime.cache_clear()
+    try:
+        with pytest.warns(NativeUnavailableWarning, match=r"the C simulation loop is unavailable, "
+                                                          r"the Python loop runs instead "
+                                                          r"\(slower\): .*no runtime"):
+            plan = pend.plan((0, 1), q0=[1.0, 0.0])
+    finally:
+        library._runtime.cache_clear()  # the next simulation loads the real one
+    assert plan.loop == "python" and "no runtime" in plan.why_python
+
+
+# -- trajectory files ------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def short(pend):
+    return pend.simulate((0, 0.1), q0=[1.0, 0.0])
+
+
+def test_save_in_another_format(short, tmp_path):
+    with pytest.raises(TrajectoryFileError, match=r"Trajectory.save writes NumPy .npz files "
+                                                  r"only; '.*run.csv' has the suffix '.csv'"):
+        short.save(tmp_path / "run.csv")
+
+
+def test_load_a_file_that_is_not_a_trajectory(tmp_path):
+    path = tmp_path / "run.npz"
+    path.write_text("t,x\n0,1\n")
+    with pytest.raises(TrajectoryFileError, match=rf"{path} is not a trajectory file: it is not "
+                                                  r"an .npz archive"):
+        Trajectory.load(path)
+
+
+def test_load_a_trajectory_with_nonsense_metadata(short, tmp_path):
+    path = short.save(tmp_path / "run.npz")
+    with np.load(path) as data:
+        content = {name: data[name] for name in data.files}
+    content["meta"] = np.array(str(content["meta"]).replace('"finished"', "123"))
+    np.savez(path, **content)
+    with pytest.raises(TrajectoryFileError, match=rf"{path} is not a valid trajectory file: the "
+                                                  r"field 'status' is 123, not a JSON str"):
+        Trajectory.load(path)
+
+
+def test_load_a_file_that_would_expand_too_far(short, tmp_path):
+    path = short.save(tmp_path / "run.npz")
+    with pytest.raises(TrajectoryFileError, match=rf"{path} would take \d+ bytes once read, more "
+                                                  r"than the limit of 1000 bytes"):
+        Trajectory.load(path, max_bytes=1000)

@@ -1,12 +1,22 @@
-"""Trajectory: access by name, save/load round trip, atomic writing, DataFrame."""
+"""Trajectory: access by name, save/load round trip, atomic writing, checked loading, DataFrame."""
 
 from __future__ import annotations
+
+import fcntl
+import io
+import json
+import os
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 import sympy as sp
 
-from dalembert import Holonomic, System, Trajectory, coordinates, t
+from dalembert import Holonomic, System, Trajectory, TrajectoryFileError, coordinates, t
 
 x, y = coordinates("x y")
 m, g, l = sp.symbols("m g l", positive=True)
@@ -73,7 +83,7 @@ def test_names_with_underscores():
 
 
 def test_save_load_lossless(traj, tmp_path):
-    path = traj.save(tmp_path / "run")
+    path = traj.save(tmp_path / "run.npz")
     assert path.name == "run.npz"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.npz"]  # no temp file left
     back = Trajectory.load(path)
@@ -137,3 +147,258 @@ def test_saved_file_honours_the_umask(traj, tmp_path, umask, mode):
     finally:
         os.umask(previous)
     assert stat.S_IMODE(path.stat().st_mode) == mode == stat.S_IMODE(plain.stat().st_mode)
+
+
+# -- the file format: save asks for .npz, load trusts nothing ---------------------------------
+@pytest.mark.parametrize(("name", "got"), [("run", "no suffix"), ("run.csv", "the suffix '.csv'"),
+                                           ("run.npy", "the suffix '.npy'"),
+                                           ("run.npz.txt", "the suffix '.txt'")])
+def test_save_refuses_other_formats(traj, tmp_path, name, got):
+    with pytest.raises(TrajectoryFileError, match=rf"Trajectory.save writes NumPy .npz files "
+                                                  rf"only; '.*{name}' has {got}. Give a path "
+                                                  r"ending in .npz"):
+        traj.save(tmp_path / name)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_save_takes_the_suffix_in_any_case(traj, tmp_path):
+    assert Trajectory.load(traj.save(tmp_path / "RUN.NPZ")).status == traj.status
+
+
+def members(path: Path) -> dict[str, np.ndarray]:
+    with np.load(path, allow_pickle=False) as data:
+        return {name: data[name] for name in data.files}
+
+
+def crafted(traj: Trajectory, folder: Path, meta: dict | None = None, drop: tuple = (),
+            **arrays: object) -> Path:
+    """A file saved by ``traj``, its metadata fields and arrays then changed."""
+    content = members(traj.save(folder / "good.npz"))
+    fields = json.loads(str(content["meta"]))
+    fields.update(meta or {})
+    content["meta"] = np.array(json.dumps({k: v for k, v in fields.items() if k not in drop}))
+    content.update(arrays)
+    for name in drop:
+        content.pop(name, None)
+    path = folder / "crafted.npz"
+    np.savez(path, **content)
+    return path
+
+
+@pytest.mark.parametrize(("meta", "drop", "message"), [
+    ({"status": 123}, (), "the field 'status' is 123, not a JSON str"),
+    ({"status": "exploded"}, (), "the field 'status' is 'exploded'; a trajectory's status is one "
+                                 "of 'finished', 'event', 'failed', 'interrupted'"),
+    ({"coordinate_names": "xy"}, (), "the field 'coordinate_names' is 'xy', not a JSON list"),
+    ({"coordinate_names": ["x", "x"]}, (), r"the field 'coordinate_names' is \['x', 'x'\], not "
+                                           "a list of distinct names"),
+    ({"constraint_names": [1]}, (), r"the field 'constraint_names' is \[1\], not a list"),
+    ({"stats": {"nfev": "many"}}, (), "the field 'stats' has 'nfev': 'many', not a number"),
+    ({"sol": "anything"}, (), "the field 'sol' is unknown"),
+    ({}, ("message",), "the field 'message' is missing"),
+])
+def test_load_names_the_bad_metadata_field(traj, tmp_path, meta, drop, message):
+    path = crafted(traj, tmp_path, meta, drop)
+    with pytest.raises(TrajectoryFileError, match=rf"{path} is not a valid trajectory file: "
+                                                  f"{message}"):
+        Trajectory.load(path)
+
+
+@pytest.mark.parametrize(("arrays", "drop", "message"), [
+    ({"q": np.zeros((3, 2))}, (), r"the array 'q' has shape \(3, 2\); \d+ times, 2 coordinates "
+                                  r"and 1 constraints make it \(\d+, 2\)"),
+    ({"multipliers": "tension"}, (), "the array 'multipliers' has shape"),
+    ({"t": np.zeros((2, 2))}, (), r"the array 't' has shape \(2, 2\), not one value per time"),
+    ({"kinetic_energy": np.zeros(1)}, (), r"the array 'kinetic_energy' has shape \(1,\)"),
+    ({}, ("qd",), "the array 'qd' is missing"),
+    ({}, ("y_events_0",), "the events of event function 0 are missing"),
+    ({"y_events_1": np.zeros((0, 4))}, (), "the array 'y_events_1' has no t_events of the same"),
+    ({"t_events_0": np.float64(0.5)}, (), r"the array 't_events_0' has shape \(\), not one time "
+                                          "per event"),
+])
+def test_load_names_the_inconsistent_array(traj, tmp_path, arrays, drop, message):
+    path = crafted(traj, tmp_path, None, drop, **arrays)
+    with pytest.raises(TrajectoryFileError, match=rf"{path} is not a valid trajectory file: "
+                                                  f"{message}"):
+        Trajectory.load(path)
+
+
+def test_load_refuses_strings_for_numbers(traj, tmp_path):
+    n_t = len(traj)
+    path = crafted(traj, tmp_path, None, (), t=np.array(["a"] * n_t))
+    with pytest.raises(TrajectoryFileError, match=r"the array 't' holds <U1, not numbers"):
+        Trajectory.load(path)
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    (b"time,x\n0,1\n", "is not a trajectory file: it is not an .npz archive"),
+    (b"", "is not a trajectory file: it is not an .npz archive"),
+])
+def test_load_says_what_the_file_is_not(tmp_path, content, message):
+    path = tmp_path / "run.npz"
+    path.write_bytes(content)
+    with pytest.raises(TrajectoryFileError, match=message):
+        Trajectory.load(path)
+
+
+def test_load_of_a_npy_array_or_another_archive(tmp_path):
+    np.save(tmp_path / "array.npy", np.zeros(3))
+    with pytest.raises(TrajectoryFileError, match=r"it is not an \.npz archive"):
+        Trajectory.load(tmp_path / "array.npy")
+    np.savez(tmp_path / "other.npz", x=np.zeros(3))
+    with pytest.raises(TrajectoryFileError, match=r"is an .npz archive but not a trajectory "
+                                                  r"file: it has no 'meta' member"):
+        Trajectory.load(tmp_path / "other.npz")
+
+
+class _Opens:
+    """Unpickled, it would create ``marker`` (as any code a pickle names would run)."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self):
+        return (open, (str(self.marker), "w"))
+
+
+@pytest.mark.parametrize("member", ["meta", "q", "extra"])
+def test_load_never_unpickles(traj, tmp_path, member):
+    marker = tmp_path / "marker"
+    path = tmp_path / "pickled.npz"
+    content = members(traj.save(tmp_path / "good.npz"))
+    content[member] = np.array([_Opens(marker)], dtype=object)
+    np.savez(path, **content)  # NumPy pickles object arrays
+    with pytest.raises(TrajectoryFileError, match=rf"its member '{member}' holds Python objects "
+                                                  r"\(they are never unpickled\)|unexpected "
+                                                  f"member '{member}.npy'"):
+        Trajectory.load(path)
+    assert not marker.exists()
+
+
+def npy_header(shape: tuple[int, ...]) -> bytes:
+    buffer = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buffer, {"descr": "<f8", "fortran_order": False,
+                                                  "shape": shape})
+    return buffer.getvalue()
+
+
+def test_load_bounds_what_a_small_file_expands_to(traj, tmp_path):
+    """A consistent trajectory of 600 000 zero rows, deflated: 72 MB read from 0.1 MB."""
+    k, n, m = 600_000, 2, 1
+    meta = json.dumps({"coordinate_names": ["x", "y"], "constraint_names": ["rod"],
+                       "status": "finished", "message": "", "stats": {},
+                       "initialization": ""})
+    path = tmp_path / "bomb.npz"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("meta.npy", _npy(np.array(meta)))
+        for name in ("t", "q", "qd", "qdd", "multipliers", "constraint_forces",
+                     "kinetic_energy", "potential_energy", "jacobi_integral",
+                     "position_residual", "velocity_residual"):
+            shape = {"q": (k, n), "qd": (k, n), "qdd": (k, n), "constraint_forces": (k, n),
+                     "multipliers": (k, m)}.get(name, (k,))
+            with archive.open(f"{name}.npy", "w", force_zip64=True) as fh:
+                fh.write(npy_header(shape))
+                zeros = bytes(8 * 2**16)
+                for _ in range(int(np.prod(shape)) * 8 // len(zeros)):
+                    fh.write(zeros)
+                fh.write(bytes(int(np.prod(shape)) * 8 % len(zeros)))
+    size = path.stat().st_size
+    declared = sum(i.file_size for i in zipfile.ZipFile(path).infolist())
+    assert size < 2**20 and declared > 64 * 2**20
+    with pytest.raises(TrajectoryFileError, match=rf"{path} would take {declared} bytes once "
+                                                  rf"read, more than the limit of {64 * 2**20} "
+                                                  rf"bytes for a file of {size} bytes; if you "
+                                                  "trust it, pass max_bytes="):
+        Trajectory.load(path)
+    back = Trajectory.load(path, max_bytes=declared)  # trusted: read in full
+    assert back.q.shape == (k, n) and not back.q.any()
+
+
+def _npy(array: np.ndarray) -> bytes:
+    buffer = io.BytesIO()
+    np.save(buffer, array)
+    return buffer.getvalue()
+
+
+def test_load_checks_a_header_against_its_declared_size(traj, tmp_path):
+    """A member claiming 10**9 values (8 GB) in 80 bytes is refused before allocation."""
+    path = tmp_path / "liar.npz"
+    content = members(traj.save(tmp_path / "good.npz"))
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, value in content.items():
+            archive.writestr(f"{name}.npy", _npy(value))
+        archive.writestr("t_events_1.npy", npy_header((10**9,)) + bytes(80))
+    with pytest.raises(TrajectoryFileError, match=r"its member 't_events_1' declares shape "
+                                                  r"\(1000000000,\) of float64 \(8000000000 "
+                                                  r"bytes\) but holds 80"):
+        Trajectory.load(path)
+
+
+SLOW_SAVE = """
+import sys, time
+from pathlib import Path
+import numpy as np
+from dalembert import Trajectory
+
+traj = Trajectory.load(sys.argv[1])
+traj.t[:] = -1.0  # a different trajectory, if it were written
+
+def stalled(fh, **arrays):
+    fh.write(b"PK partial")
+    fh.flush()
+    Path(sys.argv[2]).touch()
+    time.sleep(120)
+
+np.savez = stalled
+traj.save(sys.argv[1])
+"""
+
+
+def test_a_save_killed_midway_leaves_the_old_file_and_a_later_save_cleans_up(traj, tmp_path):
+    path = traj.save(tmp_path / "run.npz")
+    before = path.read_bytes()
+    started = tmp_path / "started"
+    child = subprocess.Popen([sys.executable, "-c", SLOW_SAVE, str(path), str(started)])
+    try:
+        deadline = time.monotonic() + 60
+        while not started.exists():
+            assert child.poll() is None and time.monotonic() < deadline, "the save did not start"
+            time.sleep(0.02)
+    finally:
+        child.kill()
+        child.wait()
+    assert path.read_bytes() == before  # the old file, untouched
+    assert np.array_equal(Trajectory.load(path).t, traj.t)
+    (left,) = [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+    assert left.name.startswith("run.npz.")
+    # A later save removes it once it is old enough to be no save in progress; a
+    # temporary file still locked (a save running elsewhere) stays, however old.
+    busy = tmp_path / "run.npz.busy0000.tmp"
+    busy.write_bytes(b"")
+    hours_ago = time.time() - 7200
+    for p in (left, busy):
+        os.utime(p, (hours_ago, hours_ago))
+    with open(busy, "rb") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        traj.save(path)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["run.npz", busy.name, "started"]
+
+
+def test_a_damaged_file_loads_or_raises_the_one_error(traj, tmp_path):
+    """200 files with a few bytes changed (half of them in the zip directory, at the end):
+    each loads, or raises TrajectoryFileError, never another exception."""
+    good = traj.save(tmp_path / "good.npz").read_bytes()
+    rng = np.random.default_rng(0)
+    path, outcomes = tmp_path / "damaged.npz", {"loaded": 0, "refused": 0}
+    for _ in range(200):
+        data = bytearray(good)
+        low = len(data) - 400 if rng.random() < 0.5 else 0
+        for _ in range(rng.integers(1, 6)):
+            data[rng.integers(low, len(data))] = rng.integers(256)
+        path.write_bytes(bytes(data))
+        try:
+            Trajectory.load(path)
+            outcomes["loaded"] += 1
+        except TrajectoryFileError:
+            outcomes["refused"] += 1
+    assert outcomes["refused"] > 150  # the damage was mostly seen

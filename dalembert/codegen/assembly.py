@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import ctypes
 import threading
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property, partial
@@ -127,8 +126,7 @@ def compile_static_parts(parts: Sequence[Part], n: int, m: int,
         specs.append((f"static_{g}", _arguments(part, "static", parameters), exprs))
         targets.append(np.concatenate(at, axis=1).reshape(-1))
     (values,) = _evaluators([("static_values", specs, targets, int(offsets[-1]), False)],
-                           parts, n,
-                            len(parameters), use)
+                            parts, n, len(parameters), use)
     rest_rows = sorted(int(r) for part, entries in zip(parts, local)
                        for k in entries.rest_rows for r in part.rows[:, k])
     pattern = StaticPattern(
@@ -159,7 +157,7 @@ def _evaluators(kinds: Sequence[tuple[str, list, list, int, bool]], parts: Seque
             return [_CEvaluator(getattr(lib, k), (n, n_parameters, size), indices, targets,
                                 takes_qd, lib) for k, _, targets, size, takes_qd in kinds]
         except c_backend.CompileError as exc:
-            warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=3)
+            c_backend.warn_unavailable(c_backend.MODEL_CODE, exc)
     return [_numpy_evaluator(specs, indices, targets, size)
             for _, specs, targets, size, _ in kinds]
 

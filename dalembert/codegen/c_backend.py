@@ -36,12 +36,15 @@ spherical at ``n = 16``, 15 us planar at 256, from Python) and builds 15-20%
 sooner (planar ``n = 16`` cold 0.18 against 0.22 s, spherical 0.57-0.63 against
 0.70-0.72 s), so ``-O1`` it is.
 
-The library is cached under :func:`cache_dir` (``$DALEMBERT_CACHE_DIR``, else
-``$XDG_CACHE_HOME/dalembert`` or ``~/.cache/dalembert``) by a hash of the
-symbolic input, so on a cache hit neither ``cse``, printing nor the compiler run
-again. Without a C compiler (``$CC``, ``cc``, ``gcc``, ``clang``), or when
-``$DALEMBERT_BACKEND=numpy``, :func:`build_flat_functions` falls back to the
-NumPy printer with the same interface.
+The library is cached under :func:`~dalembert.codegen.cache.cache_dir`
+(``$DALEMBERT_CACHE_DIR``, else ``$XDG_CACHE_HOME/dalembert`` or
+``~/.cache/dalembert``) by a hash of the symbolic input, so on a cache hit neither
+``cse``, printing nor the compiler run again; :mod:`dalembert.codegen.cache` keeps
+it private and checks each library before it is loaded. Without a C compiler
+(``$CC``, ``cc``, ``gcc``, ``clang``), or when ``$DALEMBERT_BACKEND=numpy``,
+:func:`build_flat_functions` falls back to the NumPy printer with the same
+interface; when that is not the user's choice, a
+:class:`~dalembert.errors.NativeUnavailableWarning` says why (once per reason).
 """
 
 from __future__ import annotations
@@ -51,10 +54,10 @@ import hashlib
 import os
 import shutil
 import subprocess
-import tempfile
 import warnings
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -62,34 +65,24 @@ import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-from ..errors import CompileError
+from ..errors import CompileError, NativeUnavailableWarning
+from . import cache
+from .cache import cache_dir as cache_dir  # where libraries are kept (re-exported)
 from .numpy_printer import generate_function
 
 Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
 #: One flat function: (name, arguments, expressions) -> ``name(*arrays) -> 1-D array``.
 FlatSpec = tuple[str, Arguments, Sequence[sp.Expr]]
 
-#: Bumped whenever the generated C changes, so that stale cached libraries are not used.
-GENERATOR_VERSION = "3"
+#: Bumped whenever the generated C changes, so that stale cached libraries are not used
+#: (4: every library ends with the cache's probe function and has a digest record).
+GENERATOR_VERSION = "4"
 CFLAGS = ("-O0", "-fPIC", "-shared", "-fno-math-errno")
 #: Kernels of one part (a body, a joint) are short, so optimizing them costs little.
 PART_CFLAGS = ("-O1", *CFLAGS[1:])
 #: Hand-written loops (the simulation runtime): compiled once, so fully optimized.
 SOURCE_CFLAGS = ("-O2", *CFLAGS[1:])
 BACKENDS = ("auto", "c", "numpy")
-
-
-def cache_dir() -> Path:
-    """Where compiled libraries are kept (``$DALEMBERT_CACHE_DIR`` overrides).
-
-    >>> isinstance(cache_dir(), Path)
-    True
-    """
-    env = os.environ.get("DALEMBERT_CACHE_DIR")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "dalembert"
 
 
 def find_compiler() -> str | None:
@@ -115,7 +108,47 @@ def backend() -> str:
         raise ValueError(f"DALEMBERT_BACKEND must be one of {BACKENDS}, not {choice!r}")
     if choice == "numpy":
         return "numpy"
-    return "c" if find_compiler() is not None else "numpy"
+    if find_compiler() is None:
+        warn_unavailable(MODEL_CODE, "no C compiler found (looked for $CC, cc, gcc, clang); "
+                         "install one, or set DALEMBERT_BACKEND=numpy to choose NumPy")
+        return "numpy"
+    return "c"
+
+
+#: What :func:`warn_unavailable` names, and what runs instead.
+MODEL_CODE = ("the model's C code", "using NumPy instead (slower)")
+RUNTIME = ("the C simulation loop", "the Python loop runs instead (slower)")
+_WARNED: set[tuple[str, str]] = set()
+
+
+def warn_unavailable(route: tuple[str, str], reason: object) -> None:
+    """Say (a :class:`~dalembert.errors.NativeUnavailableWarning`, once per process and
+    reason) that a C route is unavailable and a slower one is taken.
+
+    Parameters
+    ----------
+    route
+        :data:`MODEL_CODE` or :data:`RUNTIME`.
+    reason
+        Why (an exception or a text).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     for _ in range(2):
+    ...         warn_unavailable(RUNTIME, "an example reason")
+    >>> [str(w.message) for w in caught]  # doctest: +NORMALIZE_WHITESPACE
+    ['the C simulation loop is unavailable, the Python loop runs instead (slower):
+      an example reason']
+    """
+    what, instead = route
+    key = (what, str(reason))
+    if key not in _WARNED:
+        warnings.warn(f"{what} is unavailable, {instead}: {reason}", NativeUnavailableWarning,
+                      stacklevel=3)
+        _WARNED.add(key)  # after warning: a filter turning it into an error raises each time
 
 
 def build_flat_functions(specs: Sequence[FlatSpec], *, use: str | None = None) -> list[Callable]:
@@ -134,7 +167,7 @@ def build_flat_functions(specs: Sequence[FlatSpec], *, use: str | None = None) -
         try:
             return _c_functions(specs)
         except CompileError as exc:
-            warnings.warn(f"C code generation failed, using NumPy instead: {exc}", stacklevel=2)
+            warn_unavailable(MODEL_CODE, exc)
     return [_numpy_function(*spec) for spec in specs]
 
 
@@ -190,8 +223,12 @@ def source_library(source: str, flags: Sequence[str] = SOURCE_CFLAGS) -> ctypes.
     Raises :class:`CompileError` when C is unavailable.
     """
     compiler = _compiler()
-    key = hashlib.sha256("\0".join([compiler, *flags, source]).encode()).hexdigest()[:32]
-    return _load(key, lambda: source, compiler, flags)
+    return _load(_source_key(source, compiler, flags), lambda: source, compiler, flags)
+
+
+def _source_key(source: str, compiler: str, flags: Sequence[str]) -> str:
+    parts = [GENERATOR_VERSION, compiler, *flags, source]
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()[:32]
 
 
 def _library(specs: Sequence[FlatSpec], variant: str, sources: Callable,
@@ -211,13 +248,7 @@ def _compiler() -> str:
 
 def _load(key: str, source: Callable[[], str], compiler: str,
           flags: Sequence[str]) -> ctypes.CDLL:
-    library = cache_dir() / "c" / f"dalembert_{key}.so"
-    try:
-        if not library.exists():
-            _compile(source(), library, compiler, flags)
-        return ctypes.CDLL(str(library))
-    except OSError as exc:  # unwritable cache directory, unloadable library
-        raise CompileError(f"{exc} (set DALEMBERT_CACHE_DIR to a writable folder)") from exc
+    return cache.load_library(key, partial(_compile, source, compiler, flags))
 
 
 def _cache_key(specs: Sequence[FlatSpec], compiler: str, variant: str) -> str:
@@ -344,17 +375,18 @@ def _print(printer: _Printer, expr: sp.Expr) -> str:
     return code
 
 
-def _compile(source: str, library: Path, compiler: str, flags: Sequence[str]) -> None:
-    library.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=library.parent) as tmp:
-        src, out = Path(tmp) / "gen.c", Path(tmp) / "gen.so"
-        src.write_text(source)
-        run = subprocess.run([compiler, *flags, str(src), "-o", str(out), "-lm"],
-                             capture_output=True, text=True)
-        if run.returncode != 0:
-            raise CompileError(f"{compiler} failed: {run.stderr.strip()[:500]}")
-        (Path(tmp) / "gen.c").replace(library.with_suffix(".c"))  # kept for inspection
-        out.replace(library)  # atomic: concurrent processes never load a partial file
+def _compile(source: Callable[[], str], compiler: str, flags: Sequence[str],
+             folder: Path) -> None:
+    """Compile ``source()`` into ``folder`` as the cache expects (its probe appended)."""
+    src = folder / cache.SOURCE
+    src.write_text(source() + cache.PROBE_SOURCE)
+    try:
+        run = subprocess.run([compiler, *flags, str(src), "-o", str(folder / cache.LIBRARY),
+                              "-lm"], capture_output=True, text=True)
+    except OSError as exc:  # not the cache's fault: the compiler cannot be run
+        raise CompileError(f"cannot run the C compiler {compiler}: {exc}") from exc
+    if run.returncode != 0:
+        raise CompileError(f"{compiler} failed: {run.stderr.strip()[:500]}")
 
 
 def _bind(lib: ctypes.CDLL, name: str, arguments: Arguments, size: int) -> Callable:

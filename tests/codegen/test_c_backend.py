@@ -8,6 +8,7 @@ import sympy as sp
 
 from dalembert.codegen import c_backend
 from dalembert.codegen.compiled import compile_equations
+from dalembert.errors import NativeUnavailableWarning
 from dalembert.examples import coin, spherical_chain
 
 needs_cc = pytest.mark.skipif(c_backend.find_compiler() is None, reason="no C compiler found")
@@ -21,6 +22,7 @@ EXPRS = [sp.sin(x) * sp.exp(y) + k, sp.atan2(x, y), sp.sqrt(x**2 + y**2) / k,
 @pytest.fixture()
 def cache(tmp_path, monkeypatch):
     monkeypatch.setenv("DALEMBERT_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(c_backend, "_WARNED", set())  # each test sees its warnings
     return tmp_path
 
 
@@ -94,7 +96,8 @@ def test_cache_key_tells_expressions_apart():
 
 def test_numpy_fallback_without_a_compiler(cache, monkeypatch):
     monkeypatch.setattr(c_backend, "find_compiler", lambda: None)
-    assert c_backend.backend() == "numpy"
+    with pytest.warns(NativeUnavailableWarning, match="no C compiler found"):
+        assert c_backend.backend() == "numpy"
     fn = evaluate(None)
     assert not hasattr(fn, "library")
     assert np.isclose(fn(np.array([1.0, 2.0]), np.array([3.0]))[0], np.sin(1) * np.exp(2) + 3)

@@ -158,11 +158,18 @@ _LOCK = threading.Lock()
 def runtime() -> ctypes.CDLL:
     """The compiled runtime (built once per machine and cached like generated code).
 
-    Raises :class:`~dalembert.codegen.c_backend.CompileError` without a C compiler,
-    and :class:`LayoutError` (one) when a mirror does not match the library.
+    Raises :class:`~dalembert.codegen.c_backend.CompileError` without a C compiler
+    or when the runtime cannot be built, stored or loaded, and :class:`LayoutError`
+    (one) when a mirror does not match the library; either is also said once per
+    reason as a :class:`~dalembert.errors.NativeUnavailableWarning` (the simulation
+    then takes the slower Python loop).
     """
     with _LOCK:  # one compilation, even when prepare_runtime's thread is at it
-        return _runtime()
+        try:
+            return _runtime()
+        except c_backend.CompileError as exc:
+            c_backend.warn_unavailable(c_backend.RUNTIME, exc)
+            raise
 
 
 def prepare_runtime() -> None:
@@ -178,9 +185,10 @@ def prepare_runtime() -> None:
 
 
 def _runtime_if_possible() -> None:
-    # A failure is reported by the first simulation that needs the runtime.
-    with contextlib.suppress(c_backend.CompileError):
-        runtime()
+    # A failure is reported (and warned about) by the first simulation that needs the
+    # runtime, in the caller's thread.
+    with _LOCK, contextlib.suppress(c_backend.CompileError):
+        _runtime()
 
 
 @lru_cache(maxsize=1)
