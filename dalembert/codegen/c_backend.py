@@ -75,8 +75,9 @@ Arguments = Sequence[tuple[str, Sequence[sp.Symbol]]]
 FlatSpec = tuple[str, Arguments, Sequence[sp.Expr]]
 
 #: Bumped whenever the generated C changes, so that stale cached libraries are not used
-#: (4: every library ends with the cache's probe function and has a digest record).
-GENERATOR_VERSION = "4"
+#: (4: every library ends with the cache's probe function and has a digest record;
+#: 5: a small power printed as a parenthesized product, right after "/" too).
+GENERATOR_VERSION = "5"
 CFLAGS = ("-O0", "-fPIC", "-shared", "-fno-math-errno")
 #: Kernels of one part (a body, a joint) are short, so optimizing them costs little.
 PART_CFLAGS = ("-O1", *CFLAGS[1:])
@@ -299,10 +300,12 @@ class _Printer(C99CodePrinter):
     _print_Dummy = _print_Symbol
 
     def _print_Pow(self, expr: sp.Pow) -> str:
-        # Small integer powers as products: exact, and faster than pow().
+        # Small integer powers as products: exact, and faster than pow(). The product is
+        # parenthesized whole: SymPy prints a denominator's power after "/" as an atom
+        # (x/l**3 as "x/" + this), and x/(l)*(l)*(l) would be x*l.
         if expr.exp.is_Integer and 2 <= int(expr.exp) <= 4:
             base = self.parenthesize(expr.base, 100)
-            return "*".join([f"({base})"] * int(expr.exp))
+            return "(" + "*".join([f"({base})"] * int(expr.exp)) + ")"
         return super()._print_Pow(expr)
 
 

@@ -13,10 +13,12 @@ from dalembert.examples import coin, spherical_chain
 
 needs_cc = pytest.mark.skipif(c_backend.find_compiler() is None, reason="no C compiler found")
 x, y, k = sp.symbols("x y k")
-#: Trig, roots, powers (integer, negative, fractional), atan2, exp/log, a rational.
+#: Trig, roots, powers (integer, negative, fractional, in denominators), atan2,
+#: exp/log, a rational.
 EXPRS = [sp.sin(x) * sp.exp(y) + k, sp.atan2(x, y), sp.sqrt(x**2 + y**2) / k,
          x**3 - y**-2 + sp.Rational(1, 3) * x ** sp.Rational(5, 2), sp.log(1 + y**2) * sp.cos(k),
-         sp.Abs(x - y) * sp.tanh(x), sp.pi * x**4]
+         sp.Abs(x - y) * sp.tanh(x), sp.pi * x**4, x / y**2, x / y**3, k * (x + 1) / y**4,
+         x / (k * y**3)]
 
 
 @pytest.fixture()
@@ -126,3 +128,18 @@ def test_unwritable_cache_falls_back_with_a_hint(tmp_path, monkeypatch):
     with pytest.warns(UserWarning, match="DALEMBERT_CACHE_DIR"):
         fn = evaluate("c")
     assert not hasattr(fn, "library")
+
+
+@needs_cc
+def test_a_spring_over_a_squared_length_oscillates_at_its_frequency(cache):
+    """``V = x^2 / (2 l^2)`` (unit mass): ``x = cos(t / l)``. A power in a denominator
+    was once printed as ``x/(l)*(l)``, which C reads as ``x``: the frequency was 1."""
+    from dalembert import System, coordinates
+
+    (q,) = coordinates("q")
+    length = sp.Symbol("l", positive=True)
+    for exponent in (2, 3):
+        spring = System([q], kinetic=q.diff()**2 / 2,
+                        potential=q**2 / (2 * length**exponent), parameters={length: 2.0})
+        traj = spring.simulate((0.0, 1.0), {q: 1.0}, t_eval=[1.0], backend="c")
+        assert traj.q[0, 0] == pytest.approx(np.cos(2.0 ** (-exponent / 2)), abs=1e-10)
