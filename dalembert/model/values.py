@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import InitialConditionError
 from .coordinates import key_name
+from .expressions import listed
 
 #: What users pass for ``q0``, ``qd0``, a guess: by coordinate, in order, or nothing.
 CoordinateValues = Mapping[object, float] | Sequence[float] | np.ndarray | None
@@ -81,7 +82,7 @@ def free_mask(fixed: Sequence[object] | None, names: Sequence[str]) -> np.ndarra
     [False, True]
     """
     free = np.ones(len(names), dtype=bool)
-    for key in fixed or ():
+    for key in listed(fixed or (), "fixed", "coordinates", InitialConditionError):
         name = key_name(key)
         if name not in names:
             raise InitialConditionError(f"fixed names {name!r}, which is not a coordinate")

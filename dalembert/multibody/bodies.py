@@ -37,6 +37,7 @@ from sympy.physics.vector import dynamicsymbols
 from ..errors import ModelError
 from ..model.constraints import Holonomic
 from ..model.coordinates import t
+from ..model.expressions import sympify_strict
 from .rotations import E_matrix, dot, rotation_matrix, times_vector
 
 
@@ -48,7 +49,7 @@ def _vector(v: object, what: str) -> sp.Matrix:
         raise ModelError(f"{what} must be a 3-vector, got {v!r}") from exc
     if len(comps) != 3:
         raise ModelError(f"{what} must have 3 components, got {len(comps)}")
-    vals = [sp.sympify(c) for c in comps]
+    vals = [sympify_strict(c, what) for c in comps]
     # exact zeros (not Float(0.0)) so that their terms vanish from the equations
     return sp.Matrix([sp.S.Zero if v.is_zero else v for v in vals])
 
