@@ -358,7 +358,8 @@ class System:
             baumgarte_gain=baumgarte_gain, backend=backend, native=native,
             redundant_constraints=self.redundant_constraints if redundant_constraints is None
             else redundant_constraints, velocity_projection=velocity_projection,
-            events=events, dense_output=dense_output, progress=progress)
+            events=events, dense_output=dense_output, progress=progress,
+            state_size=2 * len(self.coordinate_names))
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def plan(
@@ -398,7 +399,8 @@ class System:
         'finished'
         """
         options.setdefault("redundant_constraints", self.redundant_constraints)
-        checked = simulation_options(t_span, **options)
+        checked = simulation_options(t_span, state_size=2 * len(self.coordinate_names),
+                                     **options)
         return self._plan(checked, q0, qd0, parameters, fixed)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,
