@@ -96,6 +96,10 @@ class System:
     True
     """
 
+    #: ``M`` comes from a kinetic energy, which must not be negative (a Lagrangian
+    #: given as ``lagrangian=`` may have an indefinite quadratic part).
+    _kinetic_energy = True
+
     def __init__(
         self,
         coordinates: Iterable[object],
@@ -118,6 +122,7 @@ class System:
             velocities=velocities, name=name,
         )
         self.parameter_values = parameter_values(self.model.parameters, parameters)
+        self._kinetic_energy = lagrangian is None
 
     # -- description -----------------------------------------------------------------
     @property
@@ -249,7 +254,8 @@ class System:
         return consistent_state(num, t0, q, qd, names, labels, fixed,
                                 constraint_names=self.constraint_names,
                                 redundant_constraints=redundant_constraints,
-                                velocity_projection=velocity_projection)
+                                velocity_projection=velocity_projection,
+                                kinetic_energy=self._kinetic_energy)
 
     def simulate(
         self,
