@@ -159,8 +159,9 @@ def check_kinetic_energy(num: NumericModel, t: float, q: np.ndarray, qd: np.ndar
     raise ModelError(
         f"the kinetic energy is negative for some velocities at the initial state: the mass "
         f"matrix M (T = 1/2 qd^T M qd) has the eigenvalue {value:.6g} "
-        f"in the block of {', '.join(names[i] for i in block)} (whose largest is "
-        f"{largest:.6g}), along {along}"
+        f"in the block of {', '.join(names[i] for i in block)}"
+        + (f" (whose largest is {largest:.6g})" if len(block) > 1 else "")
+        + f", along {along}"
         + (f"; {', '.join(diagonal)}" if diagonal else "")
         + ". A negative mass or inertia in T? M must be positive semidefinite, or at least "
         "positive definite on the velocities the constraints allow"
