@@ -9,16 +9,20 @@
     dalembert demo [--out DIR] [--t-end T] [--points N]
     dalembert gallery [EXAMPLE ...] [--out DIR] [--t-end T] [--points N]
 
-Errors raised by dalembert (:class:`~dalembert.errors.DalembertError`) and unknown
-example names print one line on stderr and exit with status 2; ``gallery`` exits with
-status 1 when an example failed (its error is in ``index.md``, the others are written).
+Errors raised by dalembert (:class:`~dalembert.errors.DalembertError`), unknown
+example names and an output folder that cannot be written print one line on stderr
+and exit with status 2; ``gallery`` exits with status 1 when an example failed (its
+error is in ``index.md``, the others are written). Ctrl-C exits with status 130
+(a simulation it stops still writes the part computed so far).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -34,6 +38,11 @@ if TYPE_CHECKING:
 
 EXIT_ERROR = 2
 EXIT_IMPORT = 1
+#: After Ctrl-C, as a shell reports a process ended by SIGINT (128 + 2).
+EXIT_INTERRUPTED = 130
+#: Output times at most: the plots cannot show more, and each point holds the whole
+#: state with its multipliers (a 1e8-point request ran out of memory).
+MAX_POINTS = 100_000
 #: ``dalembert gallery`` when some example failed (the others are written).
 EXIT_GALLERY_FAILED = 1
 #: Modes printed and drawn by ``dalembert modes`` unless ``--count`` says otherwise.
@@ -55,12 +64,67 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help or a usage error: keep main() returning an int
         return exc.code if isinstance(exc.code, int) else 0
+    interrupts = _InterruptFlag()
     try:
-        return args.handler(args)
+        with interrupts:
+            if args.handler in (cmd_run, cmd_demo, cmd_gallery):  # they always write
+                _check_output_folder(args.out)
+            status = args.handler(args)
+    except KeyboardInterrupt:
+        return _fail("interrupted", EXIT_INTERRUPTED)
     except DalembertError as exc:
         return _fail(f"{type(exc).__name__}: {exc}", EXIT_ERROR)
     except _CommandError as exc:
         return _fail(str(exc), exc.status)
+    except OSError as exc:  # an output file that cannot be written (disk full, no access)
+        return _fail(_os_error(exc), EXIT_ERROR)
+    if interrupts.seen:  # the simulation caught Ctrl-C and returned what it had
+        return _fail("interrupted; the files hold the part computed before Ctrl-C",
+                     EXIT_INTERRUPTED)
+    return status
+
+
+class _InterruptFlag:
+    """Records Ctrl-C while still raising ``KeyboardInterrupt``: a simulation catches it
+    and returns the part computed so far, and the command must then not exit 0."""
+
+    def __init__(self) -> None:
+        self.seen = False
+        self._previous: object = None
+
+    def _handler(self, signum: int, frame: object) -> None:
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def __enter__(self) -> _InterruptFlag:
+        try:
+            self._previous = signal.signal(signal.SIGINT, self._handler)
+        except ValueError:  # not the main thread: Ctrl-C cannot reach this one anyway
+            self._previous = None
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)  # type: ignore[arg-type]
+
+
+def _check_output_folder(out: str | None) -> None:
+    """Fail before simulating, not after, when ``out`` cannot be written."""
+    if out is None:
+        return
+    folder = Path(out)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise _CommandError(f"cannot write to the output folder {out!r}: "
+                            f"{exc.strerror or exc}") from exc
+
+
+def _os_error(exc: OSError) -> str:
+    where = f" {exc.filename!r}" if exc.filename else ""
+    return f"could not write{where}: {exc.strerror or exc}"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -330,4 +394,8 @@ def _points(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
     if value < 2:
         raise argparse.ArgumentTypeError(f"need at least 2 points, not {value}")
+    if value > MAX_POINTS:
+        raise argparse.ArgumentTypeError(
+            f"at most {MAX_POINTS} points, not {value} (the plots show no more; for denser "
+            "output use System.simulate with t_eval or dense_output=True)")
     return value

@@ -173,11 +173,30 @@ class Tolerance:
         if isinstance(value, bool):
             return False
         try:
-            array = np.asarray(value, dtype=float)
+            array = np.asarray(value)
         except (TypeError, ValueError):
+            return False
+        if array.dtype.kind not in "iuf":  # strings, objects, booleans, complex
             return False
         return array.size > 0 and array.ndim <= 1 and bool(np.all(np.isfinite(array))
                                                            & np.all(array > 0))
+
+
+@dataclass(frozen=True)
+class Times:
+    """A 1-D array of numbers (times; whether they are finite, ordered and inside
+    ``t_span`` is checked with ``t_span``, which says where they are not)."""
+
+    description: str = "a 1-D array of times"
+
+    def accepts(self, value: object) -> bool:
+        if isinstance(value, (str, bytes)):
+            return False
+        try:
+            array = np.asarray(value)
+        except (TypeError, ValueError):
+            return False
+        return array.ndim == 1 and (array.size == 0 or array.dtype.kind in "iuf")
 
 
 @dataclass(frozen=True)
@@ -201,7 +220,8 @@ class Callables:
     description: str = "a sequence of callables event(t, q, qd)"
 
     def accepts(self, value: object) -> bool:
-        return isinstance(value, Sequence) and all(callable(e) for e in value)
+        return (isinstance(value, Sequence) and not isinstance(value, (str, bytes))
+                and all(callable(e) for e in value))
 
 
 @dataclass(frozen=True)
@@ -231,6 +251,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "dense_output": [Boolean()],
     "progress": [Boolean()],
     "events": [Callables()],
+    "t_eval": [Times(), NONE],
 }
 
 
@@ -282,6 +303,7 @@ def simulation_options(
     events: Sequence[Callable] = (),
     dense_output: bool = False,
     progress: bool = False,
+    state_size: int | None = None,
 ) -> SimulationOptions:
     """Check the keywords of ``simulate`` once and turn them into typed values.
 
@@ -307,9 +329,16 @@ def simulation_options(
         ``"least-change"`` (the nearest velocities in the Euclidean sense).
     progress
         Show a progress bar.
+    state_size
+        The length of the state ``[q, qd]`` (twice the coordinates), when known: an
+        array of tolerances must have one entry per state entry.
 
     >>> simulation_options((0, 2), method="RK45", rtol=1e-8).step.rtol
     1e-08
+    >>> simulation_options((0, 2), atol=[1e-9, 1e-9], state_size=4)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'atol' parameter of simulate must be ... or an array of 4 of them ...
     """
     given = {
         "method": method, "rtol": rtol, "atol": atol, "step_control": step_control,
@@ -317,10 +346,15 @@ def simulation_options(
         "baumgarte_gain": baumgarte_gain, "backend": backend, "native": native,
         "redundant_constraints": redundant_constraints,
         "velocity_projection": velocity_projection, "events": events,
-        "dense_output": dense_output, "progress": progress,
+        "dense_output": dense_output, "progress": progress, "t_eval": t_eval,
     }
     check_parameters(given, SIMULATE_PARAMETERS, "simulate")
+    if state_size is not None:
+        _check_tolerance_sizes({"rtol": rtol, "atol": atol}, state_size)
     span = _time_span(t_span)
+    if first_step is not None and first_step > abs(span[1] - span[0]):
+        raise ValueError(f"first_step={first_step!r} is longer than t_span {span}; give a "
+                         "first step inside the span, or leave it None")
     solver = METHODS[method] if isinstance(method, str) else method
     if stabilization == "projection" and solver is LSODA:
         raise ValueError(
@@ -338,6 +372,18 @@ def simulation_options(
         redundant_constraints=redundant_constraints,
         velocity_projection=velocity_projection,
     )
+
+
+def _check_tolerance_sizes(tolerances: Mapping[str, object], size: int) -> None:
+    """An array of tolerances holds one per state entry (positions, then velocities)."""
+    for name, value in tolerances.items():
+        array = np.asarray(value, dtype=float)
+        if array.ndim == 1 and array.size != size:
+            raise ValueError(
+                f"The {name!r} parameter of simulate must be a finite positive number or an "
+                f"array of {size} of them (one per position, then one per velocity); got "
+                f"{value!r}."
+            )
 
 
 def _time_span(t_span: Sequence[float]) -> tuple[float, float]:

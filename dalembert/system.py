@@ -105,6 +105,10 @@ class System:
     True
     """
 
+    #: ``M`` comes from a kinetic energy, which must not be negative (a Lagrangian
+    #: given as ``lagrangian=`` may have an indefinite quadratic part).
+    _kinetic_energy = True
+
     def __init__(
         self,
         coordinates: Iterable[object],
@@ -131,6 +135,7 @@ class System:
             velocities=velocities, name=name,
         )
         self.parameter_values = parameter_values(self.model.parameters, parameters)
+        self._kinetic_energy = lagrangian is None
 
     @classmethod
     def from_lagranges_method(
@@ -410,7 +415,8 @@ class System:
                                 constraint_names=self.constraint_names,
                                 redundant_constraints=redundant_constraints,
                                 velocity_projection=velocity_projection,
-                                driven=self.rheonomic)
+                                driven=self.rheonomic,
+                                kinetic_energy=self._kinetic_energy)
 
     def simulate(
         self,
@@ -519,7 +525,8 @@ class System:
             baumgarte_gain=baumgarte_gain, backend=backend, native=native,
             redundant_constraints=self.redundant_constraints if redundant_constraints is None
             else redundant_constraints, velocity_projection=velocity_projection,
-            events=events, dense_output=dense_output, progress=progress)
+            events=events, dense_output=dense_output, progress=progress,
+            state_size=2 * len(self.coordinate_names))
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def plan(
@@ -559,7 +566,8 @@ class System:
         'finished'
         """
         options.setdefault("redundant_constraints", self.redundant_constraints)
-        checked = simulation_options(t_span, **options)
+        checked = simulation_options(t_span, state_size=2 * len(self.coordinate_names),
+                                     **options)
         return self._plan(checked, q0, qd0, parameters, fixed)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,

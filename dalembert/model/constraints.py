@@ -8,14 +8,13 @@ Both kinds then share one constraint matrix ``A`` whose rows keep the user's ord
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import cast
 
 import sympy as sp
 
 from ..errors import ConstraintError
 from .coordinates import Coordinates, t
+from .expressions import listed
 
 
 @dataclass(frozen=True)
@@ -86,7 +85,8 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
     """Check each constraint and assemble the Pfaffian matrices ``A`` and ``b``."""
     if isinstance(constraints, (Holonomic, Pfaffian)):
         constraints = [constraints]
-    items = list(cast(Iterable[object], constraints or ()))
+    items = listed(constraints or (), "constraints",
+                   "dalembert.Holonomic(expr) or dalembert.Pfaffian(expr)", ConstraintError)
     names, kinds, exprs, rows_A, rows_b, holonomic = [], [], [], [], [], []
     for i, c in enumerate(items):
         if not isinstance(c, (Holonomic, Pfaffian)):
@@ -95,6 +95,8 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
                 "or dalembert.Pfaffian(expr)"
             )
         kind = "holonomic" if isinstance(c, Holonomic) else "Pfaffian"
+        if c.name is not None and not isinstance(c.name, str):
+            raise ConstraintError(f"the name of constraint {i} must be a string, got {c.name!r}")
         name = c.name or f"{kind}_{i}"
         expr = coords.to_plain(c.expr, f"constraint {name!r}")
         if isinstance(c, Holonomic):

@@ -16,6 +16,7 @@ import sympy as sp
 from sympy.physics.vector import dynamicsymbols
 
 from ..errors import ModelError
+from .expressions import listed, sympify_checked
 
 #: The time symbol, the same one ``dynamicsymbols`` uses.
 t: sp.Symbol = dynamicsymbols._t
@@ -46,6 +47,13 @@ class Coordinates:
     qd: tuple[sp.Symbol, ...]
     qdd: tuple[sp.Symbol, ...]
     user_forms: tuple[tuple[sp.Expr, sp.Symbol], ...]
+    #: ``(name, what it stands for, how to write it)`` for time and each coordinate,
+    #: velocity and acceleration: a symbol of that name that is not ``allowed`` is
+    #: refused, never taken for the coordinate or made a parameter of the same name.
+    reserved: tuple[tuple[str, str, str], ...] = ()
+    #: The plain symbols users may write: time, and the coordinates (with their
+    #: velocities and accelerations) they gave as symbols or names.
+    allowed: frozenset[sp.Symbol] = frozenset()
 
     @property
     def n(self) -> int:
@@ -62,7 +70,9 @@ class Coordinates:
 
     def to_plain(self, expr: object, what: str) -> sp.Expr:
         """Rewrite ``expr`` in plain symbols; ``what`` names it in error messages."""
-        plain = sympify_checked(expr, what).xreplace(dict(self.user_forms))
+        given = sympify_checked(expr, what)
+        self._reject_lookalikes(given, what)
+        plain = given.xreplace(dict(self.user_forms))
         _reject_leftover_functions(plain, what)
         accelerations = plain.free_symbols.intersection(self.qdd)
         if accelerations:
@@ -70,6 +80,34 @@ class Coordinates:
             raise ModelError(f"{what} contains the acceleration of {name!r}; "
                              "model expressions may hold positions and velocities only")
         return plain
+
+    def _reject_lookalikes(self, expr: sp.Expr, what: str) -> None:
+        """A symbol named like a coordinate, a velocity or time that is not that one.
+
+        ``Symbol("x")`` next to the coordinate ``x(t)`` would silently be the
+        coordinate; ``Symbol("t", positive=True)`` or ``Symbol("x", real=True)`` a
+        parameter sharing the name of time or of a coordinate.
+        """
+        reserved = {name: (meaning, form) for name, meaning, form in self.reserved}
+        for s in sorted(expr.free_symbols - self.allowed, key=str):
+            if getattr(s, "name", None) not in reserved:
+                continue
+            meaning, form = reserved[s.name]
+            kind = ("a plain symbol" if s == sp.Symbol(s.name)
+                    else f"a symbol with assumptions ({_assumptions(s)})")
+            raise ModelError(
+                f"{what} contains {kind} named {s.name!r}, the name of {meaning}, but it is "
+                f"another symbol: it would silently stand for {meaning} or become a "
+                f"parameter of the same name. Write {form} for {meaning}, or give the "
+                "parameter another name"
+            )
+
+
+def _assumptions(s: sp.Symbol) -> str:
+    """The assumptions a symbol was created with (``positive=True``)."""
+    given = getattr(s, "_assumptions_orig", None) or s.assumptions0
+    return ", ".join(f"{k}={v}" for k, v in sorted(given.items()) if k != "commutative") \
+        or type(s).__name__
 
 
 def key_name(key: object) -> str:
@@ -83,17 +121,6 @@ def key_name(key: object) -> str:
     if isinstance(key, sp.Function) or (isinstance(key, sp.Expr) and key.is_Function):
         return key.func.__name__
     raise ModelError(f"{key!r} is not a coordinate or parameter name")
-
-
-def sympify_checked(expr: object, what: str) -> sp.Expr:
-    """``sympy.sympify`` with an error that says which input could not be read."""
-    try:
-        result = sp.sympify(expr)
-    except (sp.SympifyError, TypeError) as exc:
-        raise ModelError(f"{what} is not a SymPy expression: {expr!r}") from exc
-    if not isinstance(result, sp.Expr):
-        raise ModelError(f"{what} must be a scalar SymPy expression, got {type(result).__name__}")
-    return result
 
 
 def build_coordinates(
@@ -111,13 +138,18 @@ def build_coordinates(
     """
     if isinstance(coords, str):
         coords = coords.replace(",", " ").split()
-    coords = list(coords)
+    coords = listed(coords, "coordinates", "coordinates (dynamicsymbols, symbols or names)")
     if not coords:
         raise ModelError("a System needs at least one coordinate")
     names = tuple(key_name(c) for c in coords)
     _reject_duplicates(names)
-    if velocities is not None and len(velocities) != len(names):
-        raise ModelError(f"{len(velocities)} velocities given for {len(names)} coordinates")
+    if "t" in names:
+        raise ModelError("a coordinate cannot be named 't': t is time (dalembert.t); "
+                         "rename the coordinate")
+    if velocities is not None:
+        velocities = listed(velocities, "velocities", "velocity symbols or names")
+        if len(velocities) != len(names):
+            raise ModelError(f"{len(velocities)} velocities given for {len(names)} coordinates")
     q = tuple(sp.Symbol(n) for n in names)
     qd = tuple(
         sp.Symbol(key_name(velocities[i])) if velocities is not None else sp.Symbol(f"{n}_dot")
@@ -126,10 +158,25 @@ def build_coordinates(
     qdd = tuple(sp.Symbol(f"{n}_ddot") for n in names)
     _reject_clashes(q, qd, qdd)
     forms: list[tuple[sp.Expr, sp.Symbol]] = []
-    for name, qi, qdi, qddi in zip(names, q, qd, qdd):
+    reserved: list[tuple[str, str, str]] = [("t", "time", "dalembert.t (Symbol('t'))")]
+    allowed: set[sp.Symbol] = {t}
+    for k, (given, name, qi, qdi, qddi) in enumerate(zip(coords, names, q, qd, qdd)):
         fn = sp.Function(name)(t)
         forms += [(fn.diff(t, 2), qddi), (fn.diff(t), qdi), (fn, qi)]
-    return Coordinates(names, q, qd, qdd, tuple(forms))
+        # The user's own symbols, with whatever assumptions they carry, are the coordinate.
+        for user, plain in ((given, qi), (None if velocities is None else velocities[k], qdi)):
+            if isinstance(user, sp.Symbol) and user != plain:
+                forms.append((user, plain))
+                allowed.add(user)
+        function = isinstance(given, sp.Expr) and not isinstance(given, sp.Symbol)
+        forms_q = ((f"{fn} (from dalembert.coordinates)", f"{fn}.diff(t)") if function else
+                   ("the symbol given in coordinates", f"the velocity symbol {qdi.name}"))
+        reserved += [(qi.name, f"the coordinate {name!r}", forms_q[0]),
+                     (qdi.name, f"the velocity of {name!r}", forms_q[1]),
+                     (qddi.name, f"the acceleration of {name!r}", f"{fn}.diff(t, 2)")]
+        if not function:  # given as a symbol or a name: its plain symbols are its forms
+            allowed |= {qi, qdi, qddi}
+    return Coordinates(names, q, qd, qdd, tuple(forms), tuple(reserved), frozenset(allowed))
 
 
 def _reject_duplicates(names: tuple[str, ...]) -> None:

@@ -19,6 +19,7 @@ import sympy as sp
 
 from ..errors import DoubleCountingWarning, ModelError
 from .coordinates import Coordinates
+from .expressions import listed
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,8 @@ def _per_coordinate_forces(
     if isinstance(given, Mapping):
         items = [(coords.index(key), value) for key, value in given.items()]
     else:
-        given = list(given)
+        given = listed(given, "generalized_forces",
+                       "forces, one per coordinate (or a dict by coordinate)")
         if len(given) != coords.n:
             raise ModelError(
                 f"generalized_forces has {len(given)} entries for {coords.n} coordinates "
@@ -103,6 +105,8 @@ def vector_components(vec: object, frame: object | None, what: str) -> list[obje
         if frame is None:
             raise ModelError(f"{what} is a SymPy Vector; pass frame= to read its components")
         vec = vec.to_matrix(frame)
+    if isinstance(vec, (str, bytes)):
+        raise ModelError(f"{what} must be a vector of components, got the string {vec!r}")
     try:
         comps = list(cast(Iterable[object], vec))
     except TypeError as exc:

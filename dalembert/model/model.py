@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import sympy as sp
 
 from ..errors import ModelError
 from .constraints import ConstraintSet, build_constraints
 from .coordinates import Coordinates, build_coordinates, t
+from .expressions import listed
 from .forces import PointForce, generalized_forces, warn_double_counting
 
 
@@ -48,6 +50,8 @@ def build_model(
     name: str = "system",
 ) -> Model:
     """Check the user's model and rewrite it in plain symbols."""
+    if not isinstance(name, str):
+        raise ModelError(f"name must be a string, got {name!r}")
     coords = build_coordinates(coordinates, velocities)
     T, V, L = _energies(kinetic, potential, lagrangian, coords)
     Q = _generalized_forces(generalized_forces, forces, coords)
@@ -126,7 +130,9 @@ def _generalized_forces(
 ) -> sp.Matrix:
     if isinstance(forces, PointForce):
         forces = [forces]
-    return generalized_forces(per_coordinate, list(forces or ()), coords)
+    points = listed(forces or (), "forces", "dalembert.PointForce(force, point)")
+    # each item is checked to be a PointForce where it is read
+    return generalized_forces(per_coordinate, cast(list[PointForce], points), coords)
 
 
 def _parameters(

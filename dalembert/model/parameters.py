@@ -48,12 +48,18 @@ def parameter_values(
     """
     names = {s.name for s in symbols}
     values: dict[str, float] = {}
+    if value_set is not None and not isinstance(value_set, Mapping):
+        raise ParameterError(
+            f"parameters must be a dict {{symbol or name: number}}, got {value_set!r} "
+            f"({type(value_set).__name__}); e.g. parameters={{'m': 1.0}}"
+        )
     for key, value in (value_set or {}).items():
         name = key_name(key)
         if name not in names:
             known = ", ".join(sorted(names)) or "none"
+            time = " ('t' is time, dalembert.t, never a parameter)" if name == "t" else ""
             raise ParameterError(
-                f"{name!r} is not a parameter of this model (its parameters: {known})"
+                f"{name!r} is not a parameter of this model (its parameters: {known}){time}"
             )
         values[name] = _finite_float(name, value)
     return values

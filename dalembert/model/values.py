@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import InitialConditionError
 from .coordinates import key_name
+from .expressions import listed
 
 #: What users pass for ``q0``, ``qd0``, a guess: by coordinate, in order, or nothing.
 #: A mapping's keys are coordinates (SymPy, which has no types) or their names; its key
@@ -84,7 +85,7 @@ def free_mask(fixed: Sequence[object] | None, names: Sequence[str]) -> np.ndarra
     [False, True]
     """
     free = np.ones(len(names), dtype=bool)
-    for key in fixed or ():
+    for key in listed(fixed or (), "fixed", "coordinates", InitialConditionError):
         name = key_name(key)
         if name not in names:
             raise InitialConditionError(f"fixed names {name!r}, which is not a coordinate")

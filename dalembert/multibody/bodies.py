@@ -38,6 +38,7 @@ from sympy.physics.vector import dynamicsymbols
 from ..errors import ModelError
 from ..model.constraints import Holonomic
 from ..model.coordinates import t
+from ..model.expressions import sympify_strict
 from .rotations import E_matrix, dot, rotation_matrix, times_vector
 from .types import ExprVector, FloatArray
 
@@ -50,7 +51,7 @@ def _vector(v: ExprVector, what: str) -> sp.Matrix:
         raise ModelError(f"{what} must be a 3-vector, got {v!r}") from exc
     if len(comps) != 3:
         raise ModelError(f"{what} must have 3 components, got {len(comps)}")
-    vals = [sp.sympify(c) for c in comps]
+    vals = [sympify_strict(c, what) for c in comps]
     # exact zeros (not Float(0.0)) so that their terms vanish from the equations
     return sp.Matrix([sp.S.Zero if v.is_zero else v for v in vals])
 
@@ -471,7 +472,18 @@ def _positive_mass(mass: float, name: str) -> float:
     return value
 
 
+#: Principal moments may miss the triangle inequality by this much (relative) before
+#: the inertia is refused: rounding of moments computed as sums, a flat plate's equality.
+TRIANGLE_RTOL = 1e-9
+#: Below this ratio of smallest to largest principal moment the spin about that axis
+#: has no digit left in the equations of motion (the KKT matrix is singular).
+INERTIA_RATIO_MIN = 1e-12
+
+
 def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
+    """The inertia tensor, checked: finite, symmetric, positive definite, well enough
+    conditioned to integrate, and the principal moments obeying the triangle
+    inequality (as every real mass distribution's do)."""
     try:
         I = np.asarray(inertia, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -483,14 +495,39 @@ def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
             f"the inertia of {name!r} must be a 3x3 tensor or 3 principal values, got shape "
             f"{I.shape}"
         )
-    if not np.all(np.isfinite(I)) or np.abs(I - I.T).max() > 1e-12 * max(np.abs(I).max(), 1):
-        raise ModelError(f"the inertia tensor of {name!r} must be finite and symmetric:\n{I}")
+    if not np.all(np.isfinite(I)):
+        raise ModelError(f"the inertia tensor of {name!r} must be finite:\n{I}")
+    asymmetry = np.abs(I - I.T)
+    if asymmetry.max() > 1e-12 * max(np.abs(I).max(), 1):
+        i, j = np.unravel_index(int(np.argmax(asymmetry)), I.shape)
+        raise ModelError(
+            f"the inertia tensor of {name!r} must be symmetric: I[{i}, {j}] = {I[i, j]:.6g} "
+            f"but I[{j}, {i}] = {I[j, i]:.6g}:\n{I}"
+        )
     eig = np.linalg.eigvalsh(I)
-    if eig[0] <= 1e-12 * max(eig[-1], 0.0) or eig[0] <= 0:
+    values = ", ".join(f"{e:.6g}" for e in eig)
+    if eig[0] <= 0:
         raise ModelError(
             f"the inertia tensor of {name!r} is not positive definite (principal values "
-            f"{', '.join(f'{e:.6g}' for e in eig)}); a rigid body needs inertia about every "
-            "axis (use a Particle for a point mass)"
+            f"{values}); a rigid body needs inertia about every axis (use a Particle for a "
+            "point mass)"
+        )
+    if eig[0] <= INERTIA_RATIO_MIN * eig[-1]:
+        raise ModelError(
+            f"the inertia tensor of {name!r} is nearly singular (principal values {values}): "
+            f"the smallest is {eig[0] / eig[-1]:.1e} of the largest, so the spin about that "
+            "axis has almost no inertia and the equations of motion cannot determine it "
+            "(ill-conditioned). Give that axis more inertia (for a thin rod a larger radius, "
+            "with a ratio above 1e-8, hardly changes its swinging), or model the body "
+            "without that rotation (two particles joined by a Distance joint)"
+        )
+    if eig[0] + eig[1] < eig[2] * (1 - TRIANGLE_RTOL):
+        raise ModelError(
+            f"the inertia tensor of {name!r} violates the triangle inequality: principal "
+            f"moments {values}, and {eig[0]:.6g} + {eig[1]:.6g} = {eig[0] + eig[1]:.6g} < "
+            f"{eig[2]:.6g}. No mass distribution has these moments (each is at most the sum "
+            "of the other two; equal for a flat plate): check the values, which are about "
+            "the mass center in the body frame"
         )
     return I
 

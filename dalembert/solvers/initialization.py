@@ -12,7 +12,8 @@ from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
 from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error, sparse_constraint_rank
 from ..options import RedundantConstraints, VelocityProjection
-from .kkt import check_kkt, solve_kkt
+from .initial_checks import check_finite, check_kinetic_energy, check_resolvable
+from .kkt import SINGULAR_COND, check_kkt, solve_kkt
 from .projection import StepProjector, project_positions, project_velocities
 from .sparse_kkt import DENSE_MAX, kkt_condition, kkt_solver, matvec
 
@@ -117,6 +118,7 @@ def consistent_state(
     redundant_constraints: RedundantConstraints = "minimum-norm",
     velocity_projection: VelocityProjection = "kinetic-energy",
     driven: bool = False,
+    kinetic_energy: bool = True,
 ) -> InitializationReport:
     """Project ``(q0, qd0)`` onto the constraints and check the KKT matrix there.
 
@@ -131,18 +133,31 @@ def consistent_state(
     with ``redundant_constraints="error"``; with ``"minimum-norm"`` they are
     recorded in the report (``report.rank``). Constraints that leave no degree of
     freedom raise, unless they are ``driven`` (some depend on time: a prescribed
-    motion, whose multipliers are the driving forces).
+    motion, whose multipliers are the driving forces). The checks of
+    :mod:`.initial_checks` run too: finite model values (where the projections use
+    them, and at the end), constraints the projection can resolve, and, with
+    ``kinetic_energy`` (``M`` comes from a kinetic energy, not from a Lagrangian that
+    may be indefinite), ``T >= 0``.
     """
     free = free_mask(fixed, names)
+    row_names = constraint_labels if constraint_names is None else constraint_names
+    check_finite(num, t0, q0, None, names, row_names, "at the initial positions given")
     # Large models with every coordinate free are projected with the sparse solver.
     sparse = StepProjector(num) if num.m > DENSE_MAX and free.all() else None
     rank = None
     try:
         q = _project_positions(num, t0, q0, free, sparse)
+    except (np.linalg.LinAlgError, InitialConditionError) as exc:
+        raise _not_consistent(exc, names, free) from exc
+    check_finite(num, t0, q, qd0, names, row_names, "at the initial state")
+    try:
         if num.m:
             rank = _rank_at(num, t0, q, names, constraint_labels, constraint_names,
                             redundant_constraints, driven)
         kept = None if rank is None else rank.kept
+        check_resolvable(num, t0, q, constraint_labels)
+        if kinetic_energy:
+            check_kinetic_energy(num, t0, q, qd0, names, kept)
         _check_kkt_at(num, t0, q, qd0, kept, names)  # before the impact's KKT solve
         impulse, lost = None, 0.0
         if velocity_projection == "kinetic-energy":
@@ -151,19 +166,25 @@ def consistent_state(
             if kept is not None:
                 sparse = None  # the sparse velocity projection needs independent rows
             qd = _project_velocities(num, t0, q, qd0, free, sparse)
-    except np.linalg.LinAlgError as exc:
-        raise InitialConditionError(f"could not project the initial state: {exc}") from exc
-    except InitialConditionError as exc:
-        held = [n for n, f in zip(names, free) if not f]
-        hint = f" with {', '.join(held)} held fixed" if held else ""
-        raise InitialConditionError(
-            f"the initial conditions cannot be made consistent{hint}: {exc}. "
-            "Start closer to a configuration that satisfies the constraints"
-            + ("; or fix fewer coordinates" if held else "")
-        ) from exc
+    except (np.linalg.LinAlgError, InitialConditionError) as exc:
+        raise _not_consistent(exc, names, free) from exc
     _check_consistent(num, t0, q, qd, free, names)
+    check_finite(num, t0, q, qd, names, row_names, "at the consistent initial state")
     return InitializationReport(tuple(names), q0, qd0, q, qd, rank, velocity_projection,
                                 impulse, lost)
+
+
+def _not_consistent(exc: Exception, names: Sequence[str], free: np.ndarray) -> Exception:
+    """The error of a projection that failed: what was held fixed, what to do."""
+    if isinstance(exc, np.linalg.LinAlgError):
+        return InitialConditionError(f"could not project the initial state: {exc}")
+    held = [n for n, f in zip(names, free) if not f]
+    hint = f" with {', '.join(held)} held fixed" if held else ""
+    return InitialConditionError(
+        f"the initial conditions cannot be made consistent{hint}: {exc}. "
+        "Start closer to a configuration that satisfies the constraints"
+        + ("; or fix fewer coordinates" if held else "")
+    )
 
 
 def plastic_impact(
@@ -280,11 +301,21 @@ def _check_kkt_at(num: NumericModel, t0: float, q: np.ndarray, qd: np.ndarray,
         if solver.size > DENSE_CHECK_MAX:
             if cond < KKT_COND_LIMIT:
                 return
+            if cond >= SINGULAR_COND:
+                raise SingularSystemError(
+                    f"the KKT matrix [[M, A^T], [A, 0]] is singular at the initial state "
+                    f"(condition number estimate {cond:.1e}): the motion is not determined. "
+                    "Check the kinetic energy (a direction without inertia the constraints "
+                    "leave free) or add the missing constraint."
+                )
             raise SingularSystemError(
-                f"the KKT matrix [[M, A^T], [A, 0]] is singular at the initial state "
-                f"(condition number estimate {cond:.1e}): the motion is not determined. "
-                "Check the kinetic energy (a direction without inertia the constraints "
-                "leave free) or add the missing constraint."
+                f"the KKT matrix [[M, A^T], [A, 0]] is ill-conditioned at the initial state "
+                f"(condition number estimate {cond:.1e}, above the {KKT_COND_LIMIT:.0e} "
+                "trusted for large mechanisms): a direction with almost no inertia (the spin "
+                "of a thin rod about its own axis, a very light body among heavy ones) or "
+                "nearly dependent constraints. Give that direction more inertia (a thin rod: "
+                "a larger radius), model the rod without that rotation (two particles and a "
+                "Distance joint), or start away from a singular configuration."
             )
     M, A = num.pattern.dense_M(Mv), num.pattern.dense_A(Av)
     check_kkt(M, A if kept is None else A[kept], names, "at the initial state")

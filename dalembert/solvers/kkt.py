@@ -130,8 +130,29 @@ def _least_squares_kkt(M, f, A, c) -> tuple[np.ndarray, np.ndarray]:
     return x[:n], -x[n:]
 
 
+#: Condition numbers above this are singular to working precision (no digit is left);
+#: between ``1 / RANK_RTOL`` and this the KKT matrix is ill-conditioned, not singular.
+SINGULAR_COND = 1e14
+#: Below this ratio of smallest to largest inertia (on the motions the constraints
+#: allow) the ill-conditioning is blamed on the inertia (a thin rod's axial spin).
+INERTIA_SPREAD = 1e-8
+
+
 def check_kkt(M: np.ndarray, A: np.ndarray, coordinate_names: Sequence[str], when: str) -> None:
-    """Raise :class:`SingularSystemError` naming the coordinates of a singular KKT matrix."""
+    """Raise :class:`SingularSystemError` naming the coordinates of a singular KKT matrix.
+
+    A matrix singular to working precision gets "no inertia in a direction the
+    constraints leave free"; one that is only ill-conditioned (a condition number
+    between ``1 / RANK_RTOL`` and :data:`SINGULAR_COND`) gets its cause: a direction
+    with almost no inertia (a thin rod's spin about its axis) or nearly dependent
+    constraints, and what to do about it.
+
+    >>> check_kkt(np.diag([1.0, 1e-12]), np.zeros((0, 2)), ("x", "y"), "here")
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    dalembert.errors.SingularSystemError: the KKT matrix ... is ill-conditioned here ...
+    """
     K = kkt_matrix(M, A)
     if not np.all(np.isfinite(K)):
         raise SingularSystemError(f"the mass or constraint matrix is not finite {when}")
@@ -141,9 +162,41 @@ def check_kkt(M: np.ndarray, A: np.ndarray, coordinate_names: Sequence[str], whe
     _, s, vt = np.linalg.svd(K)
     null = vt[-1, : len(coordinate_names)]
     involved = [n for n, v in zip(coordinate_names, null) if abs(v) > 0.1 * np.abs(null).max()]
+    motion = ", ".join(involved) or "the system"
+    cond = s[0] / max(s[-1], 1e-300)
+    if cond >= SINGULAR_COND:
+        raise SingularSystemError(
+            f"the KKT matrix [[M, A^T], [A, 0]] is singular {when} (condition number "
+            f"{cond:.1e}): the motion of {motion} is not determined. The mass matrix has no "
+            "inertia in a direction the constraints leave free; check the kinetic energy or "
+            "add the missing constraint."
+        )
     raise SingularSystemError(
-        f"the KKT matrix [[M, A^T], [A, 0]] is singular {when} (condition number "
-        f"{s[0] / max(s[-1], 1e-300):.1e}): the motion of {', '.join(involved) or 'the system'} "
-        "is not determined. The mass matrix has no inertia in a direction the constraints "
-        "leave free; check the kinetic energy or add the missing constraint."
+        f"the KKT matrix [[M, A^T], [A, 0]] is ill-conditioned {when} (condition number "
+        f"{cond:.1e}, above the {1 / RANK_RTOL:.0e} the solver trusts): the motion of "
+        f"{motion} would be determined to only about {max(0, 16 - np.log10(cond)):.0f} "
+        f"digits. {_ill_conditioning_cause(M, A)}"
+    )
+
+
+def _ill_conditioning_cause(M: np.ndarray, A: np.ndarray) -> str:
+    """Why the KKT matrix is nearly singular: the inertia or the constraints."""
+    Z = scipy.linalg.null_space(A) if A.shape[0] else np.eye(M.shape[0])
+    inertia = np.linalg.eigvalsh(Z.T @ M @ Z) if Z.shape[1] else np.ones(1)
+    spread = inertia[0] / inertia[-1] if inertia[-1] > 0 else 0.0
+    if spread < INERTIA_SPREAD:
+        return (
+            f"The inertia on the motions the constraints allow spans a ratio of {spread:.1e} "
+            "(smallest to largest): a direction with almost no inertia, such as the spin of "
+            "a thin rod or disk about its own axis, or a very light body among heavy ones. "
+            f"Give that direction more inertia (a ratio above {INERTIA_SPREAD:.0e}: for a "
+            "thin rod a larger radius, which hardly changes its swinging), model the rod "
+            "without that rotation (two particles and a Distance joint), or rescale the units"
+        )
+    sv = np.linalg.svd(A, compute_uv=False) if A.shape[0] else np.ones(1)
+    return (
+        f"The constraints are nearly dependent (the smallest singular value of A is "
+        f"{sv[-1] / sv[0]:.1e} of the largest): a configuration near a singular one (a "
+        "linkage almost straight or flat), or constraints of very different scales. Start "
+        "away from it, or rescale the constraints to similar sizes"
     )

@@ -21,6 +21,7 @@ from ..errors import (
     TooManyConstraintsError,
 )
 from ..model.coordinates import key_name
+from ..model.expressions import sympify_strict
 
 
 def read_problem(
@@ -50,7 +51,7 @@ def check_variables(variables: object) -> tuple[sp.Basic, ...]:
     """The variables as SymPy symbols or functions of time, with distinct names."""
     single = isinstance(variables, sp.Basic)
     items = [variables] if single else list(variables)  # type: ignore[call-overload]
-    found = tuple(sp.sympify(v) for v in items)
+    found = tuple(sympify_strict(v, f"variable {k}") for k, v in enumerate(items))
     if not found:
         raise ModelError("no variables given; pass a list of SymPy symbols")
     for v in found:
@@ -66,7 +67,7 @@ def check_variables(variables: object) -> tuple[sp.Basic, ...]:
 
 
 def _objective_expression(phi: object) -> sp.Expr:
-    expr = sp.sympify(phi)
+    expr = sympify_strict(phi, "the function to extremize")
     if not isinstance(expr, sp.Expr):
         raise ModelError(f"the function to extremize must be a SymPy expression, got {phi!r}")
     return expr
@@ -79,7 +80,7 @@ def _constraint_expressions(constraints: object) -> tuple[sp.Expr, ...]:
 
 
 def _as_expression(constraint: object, index: int) -> sp.Expr:
-    c = sp.sympify(constraint)
+    c = sympify_strict(constraint, f"constraint {index}")
     if isinstance(c, BooleanAtom):
         raise ConstraintError(f"constraint {index} is identically {c}; remove it")
     if isinstance(c, sp.Equality):

@@ -15,6 +15,7 @@ import numpy as np
 import sympy as sp
 from numpy.typing import NDArray
 
+from ..codegen.numpy_printer import generate_function
 from ..model.coordinates import key_name
 from .inputs import (
     check_constraints_depend,
@@ -61,7 +62,7 @@ def prepare(
     """
     originals, objective, psi = read_problem(phi, constraints, variables)
     names = tuple(key_name(v) for v in originals)
-    # Functions of time become plain symbols: faster to differentiate and lambdify.
+    # Functions of time become plain symbols: faster to differentiate and to print.
     unknowns = tuple(
         v if isinstance(v, sp.Symbol) else sp.Dummy(n)
         for v, n in zip(originals, names, strict=True)
@@ -96,20 +97,22 @@ def _compile(
     residual = sp.Matrix([*(sp.diff(augmented, u) for u in unknowns), *psi])
     args = [*unknowns, *multipliers]
     matrix = residual.jacobian(args)
-    both = sp.lambdify(args, [residual, matrix], modules="numpy", cse=True)
-    value = sp.lambdify(list(unknowns), objective, modules="numpy", cse=True)
+    # generate_function, not lambdify: it never prints a user's symbol names into code
+    both = generate_function("kkt", [("z", args)], [("r", residual), ("K", matrix)],
+                             vectors={"r"})
+    value = generate_function("objective", [("x", unknowns)], [("phi", sp.Matrix([objective]))])
     size = len(args)
 
     def kkt(z: Array) -> tuple[Array, Array]:
         with np.errstate(all="ignore"):
-            r, k = both(*z)
+            r, k = both(np.asarray(z, dtype=float))
         return np.asarray(r, dtype=float).reshape(size), np.asarray(k, dtype=float).reshape(
             size, size
         )
 
     def objective_at(x: Array) -> float:
         with np.errstate(all="ignore"):
-            return float(value(*x))
+            return float(value(np.asarray(x, dtype=float))[0][0])
 
     return tuple(residual), kkt, objective_at
 
