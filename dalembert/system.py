@@ -117,9 +117,9 @@ class System:
         potential: object = None,
         lagrangian: object = None,
         constraints: object = (),
-        generalized_forces: Mapping[object, object] | Sequence[object] | None = None,
+        generalized_forces: Mapping[Any, object] | Sequence[object] | None = None,
         forces: Sequence[PointForce] = (),
-        parameters: Mapping[object, object] | None = None,
+        parameters: Mapping[Any, object] | None = None,
         velocities: Sequence[object] | None = None,
         name: str = "system",
         redundant_constraints: RedundantConstraints = "minimum-norm",
@@ -142,7 +142,7 @@ class System:
         cls,
         method: Any,
         *,
-        parameters: Mapping[object, object] | None = None,
+        parameters: Mapping[Any, object] | None = None,
         name: str = "system",
         redundant_constraints: RedundantConstraints = "minimum-norm",
     ) -> System:
@@ -246,7 +246,7 @@ class System:
         # Looked up on the module so that tests (and profilers) can wrap it.
         return codegen.compile_equations(self._equations)
 
-    def numeric(self, parameters: Mapping[object, object] | None = None) -> NumericModel:
+    def numeric(self, parameters: Mapping[Any, object] | None = None) -> NumericModel:
         """The compiled equations bound to parameter values."""
         p = resolve_parameters(self.parameters, self.parameter_values, parameters)
         return self.compiled.bind(p)
@@ -254,7 +254,7 @@ class System:
     # -- the dynamics at one state ---------------------------------------------------
     def accelerations(
         self, t: float, q: CoordinateValues, qd: CoordinateValues | None = None, *,
-        parameters: Mapping[object, object] | None = None,
+        parameters: Mapping[Any, object] | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """``qdd`` and the multipliers ``lambda`` at one state, from the KKT system.
 
@@ -289,7 +289,7 @@ class System:
 
     def inverse_dynamics(
         self, t: float, q: CoordinateValues, qd: CoordinateValues | None,
-        qdd: CoordinateValues, *, parameters: Mapping[object, object] | None = None,
+        qdd: CoordinateValues, *, parameters: Mapping[Any, object] | None = None,
     ) -> InverseDynamics:
         """The generalized forces a given motion needs at one instant.
 
@@ -351,7 +351,7 @@ class System:
         *,
         t0: float = 0.0,
         fixed: Sequence[object] | None = None,
-        parameters: Mapping[object, object] | None = None,
+        parameters: Mapping[Any, object] | None = None,
         redundant_constraints: RedundantConstraints | None = None,
         velocity_projection: VelocityProjection = "kinetic-energy",
     ) -> InitializationReport:
@@ -433,7 +433,7 @@ class System:
         step_control: StepController = "PI",
         stabilization: Literal["projection", "baumgarte"] | None = "projection",
         baumgarte_gain: float | None = None,
-        parameters: Mapping[object, object] | None = None,
+        parameters: Mapping[Any, object] | None = None,
         fixed: Sequence[object] | None = None,
         events: Sequence[Callable] = (),
         dense_output: bool = False,
@@ -535,7 +535,7 @@ class System:
         q0: CoordinateValues,
         qd0: CoordinateValues | None = None,
         *,
-        parameters: Mapping[object, object] | None = None,
+        parameters: Mapping[Any, object] | None = None,
         fixed: Sequence[object] | None = None,
         **options: Any,
     ) -> SimulationPlan:
@@ -571,7 +571,7 @@ class System:
         return self._plan(checked, q0, qd0, parameters, fixed)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,
-              qd0: CoordinateValues | None, parameters: Mapping[object, object] | None,
+              qd0: CoordinateValues | None, parameters: Mapping[Any, object] | None,
               fixed: Sequence[object] | None) -> SimulationPlan:
         num = self.numeric(parameters)
         report = self._initial_state(num, q0, qd0, options.t_span[0], fixed,
@@ -682,6 +682,7 @@ class System:
             jacobi_integral=energies[:, 2], coordinate_names=self.coordinate_names,
             constraint_names=self.constraint_names, status=result.status,
             message=result.message, stats=result.stats, initialization=str(plan.initial),
+            parameters={s.name: float(v) for s, v in zip(self.parameters, plan.parameters)},
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
         )
 

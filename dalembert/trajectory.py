@@ -52,6 +52,8 @@ class Trajectory:
         Evaluations, steps, projections.
     initialization
         What making the initial state consistent changed.
+    parameters
+        The parameter values the run used, by name.
     t_events, y_events
         Event times and states, one array per event function.
     sol
@@ -85,6 +87,7 @@ class Trajectory:
     message: str = ""
     stats: dict[str, Any] = field(default_factory=dict)
     initialization: str = ""
+    parameters: dict[str, float] = field(default_factory=dict)
     t_events: list[np.ndarray] = field(default_factory=list)
     y_events: list[np.ndarray] = field(default_factory=list)
     sol: Any = None
@@ -189,7 +192,8 @@ class Trajectory:
         meta = {"coordinate_names": list(self.coordinate_names),
                 "constraint_names": list(self.constraint_names), "status": self.status,
                 "message": self.message, "stats": self.stats,
-                "initialization": self.initialization}
+                "initialization": self.initialization,
+                "parameters": {k: float(v) for k, v in self.parameters.items()}}
         arrays = {name: getattr(self, name) for name in trajectory_file.ARRAYS}
         arrays.update({f"t_events_{k}": v for k, v in enumerate(self.t_events)})
         arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})

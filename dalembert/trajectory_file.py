@@ -49,7 +49,9 @@ STATUSES = ("finished", "event", "failed", "interrupted")
 #: The metadata fields and their JSON types.
 METADATA: dict[str, type] = {"coordinate_names": list, "constraint_names": list,
                              "status": str, "message": str, "stats": dict,
-                             "initialization": str}
+                             "initialization": str, "parameters": dict}
+#: Fields a file of an earlier version may lack, and their value then.
+OPTIONAL = {"parameters": dict}
 #: By default a file may read to at most this many times its size ...
 MAX_EXPANSION = 16
 #: ... or this many bytes, whichever is more.
@@ -297,6 +299,8 @@ def _metadata(meta: np.ndarray, path: Path) -> dict[str, Any]:
     for name in fields:
         if name not in METADATA:
             raise bad(f"the field {name!r}", f"is unknown (the fields are {', '.join(METADATA)})")
+    for name, make in OPTIONAL.items():
+        fields.setdefault(name, make())
     for name, kind in METADATA.items():
         if name not in fields:
             raise bad(f"the field {name!r}", "is missing")
@@ -310,7 +314,8 @@ def _metadata(meta: np.ndarray, path: Path) -> dict[str, Any]:
     if fields["status"] not in STATUSES:
         raise bad("the field 'status'", f"is {fields['status']!r}; a trajectory's status is one "
                   f"of {', '.join(map(repr, STATUSES))}")
-    for key, value in fields["stats"].items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise bad("the field 'stats'", f"has {key!r}: {value!r}, not a number")
+    for name in ("stats", "parameters"):
+        for key, value in fields[name].items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise bad(f"the field {name!r}", f"has {key!r}: {value!r}, not a number")
     return fields

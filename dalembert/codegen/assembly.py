@@ -41,18 +41,34 @@ class Part:
     """Local equations placed ``K`` times in a global model.
 
     ``coordinates[k, i]`` is the global index of local coordinate ``i`` in instance
-    ``k``; ``rows[k, r]`` the global constraint row of local row ``r``.
+    ``k``; ``rows[k, r]`` the global constraint row of local row ``r``. The kernel's
+    parameters are ``parameters`` (local symbols of the part's equations) and
+    ``values[k, j]`` is parameter ``j``'s value in instance ``k``: an expression of the
+    model's parameters (``m``, ``2 * l``), so that pieces that differ only in their
+    parameter values share one kernel. By default the part's parameters are the
+    model's own, the same in every instance.
     """
 
     equations: Equations
     coordinates: np.ndarray
     rows: np.ndarray
+    parameters: tuple[sp.Symbol, ...] | None = None
+    values: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         model = self.equations.model
         K = len(self.coordinates)
         object.__setattr__(self, "coordinates", _index_array(self.coordinates, K, model.coords.n))
         object.__setattr__(self, "rows", _index_array(self.rows, K, model.constraints.m))
+        if self.parameters is None:
+            object.__setattr__(self, "parameters", tuple(model.parameters))
+        symbols = tuple(self.parameters or ())
+        values = np.empty((K, len(symbols)), dtype=object)
+        if self.values is None:
+            values[:] = symbols
+        else:
+            values[:] = np.asarray(self.values, dtype=object).reshape(K, len(symbols))
+        object.__setattr__(self, "values", values)
 
     @property
     def instances(self) -> int:
@@ -63,6 +79,60 @@ def _index_array(values: object, K: int, width: int) -> np.ndarray:
     return np.asarray(values, dtype=np.intp).reshape(K, width)
 
 
+@dataclass(frozen=True)
+class ParameterLayout:
+    """Where every part instance finds its parameter values.
+
+    The parameter vector the kernels read is ``[the model's parameters, derived
+    values]``: an instance value that is one of the model's parameters is read in
+    place, any other expression (``2 * l``) gets a slot of its own after them,
+    computed when values are bound (:meth:`expand`), never compiled.
+    """
+
+    parameters: tuple[sp.Symbol, ...]
+    derived: tuple[sp.Expr, ...]
+    index: tuple[np.ndarray, ...]  # per part, (K, its parameters): places in the vector
+
+    @classmethod
+    def of(cls, parts: Sequence[Part], parameters: Sequence[sp.Symbol]) -> ParameterLayout:
+        place = {s: k for k, s in enumerate(parameters)}
+        derived: dict[sp.Expr, int] = {}
+        index = []
+        for part in parts:
+            values = part.values if part.values is not None else np.empty((part.instances, 0))
+            at = np.empty(values.shape, dtype=np.intp)
+            for kj, value in np.ndenumerate(values):
+                expr = sp.sympify(value)
+                missing = expr.free_symbols - set(parameters)
+                if missing:
+                    names = ", ".join(sorted(str(s) for s in missing))
+                    raise ValueError(f"a part's parameter value {expr} uses {names}, which "
+                                     "is not among the model's parameters")
+                if expr in place:
+                    at[kj] = place[expr]
+                else:
+                    at[kj] = len(parameters) + derived.setdefault(expr, len(derived))
+            index.append(at)
+        return cls(tuple(parameters), tuple(derived), tuple(index))
+
+    @property
+    def size(self) -> int:
+        return len(self.parameters) + len(self.derived)
+
+    def expand(self, p: np.ndarray) -> np.ndarray:
+        """The kernels' parameter vector from the model's parameter values ``p``."""
+        p = np.asarray(p, dtype=float)
+        if not self.derived:
+            return p
+        return np.concatenate([p, _evaluate(self.parameters, self.derived, p)])
+
+
+def _evaluate(symbols: tuple[sp.Symbol, ...], exprs: tuple[sp.Expr, ...],
+              p: np.ndarray) -> np.ndarray:
+    values = dict(zip(symbols, map(float, p)))
+    return np.array([float(e.xreplace(values)) for e in exprs], dtype=float)
+
+
 def compile_parts(
     parts: Sequence[Part], n: int, m: int, parameters: Sequence[sp.Symbol] = (),
     backend: str | None = None,
@@ -70,27 +140,31 @@ def compile_parts(
     """The numeric functions of the model made of ``parts`` (``n`` coordinates, ``m`` rows).
 
     Every coordinate index and constraint row must be in range and every row
-    covered exactly once. ``parameters`` are the global parameter symbols, passed to
-    every part. The static function (:mod:`.static`) is generated from the same parts
+    covered exactly once. ``parameters`` are the model's parameter symbols, in which
+    the parts' parameter values are written (:class:`Part`); the compiled functions
+    take the vector :meth:`ParameterLayout.expand` makes of their values (``bind``
+    does it). The static function (:mod:`.static`) is generated from the same parts
     when statics first asks for it.
     """
     _check_rows(parts, m)
     holonomic = _holonomic_rows(parts)
     pattern = _pattern(parts, n, m)
     layout = _Layout(pattern, holonomic)
+    values = ParameterLayout.of(parts, parameters)
     kinds: dict[str, tuple[list, list]] = {kind: ([], []) for kind in _KINDS}
     for g, part in enumerate(parts):
         for kind, exprs, target in _outputs(part, layout):
-            kinds[kind][0].append((f"{kind}_{g}", _arguments(part, kind, parameters), exprs))
+            kinds[kind][0].append((f"{kind}_{g}", _arguments(part, kind), exprs))
             kinds[kind][1].append(target)
     sizes = layout.sizes(n, m)
     use = c_backend.backend() if backend is None else backend
     functions = _evaluators([(k, *kinds[k], sizes[k], k in _STATE) for k in _KINDS], parts,
-                            n, len(parameters), use)
+                            values, n, use)
     used = "numpy" if isinstance(functions[0], _NumpyEvaluator) else "c"
     kkt, velocity, position, energy = functions
     return CompiledEquations(kkt, velocity, position, energy, pattern, tuple(holonomic), used,
-                             partial(compile_static_parts, parts, n, m, parameters, used))
+                             partial(compile_static_parts, parts, n, m, parameters, used),
+                             values.expand)
 
 
 def compile_static_parts(parts: Sequence[Part], n: int, m: int,
@@ -123,10 +197,10 @@ def compile_static_parts(parts: Sequence[Part], n: int, m: int,
         groups = (entries.stiffness, entries.curvature, entries.damping, entries.rest)
         exprs = [e for group in groups for e in group.values()]
         at = [offsets[c] + np.searchsorted(unique[c], keys[c][g]) for c in range(4)]
-        specs.append((f"static_{g}", _arguments(part, "static", parameters), exprs))
+        specs.append((f"static_{g}", _arguments(part, "static"), exprs))
         targets.append(np.concatenate(at, axis=1).reshape(-1))
     (values,) = _evaluators([("static_values", specs, targets, int(offsets[-1]), False)],
-                            parts, n, len(parameters), use)
+                            parts, ParameterLayout.of(parts, parameters), n, use)
     rest_rows = sorted(int(r) for part, entries in zip(parts, local)
                        for k in entries.rest_rows for r in part.rows[:, k])
     pattern = StaticPattern(
@@ -147,18 +221,20 @@ def _keys(columns: list[np.ndarray], K: int) -> np.ndarray:
 
 
 def _evaluators(kinds: Sequence[tuple[str, list, list, int, bool]], parts: Sequence[Part],
-                n: int, n_parameters: int, use: str) -> list[Callable]:
+                values: ParameterLayout, n: int, use: str) -> list[Callable]:
     """One evaluator per kind ``(name, specs, targets, size, takes_qd)``: a driver of one
-    compiled library when ``use`` is ``"c"`` (NumPy, with a warning, if that fails)."""
-    indices = [part.coordinates for part in parts]
+    compiled library when ``use`` is ``"c"`` (NumPy, with a warning, if that fails).
+    Each instance's index row holds its coordinates' places, then its parameters'."""
+    indices = [np.hstack([part.coordinates, at]) for part, at in zip(parts, values.index)]
     if use == "c":
         try:
-            lib = c_backend.scatter_library([(k, specs) for k, specs, *_ in kinds], {"q", "qd"})
-            return [_CEvaluator(getattr(lib, k), (n, n_parameters, size), indices, targets,
+            lib = c_backend.scatter_library([(k, specs) for k, specs, *_ in kinds],
+                                            [("q", "qd"), ("p",)])
+            return [_CEvaluator(getattr(lib, k), (n, values.size, size), indices, targets,
                                 takes_qd, lib) for k, _, targets, size, takes_qd in kinds]
         except c_backend.CompileError as exc:
             c_backend.warn_unavailable(c_backend.MODEL_CODE, exc)
-    return [_numpy_evaluator(specs, indices, targets, size)
+    return [_numpy_evaluator(specs, parts, values.index, targets, size)
             for _, specs, targets, size, _ in kinds]
 
 
@@ -231,13 +307,14 @@ def _columns(targets: list[np.ndarray], K: int) -> np.ndarray:
     return np.stack(targets, axis=1).reshape(-1)
 
 
-def _arguments(part: Part, kind: str, parameters: Sequence[sp.Symbol]) -> list:
-    """The kernel's arguments: ``(t, q, [qd,] p)``, ``qd`` for the kinds of the state."""
+def _arguments(part: Part, kind: str) -> list:
+    """The kernel's arguments: ``(t, q, [qd,] p)``, ``qd`` for the kinds of the state,
+    ``p`` the part's own parameters."""
     coords = part.equations.model.coords
     state = [("t", [t]), ("q", coords.q)]
     if kind in _STATE:
         state.append(("qd", coords.qd))
-    return [*state, ("p", list(parameters))]
+    return [*state, ("p", list(part.parameters or ()))]
 
 
 class _CEvaluator:
@@ -288,25 +365,28 @@ class _CEvaluator:
 class _NumpyEvaluator:
     """The same sums with NumPy kernels called instance by instance (no C compiler)."""
 
-    def __init__(self, kernels: list, indices: list[np.ndarray], targets: list[np.ndarray],
+    def __init__(self, kernels: list, coordinates: list[np.ndarray],
+                 parameters: Sequence[np.ndarray], targets: list[np.ndarray],
                  size: int) -> None:
-        self._kernels, self._indices, self._size = kernels, indices, size
+        self._kernels, self._size = kernels, size
+        self._rows = list(zip(coordinates, parameters))
         self._where = np.concatenate(targets) if targets else np.zeros(0, dtype=np.intp)
 
     def __call__(self, time, q, *rest):
         *qd, p = rest
         outputs = []
-        for kernel, idx in zip(self._kernels, self._indices):
-            for row in idx:
-                outputs.append(kernel(time, q[row], *(v[row] for v in qd), p))
+        for kernel, (idx, at) in zip(self._kernels, self._rows):
+            for row, where in zip(idx, at):
+                outputs.append(kernel(time, q[row], *(v[row] for v in qd), p[where]))
         weights = np.concatenate(outputs) if outputs else np.zeros(0)
         return np.bincount(self._where, weights=weights, minlength=self._size)
 
 
-def _numpy_evaluator(specs: list, indices: list[np.ndarray], targets: list[np.ndarray],
-                     size: int) -> _NumpyEvaluator:
+def _numpy_evaluator(specs: list, parts: Sequence[Part], parameters: Sequence[np.ndarray],
+                     targets: list[np.ndarray], size: int) -> _NumpyEvaluator:
     kernels = c_backend.build_flat_functions(specs, use="numpy")
-    return _NumpyEvaluator(kernels, indices, targets, size)
+    return _NumpyEvaluator(kernels, [part.coordinates for part in parts], parameters,
+                           targets, size)
 
 
 def _pattern(parts: Sequence[Part], n: int, m: int) -> SparsePattern:

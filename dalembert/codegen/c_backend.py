@@ -55,7 +55,7 @@ import os
 import shutil
 import subprocess
 import warnings
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -76,8 +76,9 @@ FlatSpec = tuple[str, Arguments, Sequence[sp.Expr]]
 
 #: Bumped whenever the generated C changes, so that stale cached libraries are not used
 #: (4: every library ends with the cache's probe function and has a digest record;
-#: 5: a small power printed as a parenthesized product, right after "/" too).
-GENERATOR_VERSION = "5"
+#: 5: a small power printed as a parenthesized product, right after "/" too;
+#: 6: part kernels gather their parameters as they gather their coordinates).
+GENERATOR_VERSION = "6"
 CFLAGS = ("-O0", "-fPIC", "-shared", "-fno-math-errno")
 #: Kernels of one part (a body, a joint) are short, so optimizing them costs little.
 PART_CFLAGS = ("-O1", *CFLAGS[1:])
@@ -194,7 +195,7 @@ def _c_functions(specs: Sequence[FlatSpec]) -> list[Callable]:
 
 
 def scatter_library(kinds: Sequence[tuple[str, Sequence[FlatSpec]]],
-                    gathered: Collection[str]) -> ctypes.CDLL:
+                    gathered: Sequence[Sequence[str]]) -> ctypes.CDLL:
     """Compile (or load from the cache) one driver per kind that sums many kernels.
 
     Each spec describes one part of a model in its local variables. For kind
@@ -206,16 +207,20 @@ def scatter_library(kinds: Sequence[tuple[str, Sequence[FlatSpec]]],
     which, for each spec ``g`` and each of its ``K[g]`` instances ``k``, reads the
     ``gathered`` arguments at the global positions ``index[g][k, :]``, evaluates
     the spec's expressions and adds value ``e`` into ``out[target[g][k, e]]``
-    (``out`` is not cleared). The other arguments are passed through whole. Each
-    spec's kernel is a static function under the spec's name (names must differ
-    from each other and from the kinds). Raises :class:`CompileError` when C is
-    unavailable.
+    (``out`` is not cleared). ``gathered`` lists groups of argument names: the
+    groups take consecutive columns of an index row, in order, and the arguments of
+    one group share theirs (``[("q", "qd"), ("p",)]``: a row holds the positions of
+    the part's coordinates, which index both ``q`` and ``qd``, then those of its
+    parameters). The other arguments are passed through whole. Each spec's kernel is a
+    static function under the spec's name (names must differ from each other and
+    from the kinds). Raises :class:`CompileError` when C is unavailable.
     """
-    gathered = frozenset(gathered)
+    groups = tuple(tuple(group) for group in gathered)
     every = [s for _, specs in kinds for s in specs]
-    variant = "scatter:" + ",".join(sorted(gathered)) + ":" + ",".join(k for k, _ in kinds)
+    variant = ("scatter:" + "|".join(",".join(g) for g in groups) + ":"
+               + ",".join(k for k, _ in kinds))
     return _library(every, variant, lambda: [
-        _scatter_source(kind, specs, gathered) for kind, specs in kinds], PART_CFLAGS)
+        _scatter_source(kind, specs, groups) for kind, specs in kinds], PART_CFLAGS)
 
 
 def source_library(source: str, flags: Sequence[str] = SOURCE_CFLAGS) -> ctypes.CDLL:
@@ -329,7 +334,8 @@ def _c_body(arguments: Arguments, exprs: Sequence[sp.Expr]) -> list[str]:
     return lines
 
 
-def _scatter_source(kind: str, specs: Sequence[FlatSpec], gathered: frozenset[str]) -> str:
+def _scatter_source(kind: str, specs: Sequence[FlatSpec],
+                    gathered: tuple[tuple[str, ...], ...]) -> str:
     """The kernels of one kind (gather, evaluate, add) and their driver ``kind``."""
     kernels, calls = [], []
     for g, (name, arguments, exprs) in enumerate(specs):
@@ -346,20 +352,28 @@ def _scatter_source(kind: str, specs: Sequence[FlatSpec], gathered: frozenset[st
 
 
 def _scatter_kernel(name: str, arguments: Arguments, exprs: Sequence[sp.Expr],
-                    gathered: frozenset[str]) -> str:
-    width = max((len(s) for arg, s in arguments if arg in gathered), default=0)
+                    gathered: tuple[tuple[str, ...], ...]) -> str:
+    sizes = dict(arguments)
+    offset: dict[str, int] = {}  # the first column of each gathered argument
+    width = 0
+    for group in gathered:
+        present = [arg for arg in group if arg in sizes]
+        for arg in present:
+            offset[arg] = width
+        width += max((len(sizes[arg]) for arg in present), default=0)
     size = len(exprs)
     params = ", ".join(["int64_t K", "const int64_t *index", "const int64_t *target",
-                        *(f"const double *{arg}_all" if arg in gathered
+                        *(f"const double *{arg}_all" if arg in offset
                           else f"const double *{arg}" for arg, _ in arguments),
                         "double *out_all"])
     lines = [f"static void {name}({params}) {{", "  for (int64_t k = 0; k < K; ++k) {",
              f"    const int64_t *at = index + k * {width};",
              f"    double out[{size}];"]
     for arg, symbols in arguments:
-        if arg in gathered and symbols:
+        if arg in offset and symbols:
             lines += [f"    double {arg}[{len(symbols)}];",
-                      f"    for (int i = 0; i < {len(symbols)}; ++i) {arg}[i] = {arg}_all[at[i]];"]
+                      f"    for (int i = 0; i < {len(symbols)}; ++i) "
+                      f"{arg}[i] = {arg}_all[at[{offset[arg]} + i]];"]
     lines += ["  " + line for line in _c_body(arguments, exprs)]
     lines += [f"    const int64_t *to = target + k * {size};",
               f"    for (int e = 0; e < {size}; ++e) out_all[to[e]] += out[e];", "  }", "}"]

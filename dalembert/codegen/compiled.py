@@ -89,6 +89,10 @@ class CompiledEquations:
     backend: str = "numpy"
     #: Generates the static function (:mod:`.static`) when statics first asks for it.
     static_builder: Callable[[], StaticFunctions] | None = field(default=None, repr=False)
+    #: The functions' parameter vector from the model's parameter values (a model
+    #: assembled from parts appends values derived from them; default: as given).
+    expand_parameters: Callable[[np.ndarray], np.ndarray] | None = field(default=None,
+                                                                         repr=False)
 
     @cached_property
     def static(self) -> StaticFunctions:
@@ -124,7 +128,10 @@ class CompiledEquations:
         return self.pattern.dense_A(values[:k]), values[k:]
 
     def bind(self, p: np.ndarray) -> NumericModel:
-        return NumericModel(self, np.asarray(p, dtype=float))
+        """The functions bound to the model's parameter values ``p``."""
+        p = np.asarray(p, dtype=float)
+        return NumericModel(self, p if self.expand_parameters is None
+                            else self.expand_parameters(p))
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 import sympy as sp
 
@@ -47,7 +47,7 @@ class PointForce:
 
 
 def generalized_forces(
-    per_coordinate: Mapping[object, object] | Sequence[object] | None,
+    per_coordinate: Mapping[Any, object] | Sequence[object] | None,
     point_forces: Sequence[PointForce],
     coords: Coordinates,
 ) -> sp.Matrix:
@@ -61,7 +61,7 @@ def generalized_forces(
 
 
 def _per_coordinate_forces(
-    given: Mapping[object, object] | Sequence[object] | None, coords: Coordinates
+    given: Mapping[Any, object] | Sequence[object] | None, coords: Coordinates
 ) -> sp.Matrix:
     Q = sp.zeros(coords.n, 1)
     if given is None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 import sympy as sp
 
@@ -44,7 +44,7 @@ def build_model(
     potential: object = None,
     lagrangian: object = None,
     constraints: object = (),
-    generalized_forces: Mapping[object, object] | Sequence[object] | None = None,
+    generalized_forces: Mapping[Any, object] | Sequence[object] | None = None,
     forces: Sequence[PointForce] = (),
     velocities: Sequence[object] | None = None,
     name: str = "system",
@@ -71,7 +71,7 @@ def build_part_model(
     kinetic: object = 0,
     potential: object = 0,
     constraints: object = (),
-    generalized_forces: Mapping[object, object] | Sequence[object] | None = None,
+    generalized_forces: Mapping[Any, object] | Sequence[object] | None = None,
     forces: Sequence[PointForce] = (),
     name: str = "part",
 ) -> Model:
@@ -125,7 +125,7 @@ def _require_velocities(expr: sp.Expr, what: str, coords: Coordinates) -> None:
 
 
 def _generalized_forces(
-    per_coordinate: Mapping[object, object] | Sequence[object] | None,
+    per_coordinate: Mapping[Any, object] | Sequence[object] | None,
     forces: Sequence[PointForce], coords: Coordinates
 ) -> sp.Matrix:
     if isinstance(forces, PointForce):

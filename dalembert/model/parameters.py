@@ -39,7 +39,7 @@ def resolve_parameters(
 
 
 def parameter_values(
-    symbols: tuple[sp.Symbol, ...], value_set: Mapping[object, object] | None
+    symbols: tuple[sp.Symbol, ...], value_set: Mapping[Any, object] | None
 ) -> dict[str, float]:
     """Check a user's parameter dict: known names, finite numbers. Keyed by name.
 

@@ -39,6 +39,7 @@ from ..errors import ModelError
 from ..model.constraints import Holonomic
 from ..model.coordinates import t
 from ..model.expressions import sympify_strict
+from .parametric import Scalar, array, is_symbolic, scalar, to_sympy
 from .rotations import E_matrix, dot, rotation_matrix, times_vector
 from .types import ExprVector, FloatArray
 
@@ -249,7 +250,8 @@ class Particle(Body):
     name
         Prefix of the coordinate names.
     mass
-        Positive mass.
+        Positive mass: a number, or an expression of parameter symbols (see
+        :mod:`dalembert.multibody.parametric`).
 
     Examples
     --------
@@ -259,11 +261,17 @@ class Particle(Body):
     """
 
     has_orientation = False
+    PARAMETRIC = ("mass",)
 
-    def __init__(self, name: str, mass: float) -> None:
+    def __init__(self, name: str, mass: Scalar) -> None:
         self.name = _check_name(name)
-        self.mass = _positive_mass(mass, name)
+        self.mass = scalar(mass, f"the mass of {name!r}")
         self.coordinates = tuple(dynamicsymbols(f"{name}_x {name}_y {name}_z"))
+        self.check_values()
+
+    def check_values(self) -> None:
+        """Check the numeric values (all of them once parameters are bound)."""
+        _positive_mass(self.mass, self.name)
 
     @property
     def center(self) -> sp.Matrix:
@@ -283,7 +291,7 @@ class Particle(Body):
 
     def kinetic_energy(self) -> sp.Expr:
         v = self.center.diff(t)
-        return _number(self.mass) / 2 * v.dot(v)
+        return to_sympy(self.mass) / 2 * v.dot(v)
 
 
 class RigidBody(Body):
@@ -297,7 +305,9 @@ class RigidBody(Body):
         Positive mass.
     inertia
         Inertia tensor about the mass center in the body frame: a symmetric
-        positive-definite 3x3 matrix, or its 3 principal values.
+        positive-definite 3x3 matrix, or its 3 principal values. Mass and inertia
+        entries may be expressions of parameter symbols (see
+        :mod:`dalembert.multibody.parametric`).
 
     Examples
     --------
@@ -306,13 +316,22 @@ class RigidBody(Body):
     ['box_unit_quaternion']
     """
 
-    def __init__(self, name: str, mass: float, inertia: ArrayLike) -> None:
+    PARAMETRIC = ("mass", "inertia")
+
+    def __init__(self, name: str, mass: Scalar, inertia: ArrayLike) -> None:
         self.name = _check_name(name)
-        self.mass = _positive_mass(mass, name)
-        self.inertia = _inertia_tensor(inertia, name)
+        self.mass = scalar(mass, f"the mass of {name!r}")
+        self.inertia = _inertia_array(inertia, name)
         self.coordinates = tuple(
             dynamicsymbols(" ".join(f"{name}_{c}" for c in ("x", "y", "z", "b0", "b1", "b2", "b3")))
         )
+        self.check_values()
+
+    def check_values(self) -> None:
+        """Check the numeric values (all of them once parameters are bound)."""
+        _positive_mass(self.mass, self.name)
+        if not is_symbolic(self.inertia):
+            _inertia_tensor(self.inertia, self.name)
 
     @property
     def center(self) -> sp.Matrix:
@@ -332,10 +351,10 @@ class RigidBody(Body):
     def kinetic_energy(self) -> sp.Expr:
         v = self.center.diff(t)
         w = self.angular_velocity()
-        inertia = sp.Matrix(3, 3, lambda i, j: _number(float(self.inertia[i, j])))
+        inertia = sp.Matrix(3, 3, lambda i, j: to_sympy(self.inertia[i, j]))
         rot = dot(w, times_vector(inertia, w))
         # expanded: a sum of monomials differentiates much faster than nested products
-        return sp.expand(_number(self.mass) / 2 * v.dot(v) + rot / 2)
+        return sp.expand(to_sympy(self.mass) / 2 * v.dot(v) + rot / 2)
 
     def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = np.atleast_2d(c)
@@ -376,7 +395,9 @@ class PlanarBody(Body):
     mass
         Positive mass.
     inertia
-        Moment of inertia about the ``z`` axis through the mass center (> 0).
+        Moment of inertia about the ``z`` axis through the mass center (> 0). Both
+        may be expressions of parameter symbols (see
+        :mod:`dalembert.multibody.parametric`).
 
     Examples
     --------
@@ -385,13 +406,29 @@ class PlanarBody(Body):
     (['link_x', 'link_y', 'link_theta'], [])
     """
 
-    def __init__(self, name: str, mass: float, inertia: float) -> None:
+    PARAMETRIC = ("mass", "moment")
+
+    def __init__(self, name: str, mass: Scalar, inertia: Scalar) -> None:
         self.name = _check_name(name)
-        self.mass = _positive_mass(mass, name)
-        self.moment = _positive_moment(inertia, name)
-        #: The inertia tensor seen in 3D: only rotations about ``z`` are possible.
-        self.inertia = np.diag([0.0, 0.0, self.moment])
+        self.mass = scalar(mass, f"the mass of {name!r}")
+        if np.ndim(np.array(inertia, dtype=object)) != 0:
+            raise ModelError(f"the inertia of planar body {name!r} is its moment about z, one "
+                             f"number; got {inertia!r}")
+        self.moment = scalar(inertia, f"the moment of inertia of planar body {name!r}")
         self.coordinates = tuple(dynamicsymbols(f"{name}_x {name}_y {name}_theta"))
+        self.check_values()
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """The inertia tensor seen in 3D: only rotations about ``z`` are possible."""
+        tensor = np.zeros((3, 3), dtype=object if is_symbolic(self.moment) else float)
+        tensor[2, 2] = self.moment
+        return tensor
+
+    def check_values(self) -> None:
+        """Check the numeric values (all of them once parameters are bound)."""
+        _positive_mass(self.mass, self.name)
+        _positive_moment(self.moment, self.name)
 
     @property
     def center(self) -> sp.Matrix:
@@ -407,8 +444,8 @@ class PlanarBody(Body):
 
     def kinetic_energy(self) -> sp.Expr:
         x, y, theta = (c.diff(t) for c in self.coordinates)
-        return (_number(self.mass) / 2 * (x**2 + y**2)
-                + _number(self.moment) / 2 * theta**2)
+        return (to_sympy(self.mass) / 2 * (x**2 + y**2)
+                + to_sympy(self.moment) / 2 * theta**2)
 
     def pose(self, c: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = np.atleast_2d(c)
@@ -445,31 +482,33 @@ def _along_z(values: FloatArray) -> FloatArray:
     return out
 
 
-def _positive_moment(value: float, name: str) -> float:
-    try:
-        moment = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ModelError(f"the inertia of planar body {name!r} is its moment about z, one "
-                         f"number; got {value!r}") from exc
-    if not (np.isfinite(moment) and moment > 0):
+def _positive_moment(moment: Scalar, name: str) -> None:
+    """A numeric moment must be positive (an expression is checked once bound)."""
+    if isinstance(moment, float) and not moment > 0:
         raise ModelError(f"the moment of inertia of planar body {name!r} must be positive and "
                          f"finite, got {moment} (use a Particle for a point mass)")
-    return moment
 
 
-def _number(value: float) -> sp.Expr:
-    """A float as a SymPy number; exact zero stays exact so its terms vanish."""
-    return sp.S.Zero if value == 0 else sp.Float(value)
+def _positive_mass(mass: Scalar, name: str) -> None:
+    """A numeric mass must be positive (an expression is checked once bound)."""
+    if isinstance(mass, float) and not mass > 0:
+        raise ModelError(f"the mass of {name!r} must be positive and finite, got {mass}")
 
 
-def _positive_mass(mass: float, name: str) -> float:
-    try:
-        value = float(mass)
-    except (TypeError, ValueError) as exc:
-        raise ModelError(f"the mass of {name!r} must be a number, got {mass!r}") from exc
-    if not (np.isfinite(value) and value > 0):
-        raise ModelError(f"the mass of {name!r} must be positive and finite, got {value}")
-    return value
+def _inertia_array(inertia: ArrayLike, name: str) -> np.ndarray:
+    """The inertia as a 3x3 array: floats, or expressions of parameters."""
+    what = f"the inertia of {name!r}"
+    raw = inertia.tolist() if isinstance(inertia, sp.MatrixBase) else inertia
+    shape = np.shape(np.array(raw, dtype=object))
+    if shape == (3,):
+        values = array(raw, (3,), what)
+        tensor = np.zeros((3, 3), dtype=values.dtype)
+        tensor[np.diag_indices(3)] = values
+        return tensor
+    if shape != (3, 3):
+        raise ModelError(f"the inertia of {name!r} must be a 3x3 tensor or 3 principal "
+                         f"values, got shape {shape}")
+    return array(raw, (3, 3), what)
 
 
 #: Principal moments may miss the triangle inequality by this much (relative) before

@@ -7,6 +7,7 @@ energy is block-diagonal and each joint's equations involve only its two bodies.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 from typing import Any, Literal, TypeVar
@@ -16,7 +17,9 @@ import sympy as sp
 
 from ..errors import ConstraintError, InitialConditionError, ModelError
 from ..model.constraints import Holonomic, Pfaffian
+from ..model.coordinates import t
 from ..model.forces import PointForce
+from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
@@ -26,6 +29,7 @@ from .drawing import stick_figure
 from .initial_state import body_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
+from .parametric import Scalar, array, parametric_symbols, scalar, with_numbers
 from .parts import gravity_potential
 from .system import MultibodySystem
 from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
@@ -49,6 +53,11 @@ class Multibody:
         :class:`Force`, :class:`Torque`, :class:`SpringDamper` loads.
     name
         The system's name (in titles and messages).
+    parameters
+        Default values of the parameter symbols the mechanism's numbers are written
+        in (a mass ``m``, a length ``l``, gravity ``g``: see
+        :mod:`dalembert.multibody.parametric`), by symbol or name;
+        ``simulate(parameters=...)`` changes them without generating any code.
 
     Examples
     --------
@@ -70,6 +79,7 @@ class Multibody:
         torques: Sequence[Torque] = (),
         springs: Sequence[SpringDamper] = (),
         name: str = "multibody",
+        parameters: Mapping[Any, object] | None = None,
     ) -> None:
         self.bodies = tuple(bodies)
         self.joints = tuple(joints)
@@ -77,8 +87,85 @@ class Multibody:
         self.torques = tuple(torques)
         self.springs = tuple(springs)
         self.name = name
-        self.gravity = _gravity(gravity)
+        self.gravity = array(gravity, (3,), "gravity (world components)")
+        self.defaults = dict(parameters or {})
         self._check()
+
+    PARAMETRIC = ("gravity",)
+
+    # -- parameters ------------------------------------------------------------------
+    def _with_defaults(self) -> Multibody | None:
+        """The mechanism bound to its default values, or ``None`` if some are missing."""
+        if not self.parameters:
+            return self
+        if any(s not in self.defaults and s.name not in self.defaults
+               for s in self.parameters):
+            return None
+        return self.bound()
+
+    @cached_property
+    def parameters(self) -> tuple[sp.Symbol, ...]:
+        """The parameter symbols of the mechanism's numbers and loads, sorted by name."""
+        found = parametric_symbols(self)
+        for piece in (*self.bodies, *self.joints, *self.springs, *self.forces):
+            found |= parametric_symbols(piece)
+        loads = [*(c for f in self.forces for c in f.force),
+                 *(c for tq in self.torques for c in tq.torque)]
+        for expr in loads:
+            found |= {s for s in sp.sympify(expr).free_symbols
+                      if isinstance(s, sp.Symbol) and s != t}
+        return tuple(sorted(found, key=lambda s: s.name))
+
+    def bound(self, *values: Mapping[Any, object] | None) -> Multibody:
+        """The mechanism with its parameters replaced by numbers (each piece checked
+        as if it had been given them: a positive mass, a valid inertia...).
+
+        Parameters
+        ----------
+        values
+            Parameter values by symbol or name, over :attr:`defaults` (later ones
+            overriding earlier ones).
+
+        Raises
+        ------
+        ModelError
+            A value makes a piece invalid (naming it), or a parameter has no value.
+
+        Examples
+        --------
+        >>> from dalembert.multibody import Particle
+        >>> m = sp.Symbol("m")
+        >>> mb = Multibody([Particle("p", 2 * m)], parameters={m: 1.5})
+        >>> mb.bound().bodies[0].mass, mb.bound({"m": 4}).bodies[0].mass
+        (3.0, 8.0)
+        """
+        if not self.parameters:
+            return self
+        numbers = dict(zip(self.parameters,
+                           resolve_parameters(self.parameters, self.defaults, *values)))
+        bound = copy.copy(self)
+        bound.gravity = with_numbers(self, numbers).gravity
+        mapped = {id(b): with_numbers(b, numbers) for b in self.bodies}
+        bound.bodies = tuple(mapped[id(b)] for b in self.bodies)
+
+        def rebody(piece: _Piece) -> _Piece:
+            out = with_numbers(piece, numbers)
+            swaps = {a: mapped[id(b)] for a in ("body", "body_a", "body_b")
+                     if (b := getattr(piece, a, None)) is not None and id(b) in mapped
+                     and mapped[id(b)] is not b}
+            if swaps:
+                out = copy.copy(out) if out is piece else out
+                for attribute, body in swaps.items():
+                    setattr(out, attribute, body)
+            return out
+
+        bound.joints = tuple(rebody(j) for j in self.joints)
+        bound.springs = tuple(rebody(s) for s in self.springs)
+        bound.forces = tuple(rebody(f) for f in self.forces)
+        bound.torques = tuple(rebody(tq) for tq in self.torques)
+        bound.__dict__.pop("parameters", None)
+        bound.__dict__.pop("system", None)
+        return bound
 
     # -- validation ------------------------------------------------------------------
     def _check(self) -> None:
@@ -111,7 +198,7 @@ class Multibody:
     def _check_plane(self) -> None:
         """Planar bodies move in the x-y plane: gravity along z would be silently lost."""
         planar = [b.name for b in self.bodies if isinstance(b, PlanarBody)]
-        if planar and self.gravity[2] != 0:
+        if planar and not (isinstance(self.gravity[2], float) and self.gravity[2] == 0):
             raise ModelError(
                 f"gravity {tuple(self.gravity.tolist())} has a z component, but the planar "
                 f"bodies {', '.join(planar)} move in the x-y plane, where it does no work; "
@@ -274,7 +361,9 @@ class Multibody:
                                v.get(name), w.get(name))
             q0.update(zip(_names(body), map(float, q)))
             qd0.update(zip(_names(body), map(float, qd)))
-        check_initial_joint_points(self, q0)
+        numbers = self._with_defaults()
+        if numbers is not None:  # without values for every parameter, no geometry check
+            check_initial_joint_points(numbers, q0)
         return q0, qd0
 
     # -- outputs (see dalembert.multibody.outputs) -----------------------------------
@@ -331,10 +420,10 @@ class Multibody:
         >>> [len(line) for line in mb.stick_figure([q0[n] for n in mb.system.coordinate_names])]
         [1, 2, 2, 2, 2]
         """
-        return stick_figure(self, np.asarray(q, dtype=float))
+        return stick_figure(self._with_defaults() or self.bound(), np.asarray(q, dtype=float))
 
     def _explain_immobility(self, q0: CoordinateValues, t_span: Sequence[float],
-                            parameters: Mapping[object, object] | None,
+                            parameters: Mapping[Any, object] | None,
                             exc: Exception) -> None:
         """Raise the joint-naming error if the failure was a mechanism without freedom."""
         try:
@@ -376,18 +465,14 @@ def _names(body: Body) -> list[str]:
     return [c.name for c in body.coordinates]
 
 
-def _gravity(g: Vector) -> FloatArray:
-    arr = np.asarray(g, dtype=float)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ModelError(f"gravity must be 3 finite numbers (world components), got {g!r}")
-    return arr
+_Piece = TypeVar("_Piece")
 
 
 def chain(
     n: int,
-    length: float,
-    mass: float,
-    radius: float,
+    length: Scalar,
+    mass: Scalar,
+    radius: Scalar,
     joint: Literal["spherical", "revolute"] = "spherical",
     gravity: Vector | None = None,
     planar: bool = False,
@@ -411,7 +496,9 @@ def chain(
     n
         The number of links.
     length, mass, radius
-        Each link's length, mass and radius (a solid cylinder's inertia).
+        Each link's length, mass and radius (a solid cylinder's inertia): numbers, or
+        expressions of parameter symbols (then give their values with
+        ``Multibody.defaults`` or ``simulate(parameters=...)``).
     joint
         ``"spherical"`` or ``"revolute"``.
     gravity
@@ -432,8 +519,11 @@ def chain(
         raise ModelError(f"joint must be 'spherical' or 'revolute', got {joint!r}")
     if planar and joint != "revolute":
         raise ModelError("a planar chain has revolute joints; use joint='revolute'")
-    if not (length > 0 and radius > 0):
-        raise ModelError(f"length and radius must be positive, got {length}, {radius}")
+    length, mass, radius = (scalar(v, f"the chain's {what}") for v, what in
+                            ((length, "length"), (mass, "mass"), (radius, "radius")))
+    for value, what in ((length, "length"), (radius, "radius")):
+        if isinstance(value, float) and not value > 0:
+            raise ModelError(f"the chain's {what} must be positive, got {value}")
     transverse = mass * (3 * radius**2 + length**2) / 12
     links: list[MovingBody]
     if planar:
@@ -443,12 +533,12 @@ def chain(
         inertia = (transverse, transverse, mass * radius**2 / 2)
         links = [RigidBody(f"link{k + 1}", mass, inertia) for k in range(int(n))]
         axis, down, hinge = 2, (0.0, 0.0, -9.81), (0, 1, 0)
-    top, bottom = np.zeros(3), np.zeros(3)
+    top, bottom = np.zeros(3, dtype=object), np.zeros(3, dtype=object)
     top[axis], bottom[axis] = length / 2, -length / 2
     joints: list[Joint] = []
     parents: list[Body] = [Ground(), *links[:-1]]
     for k, (parent, child) in enumerate(zip(parents, links)):
-        pa = np.zeros(3) if k == 0 else bottom
+        pa = (0, 0, 0) if k == 0 else bottom
         if joint == "spherical":
             joints.append(Spherical(f"joint{k + 1}", parent, child, pa, top))
         else:

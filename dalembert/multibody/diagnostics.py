@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,6 +35,7 @@ from ..model.values import CoordinateValues, coordinate_values
 from ..numerics.rank import constraint_rank
 from .bodies import Body, Ground, TurningBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
+from .parametric import is_symbolic
 from .types import FloatArray
 
 if TYPE_CHECKING:
@@ -87,8 +88,9 @@ def check_joint_points(joint: Joint) -> None:
     """
     for side, body, point in (("a", joint.body_a, joint.point_a),
                               ("b", joint.body_b, joint.point_b)):
-        if not isinstance(body, TurningBody):
-            continue
+        if not isinstance(body, TurningBody) or any(
+                is_symbolic(v) for v in (point, body.mass, body.inertia)):
+            continue  # parameters: checked on the mechanism bound to their values
         size = radius_of_gyration(body)
         dist = float(np.linalg.norm(point))
         if dist > FAR_FACTOR * size:
@@ -164,7 +166,7 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
 
 
 def check_mobility(mb: Multibody, q0: CoordinateValues, t0: float = 0.0,
-                   parameters: Mapping[object, object] | None = None,
+                   parameters: Mapping[Any, object] | None = None,
                    cause: BaseException | None = None) -> int:
     """Degrees of freedom ``n - rank(A)`` at ``q0``; raise naming the joints when none.
 

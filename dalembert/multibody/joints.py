@@ -54,6 +54,7 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from .bodies import Body, Ground, Particle, PlanarBody
+from .parametric import Scalar, array, scalar, sympy_vector, to_sympy
 from .rotations import dot, times_vector
 from .types import FloatArray, Vector
 
@@ -85,18 +86,13 @@ def _perpendicular(w: FloatArray, ref: Vector | None, what: str) -> FloatArray:
     return u / np.linalg.norm(u)
 
 
-def _point(p: Vector, what: str) -> FloatArray:
-    try:
-        arr = np.asarray(p, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ModelError(f"{what} must be 3 numbers, got {p!r}") from exc
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ModelError(f"{what} must be 3 finite numbers, got {p!r}")
-    return arr
+def _point(p: object, what: str) -> np.ndarray:
+    """A point: 3 numbers, or expressions of parameters (see :mod:`.parametric`)."""
+    return array(p, (3,), what)
 
 
-def _sym(v: FloatArray) -> sp.Matrix:
-    return sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in v])
+def _sym(v: np.ndarray) -> sp.Matrix:
+    return sympy_vector(v)
 
 
 class Joint:
@@ -132,6 +128,8 @@ class Joint:
 
     #: The number of equations (rows) of the joint.
     n_equations = 0
+    #: The attributes that may be parameters (:mod:`.parametric`).
+    PARAMETRIC: tuple[str, ...] = ("point_a", "point_b")
     #: Whether the joint constrains its bodies' orientations (then no particle may join).
     uses_orientation = True
     #: Rows between planar bodies (``None``: no planar form).
@@ -479,17 +477,23 @@ class Distance(Joint):
     planar_rows = 1
     uses_orientation = False
 
-    def __init__(self, name: str, body_a: Body, body_b: Body, length: float,
+    PARAMETRIC = ("point_a", "point_b", "length")
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, length: Scalar,
                  point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:
-        length = float(length)
-        if not (np.isfinite(length) and length > 0):
-            raise ModelError(f"joint {name!r}: the length must be positive, got {length}")
-        self.length = length
+        self.length = scalar(length, f"joint {name!r}: the length")
         super().__init__(name, body_a, body_b, point_a, point_b)
+        self.check_values()
+
+    def check_values(self) -> None:
+        """Check the numeric values (all of them once parameters are bound)."""
+        if isinstance(self.length, float) and not self.length > 0:
+            raise ModelError(f"joint {self.name!r}: the length must be positive, got "
+                             f"{self.length}")
 
     def equations(self) -> list[sp.Expr]:
         d = self.separation()
-        return [dot(d, d) - sp.Float(self.length) ** 2]
+        return [dot(d, d) - to_sympy(self.length) ** 2]
 
     planar_equations = equations
 

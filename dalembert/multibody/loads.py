@@ -15,7 +15,6 @@ from __future__ import annotations
 
 from typing import get_args
 
-import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
@@ -23,6 +22,7 @@ from ..model.coordinates import t
 from ..model.forces import PointForce
 from .bodies import Body, Particle, PlanarBody, TurningBody, _vector
 from .joints import _point
+from .parametric import Scalar, scalar, to_sympy
 from .rotations import E_matrix, G_matrix
 from .types import ExprVector, Frame, Vector
 
@@ -64,6 +64,8 @@ class Force:
     >>> round(float(traj["p_x"][0]), 9)   # a t^2 / 2 with a = 2
     1.0
     """
+
+    PARAMETRIC = ("point",)
 
     def __init__(self, body: Body, force: ExprVector, point: Vector = (0, 0, 0),
                  frame: Frame = "world", name: str | None = None) -> None:
@@ -173,8 +175,10 @@ class SpringDamper:
     (0.0, -0.2)
     """
 
-    def __init__(self, name: str, body_a: Body, body_b: Body, stiffness: float,
-                 rest_length: float = 0.0, damping: float = 0.0,
+    PARAMETRIC = ("stiffness", "rest_length", "damping", "point_a", "point_b")
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, stiffness: Scalar,
+                 rest_length: Scalar = 0.0, damping: Scalar = 0.0,
                  point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:
         self.name = name
         self.body_a, self.body_b = body_a, body_b
@@ -183,6 +187,11 @@ class SpringDamper:
         self.damping = _nonnegative(damping, f"spring {name!r}: damping")
         self.point_a = _point(point_a, f"spring {name!r}: point_a")
         self.point_b = _point(point_b, f"spring {name!r}: point_b")
+
+    def check_values(self) -> None:
+        """Check the numeric values (all of them once parameters are bound)."""
+        for field in ("stiffness", "rest_length", "damping"):
+            _nonnegative(getattr(self, field), f"spring {self.name!r}: {field}")
 
     @property
     def bodies(self) -> tuple[Body, Body]:
@@ -201,8 +210,8 @@ class SpringDamper:
         if self.rest_length == 0:
             # (L - 0)^2 = d.d: no square root, smooth through L = 0
             d = self._geometry()[2]
-            return sp.Float(self.stiffness) / 2 * d.dot(d)
-        return sp.Float(self.stiffness) / 2 * (L - sp.Float(self.rest_length)) ** 2
+            return to_sympy(self.stiffness) / 2 * d.dot(d)
+        return to_sympy(self.stiffness) / 2 * (L - to_sympy(self.rest_length)) ** 2
 
     def point_forces(self) -> list[PointForce]:
         """The damper's two opposite forces (none without damping)."""
@@ -210,16 +219,14 @@ class SpringDamper:
             return []
         ra, rb, d, _ = self._geometry()
         # c Ldot along the unit vector, written as c (d.ddot) d / L^2 (one sqrt less)
-        F_b = -sp.Float(self.damping) * d.dot(d.diff(t)) / d.dot(d) * d
+        F_b = -to_sympy(self.damping) * d.dot(d.diff(t)) / d.dot(d) * d
         return [PointForce(force=list(F_b), point=list(rb), name=f"{self.name}_damper_b"),
                 PointForce(force=list(-F_b), point=list(ra), name=f"{self.name}_damper_a")]
 
 
-def _nonnegative(value: float, what: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ModelError(f"{what} must be a number, got {value!r}") from exc
-    if not (np.isfinite(v) and v >= 0):
+def _nonnegative(value: Scalar, what: str) -> Scalar:
+    """A number >= 0, or an expression of parameters (checked once bound)."""
+    v = scalar(value, what)
+    if isinstance(v, float) and not v >= 0:
         raise ModelError(f"{what} must be finite and >= 0, got {v}")
     return v

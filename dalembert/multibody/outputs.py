@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -35,8 +36,16 @@ def _columns(traj: Trajectory, body: Body, suffix: str = "") -> FloatArray:
     return np.column_stack([traj[f"{c.name}{suffix}"] for c in body.coordinates])
 
 
+def _bound(mb: Multibody, traj: Trajectory) -> Multibody:
+    """The mechanism with the parameter values ``traj`` was simulated with."""
+    return mb.bound(traj.parameters) if mb.parameters else mb
+
+
 def _body(mb: Multibody, body: Body | str) -> Body:
-    return mb.body(body) if isinstance(body, str) else body
+    """The body of (the bound) ``mb`` called as ``body`` is, or named ``body``."""
+    if isinstance(body, Ground):
+        return body
+    return mb.body(body if isinstance(body, str) else body.name)
 
 
 def _pose(traj: Trajectory, body: Body) -> tuple[FloatArray, FloatArray]:
@@ -70,6 +79,7 @@ def rotation_matrices(mb: Multibody, traj: Trajectory, body: Body | str) -> Floa
            [ 1.,  0.,  0.],
            [ 0.,  0.,  1.]])
     """
+    mb = _bound(mb, traj)
     return _pose(traj, _body(mb, body))[1]
 
 
@@ -99,6 +109,7 @@ def euler_angles(mb: Multibody, traj: Trajectory, body: Body | str,
     >>> euler_angles(mb, traj, "box").round(9).tolist() == [[round(np.pi / 2, 9), 0.0, 0.0]]
     True
     """
+    mb = _bound(mb, traj)
     return euler_from_matrix(rotation_matrices(mb, traj, body), sequence)
 
 
@@ -126,6 +137,7 @@ def point_positions(mb: Multibody, traj: Trajectory, body: Body | str,
     >>> (point_positions(mb, traj, "box", (1, 0, 0)).round(9) + 0.0).tolist()
     [[0.0, 1.0, 0.0]]
     """
+    mb = _bound(mb, traj)
     body = _body(mb, body)
     if isinstance(body, Ground):
         return np.broadcast_to(np.asarray(point, float), (len(traj), 3)).copy()
@@ -158,6 +170,7 @@ def angular_velocities(mb: Multibody, traj: Trajectory, body: Body | str,
     >>> (angular_velocities(mb, traj, "box").round(9) + 0.0).tolist()
     [[0.0, 0.0, 1.0]]
     """
+    mb = _bound(mb, traj)
     body = _body(mb, body)
     if frame not in ("world", "body"):
         raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
@@ -187,6 +200,7 @@ def linear_momentum(mb: Multibody, traj: Trajectory) -> FloatArray:
     >>> (linear_momentum(mb, traj)[1].round(9) + 0.0).tolist()
     [2.0, 0.0, -20.0]
     """
+    mb = _bound(mb, traj)
     P = np.zeros((len(traj), 3))
     for b in mb.bodies:
         P += b.mass * _velocity(traj, b)
@@ -216,6 +230,7 @@ def angular_momentum(mb: Multibody, traj: Trajectory,
     >>> (angular_momentum(mb, traj).round(9) + 0.0).tolist()
     [[0.0, 0.0, 3.0]]
     """
+    mb = _bound(mb, traj)
     H = np.zeros((len(traj), 3))
     for b in mb.bodies:
         x, R = _pose(traj, b)
@@ -245,6 +260,7 @@ def kinetic_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
     >>> kinetic_energy(mb, traj).round(9).tolist()   # 1/2 2 (1^2 + 10^2) at t = 1
     [1.0, 101.0]
     """
+    mb = _bound(mb, traj)
     T = np.zeros(len(traj))
     for b in mb.bodies:
         v = _velocity(traj, b)
@@ -274,6 +290,7 @@ def potential_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
     >>> potential_energy(mb, traj).round(9).tolist()   # 2 10 z, z = -5 at t = 1
     [0.0, -100.0]
     """
+    mb = _bound(mb, traj)
     V = np.zeros(len(traj))
     for b in mb.bodies:
         V -= b.mass * _pose(traj, b)[0] @ mb.gravity
@@ -326,7 +343,7 @@ class JointReaction:
 
 
 def joint_reactions(
-    mb: Multibody, traj: Trajectory, parameters: Mapping[object, object] | None = None
+    mb: Multibody, traj: Trajectory, parameters: Mapping[Any, object] | None = None
 ) -> dict[str, dict[str, JointReaction]]:
     """Constraint force and torque of every joint on each of its two bodies.
 
@@ -340,7 +357,7 @@ def joint_reactions(
     mb, traj
         The mechanism and a trajectory of its ``system``.
     parameters
-        The parameter values ``traj`` was simulated with, if not the system's.
+        Parameter values overriding those ``traj`` records (``traj.parameters``).
 
     Examples
     --------
@@ -356,8 +373,10 @@ def joint_reactions(
     >>> [(rod[side].force_world[0].round(9) + 0.0).tolist() for side in ("bob", "ground")]
     [[0.0, 0.0, 20.0], [0.0, 0.0, -20.0]]
     """
-    system = mb.system
-    num = system.numeric(parameters)
+    system = mb.system  # the mechanism's own (a bound copy would compile again)
+    values: dict[Any, object] = {**traj.parameters, **(parameters or {})}
+    num = system.numeric(values)
+    mb = mb.bound(traj.parameters, parameters) if mb.parameters else mb
     names = system.constraint_names
     k = len(traj)
     Q_all = {j.name: np.zeros((k, num.n)) for j in mb.joints}

@@ -37,7 +37,7 @@ from ..model.model import Model, build_part_model
 from .bodies import Body, Ground, MovingBody, Particle, PlanarBody, RigidBody
 from .derivatives import NotPolynomial, holonomic_rates
 from .joints import Joint
-from .types import FloatArray
+from .parametric import sympy_vector, to_sympy
 
 if TYPE_CHECKING:
     from .builder import Multibody
@@ -47,7 +47,7 @@ Indices = NDArray[np.intp]
 _T = TypeVar("_T")
 
 
-def gravity_potential(body: Body, gravity: FloatArray) -> sp.Expr:
+def gravity_potential(body: Body, gravity: np.ndarray) -> sp.Expr:
     """``-m g . x`` of the body's mass center (exact zeros drop out).
 
     Parameters
@@ -55,16 +55,17 @@ def gravity_potential(body: Body, gravity: FloatArray) -> sp.Expr:
     body
         A moving body.
     gravity
-        The field, world components.
+        The field, world components (numbers or expressions of parameters).
 
     Examples
     --------
     >>> from dalembert.multibody import Particle
     >>> gravity_potential(Particle("p", 2.0), np.array([0.0, 0.0, -9.81]))
     19.62*p_z(t)
+    >>> gravity_potential(Particle("p", sp.Symbol("m")), np.array([0, 0, -sp.Symbol("g")]))
+    g*m*p_z(t)
     """
-    g = sp.Matrix([sp.S.Zero if c == 0 else sp.Float(c) for c in gravity])
-    return -sp.Float(body.mass) * g.dot(body.center)
+    return -to_sympy(body.mass) * sympy_vector(np.asarray(gravity)).dot(body.center)
 
 
 def multibody_parts(mb: Multibody) -> list[Part]:
@@ -114,35 +115,82 @@ def _grouped(items: Sequence[_T], signature: Callable[[_T], Hashable]) -> list[l
     return list(groups.values())
 
 
-def _body_parts(bodies: Sequence[MovingBody], gravity: FloatArray, offsets: dict[int, Indices],
-                rows: dict[int, Indices]) -> list[Part]:
+class _Localized:
+    """Parametric values with each expression replaced by a local symbol ``_p0, _p1...``.
+
+    ``signature`` keeps the numbers and marks the expressions, so pieces that differ
+    only in their parameter values share it (and one kernel); ``values`` are the
+    local stand-ins, ``exprs`` what instance by instance they stand for.
+    """
+
+    def __init__(self, values: Sequence[object]) -> None:
+        self.symbols: list[sp.Symbol] = []
+        self.exprs: list[sp.Expr] = []
+        self.values = [self._local(v) for v in values]
+        self.signature = tuple(_freeze(v) for v in self.values)
+
+    def _local(self, value: object) -> object:
+        if isinstance(value, np.ndarray) and value.dtype == object:
+            out = np.empty(value.shape, dtype=object)
+            for i, v in np.ndenumerate(value):
+                out[i] = self._local(v)
+            return out
+        if isinstance(value, sp.Basic) and value.free_symbols:
+            symbol = sp.Symbol(f"_p{len(self.symbols)}")
+            self.symbols.append(symbol)
+            self.exprs.append(value)
+            return symbol
+        return value
+
+
+def _localized_part(members: Sequence[object], localized: Sequence[_Localized],
+                    equations: Equations, coordinates: np.ndarray, rows: np.ndarray) -> Part:
+    """The part of a group of pieces, its kernel's parameters the template's locals."""
+    symbols = tuple(localized[0].symbols)
+    values = np.empty((len(members), len(symbols)), dtype=object)
+    for k, local in enumerate(localized):
+        values[k, :] = local.exprs
+    return Part(equations, coordinates, rows, symbols, values)
+
+
+def _body_fields(body: MovingBody, gravity: np.ndarray) -> list[object]:
+    fields = [body.mass, gravity]
+    if isinstance(body, RigidBody):
+        fields.append(body.inertia)
+    if isinstance(body, PlanarBody):
+        fields.append(body.moment)
+    return fields
+
+
+def _body_parts(bodies: Sequence[MovingBody], gravity: np.ndarray,
+                offsets: dict[int, Indices], rows: dict[int, Indices]) -> list[Part]:
+    local = {id(b): _Localized(_body_fields(b, gravity)) for b in bodies}
     parts = []
-    for members in _grouped(bodies, _body_signature):
-        template = _template_body(members[0], "body", keep_mass=True)
+    for members in _grouped(bodies, lambda b: (type(b), local[id(b)].signature)):
+        first = local[id(members[0])]
+        template = _template_body(members[0], "body", first.values)
         model = build_part_model(
             template.coordinates, kinetic=template.kinetic_energy(),
-            potential=gravity_potential(template, gravity), constraints=template.constraints(),
-            name=f"body {members[0].name}",
+            potential=gravity_potential(template, np.asarray(first.values[1])),
+            constraints=template.constraints(), name=f"body {members[0].name}",
         )
-        parts.append(Part(derive_equations(model), np.array([offsets[id(b)] for b in members]),
-                          np.array([rows[id(b)] for b in members])))
+        parts.append(_localized_part(
+            members, [local[id(b)] for b in members], derive_equations(model),
+            np.array([offsets[id(b)] for b in members]), np.array([rows[id(b)] for b in members])))
     return parts
 
 
-def _body_signature(body: MovingBody) -> Hashable:
-    inertia = getattr(body, "inertia", None)
-    return type(body), body.mass, None if inertia is None else tuple(inertia.ravel())
-
-
-def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
-    """A body of the same kind with coordinates ``<name>_x ...`` (ground is itself)."""
+def _template_body(body: Body, name: str, fields: Sequence[object] | None = None) -> Body:
+    """A body of the same kind with coordinates ``<name>_x ...`` (ground is itself): with
+    ``fields`` (``[mass, gravity, inertia or moment]``, localized), the equations of
+    ``body``; without, unit inertia (a joint's equations are kinematic)."""
     if isinstance(body, Ground):
         return body
-    mass = body.mass if keep_mass else 1.0
+    mass = fields[0] if fields else 1.0
     if isinstance(body, RigidBody):
-        return RigidBody(name, mass, body.inertia if keep_mass else np.ones(3))
+        return RigidBody(name, mass, np.asarray(fields[2]) if fields else np.ones(3))
     if isinstance(body, PlanarBody):
-        return PlanarBody(name, mass, body.moment if keep_mass else 1.0)
+        return PlanarBody(name, mass, fields[2] if fields else 1.0)
     if isinstance(body, Particle):
         return Particle(name, mass)
     raise TypeError(f"no template for {body!r}")
@@ -150,16 +198,21 @@ def _template_body(body: Body, name: str, keep_mass: bool = False) -> Body:
 
 def _joint_parts(joints: Sequence[Joint], offsets: dict[int, Indices],
                  rows: dict[int, Indices]) -> list[Part]:
+    local = {id(j): _Localized([getattr(j, f) for f in j.PARAMETRIC]) for j in joints}
     parts = []
-    for members in _grouped(joints, _signature):
+    for members in _grouped(joints, lambda j: (_signature(j), local[id(j)].signature)):
+        first = local[id(members[0])]
         template = copy.copy(members[0])
+        for field, value in zip(template.PARAMETRIC, first.values):
+            setattr(template, field, value)
         template.body_a = _template_body(template.body_a, "a")
         template.body_b = _template_body(template.body_b, "b")
         coords = [*template.body_a.coordinates, *template.body_b.coordinates]
         equations = _constraint_equations(coords, template.constraints(),
                                           f"joint {members[0].name}")
         places = np.array([_joint_coordinates(j, offsets) for j in members])
-        parts.append(Part(equations, places, np.array([rows[id(j)] for j in members])))
+        parts.append(_localized_part(members, [local[id(j)] for j in members], equations,
+                                     places, np.array([rows[id(j)] for j in members])))
     return parts
 
 
@@ -219,8 +272,11 @@ def _joint_coordinates(joint: Joint, offsets: dict[int, Indices]) -> Indices:
 
 
 def _signature(joint: Joint) -> Hashable:
-    """What a joint's equations depend on: its type, geometry and the kinds of its bodies."""
-    items = tuple((k, _freeze(v)) for k, v in sorted(vars(joint).items()) if k != "name")
+    """What a joint's equations depend on besides its parametric values: its type, the
+    rest of its geometry and the kinds of its bodies."""
+    parametric = set(joint.PARAMETRIC)
+    items = tuple((k, _freeze(v)) for k, v in sorted(vars(joint).items())
+                  if k != "name" and k not in parametric)
     return type(joint), items
 
 

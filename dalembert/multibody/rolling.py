@@ -48,6 +48,7 @@ from ..model.constraints import Holonomic, Pfaffian
 from ..model.coordinates import t
 from .bodies import Ground, RigidBody
 from .joints import Joint, _sym
+from .parametric import scalar, to_sympy
 from .rotations import G_matrix
 from .types import FloatArray, Vector
 
@@ -94,14 +95,19 @@ class Rolling(Joint):
         if not isinstance(body, RigidBody):
             raise ModelError(f"joint {name!r} (Rolling): the rolling body must be a RigidBody, "
                              f"got {body!r}; a particle has no rotation to roll with")
-        radius = float(radius)
-        if not (np.isfinite(radius) and radius > 0):
-            raise ModelError(f"joint {name!r} (Rolling): the radius must be positive, got "
-                             f"{radius}")
-        self.radius = radius
+        self.radius = scalar(radius, f"joint {name!r} (Rolling): the radius")
         self.is_disk = axis is not None
         super().__init__(name, ground or Ground(), body, point_a=point, axis_a=normal,
                          axis_b=normal if axis is None else axis, ref_a=tangent)
+        self.check_values()
+
+    PARAMETRIC = ("point_a", "radius")
+
+    def check_values(self) -> None:
+        """Check the numeric values (all of them once parameters are bound)."""
+        if isinstance(self.radius, float) and not self.radius > 0:
+            raise ModelError(f"joint {self.name!r} (Rolling): the radius must be positive, "
+                             f"got {self.radius}")
 
     @property
     def normal(self) -> FloatArray:
@@ -116,7 +122,7 @@ class Rolling(Joint):
     # -- symbolic ----------------------------------------------------------------------
     def _arm_and_height(self) -> tuple[sp.Matrix, sp.Expr]:
         """``rho`` (center -> contact, world) and the center's height ``h`` above the plane."""
-        n, r = _sym(self.normal), sp.Float(self.radius)
+        n, r = _sym(self.normal), to_sympy(self.radius)
         if not self.is_disk:
             return -r * n, r
         a = self.body_b.rotation() * _sym(self.axis_b)

@@ -10,13 +10,15 @@ message -- is made on first use and gives the same equations.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import sympy as sp
 
 from ..codegen.assembly import compile_parts
-from ..codegen.compiled import CompiledEquations
+from ..codegen.compiled import CompiledEquations, NumericModel
 from ..model.model import Model, build_model
+from ..model.parameters import parameter_values
 from ..options import RedundantConstraints
 from ..system import System, _check_redundant
 from .parts import multibody_parts
@@ -39,7 +41,7 @@ class MultibodySystem(System):
         self._multibody = multibody
         self._model: Model | None = None
         self.redundant_constraints = _check_redundant(redundant_constraints)
-        self.parameter_values: dict[str, float] = {}
+        self.parameter_values = parameter_values(multibody.parameters, multibody.defaults)
         self._names = tuple(c.name for c in multibody.coordinates)
         self._rows = tuple(
             [name for b in multibody.bodies for name in b.constraint_names]
@@ -61,7 +63,15 @@ class MultibodySystem(System):
 
     @property
     def parameters(self) -> tuple[sp.Symbol, ...]:
-        return ()
+        """The symbols the mechanism's numbers and loads are written in."""
+        return self._multibody.parameters
+
+    def numeric(self, parameters: Mapping[Any, object] | None = None) -> NumericModel:
+        """The compiled functions bound to parameter values, after the mechanism has been
+        checked with them (a mass must come out positive, an inertia valid...)."""
+        if self.parameters:
+            self._multibody.bound(self.parameter_values, parameters)
+        return super().numeric(parameters)
 
     @property
     def rheonomic(self) -> bool:
@@ -109,4 +119,4 @@ class MultibodySystem(System):
     def _compile(self) -> CompiledEquations:
         """One kernel per kind of body, joint and the loads."""
         parts = multibody_parts(self._multibody)
-        return compile_parts(parts, len(self._names), len(self._rows))
+        return compile_parts(parts, len(self._names), len(self._rows), self.parameters)

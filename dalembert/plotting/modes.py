@@ -180,9 +180,9 @@ def _on_constraints(system: System, equilibrium: Equilibrium,
                     q: NDArray[np.float64]) -> NDArray[np.float64]:
     """The least change of ``q`` that satisfies the constraints (same parameters and
     fixed coordinates as the equilibrium)."""
-    # copied by items: a dict[str, float] is no Mapping[object, object] to a type checker
+    # copied by items: a dict[str, float] is no Mapping[Any, object] to a type checker
     # (a mapping's key type is invariant)
-    parameters: Mapping[object, object] = dict(equilibrium.parameter_values.items())
+    parameters: Mapping[Any, object] = dict(equilibrium.parameter_values.items())
     report = system.consistent_initial_state(q, parameters=parameters or None,
                                              fixed=equilibrium.fixed or None)
     return np.asarray(report.q, dtype=float)

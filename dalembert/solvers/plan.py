@@ -67,6 +67,9 @@ class SimulationPlan:
         projection); ``outputs(t, y)`` the trajectory's derived arrays.
     events
         The events as ``event(t, y)``, with their ``terminal``/``direction``.
+    parameters
+        The parameter vector the model's functions read (the model's parameter
+        values first).
     """
 
     options: SimulationOptions
@@ -80,6 +83,7 @@ class SimulationPlan:
     project: Callable[[float, np.ndarray], np.ndarray] | None = field(repr=False)
     outputs: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]] = field(repr=False)
     events: tuple[Callable, ...] = field(repr=False)
+    parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
 
     @property
     def y0(self) -> np.ndarray:
@@ -164,7 +168,7 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         options=options, initial=initial, loop="c" if native else "python",
         why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
         rhs=rhs, project=project, outputs=outputs,
-        events=tuple(_state_event(e, n) for e in output.events))
+        events=tuple(_state_event(e, n) for e in output.events), parameters=num.p)
 
 
 def _state_event(event: Callable, n: int) -> Callable:

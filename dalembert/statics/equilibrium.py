@@ -28,7 +28,7 @@ import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg
@@ -215,7 +215,7 @@ def equilibrium(
     system: System,
     guess: Mapping[object, float] | Sequence[float] | Array,
     *,
-    parameters: Mapping[object, object] | None = None,
+    parameters: Mapping[Any, object] | None = None,
     t: float = 0.0,
     fixed: Sequence[object] | None = None,
     tol: float = 1e-12,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -47,7 +48,7 @@ def _initial_point(guess: object, problem: Problem) -> Array:
     return x0
 
 
-def _guess_from_mapping(guess: Mapping[object, object], problem: Problem) -> Array:
+def _guess_from_mapping(guess: Mapping[Any, object], problem: Problem) -> Array:
     x0 = np.ones(problem.n)
     for key, value in guess.items():
         index = _variable_index(key, problem)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import scipy.linalg
@@ -169,7 +169,7 @@ def linearize(
     system: System,
     q_eq: Equilibrium | Mapping[object, float] | Sequence[float] | Array,
     *,
-    parameters: Mapping[object, object] | None = None,
+    parameters: Mapping[Any, object] | None = None,
     t: float | None = None,
     fixed: Sequence[object] | None = None,
     tol: float = 1e-8,
