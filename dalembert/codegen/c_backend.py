@@ -77,8 +77,9 @@ FlatSpec = tuple[str, Arguments, Sequence[sp.Expr]]
 #: Bumped whenever the generated C changes, so that stale cached libraries are not used
 #: (4: every library ends with the cache's probe function and has a digest record;
 #: 5: a small power printed as a parenthesized product, right after "/" too;
-#: 6: part kernels gather their parameters as they gather their coordinates).
-GENERATOR_VERSION = "6"
+#: 6: part kernels gather their parameters as they gather their coordinates;
+#: 7: Piecewise and Heaviside as conditional expressions).
+GENERATOR_VERSION = "7"
 CFLAGS = ("-O0", "-fPIC", "-shared", "-fno-math-errno")
 #: Kernels of one part (a body, a joint) are short, so optimizing them costs little.
 PART_CFLAGS = ("-O1", *CFLAGS[1:])
@@ -312,6 +313,28 @@ class _Printer(C99CodePrinter):
             base = self.parenthesize(expr.base, 100)
             return "(" + "*".join([f"({base})"] * int(expr.exp)) + ")"
         return super()._print_Pow(expr)
+
+    # Switching functions (saturation, dead zones, Coulomb-like laws) as conditional
+    # expressions, so that such models stay in C.
+    def _print_Piecewise(self, expr: sp.Piecewise) -> str:
+        """Nested ``cond ? value : rest``; NaN where no condition holds (as SymPy)."""
+        code = "NAN"
+        for value, condition in reversed(expr.args):
+            if condition == sp.true:
+                code = self._print(value)
+            else:
+                code = f"(({self._print(condition)}) ? ({self._print(value)}) : ({code}))"
+        return code
+
+    def _print_Heaviside(self, expr: sp.Heaviside) -> str:
+        x = self._print(expr.args[0])
+        at_zero = expr.args[1] if len(expr.args) > 1 else sp.S.Half
+        return f"(({x}) > 0 ? 1.0 : (({x}) < 0 ? 0.0 : ({self._print(at_zero)})))"
+
+    def _print_DiracDelta(self, expr: sp.Expr) -> str:
+        # The derivative of a step (of Heaviside, sign, Abs, Min, Max): zero wherever it
+        # is defined, which is every state but a set of measure zero.
+        return "0.0"
 
 
 def _c_source(name: str, arguments: Arguments, exprs: Sequence[sp.Expr]) -> str:

@@ -159,6 +159,10 @@ class _NamedPrinter(NumPyPrinter):
 
     _print_Dummy = _print_Symbol
 
+    def _print_DiracDelta(self, expr: sp.Expr) -> str:
+        # The derivative of a step: zero wherever it is defined (as the C code has it).
+        return "0.0"
+
     def code(self, expr: sp.Expr) -> str:
         """``expr`` printed and checked (see :meth:`check`)."""
         try:

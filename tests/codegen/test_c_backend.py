@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -143,3 +145,50 @@ def test_a_spring_over_a_squared_length_oscillates_at_its_frequency(cache):
                         potential=q**2 / (2 * length**exponent), parameters={length: 2.0})
         traj = spring.simulate((0.0, 1.0), {q: 1.0}, t_eval=[1.0], backend="c")
         assert traj.q[0, 0] == pytest.approx(np.cos(2.0 ** (-exponent / 2)), abs=1e-10)
+
+
+#: Switching functions: saturation, dead zones, Coulomb-like laws, their derivatives.
+SWITCHING = [sp.Piecewise((x, x > 0), (-x, True)), sp.Heaviside(x), sp.Heaviside(x, 0.25),
+             sp.sign(x), sp.Abs(x), sp.Min(x, k), sp.Max(x, 1, k),
+             sp.Piecewise((1, x < -1), (x**2, x < 1), (2, True)),
+             sp.Piecewise((x, (x > 0) & (x < k)), (0, True)),
+             sp.Piecewise((x, x > 0)),  # no value for x <= 0: NaN, as SymPy says
+             sp.Max(-k, sp.Min(k, 3 * x)).diff(x)]  # a saturation's derivative
+
+
+@needs_cc
+@pytest.mark.parametrize("expr", SWITCHING, ids=str)
+def test_switching_functions_compile_to_c(cache, expr):
+    spec = ("f", [("q", [x]), ("p", [k])], [expr])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no fallback to NumPy
+        (fn,) = c_backend.build_flat_functions([spec], use="c")
+    assert hasattr(fn, "library")
+    for value in (-2.0, -1.0, -0.2, 0.0, 0.2, 0.5, 1.0, 2.0):  # both sides and the switches
+        exact = expr.subs({x: value, k: 0.5})
+        expected = float("nan") if exact is sp.nan else float(exact.rewrite(sp.Piecewise)) \
+            if exact.has(sp.DiracDelta) is False else 0.0
+        np.testing.assert_equal(fn(np.array([value]), np.array([0.5])), [expected])
+
+
+@needs_cc
+def test_a_saturated_controller_stays_in_c_and_matches_numpy(cache, monkeypatch):
+    """A pendulum pushed back by a torque saturating at +-limit (``Min``/``Max``): the C
+    functions equal NumPy's on both sides of the saturation and at its corners."""
+    from dalembert import System, coordinates
+
+    (theta,) = coordinates("theta")
+    gain, limit = sp.symbols("gain limit", positive=True)
+    torque = sp.Max(-limit, sp.Min(limit, -gain * theta))
+    models = {}
+    for backend in ("c", "numpy"):
+        monkeypatch.setenv("DALEMBERT_BACKEND", backend)
+        system = System([theta], kinetic=theta.diff()**2 / 2, potential=-9.81 * sp.cos(theta),
+                        generalized_forces={theta: torque}, parameters={gain: 40.0, limit: 2.0})
+        models[backend] = system.numeric()
+        assert models[backend].compiled.backend == backend
+    for angle in np.linspace(-0.2, 0.2, 41):  # the corners at +-0.05
+        state = (0.0, np.array([angle]), np.array([0.3]))
+        for c_value, numpy_value in zip(models["c"].kkt_blocks(*state),
+                                        models["numpy"].kkt_blocks(*state)):
+            np.testing.assert_allclose(c_value, numpy_value, rtol=1e-15, atol=0)
