@@ -15,6 +15,7 @@ harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of
 from .diagnostics import JointPointWarning, check_mobility
+from .drivers import Driver, JointSpring
 from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
 from .loads import Force, SpringDamper, Torque
 from .outputs import (
@@ -43,6 +44,7 @@ from .rotations import (
 __all__ = [
     "Body",
     "Distance",
+    "Driver",
     "E_matrix",
     "Fixed",
     "Force",
@@ -51,6 +53,7 @@ __all__ = [
     "Joint",
     "JointPointWarning",
     "JointReaction",
+    "JointSpring",
     "Multibody",
     "Particle",
     "PlanarBody",

@@ -26,6 +26,7 @@ from ..trajectory import Trajectory
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
+from .drivers import JointSpring
 from .initial_state import body_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
@@ -51,6 +52,10 @@ class Multibody:
         Uniform field (world components), as the potential ``-sum m g . x``.
     forces, torques, springs
         :class:`Force`, :class:`Torque`, :class:`SpringDamper` loads.
+    joint_springs
+        :class:`~dalembert.multibody.drivers.JointSpring` loads: springs and dampers
+        on revolute angles and prismatic travels (drivers, which prescribe those, are
+        joints: :class:`~dalembert.multibody.drivers.Driver`).
     name
         The system's name (in titles and messages).
     parameters
@@ -80,12 +85,14 @@ class Multibody:
         springs: Sequence[SpringDamper] = (),
         name: str = "multibody",
         parameters: Mapping[Any, object] | None = None,
+        joint_springs: Sequence[JointSpring] = (),
     ) -> None:
         self.bodies = tuple(bodies)
         self.joints = tuple(joints)
         self.forces = tuple(forces)
         self.torques = tuple(torques)
         self.springs = tuple(springs)
+        self.joint_springs = tuple(joint_springs)
         self.name = name
         self.gravity = array(gravity, (3,), "gravity (world components)")
         self.defaults = dict(parameters or {})
@@ -107,8 +114,10 @@ class Multibody:
     def parameters(self) -> tuple[sp.Symbol, ...]:
         """The parameter symbols of the mechanism's numbers and loads, sorted by name."""
         found = parametric_symbols(self)
-        for piece in (*self.bodies, *self.joints, *self.springs, *self.forces):
+        for piece in (*self.bodies, *self.springs, *self.forces, *self.joint_springs):
             found |= parametric_symbols(piece)
+        for joint in self.joints:
+            found |= joint.parameter_symbols()
         loads = [*(c for f in self.forces for c in f.force),
                  *(c for tq in self.torques for c in tq.torque)]
         for expr in loads:
@@ -160,6 +169,10 @@ class Multibody:
             return out
 
         bound.joints = tuple(rebody(j) for j in self.joints)
+        joints = {id(j): b for j, b in zip(self.joints, bound.joints)}
+        bound.joint_springs = tuple(
+            _with_joint(with_numbers(s, numbers), joints.get(id(s.joint), s.joint))
+            for s in self.joint_springs)
         bound.springs = tuple(rebody(s) for s in self.springs)
         bound.forces = tuple(rebody(f) for f in self.forces)
         bound.torques = tuple(rebody(tq) for tq in self.torques)
@@ -188,6 +201,10 @@ class Multibody:
             self._check_members(j.bodies, f"joint {j.name!r}")
         for s in self.springs:
             self._check_members(s.bodies, f"spring {s.name!r}")
+        for js in self.joint_springs:
+            if not any(js.joint is j for j in self.joints):
+                raise ModelError(f"joint spring {js.name!r} acts on joint {js.joint.name!r}, "
+                                 "which is not in this system's joints")
         loads: tuple[Force | Torque, ...] = (*self.forces, *self.torques)
         for load in loads:
             self._check_members((load.body,), load.name)
@@ -232,13 +249,16 @@ class Multibody:
     def potential_energy(self) -> sp.Expr:
         """``V``: gravity ``-sum m g . x`` and the springs' ``1/2 k (L - L0)^2``."""
         V = sp.Add(*(gravity_potential(b, self.gravity) for b in self.bodies))
-        return V + sp.Add(*(s.potential() for s in self.springs))
+        V += sp.Add(*(s.potential() for s in self.springs))
+        return V + sp.Add(*(s.potential() for s in self.joint_springs))
 
     def generalized_forces(self) -> dict[object, sp.Expr]:
         """Generalized forces of the torques, by coordinate."""
         Q: dict[object, sp.Expr] = {}
-        for torque in self.torques:
-            for coord, value in torque.generalized_forces().items():
+        loads = [load.generalized_forces() for load in self.torques]
+        loads += [spring.generalized_forces() for spring in self.joint_springs]
+        for forces in loads:
+            for coord, value in forces.items():
                 Q[coord] = Q.get(coord, sp.S.Zero) + value
         return Q
 
@@ -466,6 +486,15 @@ def _names(body: Body) -> list[str]:
 
 
 _Piece = TypeVar("_Piece")
+
+
+def _with_joint(spring: JointSpring, joint: Joint) -> JointSpring:
+    """``spring`` acting on ``joint`` (a bound copy of its own)."""
+    if spring.joint is joint:
+        return spring
+    out = copy.copy(spring)
+    out.joint = joint
+    return out
 
 
 def chain(

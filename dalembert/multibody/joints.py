@@ -54,7 +54,7 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from .bodies import Body, Ground, Particle, PlanarBody
-from .parametric import Scalar, array, scalar, sympy_vector, to_sympy
+from .parametric import Scalar, array, parametric_symbols, scalar, sympy_vector, to_sympy
 from .rotations import dot, times_vector
 from .types import FloatArray, Vector
 
@@ -172,6 +172,10 @@ class Joint:
     def bodies(self) -> tuple[Body, Body]:
         """``(body_a, body_b)``."""
         return self.body_a, self.body_b
+
+    def parameter_symbols(self) -> set[sp.Symbol]:
+        """The parameter symbols of its geometry (:mod:`.parametric`)."""
+        return parametric_symbols(self)
 
     def _check_bodies(self) -> None:
         if not self.uses_orientation:
@@ -515,7 +519,7 @@ class PointOnPlane(Joint):
     >>> from dalembert.multibody import Ground, Particle
     >>> floor = PointOnPlane("floor", Ground(), Particle("p", 1.0), normal=(0, 0, 1))
     >>> floor.constraints()[0].expr
-    1.0*p_z(t)
+    p_z(t)
     """
 
     n_equations = 1

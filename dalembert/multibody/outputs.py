@@ -26,6 +26,7 @@ import numpy as np
 from ..trajectory import Trajectory
 from .bodies import Body, Ground, TurningBody
 from .builder import Multibody
+from .drivers import coordinate_values
 from .joints import Joint
 from .rolling import Rolling
 from .rotations import euler_from_matrix
@@ -298,6 +299,10 @@ def potential_energy(mb: Multibody, traj: Trajectory) -> FloatArray:
         d = (point_positions(mb, traj, s.body_b, s.point_b)
              - point_positions(mb, traj, s.body_a, s.point_a))
         V += 0.5 * s.stiffness * (np.linalg.norm(d, axis=1) - s.rest_length) ** 2
+    if mb.joint_springs:
+        poses = {b.name: _pose(traj, b) for b in mb.bodies}
+        for js in mb.joint_springs:
+            V += 0.5 * js.stiffness * (coordinate_values(js.joint, poses) - js.rest) ** 2
     return V
 
 

@@ -129,10 +129,13 @@ def symbols_of(value: object) -> set[sp.Symbol]:
 
 
 def to_sympy(value: Scalar) -> sp.Expr:
-    """A scalar for the equations: exact zero for 0.0, ``Float`` for other numbers."""
+    """A scalar for the equations: exact 0 and +-1 (their products vanish or disappear
+    from the expressions), ``Float`` for other numbers."""
     if isinstance(value, sp.Basic):
         return value
-    return sp.S.Zero if value == 0 else sp.Float(value)
+    if value in (0.0, 1.0, -1.0):
+        return sp.Integer(int(value))
+    return sp.Float(value)
 
 
 def sympy_vector(value: Array) -> sp.Matrix:

@@ -146,11 +146,14 @@ class _Localized:
 def _localized_part(members: Sequence[object], localized: Sequence[_Localized],
                     equations: Equations, coordinates: np.ndarray, rows: np.ndarray) -> Part:
     """The part of a group of pieces, its kernel's parameters the template's locals."""
-    symbols = tuple(localized[0].symbols)
-    values = np.empty((len(members), len(symbols)), dtype=object)
-    for k, local in enumerate(localized):
-        values[k, :] = local.exprs
-    return Part(equations, coordinates, rows, symbols, values)
+    local = tuple(localized[0].symbols)
+    # the model's own parameters in what was not localized (a driver's motion)
+    shared = tuple(sorted((s for s in equations.model.parameters if s not in set(local)),
+                          key=lambda s: s.name))
+    values = np.empty((len(members), len(local) + len(shared)), dtype=object)
+    for k, instance in enumerate(localized):
+        values[k, :] = [*instance.exprs, *shared]
+    return Part(equations, coordinates, rows, local + shared, values)
 
 
 def _body_fields(body: MovingBody, gravity: np.ndarray) -> list[object]:
@@ -296,9 +299,10 @@ def _freeze(value: object) -> object:
 
 def _load_part(mb: Multibody, offsets: dict[int, Indices]) -> Part | None:
     """Forces, torques and springs as one part in the coordinates they involve."""
-    if not (mb.forces or mb.torques or mb.springs):
+    if not (mb.forces or mb.torques or mb.springs or mb.joint_springs):
         return None
-    potential = sp.Add(*(s.potential() for s in mb.springs))
+    potential = sp.Add(*(s.potential() for s in mb.springs),
+                       *(s.potential() for s in mb.joint_springs))
     generalized = mb.generalized_forces()
     point_forces = mb.point_forces()
     # a generalized force involves the coordinate it acts on even when constant (a
