@@ -38,6 +38,7 @@ from .errors import (  # every error and warning (errors.__all__)
 from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
 from .model.forces import PointForce
+from .model.parameters import ParameterSet
 from .system import System
 from .trajectory import Trajectory
 
@@ -84,6 +85,7 @@ __all__ = [
     "NonholonomicLinearizationError",
     "NotAnEquilibriumError",
     "ParameterError",
+    "ParameterSet",
     "Pfaffian",
     "PointForce",
     "RedundantConstraintsWarning",

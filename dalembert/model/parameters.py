@@ -2,7 +2,10 @@
 
 Parameters are the free SymPy symbols of a model other than time, positions and
 velocities. Generated code takes them as one array, so changing a value never
-regenerates code.
+regenerates code. A name that is not a parameter of the model is an error (a typo
+would otherwise pass silently), unless the values are given as
+``ParameterSet(values, strict=False)``: one dictionary for several variants of a
+model, each taking the values it uses.
 """
 
 from __future__ import annotations
@@ -15,6 +18,34 @@ import sympy as sp
 
 from ..errors import ParameterError
 from .coordinates import key_name
+
+
+class ParameterSet(dict):
+    """Parameter values by symbol or name, with how to treat names a model lacks.
+
+    Parameters
+    ----------
+    values
+        The values, by symbol or name.
+    strict
+        ``True`` (the default, as for a plain dict): a name that is not a parameter of
+        the model is an error. ``False``: such names are ignored, so that one set
+        serves several models.
+
+    Examples
+    --------
+    >>> m, g, k = sp.symbols("m g k")
+    >>> shared = ParameterSet({"m": 2.0, "g": 9.81, "k": 5.0}, strict=False)
+    >>> parameter_values((m, g), shared)
+    {'m': 2.0, 'g': 9.81}
+    """
+
+    def __init__(self, values: Mapping[Any, object] | None = None, *,
+                 strict: bool = True) -> None:
+        super().__init__(values or {})
+        if not isinstance(strict, bool):
+            raise ParameterError(f"strict must be True or False, got {strict!r}")
+        self.strict = strict
 
 
 def resolve_parameters(
@@ -53,8 +84,11 @@ def parameter_values(
             f"parameters must be a dict {{symbol or name: number}}, got {value_set!r} "
             f"({type(value_set).__name__}); e.g. parameters={{'m': 1.0}}"
         )
+    strict = getattr(value_set, "strict", True)
     for key, value in (value_set or {}).items():
         name = key_name(key)
+        if name not in names and not strict:
+            continue
         if name not in names:
             known = ", ".join(sorted(names)) or "none"
             time = " ('t' is time, dalembert.t, never a parameter)" if name == "t" else ""

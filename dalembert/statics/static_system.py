@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..codegen.compiled import NumericModel
+from ..model.parameters import ParameterSet
 
 if TYPE_CHECKING:
     from ..system import System
@@ -98,9 +99,10 @@ def static_system(system: System, *parameters: Mapping[Any, object] | None) -> S
     >>> s.parameter_values["l"], s.constraint_labels
     (2.0, ("constraint 'rod' (holonomic: -l**2 + x**2 + y**2 = 0)",))
     """
-    overrides: dict[Any, object] = {}
-    for value_set in parameters:
-        overrides.update(value_set or {})
+    given = [v for v in parameters if v]
+    overrides = ParameterSet(strict=all(getattr(v, "strict", True) for v in given))
+    for value_set in given:
+        overrides.update(value_set)
     num = system.numeric(overrides)
     return StaticSystem(
         num, tuple(system.coordinate_names), tuple(system.constraint_names),

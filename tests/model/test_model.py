@@ -156,3 +156,31 @@ def test_parameters_sorted_and_overridden():
     p = resolve_parameters(system.parameters, system.parameter_values, {"g": 2.0})
     assert np.array_equal(p, [2.0, 1.0])
     assert system.numeric({"m": 3.0}).p.tolist() == [9.0, 3.0]
+
+
+def test_one_parameter_set_serves_several_models():
+    """A ``ParameterSet(strict=False)`` carries names a model lacks; a plain dict may
+    not (a typo would pass silently)."""
+    import numpy as np
+
+    from dalembert import ParameterError, ParameterSet
+    from dalembert.examples import cartesian_pendulum
+    from dalembert.multibody import Ground as G0
+    from dalembert.multibody import Multibody, Particle, SpringDamper
+
+    k, m_p = sp.Symbol("k"), sp.Symbol("m")
+    bob = Particle("bob", m_p)
+    spring = Multibody([bob], springs=[SpringDamper("s", G0(), bob, k)], gravity=(0, 0, 0))
+    pendulum = cartesian_pendulum.build()
+    shared = ParameterSet({"m": 2.0, "g": 9.81, "l": 1.0, "k": 8.0}, strict=False)
+    swing = pendulum.simulate((0, 1), {"x": 1.0, "y": 0.0}, parameters=shared, t_eval=[1.0])
+    bounce = spring.simulate((0, np.pi / 2), {"bob_x": 0.1}, parameters=shared,
+                             t_eval=[np.pi / 2])
+    assert swing.parameters == {"g": 9.81, "l": 1.0, "m": 2.0}
+    assert bounce["bob_x"][0] == pytest.approx(0.1 * np.cos(2 * np.pi / 2), abs=1e-10)
+    rest = pendulum.equilibrium({"x": 0.1, "y": -0.9}, parameters=shared)
+    assert -2 * rest.multiplier("rod") == pytest.approx(2.0 * 9.81, rel=1e-12)
+    with pytest.raises(ParameterError, match="'k' is not a parameter of this model"):
+        pendulum.simulate((0, 1), {"x": 1.0, "y": 0.0}, parameters=dict(shared))
+    with pytest.raises(ParameterError, match="strict must be True or False"):
+        ParameterSet({}, strict="no")
