@@ -13,7 +13,7 @@ harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
 """
 
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
-from .builder import Multibody, chain, multibody_of
+from .builder import Multibody, chain, multibody_of, ring, ring_state
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Driver, JointSpring
 from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
@@ -81,6 +81,8 @@ __all__ = [
     "point_positions",
     "potential_energy",
     "quaternion_from_matrix",
+    "ring",
+    "ring_state",
     "rotation_matrices",
     "rotation_matrix",
 ]

@@ -575,3 +575,106 @@ def chain(
     kind = "planar revolute" if planar else joint
     return Multibody(links, joints, gravity=down if gravity is None else gravity,
                      name=f"{n}-link {kind} chain")
+
+
+def ring(
+    n: int,
+    length: Scalar,
+    mass: Scalar,
+    radius: Scalar,
+    joint: Literal["revolute", "spherical"] = "revolute",
+    gravity: Vector = (0.0, 0.0, -9.81),
+) -> Multibody:
+    """A closed ring of ``n`` equal rods (uniform cylinders), hung from one vertex.
+
+    A regular polygon in the ``x-z`` plane: rod ``k`` (``rod1..rodn``) joins vertex
+    ``k-1`` to vertex ``k``, the joint ``pivot`` holds vertex 0 to the origin and
+    ``hinge1 .. hingen`` join consecutive rods, the last closing the loop. With
+    ``joint="revolute"`` (axes along ``y``) the planar loop is closed with 3D hinges,
+    so three of its rows are combinations of the others: a classic mechanism with
+    dependent constraints (``n - 3`` degrees of freedom for the planar loop on its
+    pivot, counted from the rank); with ``"spherical"`` the rows are independent.
+    :func:`ring_state` places it.
+
+    Parameters
+    ----------
+    n
+        The number of rods (at least 4).
+    length, mass, radius
+        Each rod's length, mass and radius (numbers or parameter expressions).
+    joint
+        ``"revolute"`` or ``"spherical"``.
+    gravity
+        The field (world components).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> mb = ring(6, 0.5, 1.0, 0.02)
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")  # the dependent rows are reported
+    ...     report = mb.system.consistent_initial_state(*ring_state(mb, 6, 0.5))
+    >>> report.degrees_of_freedom, len(report.dependent_constraints)
+    (4, 3)
+    """
+    if int(n) != n or n < 4:
+        raise ModelError(f"a ring needs a whole number of rods, at least 4, got {n!r}")
+    if joint not in ("spherical", "revolute"):
+        raise ModelError(f"joint must be 'spherical' or 'revolute', got {joint!r}")
+    transverse = mass * (3 * radius**2 + length**2) / 12
+    rods = [RigidBody(f"rod{k + 1}", mass, (transverse, transverse, mass * radius**2 / 2))
+            for k in range(int(n))]
+    top = np.array([0, 0, 1], dtype=object) * (length / 2)
+    bottom = -top
+
+    def hinge(name: str, a: Body, b: Body, point_a: Any, point_b: Any) -> Joint:
+        if joint == "revolute":
+            return Revolute(name, a, b, point_a, point_b, axis_a=(0, 1, 0))
+        return Spherical(name, a, b, point_a, point_b)
+
+    joints = [hinge("pivot", Ground(), rods[0], (0, 0, 0), top)]
+    joints += [hinge(f"hinge{k + 1}", rods[k], rods[(k + 1) % int(n)], bottom, top)
+               for k in range(int(n))]
+    return Multibody(rods, joints, gravity=gravity, name=f"{n}-rod {joint} ring")
+
+
+def ring_state(mb: Multibody, n: int, length: float, tilt: float = 0.6,
+               turn: float = 1.0) -> tuple[dict[str, float], dict[str, float]]:
+    """``(q0, qd0)`` of a :func:`ring`: regular, tilted by ``tilt`` about the pivot's
+    ``y`` axis and turning rigidly about it at ``turn`` rad/s (consistent: a rigid
+    rotation about the hinge axis through the pivot keeps every joint together).
+
+    Parameters
+    ----------
+    mb
+        The ring.
+    n, length
+        Its number of rods and their length (numbers).
+    tilt, turn
+        The angle (rad) and the rate (rad/s) about ``y`` through the pivot.
+
+    Examples
+    --------
+    >>> q0, qd0 = ring_state(ring(4, 1.0, 1.0, 0.05), 4, 1.0, tilt=0.0, turn=0.0)
+    >>> round(q0["rod3_z"], 12)  # a square on its corner: -1.5 L / (2 sin(pi/4))
+    -1.06066017178
+    """
+    phi = np.arange(n + 1) * 2 * np.pi / n  # the vertices, the pivot first
+    vertex = length / (2 * np.sin(np.pi / n)) * np.column_stack(
+        [np.sin(phi), np.zeros(n + 1), np.cos(phi) - 1.0])
+
+    def about_y(angle: float) -> FloatArray:
+        c, s = np.cos(angle), np.sin(angle)
+        return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+    omega = np.array([0.0, turn, 0.0])
+    positions, orientations, velocities = {}, {}, {}
+    for k in range(n):
+        axis = vertex[k] - vertex[k + 1]  # body z, from the lower joint to the upper
+        center = about_y(tilt) @ (vertex[k] + vertex[k + 1]) / 2
+        positions[f"rod{k + 1}"] = center
+        orientations[f"rod{k + 1}"] = about_y(tilt + np.arctan2(axis[0], axis[2]))
+        velocities[f"rod{k + 1}"] = np.cross(omega, center)
+    return mb.initial_state(positions=positions, orientations=orientations,
+                            velocities=velocities,
+                            angular_velocities=dict.fromkeys(positions, omega))

@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 from dalembert import SingularSystemError
-from dalembert.multibody import Ground, Multibody, Revolute, RigidBody, Spherical
+from dalembert.multibody import ring as ring_of_rods
+from dalembert.multibody import ring_state
 from dalembert.solvers.native import NativeSolver, native_solver
 from dalembert.solvers.native.structure import schur_structure
 from dalembert.solvers.projection import StepProjector
@@ -27,43 +28,10 @@ LENGTH, MASS, RADIUS = 0.5, 1.0, 0.02
 T_END = 1.5  # the motion is chaotic: rounding differences grow ~10x per 0.4 s
 
 
-def hexagon(joint: str = "revolute", tilt: float = 0.6, turn: float = 1.0):
-    """``(multibody, q0, qd0)``: the ring, regular, tilted by ``tilt`` about the pivot
-    and turning rigidly about it at ``turn`` rad/s (consistent: a rigid rotation about
-    the hinge axis through the pivot keeps every joint together)."""
-    transverse = MASS * (3 * RADIUS**2 + LENGTH**2) / 12
-    rods = [RigidBody(f"rod{k + 1}", MASS, (transverse, transverse, MASS * RADIUS**2 / 2))
-            for k in range(6)]
-    top, bottom, y = (0, 0, LENGTH / 2), (0, 0, -LENGTH / 2), (0.0, 1.0, 0.0)
-
-    def hinge(name, a, b, point_a, point_b):
-        if joint == "revolute":
-            return Revolute(name, a, b, point_a, point_b, axis_a=y)
-        return Spherical(name, a, b, point_a, point_b)
-
-    joints = [hinge("pivot", Ground(), rods[0], (0, 0, 0), top)]
-    joints += [hinge(f"hinge{k + 1}", rods[k], rods[(k + 1) % 6], bottom, top)
-               for k in range(6)]
-    mb = Multibody(rods, joints, name=f"{joint} hexagon")
-    phi = np.arange(7) * np.pi / 3  # the vertices, the pivot first, around the center
-    vertex = LENGTH * np.column_stack([np.sin(phi), np.zeros(7), np.cos(phi) - 1.0])
-
-    def about_y(angle):
-        c, s = np.cos(angle), np.sin(angle)
-        return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-    omega = np.array([0.0, turn, 0.0])
-    positions, orientations, velocities = {}, {}, {}
-    for k, rod in enumerate(rods):
-        axis = vertex[k] - vertex[k + 1]  # body z, from the lower joint to the upper
-        center = about_y(tilt) @ (vertex[k] + vertex[k + 1]) / 2
-        positions[rod.name] = center
-        orientations[rod.name] = about_y(tilt + np.arctan2(axis[0], axis[2]))
-        velocities[rod.name] = np.cross(omega, center)
-    q0, qd0 = mb.initial_state(positions=positions, orientations=orientations,
-                               velocities=velocities,
-                               angular_velocities=dict.fromkeys(positions, omega))
-    return mb, q0, qd0
+def hexagon(joint: str = "revolute"):
+    """``(multibody, q0, qd0)``: the ring, regular, tilted and turning about the pivot."""
+    mb = ring_of_rods(6, LENGTH, MASS, RADIUS, joint=joint)
+    return (mb, *ring_state(mb, 6, LENGTH))
 
 
 def simulate(mb, q0, qd0, backend: str):
