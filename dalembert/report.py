@@ -238,6 +238,9 @@ def run_example(
         run.files.append(traj.save(out / "trajectory.npz"))
         run.files += plot_all(traj, out, system=system, energy=quantity,
                               path_xy=path_coordinates(module, system))
+        own_plots = getattr(module, "plots", None)
+        if own_plots is not None:
+            run.files += own_plots(system, traj, out)
         if animation:
             run.files += write_animation(run, module, out, html=html, frames=frames)
     return run

@@ -11,6 +11,9 @@ Optional attributes, used by ``dalembert equilibrium`` and ``dalembert modes``:
 - ``EQUILIBRIUM_GUESS``: a dict by coordinate name, the starting point of
   ``System.equilibrium`` (it need not satisfy the constraints: it is projected
   onto them first). Examples without it have no statics commands.
+- ``plots(system, traj, out) -> list of paths``: plots of the example's own (a
+  motor's torque, a parameter study), written into the folder ``out`` by
+  ``dalembert run`` beside the standard ones.
 - ``draw(system, q) -> list of numpy arrays``: the mechanism at the
   configuration ``q`` (an array in coordinate order) as polylines, each a
   ``(k, 2)`` array of ``x, y`` points in the plane of the drawing (rods, links,
@@ -44,6 +47,7 @@ EXAMPLES: dict[str, str] = {
     "hanging-chain": "hanging_chain",
     "four-bar": "four_bar",
     "slider-crank": "slider_crank",
+    "crank-press": "crank_press",
     "closed-chain": "closed_chain",
 }
 

@@ -123,7 +123,7 @@ INITIAL = initial_state()
 
 def geometry_of(mb: Multibody) -> tuple[float, float, float]:
     """``(a, b, e)`` read back from the joints of :func:`build_multibody`."""
-    j1, j2, _, guide = mb.joints
+    j1, j2, guide = mb.joint("J1"), mb.joint("J2"), mb.joint("guide")
     return 2 * abs(j1.point_b[0]), 2 * abs(j2.point_b[0]), float(guide.point_a[1])
 
 
