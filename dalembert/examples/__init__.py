@@ -48,6 +48,7 @@ EXAMPLES: dict[str, str] = {
     "four-bar": "four_bar",
     "slider-crank": "slider_crank",
     "crank-press": "crank_press",
+    "chain-frequencies": "chain_frequencies",
     "closed-chain": "closed_chain",
 }
 
