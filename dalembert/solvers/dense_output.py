@@ -121,21 +121,20 @@ class DenseRecorder:
             return DenseSolution(self.direction, t_old, t_new, ends, self.project,
                                  objects=[s[2] for s in steps])
         table = self._buffer[:k].copy()
-        starts = table[:, 2:2 + n]
-        ends = np.empty((k, n))
-        ends[:-1] = starts[1:]
-        if k:
-            ends[-1] = self._final
+        assert self._final is not None
         rows = table[:, 2 + n:].reshape(k, -1, n)
-        return DenseSolution(self.direction, table[:, 0], table[:, 1], ends, self.project,
-                             kind=self.kind or "objects", starts=starts, rows=rows)
+        return DenseSolution(self.direction, table[:, 0], table[:, 1], self._final[None, :],
+                             self.project, kind=self.kind or "objects",
+                             starts=table[:, 2:2 + n], rows=rows)
 
 
 class DenseSolution:
     """``sol(t)``: the state at a time or an array of times (shape ``(n_state,)`` or
     ``(n_state, len(t))``, as SciPy's ``OdeSolution``), within ``[t_min, t_max]``.
 
-    Made by :meth:`DenseRecorder.solution`.
+    Made by :meth:`DenseRecorder.solution`. ``ends`` holds the state at each step's
+    end, or with ``starts`` (the steps' start states) only the last step's: the others
+    end where the next one starts.
     """
 
     def __init__(self, direction: float, t_old: np.ndarray, t_new: np.ndarray,
@@ -161,7 +160,7 @@ class DenseSolution:
         k = np.minimum(np.searchsorted(self._ahead, ahead), len(self._ahead) - 1)
         out = np.empty((len(flat), self.ends.shape[1]))
         at_end = ahead == self._ahead[k]
-        out[at_end] = self.ends[k[at_end]]
+        out[at_end] = self._end_states(k[at_end])
         inside = np.flatnonzero(~at_end)
         if len(inside):
             states = self._interpolate(k[inside], flat[inside])
@@ -169,6 +168,12 @@ class DenseSolution:
                 states = np.array([self.project(s, y) for s, y in zip(flat[inside], states)])
             out[inside] = states
         return out[0] if times.ndim == 0 else out.T
+
+    def _end_states(self, k: np.ndarray) -> np.ndarray:
+        if self.starts is None:
+            return self.ends[k]
+        last = len(self.t_new) - 1
+        return np.where((k == last)[:, None], self.ends[-1], self.starts[np.minimum(k + 1, last)])
 
     def _interpolate(self, k: np.ndarray, s: np.ndarray) -> np.ndarray:
         """The unprojected interpolants of steps ``k`` at times ``s``, one row each."""
