@@ -84,8 +84,9 @@ def kept_bytes(system, **options) -> tuple[float, int]:
 @pytest.mark.parametrize(("method", "rows"), [("DOP853", 7), ("RK45", 4)])
 def test_memory_per_step(pendulum, method, rows):
     n_state = 4
-    per_step, steps = kept_bytes(pendulum, t_span=(0, 60), q0=Q0, t_eval=[60.0],
+    per_step, steps = kept_bytes(pendulum, t_span=(0, 150), q0=Q0, t_eval=[150.0],
                                  method=method, rtol=1e-9, atol=1e-11)
-    assert steps > 1000
+    assert steps > 2000
     numbers = 8 * (2 + n_state * (1 + rows))  # t_old, t_new, y_old, the rows
-    assert numbers <= per_step < 1.1 * numbers
+    # beside them only what a run keeps anyway (a few kB over the run)
+    assert numbers <= per_step < 1.2 * numbers

@@ -203,3 +203,18 @@ def test_sigint_stops_a_long_run_within_a_second(time_bound):
     finally:
         child.kill()
         child.wait()
+
+
+def test_outputs_in_chunks_are_those_of_one_call(pendulum, monkeypatch):
+    """The C outputs of a long trajectory are computed in chunks (a Ctrl-C is served
+    between them): chunks of 3 give the same arrays as one call."""
+    from dalembert.solvers.native import solver as native_solver
+
+    plan = pendulum.plan((0, 1), Q0, backend="c", t_eval=np.linspace(0, 1, 11))
+    traj = pendulum.run(plan)
+    y = np.hstack([traj.q, traj.qd])
+    whole = plan.outputs(traj.t, y)
+    monkeypatch.setattr(native_solver, "OUTPUT_CHUNK", 3)
+    chunked = plan.outputs(traj.t, y)
+    for key, value in whole.items():
+        assert np.array_equal(chunked[key], value), key
