@@ -4,8 +4,8 @@
 ``dense_output``, ``events``, a solver class and its options) plus a projector,
 and runs one of the loops of :mod:`~dalembert.solvers.loop` under a progress bar
 and Ctrl-C: a failure or an interruption ends the run but keeps every step
-computed so far (none if it comes before the first step: the solver's start
-evaluates the model). It checks nothing: its arguments come from
+computed so far (the start alone if it comes before the first step: the solver's
+start evaluates the model). It checks nothing: its arguments come from
 :func:`dalembert.options.simulation_options` through the simulation plan.
 """
 

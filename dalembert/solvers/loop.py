@@ -57,8 +57,9 @@ class SimulationLoop:
     - :meth:`advance` does one unit of work (one step, or a stretch of steps) and
       records its outputs; it sets :attr:`status` when the run ends (``"finished"``,
       ``"event"`` for a terminal event, ``"failed"``) with :attr:`message`;
-    - :meth:`interrupt` ends the run on Ctrl-C, keeping everything done so far,
-      even if the Ctrl-C landed inside :meth:`advance`;
+    - :meth:`interrupt` ends the run on Ctrl-C, keeping every unit of work completed
+      so far and none of one the Ctrl-C landed in (no output without its dense
+      output, no time without its state);
     - :attr:`t_reached` is the time the recorded solution reaches (for a progress
       bar);
     - :meth:`result` gives the :class:`IntegrationResult`, at any time.
@@ -285,7 +286,8 @@ class PythonLoop(SimulationLoop):
             value = float(event(t, y))
         except Exception as exc:  # the user's function: any error ends the run
             self.error = exc
-            self.stop("failed", f"{name} raised {type(exc).__name__} at t={t:.6g}: {exc}")
+            said = f": {exc}" if str(exc) else ""
+            self.stop("failed", f"{name} raised {type(exc).__name__} at t={t:.6g}{said}")
             return None
         if not np.isfinite(value):
             self.stop("failed", f"{name} returned {value} at t={t:.6g}: an event function "
@@ -315,6 +317,11 @@ class PythonLoop(SimulationLoop):
                 try:
                     root = brentq(g, t_old, t_new, xtol=4 * np.finfo(float).eps)
                 except _EventFailed:
+                    return None
+                except (ValueError, RuntimeError) as exc:  # no sign change left, no root
+                    self.stop("failed", f"{_event_name(event, k)} changed sign between "
+                              f"t={t_old:.6g} and t={t_new:.6g}, but its root could not be "
+                              f"located there: {exc}")
                     return None
                 hits.append((root, k))
             self.g[k] = g_new
