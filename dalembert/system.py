@@ -603,9 +603,10 @@ class System:
         result = plan.run()
         if not result.success:
             reached = result.t[-1] if len(result.t) else plan.options.t_span[0]
-            # stacklevel 3: the user's call of simulate or run
-            warnings.warn(f"{result.message}; returning the trajectory up to t={reached:.6g}",
-                          IntegrationWarning, stacklevel=3)
+            warning = IntegrationWarning(f"{result.message}; returning the trajectory up to "
+                                         f"t={reached:.6g}")
+            warning.__cause__ = result.error  # an event function's exception, chained
+            warnings.warn(warning, stacklevel=3)  # 3: the user's call of simulate or run
         return self._trajectory(result, plan)
 
     # -- rest and small oscillations -------------------------------------------------

@@ -4,7 +4,8 @@
 ``dense_output``, ``events``, a solver class and its options) plus a projector,
 and runs one of the loops of :mod:`~dalembert.solvers.loop` under a progress bar
 and Ctrl-C: a failure or an interruption ends the run but keeps every step
-computed so far. It checks nothing: its arguments come from
+computed so far (the start alone if it comes before the first step: the solver's
+start evaluates the model). It checks nothing: its arguments come from
 :func:`dalembert.options.simulation_options` through the simulation plan.
 """
 
@@ -15,7 +16,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.integrate import OdeSolver
 
+from ..errors import DalembertError
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
+from .nonfinite import Diagnosis
 from .step_control import CONTROLLED, ControlledSteps
 
 __all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate"]
@@ -33,6 +36,7 @@ def integrate(
     project: Projector | None = None,
     progress: bool = False,
     stretches: bool = False,
+    diagnose: Diagnosis | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -50,6 +54,9 @@ def integrate(
     stretches
         Run whole stretches of steps in C (:class:`~.loop.StretchLoop`): only for a
         native solver with its native projection, no events, no dense output.
+    diagnose
+        ``diagnose(t, y)``: what is not finite at a state, for the message of a run
+        that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
     solver_options
         Passed to ``method``.
 
@@ -62,26 +69,53 @@ def integrate(
     True
     """
     t0, tf = t_span
-    solver = method(fun, t0, np.asarray(y0, dtype=float), tf, **solver_options)
-    times = None if t_eval is None else np.asarray(t_eval, dtype=float)
-    loop: SimulationLoop
-    if stretches and project is not None:
-        loop = StretchLoop(solver, times, project)
-    else:
-        loop = PythonLoop(solver, times, events, project, dense_output)
-    bar = _progress_bar(t0, tf) if progress else None
-    try:
-        while loop.status is None:
-            loop.advance()
+    y0 = np.asarray(y0, dtype=float)
+    times = None
+    loop: SimulationLoop | None = None
+    bar = None
+    # A NaN or an overflow ends the run with a message naming it (loop.py), so NumPy's
+    # warnings about them (from the model's code, from SciPy's norms) would only repeat it
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        try:
+            times = None if t_eval is None else np.asarray(t_eval, dtype=float)
+            # SciPy's solvers evaluate fun (and pick the first step) when made: the model
+            # may fail right there, and a Ctrl-C may land there too
+            solver = method(fun, t0, y0, tf, **solver_options)
+            if stretches and project is not None:
+                loop = StretchLoop(solver, times, project, diagnose)
+            else:
+                loop = PythonLoop(solver, times, events, project, dense_output, diagnose)
+            bar = _progress_bar(t0, tf) if progress else None
+            while loop.status is None:
+                loop.advance()
+                if bar is not None:
+                    bar.update(abs(loop.t_reached - bar.n_t))
+                    bar.n_t = loop.t_reached
+        except KeyboardInterrupt:
+            if loop is None:
+                return _not_started(t0, y0, times, "interrupted", "interrupted by the user "
+                                    f"at t={t0:.6g}, before the first step")
+            loop.interrupt()
+        except DalembertError as exc:
+            if loop is not None:  # the loops stop on their own errors: this is not one
+                raise
+            cause = diagnose(t0, y0) if diagnose is not None else ""
+            return _not_started(t0, y0, times, "failed",
+                                f"integration stopped at t={t0:.6g}: {cause or exc}")
+        finally:
             if bar is not None:
-                bar.update(abs(loop.t_reached - bar.n_t))
-                bar.n_t = loop.t_reached
-    except KeyboardInterrupt:
-        loop.interrupt()
-    finally:
-        if bar is not None:
-            bar.close()
+                bar.close()
     return loop.result(_method_name(method))
+
+
+def _not_started(t0: float, y0: np.ndarray, t_eval: np.ndarray | None, status: str,
+                 message: str) -> IntegrationResult:
+    """The result of a run that ended before its first step: the start, if it is an
+    output time (as the loops record it)."""
+    start = t_eval is None or bool(np.any(t_eval == t0))
+    return IntegrationResult(t=np.array([t0] if start else []),
+                             y=y0[None, :] if start else np.empty((0, y0.size)),
+                             status=status, message=message, stats={"n_steps": 0})
 
 
 def _method_name(cls: type[OdeSolver]) -> str:

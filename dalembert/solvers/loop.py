@@ -20,8 +20,10 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ..errors import DalembertError
+from .dense_output import DenseRecorder
 from .native.run import StretchRunner
-from .scipy_ivp import restart_second_order
+from .nonfinite import Diagnosis
+from .scipy_ivp import last_stages, restart_second_order, step_inputs
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
 
@@ -38,6 +40,8 @@ class IntegrationResult:
     t_events: list[np.ndarray] = field(default_factory=list)
     y_events: list[np.ndarray] = field(default_factory=list)
     sol: Callable | None = None
+    #: The exception that ended the run (an event function's), to chain; else ``None``.
+    error: BaseException | None = None
 
     @property
     def success(self) -> bool:
@@ -53,8 +57,9 @@ class SimulationLoop:
     - :meth:`advance` does one unit of work (one step, or a stretch of steps) and
       records its outputs; it sets :attr:`status` when the run ends (``"finished"``,
       ``"event"`` for a terminal event, ``"failed"``) with :attr:`message`;
-    - :meth:`interrupt` ends the run on Ctrl-C, keeping everything done so far,
-      even if the Ctrl-C landed inside :meth:`advance`;
+    - :meth:`interrupt` ends the run on Ctrl-C, keeping every unit of work completed
+      so far and none of one the Ctrl-C landed in (no output without its dense
+      output, no time without its state);
     - :attr:`t_reached` is the time the recorded solution reaches (for a progress
       bar);
     - :meth:`result` gives the :class:`IntegrationResult`, at any time.
@@ -74,36 +79,66 @@ class SimulationLoop:
         raise NotImplementedError
 
 
+@dataclass(frozen=True)
+class _Checkpoint:
+    """What a loop had recorded after its last complete unit of work: a Ctrl-C in the
+    middle of the next one rolls back to it, so that no output, event or dense-output
+    step is left half-recorded (a point without its interpolant, a time without its
+    state)."""
+
+    points: int
+    events: tuple[int, ...]
+    dense_steps: int
+    n_steps: int
+    n_projections: int
+    t_reached: float
+    status: str | None
+    message: str
+
+
 class PythonLoop(SimulationLoop):
     """The loop in Python: each step through :meth:`OdeSolver.step`, then the
-    projection, the events, the outputs and the restart."""
+    projection, the events, the outputs and the restart.
+
+    Before each step the solver's state, derivative and step size are checked: one
+    that is not finite ends the run (a NaN step size would be retried forever, a NaN
+    state spreads to every later one), with ``diagnose(t, y)`` saying which quantity
+    of the model is not finite there (:mod:`~dalembert.solvers.nonfinite`). An event
+    function that raises or returns a value that is not finite ends the run too,
+    keeping the steps before.
+    """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None = None,
                  events: Sequence[Callable] = (), project: Projector | None = None,
-                 dense_output: bool = False) -> None:
+                 dense_output: bool = False, diagnose: Diagnosis | None = None) -> None:
         self.solver = solver
         self.direction = solver.direction if solver.direction != 0 else 1.0
         self.project = project
+        self.diagnose = diagnose
         self.events = list(events or ())
-        self.dense_output = dense_output
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
         if self.t_eval is not None:
             #: Output times as increasing numbers in the direction of integration.
             self._t_eval_ahead = self.direction * self.t_eval
         self.status: str | None = None
         self.message = ""
+        #: The exception that ended the run (an event function's), or ``None``.
+        self.error: BaseException | None = None
         self.n_projections = 0
         self.n_steps = 0
         #: The time the recorded solution reaches (a terminal event stops before solver.t).
         self.t_reached = solver.t
         self.ts: list[float] = []
         self.ys: list[np.ndarray] = []
-        self.segments: list[tuple[float, float, Callable]] = []
+        self.dense = DenseRecorder(solver.t, solver.y.copy(), self.direction, project) \
+            if dense_output else None
         self.t_events: list[list[float]] = [[] for _ in self.events]
         self.y_events: list[list[np.ndarray]] = [[] for _ in self.events]
-        self.g = [float(e(solver.t, solver.y)) for e in self.events]
         self.event_counts = [0 for _ in self.events]
         self._record_start()
+        self._commit()
+        #: The event functions' values at the last step's end (None: one failed).
+        self.g = self._event_values(solver.t, solver.y)
 
     def _record_start(self) -> None:
         t0, y0 = self.solver.t, self.solver.y.copy()
@@ -111,83 +146,195 @@ class PythonLoop(SimulationLoop):
             self.ts.append(t0)
             self.ys.append(y0)
 
+    def _commit(self) -> None:
+        """Mark everything recorded so far as complete (see :class:`_Checkpoint`)."""
+        self._checkpoint = _Checkpoint(
+            len(self.ts), tuple(len(v) for v in self.t_events),
+            len(self.dense) if self.dense is not None else 0, self.n_steps,
+            self.n_projections, self.t_reached, self.status, self.message)
+
     def stop(self, status: str, message: str) -> None:
         self.status, self.message = status, message
+        self._commit()
 
     def interrupt(self) -> None:
-        self.stop("interrupted", f"interrupted by the user at t={self.solver.t:.6g}")
+        c = self._checkpoint
+        del self.ts[c.points:], self.ys[c.points:]
+        for times, states, count in zip(self.t_events, self.y_events, c.events):
+            del times[count:], states[count:]
+        if self.dense is not None:
+            self.dense.truncate(c.dense_steps)
+        self.n_steps, self.n_projections, self.t_reached = c.n_steps, c.n_projections, \
+            c.t_reached
+        if c.status is not None:  # the run had ended before the Ctrl-C
+            self.status, self.message = c.status, c.message
+        else:
+            self.stop("interrupted", f"interrupted by the user at t={self.t_reached:.6g}")
 
     def advance(self) -> None:
         """One step: step, project, events, outputs, restart."""
         solver = self.solver
+        if self._inputs_not_finite():
+            return
+        y_old = solver.y  # the solvers replace it with a new array when they step
         try:
             message = solver.step()
         except DalembertError as exc:
-            return self.stop("failed", f"integration failed at t={solver.t:.6g}: {exc}")
+            return self._failed(f"integration failed at t={solver.t:.6g}: {exc}")
         if solver.status == "failed":
-            return self.stop(
-                "failed",
-                f"integration failed at t={solver.t:.6g}: {str(message).rstrip('.')}. "
-                "The problem may be "
-                "stiff (try method='Radau' or 'BDF') or the mechanism near a singular "
-                "configuration",
-            )
+            return self._step_failed(str(message))
         t_old, t_new = solver.t_old, solver.t
-        self.n_steps += 1
         try:
             y_new = self._project_step(t_new)
         except DalembertError as exc:
             return self.stop("failed", f"projection failed at t={t_new:.6g}: {exc}")
+        if not np.all(np.isfinite(y_new)):  # a solver that accepts such a step (LSODA)
+            return self._state_not_finite(t_old, y_old, t_new, y_new)
         state = self._interpolator(t_new, y_new)
-        t_stop = self._handle_events(t_old, t_new, y_new, state)
-        if t_stop is not None:
-            t_new, y_new = t_stop, state(t_stop)
+        events = self._locate_events(t_old, t_new, y_new, state)
+        if events is None:  # an event function failed: the step is not kept
+            return
+        hits, terminal = events
+        if terminal is not None:
+            t_new, y_new = terminal, state(terminal)
+        # the step's records; a Ctrl-C from here to _commit rolls them back
+        self.n_steps += 1
+        self.n_projections += self.project is not None
         self._record(t_old, t_new, y_new, state)
+        for root, k in hits:
+            self.t_events[k].append(root)
+            self.y_events[k].append(state(root))
+        if self.dense is not None:  # the interpolant is made now, from this step's solver
+            self.dense.add(t_old, t_new, state.interpolant(), y_new)
         self.t_reached = t_new
-        if self.dense_output:
-            state.interpolant()  # made now, from this step's solver state
-            self.segments.append((t_old, t_new, state))
-        if self.project is not None and self.status is None:
+        if terminal is not None:
+            return self.stop("event", f"a terminal event occurred at t={terminal:.6g}")
+        if self.project is not None:
             restart_second_order(solver, y_new)
-        if self.status is None and solver.status == "finished":
-            self.stop("finished", "the integration reached the end of t_span")
+        if solver.status == "finished":
+            return self.stop("finished", "the integration reached the end of t_span")
+        self._commit()
+
+    def _failed(self, message: str) -> None:
+        """Stop with ``message``, or with what is not finite at the step's start."""
+        solver = self.solver
+        cause = self.diagnose(solver.t, solver.y) if self.diagnose is not None else ""
+        self.stop("failed", f"integration stopped at t={solver.t:.6g}: {cause}" if cause
+                  else message)
+
+    def _inputs_not_finite(self) -> bool:
+        """Stop if the next step would start from values that are not finite."""
+        for name, value in step_inputs(self.solver).items():
+            bad = np.isnan(value) if name == "step size" else ~np.isfinite(value)
+            if np.any(bad):
+                hint = "" if name != "step size" else \
+                    " (first_step is NaN, or the derivative at the start is not finite)"
+                self._failed(f"integration stopped at t={self.solver.t:.6g}: the {name} is "
+                             f"not finite{hint}")
+                return True
+        return False
+
+    def _state_not_finite(self, t_old: float, y_old: np.ndarray, t_new: float,
+                          y_new: np.ndarray) -> None:
+        """Stop after a step that ended on a state that is not finite (not kept)."""
+        cause = ""
+        if self.diagnose is not None:
+            cause = self.diagnose(t_old, y_old) or self.diagnose(t_new, y_new)
+        self.stop("failed", f"integration stopped at t={t_old:.6g}: the step to "
+                  f"t={t_new:.6g} ended on a state that is not finite" +
+                  (f"; {cause}" if cause else ""))
+
+    def _step_failed(self, message: str) -> None:
+        stages = last_stages(self.solver)
+        if stages is not None and not np.all(np.isfinite(stages)):
+            return self._failed(
+                f"integration stopped at t={self.solver.t:.6g}: the derivative was not "
+                "finite within the step at every step size tried, down to the smallest: "
+                "the model is undefined or overflows just past this state (a square root "
+                "of a negative number, a division by zero...), or the motion runs into a "
+                "singularity")
+        self._failed(
+            f"integration failed at t={self.solver.t:.6g}: {message.rstrip('.')}. "
+            "The problem may be stiff (try method='Radau' or 'BDF') or the mechanism "
+            "near a singular configuration")
 
     def _project_step(self, t: float) -> np.ndarray:
         """The new state, projected (the solver restarts from it after the outputs)."""
         solver = self.solver
         if self.project is None:
             return solver.y.copy()
-        self.n_projections += 1
         return self.project(t, solver.y).copy()
 
     def _interpolator(self, t_new: float, y_new: np.ndarray) -> _StepState:
         return _StepState(self.solver, self.project, t_new, y_new)
 
-    def _handle_events(self, t_old: float, t_new: float, y_new: np.ndarray,
-                       state: _StepState) -> float | None:
-        """Locate sign changes of the event functions; return a terminal time if any."""
+    def _event_values(self, t: float, y: np.ndarray) -> list[float] | None:
+        """Each event function at ``(t, y)``; ``None`` (the run stopped) if one fails."""
+        values = []
+        for k in range(len(self.events)):
+            value = self._event_value(k, t, y)
+            if value is None:
+                return None
+            values.append(value)
+        return values
+
+    def _event_value(self, k: int, t: float, y: np.ndarray) -> float | None:
+        """Event ``k`` at ``(t, y)``; ``None`` (the run stopped) if it raises or returns a
+        value that is not finite."""
+        event, name = self.events[k], _event_name(self.events[k], k)
+        try:
+            value = float(event(t, y))
+        except Exception as exc:  # the user's function: any error ends the run
+            self.error = exc
+            said = f": {exc}" if str(exc) else ""
+            self.stop("failed", f"{name} raised {type(exc).__name__} at t={t:.6g}{said}")
+            return None
+        if not np.isfinite(value):
+            self.stop("failed", f"{name} returned {value} at t={t:.6g}: an event function "
+                      "must return a finite number (its sign changes are the events)")
+            return None
+        return value
+
+    def _locate_events(self, t_old: float, t_new: float, y_new: np.ndarray,
+                       state: _StepState) -> tuple[list[tuple[float, int]], float | None] | None:
+        """The events in the step in time order, as ``(time, event)``, and the time of a
+        terminal one (where the step is cut); ``None`` if an event function failed."""
         hits = []
+        assert self.g is not None
         for k, event in enumerate(self.events):
-            g_new = float(event(t_new, y_new))
+            g_new = self._event_value(k, t_new, y_new)
+            if g_new is None:
+                return None
             if _crossed(self.g[k], g_new, getattr(event, "direction", 0)):
                 from scipy.optimize import brentq  # only once an event fires: slow import
 
-                root = brentq(lambda s, e=event: float(e(s, state(s))), t_old, t_new,
-                              xtol=4 * np.finfo(float).eps)
+                def g(s: float, k: int = k) -> float:
+                    value = self._event_value(k, s, state(s))
+                    if value is None:
+                        raise _EventFailed
+                    return value
+
+                try:
+                    root = brentq(g, t_old, t_new, xtol=4 * np.finfo(float).eps)
+                except _EventFailed:
+                    return None
+                except (ValueError, RuntimeError) as exc:  # no sign change left, no root
+                    self.stop("failed", f"{_event_name(event, k)} changed sign between "
+                              f"t={t_old:.6g} and t={t_new:.6g}, but its root could not be "
+                              f"located there: {exc}")
+                    return None
                 hits.append((root, k))
             self.g[k] = g_new
-        terminal_time = None
+        kept, terminal = [], None
         for root, k in sorted(hits, key=lambda h: self.direction * h[0]):
-            if terminal_time is not None:
+            if terminal is not None:
                 break
-            self.t_events[k].append(root)
-            self.y_events[k].append(state(root))
+            kept.append((root, k))
             self.event_counts[k] += 1
             limit = int(getattr(self.events[k], "terminal", False))
             if limit and self.event_counts[k] >= limit:
-                terminal_time = root
-                self.stop("event", f"a terminal event occurred at t={root:.6g}")
-        return terminal_time
+                terminal = root
+        return kept, terminal
 
     def _record(self, t_old, t_new, y_new, state) -> None:
         if self.t_eval is None:
@@ -212,8 +359,17 @@ class PythonLoop(SimulationLoop):
             message=self.message or f"{method_name} stopped", stats=stats,
             t_events=[np.array(v) for v in self.t_events],
             y_events=[np.array(v).reshape(-1, n_state) for v in self.y_events],
-            sol=_PiecewiseSolution(self.segments) if self.dense_output else None,
+            sol=self.dense.solution() if self.dense is not None else None, error=self.error,
         )
+
+
+class _EventFailed(Exception):
+    """An event function failed while its root was sought (the run is stopped)."""
+
+
+def _event_name(event: Callable, k: int) -> str:
+    name = getattr(event, "__name__", None)
+    return f"event {k} ({name})" if name and name != "<lambda>" else f"event {k}"
 
 
 class _StepState:
@@ -242,14 +398,15 @@ class StretchLoop(PythonLoop):
     """The loop in C: whole stretches of steps (step, projection, outputs at
     ``t_eval``, restart) run by a :class:`~.native.run.StretchRunner`, returning to
     Python every fraction of a second; a step C cannot finish is taken the Python
-    way. Only for a native Runge-Kutta solver with its native projection, no events
-    and no dense output (the plan checks). Same steps and states as
-    :class:`PythonLoop` (tested).
+    way (a step from values that are not finite among them: the Python loop then
+    stops with its diagnosis). Only for a native Runge-Kutta solver with its native
+    projection, no events and no dense output (the plan checks). Same steps and
+    states as :class:`PythonLoop` (tested).
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
-                 project: Projector) -> None:
-        super().__init__(solver, t_eval, (), project, False)
+                 project: Projector, diagnose: Diagnosis | None = None) -> None:
+        super().__init__(solver, t_eval, (), project, False, diagnose)
         self.runner = StretchRunner(solver, self.t_eval)
 
     def advance(self) -> None:
@@ -275,6 +432,7 @@ class StretchLoop(PythonLoop):
         self.t_reached = self.solver.t
         self.ts.extend(t.tolist())
         self.ys.extend(y)
+        self._commit()
 
 
 def _crossed(g_old: float, g_new: float, direction: float) -> bool:
@@ -285,28 +443,3 @@ def _crossed(g_old: float, g_new: float, direction: float) -> bool:
     if direction < 0:
         return down
     return up or down
-
-
-class _PiecewiseSolution:
-    """Dense output over all steps; ``sol(t)`` accepts a scalar or an array of times."""
-
-    def __init__(self, segments: list[tuple[float, float, Callable]]):
-        self.segments = segments
-        self.ends = np.array([max(a, b) for a, b, _ in segments])
-        self.t_min = min((min(a, b) for a, b, _ in segments), default=np.nan)
-        # Not ``ends.max(initial=nan)``: that is always NaN, rejecting every time.
-        self.t_max = max(self.ends, default=np.nan)
-        order = np.argsort(self.ends)
-        self.segments = [segments[i] for i in order]
-        self.ends = self.ends[order]
-
-    def __call__(self, t: float | np.ndarray) -> np.ndarray:
-        times = np.atleast_1d(np.asarray(t, dtype=float))
-        out = np.array([self._one(s) for s in times])
-        return out[0] if np.ndim(t) == 0 else out.T
-
-    def _one(self, s: float) -> np.ndarray:
-        if not self.segments or not (self.t_min <= s <= self.t_max):
-            raise ValueError(f"t={s} is outside the integrated interval")
-        k = min(int(np.searchsorted(self.ends, s)), len(self.segments) - 1)
-        return self.segments[k][2](s)

@@ -33,6 +33,16 @@ def evaluate_outputs(
     }
     solver = kkt_solver(num.pattern, kept)
     rows, cols = num.pattern.A_rows, num.pattern.A_cols
+    # The last state of a run stopped by a NaN or an overflow may overflow here too: its
+    # outputs are then not finite, without NumPy's warnings (the run's message says why)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        _fill(out, num, solver, t, y, rows, cols)
+    return out
+
+
+def _fill(out: dict[str, np.ndarray], num: NumericModel, solver, t: np.ndarray,
+          y: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> None:
+    n, m = num.n, num.m
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
         Mv, f, Av, c = num.kkt_sparse(ti, q, qd)
@@ -46,4 +56,3 @@ def evaluate_outputs(
             _, b = num.velocity_sparse(ti, q)
             out["velocity_residual"][i] = np.abs(matvec(rows, cols, Av, qd, m) + b).max()
         out["energies"][i] = num.energies(ti, q, qd)
-    return out

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import partial
+from functools import partial, update_wrapper
 from typing import Literal
 
 import numpy as np
@@ -35,6 +35,7 @@ from .dynamics import first_order_rhs
 from .initialization import InitializationReport
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .native import NATIVE_METHODS, NotApplicable, native_solver
+from .nonfinite import Diagnosis, nonfinite_diagnosis
 from .outputs import evaluate_outputs
 from .projection import StepProjector
 from .step_control import ControlledSteps, controlled_class
@@ -70,6 +71,9 @@ class SimulationPlan:
     parameters
         The parameter vector the model's functions read (the model's parameter
         values first).
+    diagnose
+        ``diagnose(t, y)``: what is not finite at a state, for the message of a run
+        that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
     """
 
     options: SimulationOptions
@@ -83,6 +87,7 @@ class SimulationPlan:
     project: Callable[[float, np.ndarray], np.ndarray] | None = field(repr=False)
     outputs: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]] = field(repr=False)
     events: tuple[Callable, ...] = field(repr=False)
+    diagnose: Diagnosis = field(repr=False)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
 
     @property
@@ -96,7 +101,8 @@ class SimulationPlan:
         return integrate(
             self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
-            progress=out.progress, stretches=self.stretches, **self.solver_options)
+            progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
+            **self.solver_options)
 
 
 def plan_simulation(num: NumericModel, initial: InitializationReport,
@@ -164,19 +170,23 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     stretches = stepper is not None and projection and not output.events \
         and not output.dense_output
     n = num.n
+    rows = initial.rank.names if initial.rank is not None else None
     return SimulationPlan(
         options=options, initial=initial, loop="c" if native else "python",
         why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
         rhs=rhs, project=project, outputs=outputs,
-        events=tuple(_state_event(e, n) for e in output.events), parameters=num.p)
+        events=tuple(_state_event(e, n) for e in output.events), parameters=num.p,
+        diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs))
 
 
 def _state_event(event: Callable, n: int) -> Callable:
-    """Adapt ``event(t, q, qd)`` to SciPy's ``event(t, y)``, keeping its attributes."""
+    """Adapt ``event(t, q, qd)`` to SciPy's ``event(t, y)``, keeping its attributes and
+    its name (messages name it)."""
 
     def wrapped(t: float, y: np.ndarray) -> float:
         return event(t, y[:n], y[n:])
 
+    update_wrapper(wrapped, event)
     wrapped.terminal = getattr(event, "terminal", False)  # type: ignore[attr-defined]
     wrapped.direction = getattr(event, "direction", 0)  # type: ignore[attr-defined]
     return wrapped

@@ -27,6 +27,7 @@ from scipy.integrate._ivp.rk import (
     MIN_FACTOR,
     SAFETY,
     Dop853DenseOutput,
+    RkDenseOutput,
     RungeKutta,
     rk_step,
 )
@@ -38,9 +39,12 @@ __all__ = [
     "SAFETY",
     "Dop853DenseOutput",
     "RungeKutta",
+    "interpolant_form",
+    "last_stages",
     "restart",
     "restart_second_order",
     "rk_step",
+    "step_inputs",
     "take_state",
 ]
 
@@ -110,3 +114,55 @@ def take_state(solver: OdeSolver, *, t: float, t_old: float, y: np.ndarray, f: n
     solver.y, solver.f, solver.h_abs = y, f, h_abs
     if solver.direction * (solver.t - solver.t_bound) >= 0:
         solver.status = "finished"
+
+
+def step_inputs(solver: OdeSolver) -> dict[str, np.ndarray]:
+    """What the solver's next step starts from, by name: the state, and where the
+    solver keeps them, the derivative there (``f``) and the step size (``h_abs``).
+
+    Parameters
+    ----------
+    solver
+        A SciPy solver.
+    """
+    inputs = {"state": np.asarray(solver.y)}
+    f = getattr(solver, "f", None)  # the explicit Runge-Kutta solvers and Radau
+    if f is not None:
+        inputs["derivative"] = np.asarray(f)
+    h_abs = getattr(solver, "h_abs", None)  # all but LSODA
+    if h_abs is not None:
+        inputs["step size"] = np.asarray(h_abs)
+    return inputs
+
+
+def last_stages(solver: OdeSolver) -> np.ndarray | None:
+    """The stage derivatives of an explicit Runge-Kutta solver's last attempted step
+    (``K``), or ``None`` for other solvers.
+
+    Parameters
+    ----------
+    solver
+        A SciPy solver.
+    """
+    return np.asarray(solver.K) if isinstance(solver, RungeKutta) else None
+
+
+def interpolant_form(dense: object) -> tuple[str, np.ndarray, np.ndarray] | None:
+    """The numbers of an explicit Runge-Kutta step's interpolant, or ``None`` for
+    another solver's.
+
+    ``("power", y_old, R)``: ``y(x) = y_old + h sum_j R[j] x^(j + 1)`` (SciPy's
+    ``RkDenseOutput``, ``R = Q^T``); ``("dop853", y_old, F)``: DOP853's, evaluated from
+    the last row of ``F`` to the first, alternately times ``x`` and ``1 - x``
+    (``Dop853DenseOutput``). ``x = (t - t_old) / h`` in both.
+
+    Parameters
+    ----------
+    dense
+        What the solver's ``dense_output()`` returned.
+    """
+    if isinstance(dense, RkDenseOutput):
+        return "power", dense.y_old, dense.Q.T
+    if isinstance(dense, Dop853DenseOutput):
+        return "dop853", dense.y_old, dense.F
+    return None

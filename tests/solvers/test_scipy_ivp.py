@@ -52,3 +52,17 @@ def test_restart_continues_from_the_given_state(cls):
     while solver.status == "running":
         solver.step()
     assert abs(solver.y[0] - 0.5 * np.exp(-2.0)) < 1e-8
+
+
+@pytest.mark.parametrize("cls", [RK23, RK45, DOP853])
+def test_dense_output_attributes(cls):
+    """What interpolant_form reads of the explicit solvers' interpolants."""
+    solver = cls(decay, 0.0, np.ones(2), 1.0)
+    solver.step()
+    dense = solver.dense_output()
+    kind, y_old, rows = scipy_ivp.interpolant_form(dense)
+    assert kind == ("dop853" if cls is DOP853 else "power")
+    assert np.array_equal(y_old, np.ones(2)) and rows.shape[1] == 2
+    implicit = Radau(decay, 0.0, np.ones(2), 1.0)
+    implicit.step()
+    assert scipy_ivp.interpolant_form(implicit.dense_output()) is None

@@ -55,7 +55,7 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_run, y_out), FIELD(dl_run, n_steps), FIELD(dl_run, n_out), FIELD(dl_run, t_old),
   FIELD(dl_run, y_new), FIELD(dl_run, y_end), FIELD(dl_run, rows),
   CODE(DL_OK), CODE(DL_SINGULAR_MASS), CODE(DL_SINGULAR_CONSTRAINTS), CODE(DL_STEP_TOO_SMALL),
-  CODE(DL_PROJECTION), CODE(DL_OUTPUTS), CODE(DL_RANK_CHANGED),
+  CODE(DL_PROJECTION), CODE(DL_OUTPUTS), CODE(DL_RANK_CHANGED), CODE(DL_NOT_FINITE),
 };
 
 /* The table above: *entries points to it, the count is returned. */

@@ -21,12 +21,15 @@ from ...codegen import c_backend
 _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
 
 #: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds;
-#: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones).
-OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED = \
-    range(7)
+#: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones;
+#: NOT_FINITE: a step would start from a time, step size, state or derivative that is
+#: not finite).
+(OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED,
+ NOT_FINITE) = range(8)
 CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
-         "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED}
+         "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
+         "DL_NOT_FINITE": NOT_FINITE}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
 SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "layout.c")
 HEADER = "runtime.h"

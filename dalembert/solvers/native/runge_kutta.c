@@ -75,14 +75,26 @@ static int rk_attempt(dl_model *md, const dl_tableau *tb, dl_stepper *st, double
   return dl_rhs(md, st->t + h, y_new, K + s * n_state, NULL);
 }
 
+static int all_finite(const double *x, int64_t n) {
+  for (int64_t i = 0; i < n; ++i)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
 /* Steps from st->t until one is accepted (ControlledSteps._step_impl, which is scipy's
  * RungeKutta._step_impl under PI control; scipy's own with beta = 0). K[0] must hold
- * f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced. */
+ * f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced.
+ * DL_NOT_FINITE if t, the step size (NaN), y or f(t, y) is not: a NaN step never falls
+ * below min_step and would be retried forever. Otherwise the retries end: each
+ * rejection shrinks the step by 0.9 at least (MIN_FACTOR where the error is NaN, as a
+ * stage that is not finite makes it) until it is accepted or below min_step. */
 int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
                double *y_new, double *stage) {
   const double SAFETY = 0.9, MIN_FACTOR = 0.2, MAX_FACTOR = 10.0, ERROR_FLOOR = 1e-4;
   const int64_t n_state = 2 * md->n;
   const double t = st->t;
+  if (!isfinite(t) || isnan(st->h_abs) || !all_finite(y, n_state) || !all_finite(K, n_state))
+    return DL_NOT_FINITE;
   const double min_step = 10.0 * fabs(nextafter(t, st->direction * INFINITY) - t);
   double h_abs = st->h_abs;
   if (h_abs > st->max_step) h_abs = st->max_step;
@@ -223,12 +235,16 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
  * K[0] and st hold the state after the last finished step; a non-OK status means
  * the next step could not be finished here (too small, a singular system, a failed
  * projection, more outputs than the buffer holds): the caller takes that step
- * itself, from this state, and st->nfev does not count the dropped attempt. */
+ * itself, from this state, and st->nfev does not count the dropped attempt (a step that
+ * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
+ * Every loop inside a step is bounded, so the call returns within a step of the time
+ * budget and Ctrl-C is served. */
 int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
               double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
   const clock_t start = clock();
   run->n_steps = run->n_out = 0;
+  if (!isfinite(st->t)) return DL_NOT_FINITE;  /* the loop below would not start */
   while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
     if (run->n_steps && (double)(clock() - start) > run->max_seconds * CLOCKS_PER_SEC) break;
     const dl_stepper before = *st;

@@ -77,6 +77,8 @@ class _NativeSteps(RungeKutta):
         self.nfev += st.nfev
         if status == library.STEP_TOO_SMALL:
             return False, self.TOO_SMALL_STEP
+        if status == library.NOT_FINITE:  # the loop checks first; said here for other callers
+            return False, "the step would start from values that are not finite"
         self._native._check(status)
         self.h_previous, self.y_old = st.h_previous, y
         self.t, self.y, self.h_abs, self.err_old = st.t, y_new, st.h_abs, st.err_old

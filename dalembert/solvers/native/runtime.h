@@ -22,9 +22,10 @@
 #include <time.h>
 
 /* Return codes (library.py's CODES). DL_RANK_CHANGED: a dropped row no longer follows
- * from the kept ones (the rank changed since it was measured). */
+ * from the kept ones (the rank changed since it was measured); DL_NOT_FINITE: a step
+ * would start from a time, step size, state or derivative that is not finite. */
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
-       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6 };
+       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);

@@ -16,6 +16,8 @@ from . import library
 from .structure import NotApplicable, schur_structure
 
 DOUBLE = np.dtype(np.float64).itemsize  # bytes, for addresses inside a buffer
+#: Output points per call of dl_outputs (a few milliseconds for a large mechanism).
+OUTPUT_CHUNK = 1024
 _MESSAGES = {
     library.SINGULAR_MASS: "a block of the mass matrix is singular even with the constraints "
                            "inside it folded in",
@@ -170,8 +172,12 @@ class NativeSolver:
         out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m)),
                "constraint_forces": np.zeros((k, n)), "position_residual": np.zeros(k),
                "velocity_residual": np.zeros(k), "energies": np.zeros((k, 3))}
-        self._check(self.lib.dl_outputs(self._address, k, times.ctypes.data, states.ctypes.data,
-                                        *(a.ctypes.data for a in out.values())))
+        # in chunks, so that a Ctrl-C is served between calls on a long trajectory
+        for lo in range(0, k, OUTPUT_CHUNK):
+            hi = min(k, lo + OUTPUT_CHUNK)
+            self._check(self.lib.dl_outputs(
+                self._address, hi - lo, times[lo:].ctypes.data, states[lo:].ctypes.data,
+                *(a[lo:].ctypes.data for a in out.values())))
         if self.kept is not None:
             self._minimum_norm(times, states, out)
         return out
