@@ -56,6 +56,11 @@ class InitialConditionError(DalembertError, ValueError):
     """Initial conditions name unknown coordinates, are not finite, or cannot be made consistent."""
 
 
+class InputError(DalembertError, ValueError):
+    """A model's inputs have no value, a value of no known form, or a function giving them
+    raised or returned something that is not a finite number of the right shape."""
+
+
 class GuessError(DalembertError, ValueError):
     """A guess names an unknown variable, has the wrong length, or is not finite."""
 
@@ -150,6 +155,7 @@ __all__ = [
     "InconsistentConstraintsError",
     "InitialConditionError",
     "InitialConditionsAdjusted",
+    "InputError",
     "IntegrationWarning",
     "JointPointWarning",
     "MarginalStabilityError",

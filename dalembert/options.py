@@ -28,6 +28,8 @@ from typing import Literal, Protocol
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
+from .inputs import InputSignal, input_signal
+
 #: SciPy's solvers by the names ``solve_ivp`` knows them by.
 METHODS: dict[str, type[OdeSolver]] = {
     "RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA,
@@ -112,6 +114,8 @@ class SimulationOptions:
     backend: Backend = "auto"
     redundant_constraints: RedundantConstraints = "minimum-norm"
     velocity_projection: VelocityProjection = "kinetic-energy"
+    #: The inputs' values along the run (:mod:`dalembert.inputs`), or ``None``.
+    inputs: InputSignal | None = None
 
 
 # --------------------------------------------------------------------------- the table
@@ -252,6 +256,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "progress": [Boolean()],
     "events": [Callables()],
     "t_eval": [Times(), NONE],
+    "sample_time": [PositiveNumber(), NONE],
 }
 
 
@@ -303,7 +308,10 @@ def simulation_options(
     events: Sequence[Callable] = (),
     dense_output: bool = False,
     progress: bool = False,
+    inputs: object = None,
+    sample_time: float | None = None,
     state_size: int | None = None,
+    input_names: Sequence[str] = (),
 ) -> SimulationOptions:
     """Check the keywords of ``simulate`` once and turn them into typed values.
 
@@ -329,9 +337,14 @@ def simulation_options(
         ``"least-change"`` (the nearest velocities in the Euclidean sense).
     progress
         Show a progress bar.
+    inputs, sample_time
+        The values of the model's inputs and the period of their zero-order hold
+        (:func:`dalembert.inputs.input_signal`).
     state_size
         The length of the state ``[q, qd]`` (twice the coordinates), when known: an
         array of tolerances must have one entry per state entry.
+    input_names
+        The model's inputs.
 
     >>> simulation_options((0, 2), method="RK45", rtol=1e-8).step.rtol
     1e-08
@@ -347,6 +360,7 @@ def simulation_options(
         "redundant_constraints": redundant_constraints,
         "velocity_projection": velocity_projection, "events": events,
         "dense_output": dense_output, "progress": progress, "t_eval": t_eval,
+        "sample_time": sample_time,
     }
     check_parameters(given, SIMULATE_PARAMETERS, "simulate")
     if state_size is not None:
@@ -371,6 +385,8 @@ def simulation_options(
         backend=_backend(backend, native),
         redundant_constraints=redundant_constraints,
         velocity_projection=velocity_projection,
+        inputs=input_signal(inputs, input_names,
+                            None if sample_time is None else float(sample_time), span),
     )
 
 

@@ -7,9 +7,10 @@ code generated once per System however often it is simulated.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from functools import cached_property
+from functools import cached_property, partial
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -21,10 +22,12 @@ from .codegen.compiled import CompiledEquations, NumericModel
 from .equations.lagrange import Equations, derive_equations
 from .errors import (
     InitialConditionsAdjusted,
+    InputError,
     IntegrationWarning,
     ModelError,
     RedundantConstraintsWarning,
 )
+from .inputs import InputSignal
 from .model.coordinates import t as time_symbol
 from .model.forces import PointForce
 from .model.model import Model, build_model
@@ -45,6 +48,7 @@ from .solvers.initialization import InitializationReport, consistent_state
 from .solvers.integrate import IntegrationResult
 from .solvers.native.library import prepare_runtime
 from .solvers.plan import SimulationPlan, plan_simulation
+from .solvers.sampled import run_sampled
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
@@ -77,6 +81,10 @@ class System:
         :meth:`simulate`).
     velocities
         With plain-symbol coordinates, the velocity symbols (default ``<name>_dot``).
+    inputs
+        Input symbols (SymPy ``Symbol``): values given during a simulation, by
+        ``simulate(inputs=...)`` (a number, a function of the state, a table, a
+        sampled controller). They may appear in the applied forces only.
     redundant_constraints
         Dependent (redundant) constraints, detected at the initial state:
         ``"minimum-norm"`` (default) proceeds with a
@@ -123,6 +131,7 @@ class System:
         velocities: Sequence[object] | None = None,
         name: str = "system",
         redundant_constraints: RedundantConstraints = "minimum-norm",
+        inputs: Sequence[object] = (),
     ) -> None:
         if is_sympy_method(coordinates):
             raise ModelError(
@@ -132,7 +141,7 @@ class System:
         self.model: Model = build_model(
             coordinates, kinetic=kinetic, potential=potential, lagrangian=lagrangian,
             constraints=constraints, generalized_forces=generalized_forces, forces=forces,
-            velocities=velocities, name=name,
+            velocities=velocities, name=name, inputs=inputs,
         )
         self.parameter_values = parameter_values(self.model.parameters, parameters)
         self._kinetic_energy = lagrangian is None
@@ -202,6 +211,11 @@ class System:
     def parameters(self) -> tuple:
         """The model's parameter symbols (sorted by name)."""
         return self.model.parameters
+
+    @property
+    def inputs(self) -> tuple[sp.Symbol, ...]:
+        """The model's input symbols, in the order they were declared."""
+        return self.model.inputs
 
     @property
     def degrees_of_freedom(self) -> int:
@@ -442,6 +456,8 @@ class System:
         velocity_projection: VelocityProjection = "kinetic-energy",
         backend: Backend = "auto",
         native: bool | None = None,
+        inputs: object = None,
+        sample_time: float | None = None,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
 
@@ -485,7 +501,9 @@ class System:
             Coordinates the initial projection must not change.
         events
             Functions ``event(t, q, qd)`` with optional ``terminal``/``direction``
-            attributes, as in ``solve_ivp``.
+            attributes, as in ``solve_ivp``; a function of four positional parameters,
+            ``event(t, q, qd, lam)``, also receives the multipliers at the state (a
+            string going slack: ``lam[0]`` crossing zero).
         dense_output
             Add ``traj.sol(t)``.
         progress
@@ -504,6 +522,14 @@ class System:
         native
             Deprecated alias of ``backend`` (``True``: ``"c"``, ``False``:
             ``"python"``).
+        inputs
+            The values of the model's inputs (``System(inputs=...)``): a number, a
+            function ``u(t, q, qd)`` or ``u(t)``, a table ``(times, values)``
+            (interpolated linearly), or a dict by input of these (see
+            :mod:`dalembert.inputs`). The trajectory records them (``traj.inputs``).
+        sample_time
+            Hold the inputs between samples taken every ``sample_time`` (a digital
+            controller's zero-order hold); the integration restarts at each sample.
 
         Returns
         -------
@@ -525,8 +551,9 @@ class System:
             baumgarte_gain=baumgarte_gain, backend=backend, native=native,
             redundant_constraints=self.redundant_constraints if redundant_constraints is None
             else redundant_constraints, velocity_projection=velocity_projection,
-            events=events, dense_output=dense_output, progress=progress,
-            state_size=2 * len(self.coordinate_names))
+            events=events, dense_output=dense_output, progress=progress, inputs=inputs,
+            sample_time=sample_time, state_size=2 * len(self.coordinate_names),
+            input_names=[u.name for u in self.inputs])
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def plan(
@@ -567,7 +594,7 @@ class System:
         """
         options.setdefault("redundant_constraints", self.redundant_constraints)
         checked = simulation_options(t_span, state_size=2 * len(self.coordinate_names),
-                                     **options)
+                                     input_names=[u.name for u in self.inputs], **options)
         return self._plan(checked, q0, qd0, parameters, fixed)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,
@@ -600,14 +627,34 @@ class System:
         return self._run(plan)
 
     def _run(self, plan: SimulationPlan) -> Trajectory:
-        result = plan.run()
+        signal, num = plan.options.inputs, plan.num
+        derived, applied = None, None
+        if signal is not None and signal.sample_time is not None and num is not None:
+            sampled = run_sampled(signal, num, plan.options.t_span, plan.y0,
+                                  plan.options.output.t_eval, partial(self._segment, plan))
+            result, derived, applied = sampled.result, sampled.derived, sampled.inputs
+        else:
+            result = plan.run()
         if not result.success:
             reached = result.t[-1] if len(result.t) else plan.options.t_span[0]
             warning = IntegrationWarning(f"{result.message}; returning the trajectory up to "
                                          f"t={reached:.6g}")
             warning.__cause__ = result.error  # an event function's exception, chained
             warnings.warn(warning, stacklevel=3)  # 3: the user's call of simulate or run
-        return self._trajectory(result, plan)
+        return self._trajectory(result, plan, derived, applied)
+
+    def _segment(self, plan: SimulationPlan, a: float, b: float, y: np.ndarray,
+                 t_eval: np.ndarray | None) -> SimulationPlan:
+        """The plan of one sample interval ``[a, b]`` of a sampled run, from ``y``."""
+        assert plan.num is not None
+        options = plan.options
+        n = len(self.coordinate_names)
+        report = self._initial_state(plan.num, y[:n], y[n:], a, None,
+                                     options.redundant_constraints,
+                                     options.velocity_projection)
+        return plan_simulation(plan.num, report, dataclasses.replace(
+            options, t_span=(a, b),
+            output=dataclasses.replace(options.output, t_eval=t_eval, progress=False)))
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:
@@ -673,10 +720,19 @@ class System:
 
         return linearize(self, q_eq, **options)
 
-    def _trajectory(self, result: IntegrationResult, plan: SimulationPlan) -> Trajectory:
+    def _trajectory(self, result: IntegrationResult, plan: SimulationPlan,
+                    derived: dict[str, np.ndarray] | None = None,
+                    applied: np.ndarray | None = None) -> Trajectory:
         n = len(self.coordinate_names)
-        derived = plan.outputs(result.t, result.y)
+        signal = plan.options.inputs
+        if derived is None:
+            derived = _outputs(plan, result)
+        derived = dict(derived)
         energies = derived.pop("energies")
+        if applied is None and signal is not None:  # the inputs at the points recorded
+            applied = np.array([_or_nan(signal, t, y[:n], y[n:], len(signal.names))
+                                for t, y in zip(result.t, result.y)])
+            applied = applied.reshape(len(result.t), len(signal.names))
         return Trajectory(
             t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,
             kinetic_energy=energies[:, 0], potential_energy=energies[:, 1],
@@ -684,8 +740,39 @@ class System:
             constraint_names=self.constraint_names, status=result.status,
             message=result.message, stats=result.stats, initialization=str(plan.initial),
             parameters={s.name: float(v) for s, v in zip(self.parameters, plan.parameters)},
+            inputs=applied, input_names=tuple(u.name for u in self.inputs),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
         )
+
+
+def _outputs(plan: SimulationPlan, result: IntegrationResult) -> dict[str, np.ndarray]:
+    """The derived arrays at the points recorded. A run that failed because its inputs
+    could not be computed has points where they still cannot: those rows are NaN."""
+    try:
+        return plan.outputs(result.t, result.y)
+    except InputError:
+        rows: list[dict[str, np.ndarray] | None] = []
+        for t, y in zip(result.t, result.y):
+            try:
+                rows.append(plan.outputs(np.array([t]), y[None]))
+            except InputError:
+                rows.append(None)
+        template = next((r for r in rows if r is not None), None)
+        if template is None:
+            empty = plan.outputs(np.zeros(0), np.zeros((0, len(result.y[0]))))
+            return {name: np.full((len(rows), *v.shape[1:]), np.nan)
+                    for name, v in empty.items()}
+        return {name: np.concatenate([r[name] if r is not None else
+                                      np.full_like(template[name], np.nan) for r in rows])
+                for name in template}
+
+
+def _or_nan(signal: InputSignal, t: float, q: np.ndarray, qd: np.ndarray,
+            size: int) -> np.ndarray:
+    try:
+        return signal(t, q, qd)
+    except InputError:
+        return np.full(size, np.nan)
 
 
 class _LazyLabels(Sequence):

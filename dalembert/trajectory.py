@@ -54,6 +54,9 @@ class Trajectory:
         What making the initial state consistent changed.
     parameters
         The parameter values the run used, by name.
+    inputs, input_names
+        The values of the model's inputs at each time, shape ``(k, inputs)``, and
+        their names.
     t_events, y_events
         Event times and states, one array per event function.
     sol
@@ -88,6 +91,8 @@ class Trajectory:
     stats: dict[str, Any] = field(default_factory=dict)
     initialization: str = ""
     parameters: dict[str, float] = field(default_factory=dict)
+    inputs: np.ndarray | None = None
+    input_names: tuple[str, ...] = ()
     t_events: list[np.ndarray] = field(default_factory=list)
     y_events: list[np.ndarray] = field(default_factory=list)
     sol: Any = None
@@ -130,6 +135,18 @@ class Trajectory:
                 f"{', '.join(self.constraint_names) or 'none'}"
             )
         return self.multipliers[:, self.constraint_names.index(name)]
+
+    def input(self, name: str) -> np.ndarray:
+        """The values the input called ``name`` took at each time."""
+        if name not in self.input_names:
+            raise KeyError(f"{name!r} is not an input; the inputs are "
+                           f"{', '.join(self.input_names) or 'none'}")
+        assert self.inputs is not None
+        return self.inputs[:, self.input_names.index(name)]
+
+    def __post_init__(self) -> None:
+        if self.inputs is None:
+            self.inputs = np.zeros((len(self.t), len(self.input_names)))
 
     def __len__(self) -> int:
         return len(self.t)
@@ -193,8 +210,11 @@ class Trajectory:
                 "constraint_names": list(self.constraint_names), "status": self.status,
                 "message": self.message, "stats": self.stats,
                 "initialization": self.initialization,
-                "parameters": {k: float(v) for k, v in self.parameters.items()}}
+                "parameters": {k: float(v) for k, v in self.parameters.items()},
+                "input_names": list(self.input_names)}
         arrays = {name: getattr(self, name) for name in trajectory_file.ARRAYS}
+        if self.input_names:
+            arrays["inputs"] = self.inputs
         arrays.update({f"t_events_{k}": v for k, v in enumerate(self.t_events)})
         arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})
         trajectory_file.write(path, arrays, meta)

@@ -44,14 +44,16 @@ SUFFIX = ".npz"
 #: The arrays of a trajectory, one row per output time.
 ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_energy",
           "potential_energy", "jacobi_integral", "position_residual", "velocity_residual")
+#: Arrays a file of an earlier version may lack (a model's inputs, one column each).
+OPTIONAL_ARRAYS = ("inputs",)
 #: How a trajectory can end (its ``status``).
 STATUSES = ("finished", "event", "failed", "interrupted")
 #: The metadata fields and their JSON types.
 METADATA: dict[str, type] = {"coordinate_names": list, "constraint_names": list,
                              "status": str, "message": str, "stats": dict,
-                             "initialization": str, "parameters": dict}
+                             "initialization": str, "parameters": dict, "input_names": list}
 #: Fields a file of an earlier version may lack, and their value then.
-OPTIONAL = {"parameters": dict}
+OPTIONAL = {"parameters": dict, "input_names": list}
 #: By default a file may read to at most this many times its size ...
 MAX_EXPANSION = 16
 #: ... or this many bytes, whichever is more.
@@ -60,7 +62,7 @@ MIN_LIMIT = 64 * 2**20
 #: killed save.
 ABANDONED_AFTER = 60.0
 
-_MEMBER = re.compile(rf"(meta|{'|'.join(ARRAYS)}|[ty]_events_\d+)\.npy")
+_MEMBER = re.compile(rf"(meta|{'|'.join((*ARRAYS, *OPTIONAL_ARRAYS))}|[ty]_events_\d+)\.npy")
 #: What reading a damaged, encrypted or oddly compressed member raises.
 _UNREADABLE = (ValueError, OSError, EOFError, RuntimeError, NotImplementedError,
                zipfile.BadZipFile)
@@ -201,7 +203,7 @@ it has no 'meta' member (Trajectory.save writes one)
     k = len(t)
     shapes: dict[str, tuple[int, ...]] = {name: (k,) for name in ARRAYS}
     shapes.update({name: (k, n) for name in ("q", "qd", "qdd", "constraint_forces")},
-                  multipliers=(k, m))
+                  multipliers=(k, m), inputs=(k, len(fields["input_names"])))
     n_events = sum(1 for name in members if name.startswith("t_events_"))
     for e in range(n_events):
         events = members.get(f"t_events_{e}")
@@ -222,6 +224,7 @@ it has no 'meta' member (Trajectory.save writes one)
         if array.dtype.kind not in "fiu":
             raise bad(f"the array {name!r}", f"holds {array.dtype}, not numbers")
     fields.update({name: members[name] for name in ARRAYS})
+    fields["inputs"] = members.get("inputs", np.zeros((k, len(fields["input_names"]))))
     fields["t_events"] = [members[f"t_events_{e}"] for e in range(n_events)]
     fields["y_events"] = [members[f"y_events_{e}"] for e in range(n_events)]
     return fields
@@ -306,7 +309,7 @@ def _metadata(meta: np.ndarray, path: Path) -> dict[str, Any]:
             raise bad(f"the field {name!r}", "is missing")
         if not isinstance(fields[name], kind):
             raise bad(f"the field {name!r}", f"is {fields[name]!r}, not a JSON {kind.__name__}")
-    for name in ("coordinate_names", "constraint_names"):
+    for name in ("coordinate_names", "constraint_names", "input_names"):
         names = fields[name]
         if not all(isinstance(s, str) for s in names) or len(set(names)) != len(names):
             raise bad(f"the field {name!r}", f"is {names!r}, not a list of distinct names")

@@ -135,7 +135,7 @@ def _evaluate(symbols: tuple[sp.Symbol, ...], exprs: tuple[sp.Expr, ...],
 
 def compile_parts(
     parts: Sequence[Part], n: int, m: int, parameters: Sequence[sp.Symbol] = (),
-    backend: str | None = None,
+    backend: str | None = None, inputs: Sequence[sp.Symbol] = (),
 ) -> CompiledEquations:
     """The numeric functions of the model made of ``parts`` (``n`` coordinates, ``m`` rows).
 
@@ -143,14 +143,15 @@ def compile_parts(
     covered exactly once. ``parameters`` are the model's parameter symbols, in which
     the parts' parameter values are written (:class:`Part`); the compiled functions
     take the vector :meth:`ParameterLayout.expand` makes of their values (``bind``
-    does it). The static function (:mod:`.static`) is generated from the same parts
+    does it). ``inputs`` are the model's input symbols, whose values follow the
+    parameters'. The static function (:mod:`.static`) is generated from the same parts
     when statics first asks for it.
     """
     _check_rows(parts, m)
     holonomic = _holonomic_rows(parts)
     pattern = _pattern(parts, n, m)
     layout = _Layout(pattern, holonomic)
-    values = ParameterLayout.of(parts, parameters)
+    values = ParameterLayout.of(parts, [*parameters, *inputs])
     kinds: dict[str, tuple[list, list]] = {kind: ([], []) for kind in _KINDS}
     for g, part in enumerate(parts):
         for kind, exprs, target in _outputs(part, layout):
@@ -163,8 +164,9 @@ def compile_parts(
     used = "numpy" if isinstance(functions[0], _NumpyEvaluator) else "c"
     kkt, velocity, position, energy = functions
     return CompiledEquations(kkt, velocity, position, energy, pattern, tuple(holonomic), used,
-                             partial(compile_static_parts, parts, n, m, parameters, used),
-                             values.expand)
+                             partial(compile_static_parts, parts, n, m,
+                                     [*parameters, *inputs], used),
+                             values.expand, tuple(u.name for u in inputs), len(parameters))
 
 
 def compile_static_parts(parts: Sequence[Part], n: int, m: int,

@@ -93,6 +93,10 @@ class CompiledEquations:
     #: assembled from parts appends values derived from them; default: as given).
     expand_parameters: Callable[[np.ndarray], np.ndarray] | None = field(default=None,
                                                                          repr=False)
+    #: The model's inputs (:class:`~dalembert.System` ``inputs=``): their values sit in
+    #: the parameter vector right after the parameters', from ``input_offset`` on.
+    input_names: tuple[str, ...] = ()
+    input_offset: int = 0
 
     @cached_property
     def static(self) -> StaticFunctions:
@@ -128,8 +132,9 @@ class CompiledEquations:
         return self.pattern.dense_A(values[:k]), values[k:]
 
     def bind(self, p: np.ndarray) -> NumericModel:
-        """The functions bound to the model's parameter values ``p``."""
-        p = np.asarray(p, dtype=float)
+        """The functions bound to the model's parameter values ``p`` (the inputs at 0
+        until :meth:`NumericModel.set_inputs`)."""
+        p = np.concatenate([np.asarray(p, dtype=float), np.zeros(len(self.input_names))])
         return NumericModel(self, p if self.expand_parameters is None
                             else self.expand_parameters(p))
 
@@ -186,6 +191,16 @@ class NumericModel:
     def energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         return self.compiled.energy_values(t, q, qd, self.p)
 
+    @property
+    def inputs(self) -> np.ndarray:
+        """The inputs' current values (a view into the parameter vector)."""
+        start = self.compiled.input_offset
+        return self.p[start:start + len(self.compiled.input_names)]
+
+    def set_inputs(self, values: np.ndarray) -> None:
+        """Set the inputs' values, which every evaluation from now on reads."""
+        self.inputs[:] = values
+
     def forces_at_rest(self, t: float, q: np.ndarray) -> np.ndarray:
         """``f(q, 0, t)``: the generalized forces with every velocity zero."""
         return self.kkt_sparse(t, q, np.zeros(self.n))[1]
@@ -204,8 +219,9 @@ def compile_equations(eqs: Equations, backend: str | None = None) -> CompiledEqu
     model = eqs.model
     coords = model.coords
     time = [("t", [t]), ("q", coords.q)]
-    state = [*time, ("qd", coords.qd), ("p", model.parameters)]
-    static = [*time, ("p", model.parameters)]
+    values = [*model.parameters, *model.inputs]  # the parameter vector: inputs last
+    state = [*time, ("qd", coords.qd), ("p", values)]
+    static = [*time, ("p", values)]
     cons = model.constraints
     M_entries, A_entries = nonzero_entries(eqs.M), nonzero_entries(eqs.A)
     pattern = SparsePattern(coords.n, cons.m, *_indices(M_entries), *_indices(A_entries))
@@ -221,7 +237,9 @@ def compile_equations(eqs: Equations, backend: str | None = None) -> CompiledEqu
     used = "c" if hasattr(functions[0], "library") else "numpy"
     kkt, velocity, position, energy = functions
     return CompiledEquations(kkt, velocity, position, energy, pattern, cons.holonomic_rows,
-                             used, partial(compile_static, eqs, used))
+                             used, partial(compile_static, eqs, used),
+                             input_names=tuple(u.name for u in model.inputs),
+                             input_offset=len(model.parameters))
 
 
 def _indices(entries: dict) -> tuple[np.ndarray, np.ndarray]:

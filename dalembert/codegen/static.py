@@ -120,7 +120,7 @@ def compile_static(eqs: Equations, use: str) -> StaticFunctions:
     entries = static_entries(eqs)
     groups = (entries.stiffness, entries.curvature, entries.damping, entries.rest)
     exprs: list[sp.Expr] = [e for group in groups for e in group.values()]
-    arguments = [("t", [t]), ("q", model.coords.q), ("p", model.parameters)]
+    arguments = [("t", [t]), ("q", model.coords.q), ("p", [*model.parameters, *model.inputs])]
     (values,) = c_backend.build_flat_functions([("static_values", arguments, exprs)], use=use)
     pattern = StaticPattern(
         model.coords.n, model.constraints.m, _index(entries.stiffness, 2),

@@ -31,6 +31,8 @@ class Model:
     constraints: ConstraintSet
     parameters: tuple[sp.Symbol, ...]
     name: str
+    #: Input symbols: values given during a simulation (forces, controllers).
+    inputs: tuple[sp.Symbol, ...] = ()
 
     @property
     def has_energy(self) -> bool:
@@ -48,8 +50,10 @@ def build_model(
     forces: Sequence[PointForce] = (),
     velocities: Sequence[object] | None = None,
     name: str = "system",
+    inputs: Sequence[object] = (),
 ) -> Model:
-    """Check the user's model and rewrite it in plain symbols."""
+    """Check the user's model and rewrite it in plain symbols (see :func:`check_inputs`
+    for where inputs may appear)."""
     if not isinstance(name, str):
         raise ModelError(f"name must be a string, got {name!r}")
     coords = build_coordinates(coordinates, velocities)
@@ -61,8 +65,56 @@ def build_model(
     # Whether the independent ones leave any depends on the state, so it is judged
     # numerically at the initial state (dalembert.solvers.initialization).
     cons = build_constraints(constraints, coords)
-    params = _parameters(coords, L, Q, cons)
-    return Model(coords, L, T, V, Q, cons, params, name)
+    given = check_inputs(inputs, coords, L, cons)
+    params = tuple(s for s in _parameters(coords, L, Q, cons) if s not in set(given))
+    return Model(coords, L, T, V, Q, cons, params, name, given)
+
+
+def check_inputs(inputs: Sequence[object], coords: Coordinates, L: sp.Expr,
+                 cons: ConstraintSet) -> tuple[sp.Symbol, ...]:
+    """The input symbols, checked: distinct plain symbols, neither a coordinate nor the
+    time, and only in the applied forces (an input in the energies or the constraints
+    would need its time derivatives, which a sampled or tabulated input does not have:
+    a prescribed motion is a constraint in ``t``, or a ``multibody.Driver``).
+
+    Parameters
+    ----------
+    inputs
+        The declared input symbols.
+    coords, L, cons
+        The model's coordinates, Lagrangian and constraints.
+
+    Examples
+    --------
+    >>> from dalembert.model.coordinates import build_coordinates, coordinates
+    >>> from dalembert.model.constraints import build_constraints
+    >>> coords = build_coordinates(coordinates("x"))
+    >>> check_inputs([sp.Symbol("u")], coords, sp.S.Zero, build_constraints((), coords))
+    (u,)
+    """
+    if isinstance(inputs, (str, sp.Basic)) or not isinstance(inputs, Sequence):
+        raise ModelError(f"inputs must be a list of SymPy symbols, got {inputs!r}")
+    out: list[sp.Symbol] = []
+    taken = {t, *coords.q, *coords.qd}
+    for u in inputs:
+        if not isinstance(u, sp.Symbol) or isinstance(u, sp.Dummy):
+            raise ModelError(f"an input must be a SymPy Symbol, got {u!r}")
+        if u in taken or u.name == "t" or u.name in coords.names:
+            raise ModelError(f"the input {u.name!r} is named like the time or a coordinate; "
+                             "give it another name")
+        if u in out:
+            raise ModelError(f"the input {u.name!r} is declared twice")
+        where = ("the Lagrangian (T or V)" if u in L.free_symbols else
+                 next((f"constraint {cons.names[i]!r}" for i, e in enumerate(cons.exprs)
+                       if u in sp.sympify(e).free_symbols), None))
+        if where is not None:
+            raise ModelError(
+                f"the input {u.name!r} appears in {where}; inputs may appear in the applied "
+                "forces only (an input in the energies or the constraints would need its "
+                "time derivatives): prescribe a motion with a constraint in dalembert.t, or "
+                "a multibody Driver")
+        out.append(u)
+    return tuple(out)
 
 
 def build_part_model(
@@ -74,6 +126,7 @@ def build_part_model(
     generalized_forces: Mapping[Any, object] | Sequence[object] | None = None,
     forces: Sequence[PointForce] = (),
     name: str = "part",
+    inputs: Sequence[object] = (),
 ) -> Model:
     """A piece of a larger model (one body, one joint, the loads) in its own coordinates.
 
@@ -92,8 +145,9 @@ def build_part_model(
     V = coords.to_plain(potential, f"the potential energy of {name}")
     Q = _generalized_forces(generalized_forces, forces, coords)
     cons = build_constraints(constraints, coords)
-    params = _parameters(coords, T - V, Q, cons)
-    return Model(coords, T - V, T, V, Q, cons, params, name)
+    given = check_inputs(inputs, coords, T - V, cons)
+    params = tuple(s for s in _parameters(coords, T - V, Q, cons) if s not in set(given))
+    return Model(coords, T - V, T, V, Q, cons, params, name, given)
 
 
 def _energies(

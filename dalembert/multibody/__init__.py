@@ -15,7 +15,7 @@ harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
 from .diagnostics import JointPointWarning, check_mobility
-from .drivers import Driver, JointSpring
+from .drivers import Actuator, Driver, JointSpring
 from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
 from .loads import Force, SpringDamper, Torque
 from .outputs import (
@@ -42,6 +42,7 @@ from .rotations import (
 )
 
 __all__ = [
+    "Actuator",
     "Body",
     "Distance",
     "Driver",

@@ -26,7 +26,7 @@ from ..trajectory import Trajectory
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
-from .drivers import JointSpring
+from .drivers import Actuator, JointSpring
 from .initial_state import body_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
@@ -56,6 +56,12 @@ class Multibody:
         :class:`~dalembert.multibody.drivers.JointSpring` loads: springs and dampers
         on revolute angles and prismatic travels (drivers, which prescribe those, are
         joints: :class:`~dalembert.multibody.drivers.Driver`).
+    actuators
+        :class:`~dalembert.multibody.drivers.Actuator` loads: a torque about a
+        revolute joint's axis, a force along a prismatic joint's.
+    inputs
+        Input symbols (``sympy.Symbol``) that forces, torques and actuators may hold;
+        their values come with ``simulate(inputs=...)`` (see :mod:`dalembert.inputs`).
     name
         The system's name (in titles and messages).
     parameters
@@ -86,6 +92,8 @@ class Multibody:
         name: str = "multibody",
         parameters: Mapping[Any, object] | None = None,
         joint_springs: Sequence[JointSpring] = (),
+        actuators: Sequence[Actuator] = (),
+        inputs: Sequence[sp.Symbol] = (),
     ) -> None:
         self.bodies = tuple(bodies)
         self.joints = tuple(joints)
@@ -93,6 +101,8 @@ class Multibody:
         self.torques = tuple(torques)
         self.springs = tuple(springs)
         self.joint_springs = tuple(joint_springs)
+        self.actuators = tuple(actuators)
+        self.inputs = tuple(inputs)
         self.name = name
         self.gravity = array(gravity, (3,), "gravity (world components)")
         self.defaults = dict(parameters or {})
@@ -119,11 +129,12 @@ class Multibody:
         for joint in self.joints:
             found |= joint.parameter_symbols()
         loads = [*(c for f in self.forces for c in f.force),
-                 *(c for tq in self.torques for c in tq.torque)]
+                 *(c for tq in self.torques for c in tq.torque),
+                 *(a.value for a in self.actuators)]
         for expr in loads:
             found |= {s for s in sp.sympify(expr).free_symbols
                       if isinstance(s, sp.Symbol) and s != t}
-        return tuple(sorted(found, key=lambda s: s.name))
+        return tuple(sorted(found - set(self.inputs), key=lambda s: s.name))
 
     def bound(self, *values: Mapping[Any, object] | None) -> Multibody:
         """The mechanism with its parameters replaced by numbers (each piece checked
@@ -173,6 +184,8 @@ class Multibody:
         bound.joint_springs = tuple(
             _with_joint(with_numbers(s, numbers), joints.get(id(s.joint), s.joint))
             for s in self.joint_springs)
+        bound.actuators = tuple(_with_joint(a, joints.get(id(a.joint), a.joint))
+                                for a in self.actuators)
         bound.springs = tuple(rebody(s) for s in self.springs)
         bound.forces = tuple(rebody(f) for f in self.forces)
         bound.torques = tuple(rebody(tq) for tq in self.torques)
@@ -201,10 +214,11 @@ class Multibody:
             self._check_members(j.bodies, f"joint {j.name!r}")
         for s in self.springs:
             self._check_members(s.bodies, f"spring {s.name!r}")
-        for js in self.joint_springs:
+        coordinate_loads: list[JointSpring | Actuator] = [*self.joint_springs, *self.actuators]
+        for js in coordinate_loads:
             if not any(js.joint is j for j in self.joints):
-                raise ModelError(f"joint spring {js.name!r} acts on joint {js.joint.name!r}, "
-                                 "which is not in this system's joints")
+                raise ModelError(f"{type(js).__name__} {js.name!r} acts on joint "
+                                 f"{js.joint.name!r}, which is not in this system's joints")
         loads: tuple[Force | Torque, ...] = (*self.forces, *self.torques)
         for load in loads:
             self._check_members((load.body,), load.name)
@@ -257,6 +271,7 @@ class Multibody:
         Q: dict[object, sp.Expr] = {}
         loads = [load.generalized_forces() for load in self.torques]
         loads += [spring.generalized_forces() for spring in self.joint_springs]
+        loads += [actuator.generalized_forces() for actuator in self.actuators]
         for forces in loads:
             for coord, value in forces.items():
                 Q[coord] = Q.get(coord, sp.S.Zero) + value
@@ -486,10 +501,11 @@ def _names(body: Body) -> list[str]:
 
 
 _Piece = TypeVar("_Piece")
+_Load = TypeVar("_Load", JointSpring, Actuator)
 
 
-def _with_joint(spring: JointSpring, joint: Joint) -> JointSpring:
-    """``spring`` acting on ``joint`` (a bound copy of its own)."""
+def _with_joint(spring: _Load, joint: Joint) -> _Load:
+    """``spring`` (or an actuator) acting on ``joint`` (a bound copy of its own)."""
     if spring.joint is joint:
         return spring
     out = copy.copy(spring)

@@ -241,3 +241,64 @@ def coordinate_values(joint: Joint, poses: dict[str, tuple[np.ndarray, np.ndarra
     wa = Ra @ np.asarray(joint.axis_a, dtype=float)
     d = (xb + Rb @ np.asarray(joint.point_b, float)) - (xa + Ra @ np.asarray(joint.point_a, float))
     return np.einsum("ki,ki->k", wa, d)
+
+
+class Actuator:
+    """A torque about a revolute joint's axis, or a force along a prismatic joint's.
+
+    It acts on the joint's body ``b`` (and the opposite on body ``a``), through the joint
+    coordinate: the generalized force ``value * dq/dq_i`` (:func:`joint_coordinate`).
+    ``value`` may hold parameters, the time and the coordinates, and the mechanism's
+    inputs (``Multibody(inputs=...)``): a motor driven by a controller.
+
+    Parameters
+    ----------
+    name
+        Its name.
+    joint
+        The ``Revolute`` or ``Prismatic`` joint it acts in.
+    value
+        The torque (N m) or force (N), a number or a SymPy expression.
+
+    Examples
+    --------
+    A motor torque ``u`` on a disk's pin, given by a controller holding 2 rad/s:
+
+    >>> import numpy as np
+    >>> import sympy as sp
+    >>> from dalembert.multibody import Ground, Multibody, PlanarBody, Revolute
+    >>> u = sp.Symbol("u")
+    >>> disk = PlanarBody("disk", 1.0, 0.5)
+    >>> pin = Revolute("pin", Ground(), disk)
+    >>> mb = Multibody([disk], [pin], actuators=[Actuator("motor", pin, u)], inputs=[u],
+    ...                gravity=(0, 0, 0))
+    >>> hold = lambda t, q, qd: 10.0 * (2.0 - qd[2])  # qd[2]: the disk's rate
+    >>> traj = mb.simulate((0, 5), {}, inputs=hold, t_eval=[5.0])
+    >>> round(float(traj["disk_theta_dot"][0]), 6)
+    2.0
+    """
+
+    def __init__(self, name: str, joint: Joint, value: object) -> None:
+        if not isinstance(joint, Revolute | Prismatic):
+            raise ModelError(f"actuator {name!r}: it acts in a Revolute or Prismatic joint, "
+                             f"got {joint!r}")
+        expr = sympify_strict(value, f"the value of actuator {name!r}")
+        if not isinstance(expr, sp.Expr):
+            raise ModelError(f"actuator {name!r}: the value must be a number or a SymPy "
+                             f"expression, got {value!r}")
+        self.name, self.value = name, expr
+        self.joint: Joint = joint
+
+    @property
+    def bodies(self) -> tuple[object, object]:
+        return self.joint.bodies
+
+    def generalized_forces(self) -> dict[object, sp.Expr]:
+        """``value * dq/dq_i`` by coordinate of the joint's bodies."""
+        q = joint_coordinate(self.joint)
+        out: dict[object, sp.Expr] = {}
+        for c in (c for body in self.joint.bodies for c in body.coordinates):
+            derivative = q.diff(c)
+            if derivative != 0:
+                out[c] = self.value * derivative
+        return out

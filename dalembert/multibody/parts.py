@@ -299,7 +299,7 @@ def _freeze(value: object) -> object:
 
 def _load_part(mb: Multibody, offsets: dict[int, Indices]) -> Part | None:
     """Forces, torques and springs as one part in the coordinates they involve."""
-    if not (mb.forces or mb.torques or mb.springs or mb.joint_springs):
+    if not (mb.forces or mb.torques or mb.springs or mb.joint_springs or mb.actuators):
         return None
     potential = sp.Add(*(s.potential() for s in mb.springs),
                        *(s.potential() for s in mb.joint_springs))
@@ -314,10 +314,11 @@ def _load_part(mb: Multibody, offsets: dict[int, Indices]) -> Part | None:
     index = {c: i for body in mb.bodies
              for c, i in zip(body.coordinates, offsets[id(body)])}
     model = build_part_model(coords, potential=potential, generalized_forces=generalized,
-                             forces=point_forces, name="loads")
+                             forces=point_forces, name="loads", inputs=mb.inputs)
     _warn_double_counting(mb, model, used)
+    symbols = (*model.parameters, *model.inputs)  # the inputs' values follow the parameters'
     return Part(derive_equations(model), np.array([[index[c] for c in coords]], dtype=np.intp),
-                np.zeros((1, 0)))
+                np.zeros((1, 0)), symbols, np.array([symbols], dtype=object))
 
 
 def _coordinates_in(bodies: Sequence[Body], exprs: Sequence[object]) -> set[sp.Function]:

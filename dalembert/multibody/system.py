@@ -66,6 +66,11 @@ class MultibodySystem(System):
         """The symbols the mechanism's numbers and loads are written in."""
         return self._multibody.parameters
 
+    @property
+    def inputs(self) -> tuple[sp.Symbol, ...]:
+        """The mechanism's input symbols (``Multibody(inputs=...)``)."""
+        return self._multibody.inputs
+
     def numeric(self, parameters: Mapping[Any, object] | None = None) -> NumericModel:
         """The compiled functions bound to parameter values, after the mechanism has been
         checked with them (a mass must come out positive, an inertia valid...)."""
@@ -107,7 +112,7 @@ class MultibodySystem(System):
             self._model = build_model(
                 mb.coordinates, kinetic=mb.kinetic_energy(), potential=mb.potential_energy(),
                 constraints=mb.constraints(), generalized_forces=mb.generalized_forces() or None,
-                forces=mb.point_forces(), name=mb.name,
+                forces=mb.point_forces(), name=mb.name, inputs=mb.inputs,
             )
         return self._model
 
@@ -119,4 +124,5 @@ class MultibodySystem(System):
     def _compile(self) -> CompiledEquations:
         """One kernel per kind of body, joint and the loads."""
         parts = multibody_parts(self._multibody)
-        return compile_parts(parts, len(self._names), len(self._rows), self.parameters)
+        return compile_parts(parts, len(self._names), len(self._rows), self.parameters,
+                             inputs=self.inputs)

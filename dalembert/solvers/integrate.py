@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ..errors import DalembertError
+from ..errors import DalembertError, InputError
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
 from .step_control import CONTROLLED, ControlledSteps
@@ -99,9 +99,13 @@ def integrate(
         except DalembertError as exc:
             if loop is not None:  # the loops stop on their own errors: this is not one
                 raise
-            cause = diagnose(t0, y0) if diagnose is not None else ""
-            return _not_started(t0, y0, times, "failed",
-                                f"integration stopped at t={t0:.6g}: {cause or exc}")
+            # the inputs' own error says what failed; else what is not finite at the start
+            cause = "" if isinstance(exc, InputError) or diagnose is None else \
+                diagnose(t0, y0)
+            result = _not_started(t0, y0, times, "failed",
+                                  f"integration stopped at t={t0:.6g}: {cause or exc}")
+            result.error = exc
+            return result
         finally:
             if bar is not None:
                 bar.close()

@@ -180,6 +180,7 @@ class PythonLoop(SimulationLoop):
         try:
             message = solver.step()
         except DalembertError as exc:
+            self.error = exc  # chained to the run's warning
             return self._failed(f"integration failed at t={solver.t:.6g}: {exc}")
         if solver.status == "failed":
             return self._step_failed(str(message))

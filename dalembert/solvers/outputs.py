@@ -12,6 +12,8 @@ solution of ``A^T lambda = M qdd - f``: one choice among infinitely many, while
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..codegen.compiled import NumericModel
@@ -19,9 +21,11 @@ from .sparse_kkt import kkt_solver, matvec
 
 
 def evaluate_outputs(
-    num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None
+    num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None,
+    inputs: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> dict[str, np.ndarray]:
-    """Arrays with one row per output time (see module docstring)."""
+    """Arrays with one row per output time (see module docstring); ``inputs(t, q, qd)``
+    sets the model's inputs at each state first, if given."""
     n, m, k = num.n, num.m, len(t)
     out = {
         "qdd": np.empty((k, n)),
@@ -36,15 +40,18 @@ def evaluate_outputs(
     # The last state of a run stopped by a NaN or an overflow may overflow here too: its
     # outputs are then not finite, without NumPy's warnings (the run's message says why)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        _fill(out, num, solver, t, y, rows, cols)
+        _fill(out, num, solver, t, y, rows, cols, inputs)
     return out
 
 
 def _fill(out: dict[str, np.ndarray], num: NumericModel, solver, t: np.ndarray,
-          y: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> None:
+          y: np.ndarray, rows: np.ndarray, cols: np.ndarray,
+          inputs: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None) -> None:
     n, m = num.n, num.m
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
+        if inputs is not None:
+            num.set_inputs(inputs(ti, q, qd))
         Mv, f, Av, c = num.kkt_sparse(ti, q, qd)
         qdd, lam = solver.solve(Mv, f, Av, c)
         out["qdd"][i] = qdd

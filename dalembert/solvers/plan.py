@@ -21,6 +21,7 @@ Both loops give the same trajectory to rounding (tested).
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial, update_wrapper
@@ -30,6 +31,7 @@ import numpy as np
 from scipy.integrate import BDF, OdeSolver, Radau
 
 from ..codegen.compiled import NumericModel
+from ..inputs import InputSignal
 from ..options import Baumgarte, Projection, SimulationOptions
 from .dynamics import first_order_rhs
 from .initialization import InitializationReport
@@ -38,6 +40,7 @@ from .native import NATIVE_METHODS, NotApplicable, native_solver
 from .nonfinite import Diagnosis, nonfinite_diagnosis
 from .outputs import evaluate_outputs
 from .projection import StepProjector
+from .state import accelerations_at
 from .step_control import ControlledSteps, controlled_class
 
 Loop = Literal["c", "python"]
@@ -89,6 +92,7 @@ class SimulationPlan:
     events: tuple[Callable, ...] = field(repr=False)
     diagnose: Diagnosis = field(repr=False)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    num: NumericModel | None = field(repr=False, default=None)
 
     @property
     def y0(self) -> np.ndarray:
@@ -149,19 +153,24 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
                 raise ValueError(f"backend='c', but the C loop does not apply: {exc}") \
                     from exc
             why = str(exc)
+    # inputs at every evaluation (a sampled signal is held: its caller sets the values)
+    signal = options.inputs if options.inputs and options.inputs.sample_time is None else None
+    if native is not None:
+        native.set_inputs(signal)
     step = options.step
     solver = controlled_class(options.method, step.controller)
     solver_options = step.solver_options()
     stepper = NATIVE_METHODS.get(options.method) if native is not None else None
+    rhs: Callable[[float, np.ndarray], np.ndarray]
     if native is not None:
         rhs, outputs = native.rhs, native.outputs
         project = native.project if projection else None
         if stepper is not None:
             solver, solver_options["native"] = stepper, native
     else:
-        rhs = first_order_rhs(num, gain, kept)
+        rhs = _with_inputs(num, signal, first_order_rhs(num, gain, kept))
         project = StepProjector(num, kept) if projection else None
-        outputs = partial(evaluate_outputs, num, kept=kept)
+        outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
     if issubclass(solver, ControlledSteps):
         solver_options["step_control"] = step.controller
     if solver in (Radau, BDF):
@@ -175,16 +184,61 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         options=options, initial=initial, loop="c" if native else "python",
         why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
         rhs=rhs, project=project, outputs=outputs,
-        events=tuple(_state_event(e, n) for e in output.events), parameters=num.p,
+        events=tuple(_state_event(e, n, partial(_multipliers, num, signal))
+                     for e in output.events), parameters=num.p, num=num,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs))
 
 
-def _state_event(event: Callable, n: int) -> Callable:
-    """Adapt ``event(t, q, qd)`` to SciPy's ``event(t, y)``, keeping its attributes and
-    its name (messages name it)."""
+def _with_inputs(num: NumericModel, signal: InputSignal | None,
+                 rhs: Callable[[float, np.ndarray], np.ndarray]
+                 ) -> Callable[[float, np.ndarray], np.ndarray]:
+    """``rhs`` with the inputs set from ``signal`` at each state first."""
+    if signal is None:
+        return rhs
+    n = num.n
 
-    def wrapped(t: float, y: np.ndarray) -> float:
-        return event(t, y[:n], y[n:])
+    def with_inputs(t: float, y: np.ndarray) -> np.ndarray:
+        num.set_inputs(signal(t, y[:n], y[n:]))
+        return rhs(t, y)
+
+    return with_inputs
+
+
+def _multipliers(num: NumericModel, signal: InputSignal | None, t: float, q: np.ndarray,
+                 qd: np.ndarray) -> np.ndarray:
+    """The multipliers at a state, for an event function that asks for them."""
+    if signal is not None:
+        num.set_inputs(signal(t, q, qd))
+    return accelerations_at(num, t, q, qd)[1]
+
+
+def takes_multipliers(event: Callable) -> bool:
+    """Whether ``event`` is ``event(t, q, qd, lam)`` (four positional parameters).
+
+    >>> takes_multipliers(lambda t, q, qd, lam: lam[0]), takes_multipliers(lambda t, q, qd: 1)
+    (True, False)
+    """
+    try:
+        parameters = inspect.signature(event).parameters.values()
+    except (TypeError, ValueError):
+        return False
+    positional = [p for p in parameters if p.kind in (p.POSITIONAL_ONLY,
+                                                      p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 4
+
+
+def _state_event(event: Callable, n: int,
+                 multipliers: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+                 ) -> Callable:
+    """Adapt ``event(t, q, qd)`` or ``event(t, q, qd, lam)`` (the multipliers at the state)
+    to SciPy's ``event(t, y)``, keeping its attributes and its name (messages name it)."""
+    if takes_multipliers(event):
+        def wrapped(t: float, y: np.ndarray) -> float:
+            q, qd = y[:n], y[n:]
+            return event(t, q, qd, multipliers(t, q, qd))
+    else:
+        def wrapped(t: float, y: np.ndarray) -> float:
+            return event(t, y[:n], y[n:])
 
     update_wrapper(wrapped, event)
     wrapped.terminal = getattr(event, "terminal", False)  # type: ignore[attr-defined]

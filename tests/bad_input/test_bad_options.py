@@ -115,10 +115,17 @@ def test_t_eval_must_be_a_one_dimensional_array_of_times(value):
     refused("t_eval", value)
 
 
+@FAST
+@given(value=st.one_of(NOT_NUMBERS.filter(lambda v: v is not None), NOT_POSITIVE))
+def test_a_sample_time_must_be_finite_and_positive(value):
+    refused("sample_time", value)
+
+
 def test_every_option_of_the_table_is_exercised_here():
     covered = {"first_step", "baumgarte_gain", "max_step", "rtol", "atol", "method",
                "step_control", "backend", "redundant_constraints", "velocity_projection",
-               "stabilization", "dense_output", "progress", "native", "events", "t_eval"}
+               "stabilization", "dense_output", "progress", "native", "events", "t_eval",
+               "sample_time"}
     assert set(SIMULATE_PARAMETERS) == covered
 
 

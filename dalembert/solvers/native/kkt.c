@@ -369,10 +369,12 @@ static void load_kkt(dl_model *md) {
   for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
 }
 
-/* The KKT values at (t, q, qd), in the solve's layout. */
-void eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
+/* The KKT values at (t, q, qd), in the solve's layout (the inputs set first). */
+int eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
+  if (md->inputs && md->inputs(t, q, qd) != 0) return DL_INPUT;
   eval_state(&md->kkt, t, q, qd, md->p, md->values);
   if (!md->kkt_in_layout) load_kkt(md);
+  return DL_OK;
 }
 
 /* Whether qdd meets the dropped rows, A_d qdd = c_d, as closely as the Python loop asks
@@ -436,7 +438,8 @@ static void baumgarte(dl_model *md, double t, const double *q, const double *qd,
 /* y' = [qd, qdd] at (t, y); lambda may be NULL. */
 int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda) {
   const int64_t n = md->n;
-  eval_kkt(md, t, y, y + n);
+  const int status = eval_kkt(md, t, y, y + n);
+  if (status != DL_OK) return status;
   if (md->baumgarte != 0.0 && md->m) baumgarte(md, t, y, y + n, md->c);
   memcpy(ydot, y + n, (size_t)n * sizeof(double));
   return dl_solve(md, ydot + n, lambda);

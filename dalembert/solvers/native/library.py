@@ -19,17 +19,20 @@ from pathlib import Path
 from ...codegen import c_backend
 
 _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
+#: ``int inputs(double t, const double *q, const double *qd)`` (see ``runtime.h``).
+INPUTS_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, _f64, ctypes.POINTER(_f64),
+                                   ctypes.POINTER(_f64))
 
 #: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds;
 #: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones;
 #: NOT_FINITE: a step would start from a time, step size, state or derivative that is
-#: not finite).
+#: not finite; INPUT: the inputs' callback failed).
 (OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED,
- NOT_FINITE) = range(8)
+ NOT_FINITE, INPUT) = range(9)
 CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
          "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
-         "DL_NOT_FINITE": NOT_FINITE}
+         "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
 SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "layout.c")
 HEADER = "runtime.h"
@@ -60,7 +63,7 @@ class Model(ctypes.Structure):
                                     "active")),
         ("kkt_in_layout", _i64), ("c", _ptr),
         ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
-        ("dropped_rtol", _f64),
+        ("dropped_rtol", _f64), ("inputs", _ptr),
     ]
 
 

@@ -10,8 +10,8 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
   const int64_t n = md->n, m = md->m;
   for (int64_t i = 0; i < k; ++i) {
     const double t = times[i], *q = Y + i * 2 * n, *qd = q + n;
-    eval_kkt(md, t, q, qd);
-    const int status = dl_solve(md, qdd + i * n, lambda + i * m);
+    int status = eval_kkt(md, t, q, qd);
+    if (status == DL_OK) status = dl_solve(md, qdd + i * n, lambda + i * m);
     if (status != DL_OK) return status;
     double *F = force + i * n;
     const double *lam = lambda + i * m;

@@ -25,7 +25,8 @@
  * from the kept ones (the rank changed since it was measured); DL_NOT_FINITE: a step
  * would start from a time, step size, state or derivative that is not finite. */
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
-       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7 };
+       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7,
+       DL_INPUT = 8 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);
@@ -86,6 +87,9 @@ typedef struct {
   int64_t n_dropped_pairs, n_dropped;
   const int64_t *dropped_rows;
   double dropped_rtol;
+  /* the model's inputs (NULL: none): called before every evaluation of the KKT values,
+   * it writes their values into p at (t, q, qd); non-zero if it failed (DL_INPUT) */
+  int (*inputs)(double t, const double *q, const double *qd);
 } dl_model;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
@@ -167,7 +171,7 @@ DL_INTERNAL void eval_static(const dl_function *F, double t, const double *q, co
                              double *out);
 DL_INTERNAL void load_pairs(dl_model *md, const double *Av);
 DL_INTERNAL void add_A_times(const dl_model *md, const double *x, double w, double *out);
-DL_INTERNAL void eval_kkt(dl_model *md, double t, const double *q, const double *qd);
+DL_INTERNAL int eval_kkt(dl_model *md, double t, const double *q, const double *qd);
 DL_INTERNAL int dl_solve(dl_model *md, double *qdd, double *lambda);
 DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active);
 DL_INTERNAL void solve_schur(dl_model *md, double *rhs, double *x);

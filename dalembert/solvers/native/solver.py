@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Callable
 
 import numpy as np
 
@@ -69,6 +70,9 @@ class NativeSolver:
                                            np.uint8)
         self._fallback: StepProjector | None = None  # made on first need
         self._io()
+        self._input_error: BaseException | None = None  # what the inputs' callback raised
+        self._callback: object = None
+        self.set_inputs(None)
 
     def _array(self, values, dtype=np.int64) -> int:
         array = np.ascontiguousarray(values, dtype=dtype)
@@ -83,6 +87,8 @@ class NativeSolver:
         num, s = self.num, self.structure
         n, m = self.n, self.m
         nM, nA = len(num.pattern.M_rows), len(num.pattern.A_rows)
+        # the vector itself (no copy): the inputs' callback writes into it
+        self._parameters = num.p
         model = library.Model(n=n, m=m, nM=nM, nA=nA, n_hol=len(num.holonomic_rows),
                               p=self._array(num.p, np.float64), baumgarte=baumgarte,
                               holonomic=self._array(num.holonomic_rows),
@@ -140,8 +146,38 @@ class NativeSolver:
             setattr(model, name, values + DOUBLE * start[name])
 
     def _check(self, status: int) -> None:
+        if status == library.INPUT and self._input_error is not None:
+            error, self._input_error = self._input_error, None
+            raise error  # what the inputs' callback raised (an InputError, a Ctrl-C)
         if status != library.OK:
             raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
+
+    def set_inputs(self, signal: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+                   | None) -> None:
+        """Have C ask ``signal(t, q, qd)`` for the model's inputs before every evaluation
+        (``None``: the inputs stay as they are in the parameter vector). The callback
+        writes into the vector C reads; an exception it raises ends C's call with
+        ``DL_INPUT`` and is raised again by the Python side (:meth:`_check`)."""
+        self._input_error = None
+        if signal is None:
+            self.model.inputs = None
+            self._callback = None
+            return
+        n, p = self.n, self._parameters
+        start = self.num.compiled.input_offset
+        slots = slice(start, start + len(self.num.compiled.input_names))
+
+        def inputs(t: float, q: ctypes._Pointer, qd: ctypes._Pointer) -> int:
+            try:
+                p[slots] = signal(t, np.ctypeslib.as_array(q, (n,)),
+                                  np.ctypeslib.as_array(qd, (n,)))
+                return 0
+            except BaseException as exc:  # raised again in Python once C has returned
+                self._input_error = exc
+                return 1
+
+        self._callback = library.INPUTS_CALLBACK(inputs)  # kept alive while C may call it
+        self.model.inputs = ctypes.cast(self._callback, ctypes.c_void_p).value
 
     def _io(self) -> None:
         """Fixed input/output buffers: taking a new array's address costs more than a copy."""

@@ -1,0 +1,213 @@
+"""Input signals: the values of a model's inputs during a simulation.
+
+A System declares input symbols (``System(..., inputs=[u])``) that may appear in its
+applied forces; ``simulate(inputs=...)`` says what they are worth along the run:
+
+- a number: constant;
+- a function of the state, ``u(t, q, qd)`` (a feedback controller), or of the time
+  alone, ``u(t)`` (a SciPy interpolator of measured data is one);
+- a table ``(times, values)``, interpolated linearly (it must cover ``t_span``);
+- for several inputs, a dict by input (symbol or name) of any of these, or one
+  function or table giving them all as a vector.
+
+``sample_time=dt`` holds the values between samples: they are computed at
+``t0, t0 + dt, ...`` from the state there and held until the next sample (a zero-
+order hold, as a digital controller acts); the integration restarts at every sample
+instant, so that steps land on them.
+
+:func:`input_signal` turns the user's values into an :class:`InputSignal` once, at
+the door; the loops call it, and a value it cannot produce (an exception in the
+user's function, a wrong shape, NaN) is an :class:`~dalembert.errors.InputError`
+naming the input, which ends the run with the steps made before.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+
+#: One input's (or all inputs') value at ``(t, q, qd)``.
+Source = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class InputSignal:
+    """The inputs' values along a run (see :mod:`dalembert.inputs`).
+
+    Attributes
+    ----------
+    names
+        The inputs, in the model's order.
+    sources
+        One function ``(t, q, qd) -> values`` per group of inputs, with the positions
+        of the inputs it gives.
+    sample_time
+        The zero-order hold's period, or ``None`` (values at every evaluation).
+    """
+
+    names: tuple[str, ...]
+    sources: tuple[tuple[Source, tuple[int, ...], str], ...]
+    sample_time: float | None = None
+
+    def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The inputs' values at ``(t, q, qd)``; an :class:`InputError` names the input
+        whose value is not a finite number (or whose function raised)."""
+        out = np.empty(len(self.names))
+        for source, where, what in self.sources:
+            try:
+                value = np.asarray(source(t, q, qd), dtype=float)
+            except Exception as exc:  # the user's function: any error ends the run
+                raise InputError(f"{what} raised at t={t:.6g}: {type(exc).__name__}: {exc}"
+                                 ) from exc
+            if value.shape == () and len(where) == 1:
+                value = value.reshape(1)
+            if value.shape != (len(where),):
+                raise InputError(f"{what} gave an array of shape {value.shape} at t={t:.6g}; "
+                                 f"it must give {len(where)} value(s) "
+                                 f"({', '.join(self.names[k] for k in where)})")
+            if not np.all(np.isfinite(value)):
+                raise InputError(f"{what} gave {value.tolist()} at t={t:.6g}, not finite")
+            out[list(where)] = value
+        return out
+
+
+def input_signal(inputs: object, names: Sequence[str], sample_time: float | None,
+                 t_span: tuple[float, float]) -> InputSignal | None:
+    """The :class:`InputSignal` of ``simulate(inputs=..., sample_time=...)``.
+
+    Parameters
+    ----------
+    inputs
+        The user's values (see :mod:`dalembert.inputs`), or ``None``.
+    names
+        The model's input names.
+    sample_time
+        The zero-order hold's period (``None``: none).
+    t_span
+        The run's span (a table must cover it).
+
+    Raises
+    ------
+    InputError
+        An input without a value, a name that is not an input, a value of no known form,
+        a table that does not cover ``t_span``.
+
+    Examples
+    --------
+    >>> signal = input_signal({"u": 2.0, "v": lambda t: 3 * t}, ["u", "v"], None, (0, 1))
+    >>> signal(0.5, np.zeros(1), np.zeros(1))
+    array([2. , 1.5])
+    """
+    if not names:
+        if inputs is not None:
+            raise InputError("inputs= is given, but the model declares no inputs "
+                             "(System(..., inputs=[u, ...]))")
+        if sample_time is not None:
+            raise InputError("sample_time= is given, but the model declares no inputs")
+        return None
+    if inputs is None:
+        raise InputError(f"the model's inputs {', '.join(names)} have no values: pass "
+                         f"inputs={{{', '.join(repr(n) + ': ...' for n in names)}}}")
+    if isinstance(inputs, Mapping):
+        given = {_name(key): value for key, value in inputs.items()}
+        unknown = [n for n in given if n not in names]
+        if unknown:
+            raise InputError(f"{', '.join(map(repr, unknown))} is not an input of this model "
+                             f"(its inputs: {', '.join(names)})")
+        missing = [n for n in names if n not in given]
+        if missing:
+            raise InputError(f"the input(s) {', '.join(missing)} have no values in inputs=")
+        sources: tuple[tuple[Source, tuple[int, ...], str], ...] = tuple(
+            (_source(given[n], 1, f"the input {n!r}", t_span), (k,), f"the input {n!r}")
+            for k, n in enumerate(names))
+    else:
+        what = f"inputs= (all of {', '.join(names)})" if len(names) > 1 else \
+            f"the input {names[0]!r}"
+        sources = ((_source(inputs, len(names), what, t_span), tuple(range(len(names))),
+                    what),)
+    return InputSignal(tuple(names), sources, sample_time)
+
+
+def _name(key: object) -> str:
+    return str(getattr(key, "name", key))
+
+
+def _source(value: object, size: int, what: str, t_span: tuple[float, float]) -> Source:
+    """``value`` (a number, a function, a table) as a function of ``(t, q, qd)``."""
+    if callable(value):
+        return _function(value, what)
+    if isinstance(value, tuple) and len(value) == 2:
+        return _table(value, size, what, t_span)
+    try:
+        number = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        number = None
+    if number is None or number.shape not in ((), (size,)) or not np.all(np.isfinite(number)):
+        raise InputError(f"{what} must be a finite number, a function u(t, q, qd) or u(t), "
+                         f"or a table (times, values); got {value!r}")
+    return lambda t, q, qd: number
+
+
+def _function(f: Callable[..., Any], what: str) -> Source:
+    """``f(t, q, qd)`` or ``f(t)``, by what it accepts."""
+    try:
+        parameters = inspect.signature(f).parameters.values()
+        # three required positional parameters: u(t, q, qd); else u(t) (an interpolator's
+        # further parameters have defaults: CubicSpline(t, nu=0, extrapolate=None))
+        required = [p for p in parameters if p.default is p.empty and p.kind in (
+            p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+        takes_state = len(required) >= 3 or any(p.kind == p.VAR_POSITIONAL
+                                                for p in parameters)
+    except (TypeError, ValueError):  # a builtin or a C function: assume u(t)
+        takes_state = False
+    if takes_state:
+        return lambda t, q, qd: f(t, q, qd)
+    return lambda t, q, qd: f(t)
+
+
+def _table(value: tuple[Any, Any], size: int, what: str,
+           t_span: tuple[float, float]) -> Source:
+    try:
+        times = np.asarray(value[0], dtype=float)
+        values = np.asarray(value[1], dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{what}: a table is (times, values) of numbers") from exc
+    if values.ndim == 1:
+        values = values[:, None]
+    if times.ndim != 1 or len(times) < 2 or values.shape != (len(times), size):
+        raise InputError(f"{what}: a table is (times, values) with at least two times and "
+                         f"values of shape ({len(times)},{' ' + str(size) if size > 1 else ''})"
+                         f"; got times {times.shape}, values {np.shape(value[1])}")
+    if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))
+            and np.all(np.diff(times) > 0)):
+        raise InputError(f"{what}: the table's times must increase and every entry be finite")
+    lo, hi = min(t_span), max(t_span)
+    if times[0] > lo or times[-1] < hi:
+        raise InputError(f"{what}: the table covers t = {times[0]:g} .. {times[-1]:g}, not "
+                         f"all of t_span {t_span}; extend it (it is not extrapolated)")
+    columns = [values[:, k] for k in range(size)]
+    if size == 1:
+        return lambda t, q, qd: np.interp(t, times, columns[0])
+    return lambda t, q, qd: np.array([np.interp(t, times, c) for c in columns])
+
+
+def check_sample_time(sample_time: object) -> float | None:
+    """``None``, or a finite positive number.
+
+    >>> check_sample_time(0.01)
+    0.01
+    """
+    if sample_time is None:
+        return None
+    if isinstance(sample_time, bool) or not isinstance(sample_time, (int, float, np.number)) \
+            or not (math.isfinite(float(sample_time)) and float(sample_time) > 0):
+        raise ValueError(f"The 'sample_time' parameter of simulate must be a finite positive "
+                         f"number or None; got {sample_time!r}.")
+    return float(sample_time)
