@@ -62,20 +62,35 @@ class InputSignal:
         out = np.empty(len(self.names))
         for source, where, what in self.sources:
             try:
-                value = np.asarray(source(t, q, qd), dtype=float)
+                value = source(t, q, qd)
             except Exception as exc:  # the user's function: any error ends the run
                 raise InputError(f"{what} raised at t={t:.6g}: {type(exc).__name__}: {exc}"
                                  ) from exc
-            if value.shape == () and len(where) == 1:
-                value = value.reshape(1)
-            if value.shape != (len(where),):
-                raise InputError(f"{what} gave an array of shape {value.shape} at t={t:.6g}; "
-                                 f"it must give {len(where)} value(s) "
-                                 f"({', '.join(self.names[k] for k in where)})")
-            if not np.all(np.isfinite(value)):
-                raise InputError(f"{what} gave {value.tolist()} at t={t:.6g}, not finite")
-            out[list(where)] = value
+            if len(where) == 1 and isinstance(value, (float, int, np.floating, np.integer)):
+                out[where[0]] = value  # the common case, one number: no array made
+                if not math.isfinite(out[where[0]]):
+                    raise InputError(f"{what} gave [{out[where[0]]}] at t={t:.6g}, "
+                                     "not finite")
+                continue
+            out[list(where)] = self._values(value, where, what, t)
         return out
+
+    def _values(self, value: object, where: tuple[int, ...], what: str,
+                t: float) -> np.ndarray:
+        """``value`` as an array of ``len(where)`` finite numbers, or an InputError."""
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{what} gave {value!r} at t={t:.6g}, not numbers") from exc
+        if array.shape == () and len(where) == 1:
+            array = array.reshape(1)
+        if array.shape != (len(where),):
+            raise InputError(f"{what} gave an array of shape {array.shape} at t={t:.6g}; "
+                             f"it must give {len(where)} value(s) "
+                             f"({', '.join(self.names[k] for k in where)})")
+        if not np.all(np.isfinite(array)):
+            raise InputError(f"{what} gave {array.tolist()} at t={t:.6g}, not finite")
+        return array
 
 
 def input_signal(inputs: object, names: Sequence[str], sample_time: float | None,

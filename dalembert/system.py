@@ -645,14 +645,14 @@ class System:
 
     def _segment(self, plan: SimulationPlan, a: float, b: float, y: np.ndarray,
                  t_eval: np.ndarray | None) -> SimulationPlan:
-        """The plan of one sample interval ``[a, b]`` of a sampled run, from ``y``."""
-        assert plan.num is not None
+        """The plan of one sample interval ``[a, b]`` of a sampled run, from ``y``: the
+        run's own plan (its solver functions, its C loop) from the state the interval
+        before ended in, which is consistent (projected after every step)."""
         options = plan.options
         n = len(self.coordinate_names)
-        report = self._initial_state(plan.num, y[:n], y[n:], a, None,
-                                     options.redundant_constraints,
-                                     options.velocity_projection)
-        return plan_simulation(plan.num, report, dataclasses.replace(
+        start = dataclasses.replace(plan.initial, q=y[:n].copy(), qd=y[n:].copy(),
+                                    q_given=y[:n].copy(), qd_given=y[n:].copy())
+        return dataclasses.replace(plan, initial=start, options=dataclasses.replace(
             options, t_span=(a, b),
             output=dataclasses.replace(options.output, t_eval=t_eval, progress=False)))
 

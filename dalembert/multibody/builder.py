@@ -106,6 +106,8 @@ class Multibody:
         self.name = name
         self.gravity = array(gravity, (3,), "gravity (world components)")
         self.defaults = dict(parameters or {})
+        #: The last values bound and the mechanism they gave (binding checks every piece)
+        self._last_bound: tuple[tuple[float, ...], Multibody] | None = None
         self._check()
 
     PARAMETRIC = ("gravity",)
@@ -163,13 +165,17 @@ class Multibody:
             return self
         numbers = dict(zip(self.parameters,
                            resolve_parameters(self.parameters, self.defaults, *values)))
+        key = tuple(numbers.values())
+        if self._last_bound is not None and self._last_bound[0] == key:
+            return self._last_bound[1]  # the same values as the last time: checked already
+        memo: dict[sp.Basic, float] = {}  # pieces share expressions: each evaluated once
         bound = copy.copy(self)
-        bound.gravity = with_numbers(self, numbers).gravity
-        mapped = {id(b): with_numbers(b, numbers) for b in self.bodies}
+        bound.gravity = with_numbers(self, numbers, memo).gravity
+        mapped = {id(b): with_numbers(b, numbers, memo) for b in self.bodies}
         bound.bodies = tuple(mapped[id(b)] for b in self.bodies)
 
         def rebody(piece: _Piece) -> _Piece:
-            out = with_numbers(piece, numbers)
+            out = with_numbers(piece, numbers, memo)
             swaps = {a: mapped[id(b)] for a in ("body", "body_a", "body_b")
                      if (b := getattr(piece, a, None)) is not None and id(b) in mapped
                      and mapped[id(b)] is not b}
@@ -182,7 +188,7 @@ class Multibody:
         bound.joints = tuple(rebody(j) for j in self.joints)
         joints = {id(j): b for j, b in zip(self.joints, bound.joints)}
         bound.joint_springs = tuple(
-            _with_joint(with_numbers(s, numbers), joints.get(id(s.joint), s.joint))
+            _with_joint(with_numbers(s, numbers, memo), joints.get(id(s.joint), s.joint))
             for s in self.joint_springs)
         bound.actuators = tuple(_with_joint(a, joints.get(id(a.joint), a.joint))
                                 for a in self.actuators)
@@ -191,6 +197,8 @@ class Multibody:
         bound.torques = tuple(rebody(tq) for tq in self.torques)
         bound.__dict__.pop("parameters", None)
         bound.__dict__.pop("system", None)
+        bound._last_bound = None
+        self._last_bound = (key, bound)
         return bound
 
     # -- validation ------------------------------------------------------------------

@@ -143,20 +143,30 @@ def sympy_vector(value: Array) -> sp.Matrix:
     return sp.Matrix([to_sympy(v) for v in value.ravel()])
 
 
-def evaluate(value: Any, values: Mapping[sp.Symbol, float], what: str) -> Any:
-    """``value`` with its symbols replaced by ``values`` (numbers stay as they are)."""
+def evaluate(value: Any, values: Mapping[sp.Symbol, float], what: str,
+             memo: dict[sp.Basic, float] | None = None) -> Any:
+    """``value`` with its symbols replaced by ``values`` (numbers stay as they are);
+    ``memo`` remembers expressions already evaluated (pieces share them)."""
     if not is_symbolic(value):
         return value
+    memo = {} if memo is None else memo
     if isinstance(value, np.ndarray):
-        return np.array([evaluate(v, values, what) for v in value.ravel()],
+        return np.array([evaluate(v, values, what, memo) for v in value.ravel()],
                         dtype=float).reshape(value.shape)
-    number = sp.sympify(value).xreplace({k: sp.Float(float(v)) for k, v in values.items()})
+    if not isinstance(value, sp.Basic):
+        return value
+    found = memo.get(value)
+    if found is not None:
+        return found
+    number = value.xreplace({k: sp.Float(float(v)) for k, v in values.items()
+                             if k in value.free_symbols})
     if number.free_symbols:
         names = ", ".join(sorted(s.name for s in number.free_symbols))
         raise ModelError(f"{what} needs a value for {names}")
     result = float(number)
     if not np.isfinite(result):
         raise ModelError(f"{what} is {result} with the given parameter values")
+    memo[value] = result
     return result
 
 
@@ -166,16 +176,19 @@ def parametric_symbols(piece: object) -> set[sp.Symbol]:
                          for name in getattr(piece, "PARAMETRIC", ())))
 
 
-def with_numbers(piece: P, values: Mapping[sp.Symbol, float]) -> P:
+def with_numbers(piece: P, values: Mapping[sp.Symbol, float],
+                 memo: dict[sp.Basic, float] | None = None) -> P:
     """A copy of ``piece`` with its parametric attributes evaluated (the piece itself
-    when none is symbolic); the piece's ``check_values`` then checks them."""
+    when none is symbolic); the piece's ``check_values`` then checks them. ``memo``: as
+    for :func:`evaluate`."""
     names = [n for n in getattr(piece, "PARAMETRIC", ()) if is_symbolic(getattr(piece, n))]
     if not names:
         return piece
     bound = copy.copy(piece)
     label = getattr(piece, "name", type(piece).__name__)
     for name in names:
-        setattr(bound, name, evaluate(getattr(piece, name), values, f"{name} of {label!r}"))
+        setattr(bound, name, evaluate(getattr(piece, name), values, f"{name} of {label!r}",
+                                      memo))
     check = getattr(bound, "check_values", None)
     if check is not None:
         check()

@@ -371,7 +371,11 @@ static void load_kkt(dl_model *md) {
 
 /* The KKT values at (t, q, qd), in the solve's layout (the inputs set first). */
 int eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
-  if (md->inputs && md->inputs(t, q, qd) != 0) return DL_INPUT;
+  if (md->inputs) {
+    memcpy(md->input_state, q, (size_t)md->n * sizeof(double));
+    memcpy(md->input_state + md->n, qd, (size_t)md->n * sizeof(double));
+    if (md->inputs(t) != 0) return DL_INPUT;
+  }
   eval_state(&md->kkt, t, q, qd, md->p, md->values);
   if (!md->kkt_in_layout) load_kkt(md);
   return DL_OK;

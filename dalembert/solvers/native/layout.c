@@ -36,6 +36,7 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_model, active), FIELD(dl_model, kkt_in_layout), FIELD(dl_model, c),
   FIELD(dl_model, n_dropped_pairs), FIELD(dl_model, n_dropped),
   FIELD(dl_model, dropped_rows), FIELD(dl_model, dropped_rtol), FIELD(dl_model, inputs),
+  FIELD(dl_model, input_state),
   SIZE(dl_tableau),
   FIELD(dl_tableau, n_stages), FIELD(dl_tableau, A), FIELD(dl_tableau, B),
   FIELD(dl_tableau, C), FIELD(dl_tableau, E), FIELD(dl_tableau, E3),

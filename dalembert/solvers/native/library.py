@@ -19,9 +19,8 @@ from pathlib import Path
 from ...codegen import c_backend
 
 _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
-#: ``int inputs(double t, const double *q, const double *qd)`` (see ``runtime.h``).
-INPUTS_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, _f64, ctypes.POINTER(_f64),
-                                   ctypes.POINTER(_f64))
+#: ``int inputs(double t)``, the state in ``input_state`` (see ``runtime.h``).
+INPUTS_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, _f64)
 
 #: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds;
 #: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones;
@@ -63,7 +62,7 @@ class Model(ctypes.Structure):
                                     "active")),
         ("kkt_in_layout", _i64), ("c", _ptr),
         ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
-        ("dropped_rtol", _f64), ("inputs", _ptr),
+        ("dropped_rtol", _f64), ("inputs", _ptr), ("input_state", _ptr),
     ]
 
 

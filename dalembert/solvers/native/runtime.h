@@ -87,9 +87,11 @@ typedef struct {
   int64_t n_dropped_pairs, n_dropped;
   const int64_t *dropped_rows;
   double dropped_rtol;
-  /* the model's inputs (NULL: none): called before every evaluation of the KKT values,
-   * it writes their values into p at (t, q, qd); non-zero if it failed (DL_INPUT) */
-  int (*inputs)(double t, const double *q, const double *qd);
+  /* the model's inputs (NULL: none): before every evaluation of the KKT values the state
+   * is copied into input_state ([q, qd], 2 n) and inputs(t) writes their values into p;
+   * non-zero if it failed (DL_INPUT) */
+  int (*inputs)(double t);
+  double *input_state;
 } dl_model;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */

@@ -166,11 +166,13 @@ class NativeSolver:
         n, p = self.n, self._parameters
         start = self.num.compiled.input_offset
         slots = slice(start, start + len(self.num.compiled.input_names))
+        state = np.zeros(2 * n)  # C copies [q, qd] here before each call
+        q, qd = state[:n], state[n:]
+        self.model.input_state = self._array(state, np.float64)
 
-        def inputs(t: float, q: ctypes._Pointer, qd: ctypes._Pointer) -> int:
+        def inputs(t: float) -> int:
             try:
-                p[slots] = signal(t, np.ctypeslib.as_array(q, (n,)),
-                                  np.ctypeslib.as_array(qd, (n,)))
+                p[slots] = signal(t, q, qd)
                 return 0
             except BaseException as exc:  # raised again in Python once C has returned
                 self._input_error = exc
