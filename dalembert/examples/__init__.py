@@ -1,7 +1,8 @@
 """The example gallery: each module builds a real constrained system.
 
 Every example module defines ``TITLE`` (one line), ``build(**parameters) -> System``,
-``INITIAL`` (keyword arguments ``q0``/``qd0`` for ``simulate``), ``T_END`` (default
+``INITIAL`` (keyword arguments of ``simulate``: ``q0``/``qd0``, and ``inputs`` for a
+controlled example), ``T_END`` (default
 simulated time) and ``checks(system, traj) -> dict[str, float]``: measured errors
 against an independent closed form or conservation law, used by the demo and
 the CLI summary. The tests validate each example separately.
@@ -48,6 +49,7 @@ EXAMPLES: dict[str, str] = {
     "four-bar": "four_bar",
     "slider-crank": "slider_crank",
     "crank-press": "crank_press",
+    "spacecraft": "spacecraft",
     "chain-frequencies": "chain_frequencies",
     "closed-chain": "closed_chain",
 }
