@@ -740,7 +740,8 @@ class System:
             constraint_names=self.constraint_names, status=result.status,
             message=result.message, stats=result.stats, initialization=str(plan.initial),
             parameters={s.name: float(v) for s, v in zip(self.parameters, plan.parameters)},
-            inputs=applied, input_names=tuple(u.name for u in self.inputs),
+            inputs=np.zeros((len(result.t), 0)) if applied is None else applied,
+            input_names=tuple(u.name for u in self.inputs),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
         )
 

@@ -91,7 +91,7 @@ class Trajectory:
     stats: dict[str, Any] = field(default_factory=dict)
     initialization: str = ""
     parameters: dict[str, float] = field(default_factory=dict)
-    inputs: np.ndarray | None = None
+    inputs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     input_names: tuple[str, ...] = ()
     t_events: list[np.ndarray] = field(default_factory=list)
     y_events: list[np.ndarray] = field(default_factory=list)
@@ -141,11 +141,10 @@ class Trajectory:
         if name not in self.input_names:
             raise KeyError(f"{name!r} is not an input; the inputs are "
                            f"{', '.join(self.input_names) or 'none'}")
-        assert self.inputs is not None
         return self.inputs[:, self.input_names.index(name)]
 
     def __post_init__(self) -> None:
-        if self.inputs is None:
+        if self.inputs is None or (np.size(self.inputs) == 0 and not self.input_names):
             self.inputs = np.zeros((len(self.t), len(self.input_names)))
 
     def __len__(self) -> int:
