@@ -54,32 +54,49 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from .bodies import Body, Ground, Particle, PlanarBody
-from .parametric import Scalar, array, parametric_symbols, scalar, sympy_vector, to_sympy
+from .parametric import (
+    Scalar,
+    array,
+    is_symbolic,
+    parametric_symbols,
+    scalar,
+    sympy_vector,
+    to_sympy,
+)
 from .rotations import dot, times_vector
-from .types import FloatArray, Vector
+from .types import Vector
 
 #: A joint's two sides: body ``a`` and body ``b``.
 Side = Literal["a", "b"]
 
 
-def _unit(v: Vector, what: str) -> FloatArray:
-    try:
-        arr = np.asarray(v, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ModelError(f"{what} must be 3 numbers, got {v!r}") from exc
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ModelError(f"{what} must be 3 finite numbers, got {v!r}")
+def _unit(v: object, what: str) -> np.ndarray:
+    """A direction made unit: 3 numbers, or expressions of parameters (normalized in
+    the expressions, checked once bound)."""
+    arr = array(v, (3,), what)
+    if is_symbolic(arr):
+        norm = sp.sqrt(sum(to_sympy(c) ** 2 for c in arr))
+        return np.array([to_sympy(c) / norm for c in arr], dtype=object)
     norm = np.linalg.norm(arr)
     if norm == 0:
         raise ModelError(f"{what} is the zero vector; give a direction")
     return arr / norm
 
 
-def _perpendicular(w: FloatArray, ref: Vector | None, what: str) -> FloatArray:
-    """``ref`` made perpendicular to ``w`` (default: the axis least aligned with ``w``)."""
+def _perpendicular(w: np.ndarray, ref: object, what: str) -> np.ndarray:
+    """``ref`` made perpendicular to ``w`` (default: the axis least aligned with ``w``;
+    an axis with parameters needs its reference given, which can then hold some too)."""
     if ref is None:
+        if is_symbolic(w):
+            raise ModelError(f"{what}: a joint axis written with parameters needs its "
+                             "reference direction too (ref_a / ref_b: perpendicular to it, "
+                             "where the joint's angle is zero)")
         ref = np.eye(3)[int(np.argmin(np.abs(w)))]
     u = _unit(ref, what)
+    if is_symbolic(u) or is_symbolic(w):
+        along = sum(to_sympy(a) * to_sympy(b) for a, b in zip(u, w))
+        u = np.array([to_sympy(a) - along * to_sympy(b) for a, b in zip(u, w)], dtype=object)
+        return _unit(u, what)
     u = u - u.dot(w) * w
     if np.linalg.norm(u) < 1e-8:
         raise ModelError(f"{what} is parallel to the joint axis; give a perpendicular direction")
@@ -129,7 +146,7 @@ class Joint:
     #: The number of equations (rows) of the joint.
     n_equations = 0
     #: The attributes that may be parameters (:mod:`.parametric`).
-    PARAMETRIC: tuple[str, ...] = ("point_a", "point_b")
+    PARAMETRIC: tuple[str, ...] = ("point_a", "point_b", "axis_a", "axis_b", "ref_a", "ref_b")
     #: Whether the joint constrains its bodies' orientations (then no particle may join).
     uses_orientation = True
     #: Rows between planar bodies (``None``: no planar form).
@@ -211,6 +228,10 @@ class Joint:
         """Both axes along z, the plane's normal (``normal``), or in the x-y plane."""
         where = "be along z, the plane's normal" if normal else "lie in the x-y plane"
         for side, axis in (("a", self.axis_a), ("b", self.axis_b)):
+            if is_symbolic(axis):
+                raise ModelError(
+                    f"joint {self.name!r} ({type(self).__name__}) between planar bodies: "
+                    f"axis_{side} must be numbers that {where} ({why}), not parameters")
             off = abs(abs(axis[2]) - 1.0) if normal else abs(axis[2])
             if off > 1e-12:
                 raise ModelError(
@@ -244,7 +265,8 @@ class Joint:
         w = self.axis_a if side == "a" else self.axis_b
         u = self.ref_a if side == "a" else self.ref_b
         R = body.rotation()
-        return tuple(times_vector(R, _sym(e)) for e in (u, np.cross(w, u), w))
+        v = [w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]]
+        return tuple(times_vector(R, _sym(np.asarray(e))) for e in (u, v, w))
 
     def _orientation_lock(self) -> list[sp.Expr]:
         ua, va, _ = self.frame("a")
@@ -481,7 +503,7 @@ class Distance(Joint):
     planar_rows = 1
     uses_orientation = False
 
-    PARAMETRIC = ("point_a", "point_b", "length")
+    PARAMETRIC = ("point_a", "point_b", "axis_a", "axis_b", "ref_a", "ref_b", "length")
 
     def __init__(self, name: str, body_a: Body, body_b: Body, length: Scalar,
                  point_a: Vector = (0, 0, 0), point_b: Vector = (0, 0, 0)) -> None:

@@ -101,7 +101,7 @@ class Rolling(Joint):
                          axis_b=normal if axis is None else axis, ref_a=tangent)
         self.check_values()
 
-    PARAMETRIC = ("point_a", "radius")
+    PARAMETRIC = ("point_a", "radius")  # its normal and axis are numbers
 
     def check_values(self) -> None:
         """Check the numeric values (all of them once parameters are bound)."""
