@@ -31,7 +31,7 @@ def case(request):
     system = module.build()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        report = system.consistent_initial_state(**module.INITIAL)
+        report = system.consistent_initial_state(module.INITIAL["q0"], module.INITIAL.get("qd0"))
     kept = report.rank.kept if report.rank is not None else None
     return request.param, system.numeric(), report, kept
 

@@ -34,7 +34,7 @@ def initial(name: str):
     system = module.build()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        report = system.consistent_initial_state(**module.INITIAL)
+        report = system.consistent_initial_state(module.INITIAL["q0"], module.INITIAL.get("qd0"))
     return system.numeric(), report
 
 
