@@ -48,16 +48,31 @@ def build() -> System:
     return mb.system
 
 
-def hand_modes(length: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(omega, shapes)`` of the hand linearization (see module), ascending; the
-    shapes are columns of absolute link angles."""
-    transverse = MASS * (3 * RADIUS**2 + length**2) / 12
-    M = transverse * np.eye(N_LINKS)
-    for i in range(N_LINKS):
-        arm = np.zeros(N_LINKS)
+def hand_modes(length: float, n: int = N_LINKS, mass: float = MASS, radius: float = RADIUS,
+               g: float = G) -> tuple[np.ndarray, np.ndarray]:
+    """``(omega, shapes)`` of the hand linearization (see module) of ``n`` uniform rods
+    hung in a row, ascending; the shapes are columns of absolute link angles.
+
+    Parameters
+    ----------
+    length, n, mass, radius, g
+        The rods' length, number, mass and radius, and gravity.
+
+    Examples
+    --------
+    One rod: a compound pendulum, ``omega^2 = m g l/2 / (I_t + m l^2/4)``:
+
+    >>> omega, _ = hand_modes(1.0, n=1, radius=0.0)
+    >>> round(float(omega[0] ** 2), 12) == round(1.5 * G, 12)
+    True
+    """
+    transverse = mass * (3 * radius**2 + length**2) / 12
+    M = transverse * np.eye(n)
+    for i in range(n):
+        arm = np.zeros(n)
         arm[:i], arm[i] = length, length / 2
-        M += MASS * np.outer(arm, arm)
-    K = np.diag([MASS * G * length * (N_LINKS - k - 0.5) for k in range(N_LINKS)])
+        M += mass * np.outer(arm, arm)
+    K = np.diag([mass * g * length * (n - k - 0.5) for k in range(n)])
     values, vectors = np.linalg.eig(np.linalg.solve(M, K))
     order = np.argsort(values.real)
     return np.sqrt(values.real[order]), vectors.real[:, order]

@@ -21,6 +21,7 @@ import sympy as sp
 from dalembert import Holonomic, Pfaffian, System, coordinates
 from dalembert import t as time
 from dalembert.examples import load
+from dalembert.examples.chain_frequencies import hand_modes
 from dalembert.multibody import (
     Force,
     Ground,
@@ -141,19 +142,9 @@ def no_global_model(monkeypatch):
 
 
 def hand_derived_chain_modes(n: int, length: float, mass: float, radius: float, g: float):
-    """omega^2 of ``n`` uniform rods hung in a row, in absolute angles, linearized.
-
-    Rod ``i``'s center moves ``L sum_{k<i} theta_k + L/2 theta_i``; its height gives
-    the potential ``m g L (sum_{k<i} theta_k^2 / 2 + theta_i^2 / 4)``.
-    """
-    transverse = mass * (3 * radius**2 + length**2) / 12
-    M = transverse * np.eye(n)
-    for i in range(n):
-        a = np.zeros(n)
-        a[:i], a[i] = length, length / 2
-        M += mass * np.outer(a, a)
-    K = np.diag([mass * g * length * (n - k - 0.5) for k in range(n)])
-    return np.sort(np.linalg.eigvals(np.linalg.solve(M, K)).real)
+    """omega^2 of ``n`` uniform rods hung in a row, in absolute angles, linearized by
+    hand (the gallery's chain-frequencies example holds the derivation)."""
+    return hand_modes(length, n, mass, radius, g)[0] ** 2
 
 
 def test_long_planar_chain_statics_from_parts(no_global_model):
