@@ -23,8 +23,9 @@ lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 
+# the suite on every core (pytest-xdist): each test file's tests run in one worker
 test: lint
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto --dist loadfile
 
 BENCH_STAMP := $(VENV)/.bench-installed
 
