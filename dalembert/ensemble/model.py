@@ -1,0 +1,242 @@
+"""Sending a model to worker processes once, with its compiled code.
+
+A :class:`~dalembert.System` holds loaded C libraries, which cannot be pickled. A
+:class:`ModelPackage` holds instead the System (with what travels along with it,
+such as the functions that make a case's initial state: pickled together, an
+object they share stays one object) pickled without what it computes on first use (every ``functools.cached_property`` value: the derived equations,
+the compiled functions; they are made again where they are needed) and the
+compiled libraries it uses, each with its code-cache key: the model's generated
+code and the C simulation loop. A worker installs them in its own code cache
+under the same keys (:func:`dalembert.codegen.cache.load_library` checks and
+test-loads them as it does a library built there), then rebuilds the System,
+whose compile finds them there: a worker with an empty cache compiles nothing.
+:func:`prepared` does this once per process and package.
+
+The keys include the compiler's path and flags, so a worker whose compiler differs
+computes other keys and compiles the model once itself; one without a compiler
+uses generated NumPy code, as a plain ``simulate`` there would (with a
+:class:`~dalembert.errors.NativeUnavailableWarning`). Installing the libraries
+trusts the client that sent them, as running its tasks already does.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import pickle
+import re
+import threading
+import time
+from dataclasses import dataclass, field
+from functools import cached_property, partial
+from pathlib import Path
+from typing import Any
+
+from ..codegen import c_backend, cache
+from ..errors import CompileError
+from ..system import System
+
+#: A cached library's file name: ``dalembert_<key>.so``.
+_LIBRARY_NAME = re.compile(r"^dalembert_([0-9A-Za-z]+)\.so$")
+
+
+@dataclass(frozen=True)
+class Library:
+    """One compiled library as its cache stores it: key, bytes, C source (or ``""``)."""
+
+    key: str
+    data: bytes = field(repr=False)
+    source: str = field(repr=False)
+
+
+@dataclass(frozen=True)
+class ModelPackage:
+    """A System ready to travel: pickled without its loaded code, plus that code.
+
+    ``token`` identifies the package (a digest of its contents), so a worker
+    prepares each package once however many tasks bring it.
+    """
+
+    token: str
+    system: bytes = field(repr=False)
+    libraries: tuple[Library, ...] = field(repr=False)
+
+    @property
+    def size(self) -> int:
+        """Bytes sent to each worker."""
+        return len(self.system) + sum(len(lib.data) + len(lib.source) for lib in self.libraries)
+
+
+def package(system: System, extra: Any = None) -> ModelPackage:
+    """Pack ``system`` (its code compiled first, here) for worker processes.
+
+    Parameters
+    ----------
+    system
+        Any System; its ``compiled`` functions are made now if they were not.
+    extra
+        What travels with it (pickled together, with cloudpickle where it is
+        installed, so functions defined in a script travel too).
+
+    Examples
+    --------
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum").build()
+    >>> again, extra = prepared(package(pendulum, "settings"))
+    >>> again.coordinate_names, again is not pendulum, extra
+    (('x', 'y'), True, 'settings')
+    """
+    system.compiled  # noqa: B018 - compiled here, once, so that its libraries travel
+    buffer = io.BytesIO()
+    _packer(buffer).dump((system, extra))
+    data = buffer.getvalue()
+    libraries = tuple(_libraries(system))
+    digest = hashlib.sha256(data)
+    for lib in libraries:
+        digest.update(lib.key.encode())
+    return ModelPackage(digest.hexdigest()[:32], data, libraries)
+
+
+_PREPARED: dict[str, tuple[System, Any]] = {}
+_PREPARING = threading.Lock()
+
+
+def prepared(pack: ModelPackage) -> tuple[System, Any]:
+    """The System of ``pack`` and what came with it, in this process: made on the first
+    call, then reused.
+
+    Its libraries are installed in this process's code cache, the System unpickled
+    and its code loaded (found in the cache under the shipped keys).
+
+    Parameters
+    ----------
+    pack
+        From :func:`package`.
+    """
+    with _PREPARING:  # threads of one worker prepare a package once
+        found = _PREPARED.get(pack.token)
+        if found is None:
+            found = _PREPARED[pack.token] = _unpack(pack)
+        return found
+
+
+def preparation_seconds(pack: ModelPackage) -> float:
+    """Seconds this process takes to prepare ``pack`` from scratch (install, unpickle,
+    load the code), for measurements; it is not kept."""
+    start = time.perf_counter()
+    _unpack(pack)
+    return time.perf_counter() - start
+
+
+def _unpack(pack: ModelPackage) -> tuple[System, Any]:
+    for lib in pack.libraries:
+        install(lib)
+    system, extra = pickle.loads(pack.system)
+    system.compiled  # noqa: B018 - loaded now, from the libraries just installed
+    if system.compiled.backend == "c":
+        from ..solvers.native.library import runtime
+
+        try:
+            runtime()
+        except CompileError:
+            pass  # warned about once; the simulations take the Python loop
+    return system, extra
+
+
+def install(lib: Library, root: Path | None = None) -> None:
+    """Put ``lib`` in the code cache under its key (nothing happens if it is there).
+
+    It goes through the cache's own checks: written privately, test-loaded in a
+    child process, its digest recorded. A failure leaves the cache as it was, and
+    the model is then compiled here when it is loaded.
+
+    Parameters
+    ----------
+    lib
+        The library.
+    root
+        The cache (default: :func:`dalembert.codegen.cache.cache_dir`).
+    """
+    try:
+        cache.load_library(lib.key, partial(_write, lib), root)
+    except CompileError:
+        pass  # not fatal: the System compiles its code itself when it needs it
+
+
+def _write(lib: Library, folder: Path) -> None:
+    (folder / cache.LIBRARY).write_bytes(lib.data)
+    if lib.source:
+        (folder / cache.SOURCE).write_text(lib.source)
+
+
+def _libraries(system: System) -> list[Library]:
+    """The cached libraries ``system``'s simulations load: its compiled functions' and,
+    when they are C, the simulation loop's."""
+    compiled = system.compiled
+    paths: list[Path] = []
+    for fn in (compiled.kkt_values, compiled.velocity_values, compiled.position_values,
+               compiled.energy_values):
+        lib = getattr(fn, "library", None) or getattr(fn, "_library", None)
+        if lib is not None:
+            paths.append(Path(lib._name))
+    if compiled.backend == "c" and c_backend.backend() == "c":
+        from ..solvers.native.library import runtime
+
+        try:
+            paths.append(Path(runtime()._name))
+        except CompileError:
+            pass
+    found: list[Library] = []
+    for path in dict.fromkeys(paths):  # each once, in order
+        match = _LIBRARY_NAME.match(path.name)
+        if match is None or not path.is_file():
+            continue
+        source = path.with_suffix(".c")
+        found.append(Library(match.group(1), path.read_bytes(),
+                             source.read_text() if source.is_file() else ""))
+    return found
+
+
+def _packer(buffer: io.BytesIO) -> pickle.Pickler:
+    """A pickler of dalembert's objects without their ``cached_property`` values: what
+    they compute on first use (equations, compiled code holding loaded libraries) is
+    made again on the other side. Based on cloudpickle's where it is installed (it
+    comes with Dask), so that functions defined in a script or a notebook travel."""
+    try:
+        from cloudpickle import Pickler as Base
+    except ImportError:  # pragma: no cover - cloudpickle comes with Dask
+        Base = pickle.Pickler
+
+    class Packer(Base):  # type: ignore[misc, valid-type]
+        def reducer_override(self, obj: Any) -> Any:
+            reduced = _without_cache(obj)
+            if reduced is not NotImplemented:
+                return reduced
+            parent = getattr(super(), "reducer_override", None)
+            return NotImplemented if parent is None else parent(obj)
+
+    return Packer(buffer, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def _without_cache(obj: Any) -> Any:
+    cls = type(obj)
+    module = getattr(cls, "__module__", None)
+    if not isinstance(module, str) or not module.startswith("dalembert.") \
+            or not hasattr(obj, "__dict__"):
+        return NotImplemented
+    cached = _cached_names(cls)
+    state = obj.__dict__
+    if not cached or not cached.intersection(state):
+        return NotImplemented
+    return _rebuild, (cls, {k: v for k, v in state.items() if k not in cached})
+
+
+def _cached_names(cls: type) -> frozenset[str]:
+    return frozenset(name for klass in cls.__mro__ for name, value in vars(klass).items()
+                     if isinstance(value, cached_property))
+
+
+def _rebuild(cls: type, state: dict[str, Any]) -> Any:
+    obj = cls.__new__(cls)
+    obj.__dict__.update(state)
+    return obj
