@@ -22,7 +22,7 @@ import logging
 import os
 import threading
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Generator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any
@@ -78,7 +78,7 @@ class Backend:
     name = "backend"
     workers = 1
 
-    def completed(self, batches: Sequence[Batch]) -> Iterator[list[CaseOutcome]]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
         raise NotImplementedError
 
     def stop(self) -> list[CaseOutcome]:
@@ -98,7 +98,7 @@ class Serial(Backend):
         self.system, self.settings, self.names = system, settings, names
         self._left: list[CaseOutcome] = []
 
-    def completed(self, batches: Sequence[Batch]) -> Iterator[list[CaseOutcome]]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
         for batch in batches:
             try:
                 yield run_here(self.system, self.settings, batch, self.names)
@@ -125,7 +125,7 @@ class Threads(Backend):
         self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="dalembert-case")
         self._futures: set[Future] = set()
 
-    def completed(self, batches: Sequence[Batch]) -> Iterator[list[CaseOutcome]]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
         # The cases' warnings are not recorded: catch_warnings in the threads would
         # race on the process-wide filters; they are silenced here, once, instead.
         with warnings.catch_warnings():
@@ -184,7 +184,7 @@ class Dask(Backend):
         self._pending: dict[Any, Batch] = {}
         self._finished: list[Any] = []
 
-    def completed(self, batches: Sequence[Batch]) -> Iterator[list[CaseOutcome]]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
         distributed = _distributed()
         pending = self._pending
         for batch in batches:

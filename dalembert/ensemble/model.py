@@ -3,8 +3,9 @@
 A :class:`~dalembert.System` holds loaded C libraries, which cannot be pickled. A
 :class:`ModelPackage` holds instead the System (with what travels along with it,
 such as the functions that make a case's initial state: pickled together, an
-object they share stays one object) pickled without what it computes on first use (every ``functools.cached_property`` value: the derived equations,
-the compiled functions; they are made again where they are needed) and the
+object they share stays one object) pickled without what it computes on first use
+(every ``functools.cached_property`` value: the derived equations, the compiled
+functions; they are made again where they are needed) and the
 compiled libraries it uses, each with its code-cache key: the model's generated
 code and the C simulation loop. A worker installs them in its own code cache
 under the same keys (:func:`dalembert.codegen.cache.load_library` checks and
@@ -27,6 +28,7 @@ import pickle
 import re
 import threading
 import time
+from contextlib import suppress
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 from pathlib import Path
@@ -136,10 +138,8 @@ def _unpack(pack: ModelPackage) -> tuple[System, Any]:
     if system.compiled.backend == "c":
         from ..solvers.native.library import runtime
 
-        try:
+        with suppress(CompileError):  # warned about once; the Python loop runs instead
             runtime()
-        except CompileError:
-            pass  # warned about once; the simulations take the Python loop
     return system, extra
 
 
@@ -157,10 +157,8 @@ def install(lib: Library, root: Path | None = None) -> None:
     root
         The cache (default: :func:`dalembert.codegen.cache.cache_dir`).
     """
-    try:
+    with suppress(CompileError):  # not fatal: the System then compiles its code itself
         cache.load_library(lib.key, partial(_write, lib), root)
-    except CompileError:
-        pass  # not fatal: the System compiles its code itself when it needs it
 
 
 def _write(lib: Library, folder: Path) -> None:
@@ -182,10 +180,8 @@ def _libraries(system: System) -> list[Library]:
     if compiled.backend == "c" and c_backend.backend() == "c":
         from ..solvers.native.library import runtime
 
-        try:
+        with suppress(CompileError):
             paths.append(Path(runtime()._name))
-        except CompileError:
-            pass
     found: list[Library] = []
     for path in dict.fromkeys(paths):  # each once, in order
         match = _LIBRARY_NAME.match(path.name)
@@ -207,7 +203,7 @@ def _packer(buffer: io.BytesIO) -> pickle.Pickler:
     except ImportError:  # pragma: no cover - cloudpickle comes with Dask
         Base = pickle.Pickler
 
-    class Packer(Base):  # type: ignore[misc, valid-type]
+    class Packer(Base):
         def reducer_override(self, obj: Any) -> Any:
             reduced = _without_cache(obj)
             if reduced is not NotImplemented:
@@ -236,7 +232,7 @@ def _cached_names(cls: type) -> frozenset[str]:
                      if isinstance(value, cached_property))
 
 
-def _rebuild(cls: type, state: dict[str, Any]) -> Any:
+def _rebuild(cls: Any, state: dict[str, Any]) -> Any:
     obj = cls.__new__(cls)
     obj.__dict__.update(state)
     return obj

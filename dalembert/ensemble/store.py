@@ -80,7 +80,8 @@ class Layout:
                                   "constraint": list(self.constraints)}
         for name in self.cases.columns:
             coords[name] = ("case", self.cases[name].to_numpy(dtype=float))
-        variables = {name: (dims, data[name]) for name, (dims, _) in self.variables().items()}
+        variables: dict[str, tuple] = {name: (dims, data[name])
+                                       for name, (dims, _) in self.variables().items()}
         variables["status"] = (("case",), data["status"], _status_attrs())
         for name in CASE_NUMBERS:
             variables[name] = (("case",), data[name])
@@ -175,7 +176,7 @@ class FileSink(Sink):
 
         layout = self.layout
         data: dict[str, Any] = {}
-        for name, (dims, shape) in layout.variables().items():
+        for name, (_, shape) in layout.variables().items():
             chunks = (layout.chunk, *shape[1:])
             data[name] = da.full(shape, np.nan, chunks=chunks)
         data["status"] = self.status  # written now, with the code of "not-run"

@@ -14,8 +14,8 @@ import socket
 import threading
 import time
 import warnings
-from contextlib import nullcontext
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -79,7 +79,7 @@ class CaseSettings:
 
 
 def run_batch(system: System, settings: CaseSettings,
-              indices: Sequence[int], rows: np.ndarray, names: Sequence[str],
+              indices: Sequence[int] | np.ndarray, rows: np.ndarray, names: Sequence[str],
               stop: threading.Event | None = None,
               record_warnings: bool = True) -> list[CaseOutcome]:
     """Run the cases ``indices`` (their values ``rows``, columns ``names``) one after
@@ -142,7 +142,7 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
     start = time.perf_counter()
     caught: list[warnings.WarningMessage] = []
     with warnings.catch_warnings(record=True) if record_warnings else nullcontext() as got:
-        if record_warnings:
+        if got is not None:
             warnings.simplefilter("always")
             caught = got
         try:
