@@ -44,11 +44,11 @@ _LIBRARY_NAME = re.compile(r"^dalembert_([0-9A-Za-z]+)\.so$")
 
 @dataclass(frozen=True)
 class Library:
-    """One compiled library as its cache stores it: key, bytes, C source (or ``""``)."""
+    """One compiled library as its cache stores it: its key and its bytes (its C source,
+    kept in the cache for inspection, does not travel)."""
 
     key: str
     data: bytes = field(repr=False)
-    source: str = field(repr=False)
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ class ModelPackage:
     @property
     def size(self) -> int:
         """Bytes sent to each worker."""
-        return len(self.system) + sum(len(lib.data) + len(lib.source) for lib in self.libraries)
+        return len(self.system) + sum(len(lib.data) for lib in self.libraries)
 
 
 def package(system: System, extra: Any = None) -> ModelPackage:
@@ -163,8 +163,6 @@ def install(lib: Library, root: Path | None = None) -> None:
 
 def _write(lib: Library, folder: Path) -> None:
     (folder / cache.LIBRARY).write_bytes(lib.data)
-    if lib.source:
-        (folder / cache.SOURCE).write_text(lib.source)
 
 
 def _libraries(system: System) -> list[Library]:
@@ -185,11 +183,8 @@ def _libraries(system: System) -> list[Library]:
     found: list[Library] = []
     for path in dict.fromkeys(paths):  # each once, in order
         match = _LIBRARY_NAME.match(path.name)
-        if match is None or not path.is_file():
-            continue
-        source = path.with_suffix(".c")
-        found.append(Library(match.group(1), path.read_bytes(),
-                             source.read_text() if source.is_file() else ""))
+        if match is not None and path.is_file():
+            found.append(Library(match.group(1), path.read_bytes()))
     return found
 
 
