@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import EnsembleError
 from ..system import System
 from .faults import CaseOutcome, error_outcome, lost_outcome
 from .model import ModelPackage, package, prepared
@@ -100,11 +101,14 @@ class Serial(Backend):
 
     def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
         for batch in batches:
-            try:
-                yield run_here(self.system, self.settings, batch, self.names)
-            except Interrupted as stop:
-                self._left = stop.outcomes
-                raise KeyboardInterrupt from None
+            for i in range(len(batch.indices)):  # case by case: the progress bar moves
+                try:
+                    yield run_here(self.system, self.settings,
+                                   Batch(batch.indices[i:i + 1], batch.rows[i:i + 1]),
+                                   self.names)
+                except Interrupted as stop:
+                    self._left = stop.outcomes
+                    raise KeyboardInterrupt from None
 
     def stop(self) -> list[CaseOutcome]:
         left, self._left = self._left, []
@@ -157,9 +161,16 @@ class Threads(Backend):
 def run_packed(pack: ModelPackage, indices: np.ndarray, rows: np.ndarray,
                names: Sequence[str]) -> list[CaseOutcome]:
     """A Dask task: one batch, on the System and settings of ``pack`` (prepared once
-    per worker process)."""
+    per worker process). On a worker running several tasks at once (threads), the
+    cases' warnings are left to the worker's log: recording them is not thread-safe."""
     system, settings = prepared(pack)
-    return run_batch(system, settings, indices, rows, names)
+    try:
+        from distributed import get_worker
+
+        threads = get_worker().state.nthreads
+    except (ImportError, ValueError, AttributeError):  # not on a Dask worker
+        threads = 1
+    return run_batch(system, settings, indices, rows, names, record_warnings=threads == 1)
 
 
 class Dask(Backend):
@@ -173,9 +184,16 @@ class Dask(Backend):
         distributed = _distributed()
         self.names, self._own = names, None
         if client is None:
-            self._own = distributed.LocalCluster(
-                n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+            try:
+                self._own = distributed.LocalCluster(
+                    n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                    processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+            except Exception as exc:  # Dask's own message says little about the usual cause
+                raise EnsembleError(
+                    f"could not start a local Dask cluster ({type(exc).__name__}: {exc}). In "
+                    "a script, the code that runs the ensemble must be under "
+                    "`if __name__ == '__main__':` (each worker process imports the script); "
+                    "or pass scheduler='serial' or 'threads'") from exc
             client = distributed.Client(self._own)
         self.client = client
         self.workers = max(1, sum(client.nthreads().values()))

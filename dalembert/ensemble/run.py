@@ -11,6 +11,7 @@ then the cases are cut into batches, run by a backend
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
 import time
 import warnings
@@ -29,7 +30,7 @@ from .backends import Backend, Batch, Dask, Serial, Threads
 from .cases import CaseTable, read_cases
 from .faults import SUCCESS, CaseOutcome, not_run_outcome
 from .results import EnsembleResult, summary_table
-from .store import Layout, sink
+from .store import Layout, check_store, sink
 from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
 
 Scheduler = Literal["auto", "serial", "threads", "processes", "dask"]
@@ -162,6 +163,11 @@ def simulate_many(
     >>> result.dataset["q"].dims, result.summary["status"].tolist()
     (('case', 'time', 'coordinate'), ['finished', 'finished', 'finished', 'finished'])
     """
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        # a spawned process importing the main script (as multiprocessing's own check)
+        raise EnsembleError(
+            "simulate_many was called while a worker process was importing the script that "
+            "started it: put the script's code under `if __name__ == '__main__':`")
     arguments = dict(q0=q0, qd0=qd0, t_eval=t_eval, parameters=parameters,
                      initial_state=initial_state, outputs=outputs, keep=keep,
                      scheduler=scheduler, client=client, workers=workers,
@@ -216,45 +222,56 @@ class _Run:
     # -- running ---------------------------------------------------------------------
     def execute(self, indices: list[int], before: EnsembleResult | None) -> EnsembleResult:
         """Run the cases ``indices``; ``before``: the result a retry updates."""
+        if before is None and self.store is not None:
+            check_store(self.store, self.overwrite)  # before anything runs or starts
         outcomes: dict[int, CaseOutcome] = {}
-        todo = list(indices)
         scheduler = self.scheduler
         if scheduler == "auto":
-            scheduler = self._auto(todo, outcomes)
-        backend = self._backend(scheduler)
-        interrupted = False
+            scheduler = self._auto(indices, outcomes)
+        chunk = self.batch_size or _batch_size(len(indices), self._workers(scheduler))
+        layout = Layout(self.cases.table, self.settings.t_eval, self.system.coordinate_names,
+                        self.system.constraint_names, self.settings.keep,
+                        tuple(self.settings.outputs), chunk)
+        out = sink(layout, self.store, indices, self.overwrite,
+                   None if before is None else before.dataset)
+        out.write(list(outcomes.values()))
+        interrupted = any(o.status == "interrupted" for o in outcomes.values())
         bar = _bar(len(indices), self.progress)
         bar.update(len(outcomes))
+        backend: Backend | None = None
         try:
-            chunk = self.batch_size or _batch_size(len(indices), backend.workers)
-            layout = Layout(self.cases.table, self.settings.t_eval,
-                            self.system.coordinate_names, self.system.constraint_names,
-                            self.settings.keep, tuple(self.settings.outputs), chunk)
-            out = sink(layout, self.store, indices, self.overwrite,
-                       None if before is None else before.dataset)
-            out.write(list(outcomes.values()))
-            todo = [i for i in todo if i not in outcomes]
-            if any(o.status == "interrupted" for o in outcomes.values()):
-                raise KeyboardInterrupt
-            batches = _batches(todo, chunk, self.cases.values)
-            found = backend.completed(batches)
-            try:
-                for done in found:
-                    self._take(done, outcomes, out, bar)
-                    if any(o.status == "interrupted" for o in done):
-                        raise KeyboardInterrupt
-            finally:
-                found.close()
+            if not interrupted:
+                backend = self._backend(scheduler)
+                todo = [i for i in indices if i not in outcomes]
+                found = backend.completed(_batches(todo, chunk, self.cases.values))
+                try:
+                    for done in found:
+                        self._take(done, outcomes, out, bar)
+                        if any(o.status == "interrupted" for o in done):
+                            raise KeyboardInterrupt  # Ctrl-C inside a simulation here
+                finally:
+                    found.close()
         except KeyboardInterrupt:
             interrupted = True
-            self._take(backend.stop(), outcomes, out, bar)
+            if backend is not None:
+                self._take(backend.stop(), outcomes, out, bar)
         finally:
-            backend.close()
+            if backend is not None:
+                backend.close()
             bar.close()
         for i in indices:
             if i not in outcomes:
                 outcomes[i] = not_run_outcome(i)
-        return self._result(indices, outcomes, out, backend.name, interrupted, before)
+        name = scheduler if backend is None else backend.name
+        return self._result(indices, outcomes, out, name, interrupted, before)
+
+    def _workers(self, scheduler: str) -> int:
+        """How many cases run at once on ``scheduler`` (to size the batches)."""
+        if scheduler == "serial":
+            return 1
+        if scheduler == "dask":
+            return max(1, sum(self.client.nthreads().values()))
+        return self.workers or os.cpu_count() or 1
 
     def _auto(self, todo: list[int], outcomes: dict[int, CaseOutcome]) -> str:
         """Run the first case here, and choose where the others run from its time."""
@@ -262,9 +279,15 @@ class _Run:
             return "serial"
         first = Serial(self.system, self.settings, list(self.cases.table.columns))
         start = time.perf_counter()
-        for done in first.completed([Batch(np.array(todo[:1]), self.cases.values[todo[:1]])]):
-            for o in done:
-                outcomes[o.index] = o
+        try:
+            for done in first.completed([Batch(np.array(todo[:1]),
+                                               self.cases.values[todo[:1]])]):
+                outcomes.update((o.index, o) for o in done)
+        except KeyboardInterrupt:  # execute() stops at once on this record
+            outcomes.update((o.index, o) for o in first.stop())
+            outcomes.setdefault(todo[0], CaseOutcome(todo[0], "interrupted",
+                                                     "interrupted by the user"))
+            return "serial"
         rest = (time.perf_counter() - start) * (len(todo) - 1)
         return "processes" if rest > AUTO_PARALLEL_SECONDS else "serial"
 

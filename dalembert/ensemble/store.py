@@ -162,9 +162,7 @@ class FileSink(Sink):
         super().__init__(layout, before)
         self.path, self.kind = path, _kind(path)
         if before is None:
-            if path.exists() and not overwrite:
-                raise EnsembleError(f"{path} exists; pass overwrite=True to replace it, or "
-                                    "another path")
+            check_store(path, overwrite)
             self._create()
         self.expected: dict[int, int] = {}
         for i in expected:
@@ -248,6 +246,14 @@ class _Closing:
 
     def __exit__(self, *exc: object) -> None:
         return None
+
+
+def check_store(path: Path, overwrite: bool) -> None:
+    """Refuse a store path of an unknown kind, or one that exists (unless ``overwrite``)."""
+    _kind(path)
+    if path.exists() and not overwrite:
+        raise EnsembleError(f"{path} exists; pass overwrite=True to replace it, or another "
+                            "path")
 
 
 def _kind(path: Path) -> str:

@@ -224,3 +224,42 @@ def test_bad_arguments_are_refused_before_anything_runs(pend):
                                **kwargs)
     with pytest.raises(ValueError, match="The 'rtol' parameter of simulate"):
         pend.simulate_many((0.0, 1.0), cases, initial_state=released, rtol=-1.0)
+
+
+def test_auto_runs_short_ensembles_here_and_long_ones_on_a_local_cluster(pend, monkeypatch):
+    from dalembert.ensemble import backends
+    from dalembert.ensemble import run as run_module
+
+    chosen = []
+
+    class LocalCluster(backends.Serial):  # stands in for a cluster: runs the cases here
+        name = "dask"
+
+        def __init__(self, system, settings, names, client=None, workers=None):
+            chosen.append(client)
+            super().__init__(system, settings, names)
+
+    monkeypatch.setattr(run_module, "Dask", LocalCluster)
+    cases = grid(l=[1.0, 1.5, 2.0])
+    short = pend.simulate_many((0.0, 2.0), cases, initial_state=released, t_eval=T_EVAL,
+                               progress=False)
+    assert short.scheduler == "serial" and chosen == []
+    monkeypatch.setattr(run_module, "AUTO_PARALLEL_SECONDS", 0.0)
+    monkeypatch.setattr(run_module.os, "cpu_count", lambda: 2)
+    long = pend.simulate_many((0.0, 2.0), cases, initial_state=released, t_eval=T_EVAL,
+                              progress=False)
+    assert long.scheduler == "dask" and chosen == [None]  # a local cluster, none given
+    assert long.summary["status"].eq("finished").all()
+    assert np.array_equal(long.dataset["q"].values, short.dataset["q"].values)
+
+
+def test_a_local_cluster_that_cannot_start_is_explained(pend, monkeypatch):
+    import distributed
+
+    def cannot(*args, **kwargs):
+        raise RuntimeError("Nanny failed to start.")
+
+    monkeypatch.setattr(distributed, "LocalCluster", cannot)
+    with pytest.raises(EnsembleError, match="if __name__ == '__main__':"):
+        pend.simulate_many((0.0, 1.0), grid(l=[1.0]), initial_state=released,
+                           scheduler="processes", progress=False)
