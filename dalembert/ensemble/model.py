@@ -1,17 +1,18 @@
 """Sending a model to worker processes once, with its compiled code.
 
 A :class:`~dalembert.System` holds loaded C libraries, which cannot be pickled. A
-:class:`ModelPackage` holds instead the System (with what travels along with it,
-such as the functions that make a case's initial state: pickled together, an
-object they share stays one object) pickled without what it computes on first use
-(every ``functools.cached_property`` value: the derived equations, the compiled
-functions; they are made again where they are needed) and the
+:class:`ModelPackage` holds instead the System pickled without what it computes on
+first use (every ``functools.cached_property`` value: the derived equations, the
+compiled functions; they are made again where they are needed), what travels with
+it (an ensemble's settings and the functions that make a case's initial state,
+pickled apart, so that a new ensemble of the same model does not prepare the model
+again) and the
 compiled libraries it uses, each with its code-cache key: the model's generated
 code and the C simulation loop. A worker installs them in its own code cache
 under the same keys (:func:`dalembert.codegen.cache.load_library` checks and
 test-loads them as it does a library built there), then rebuilds the System,
 whose compile finds them there: a worker with an empty cache compiles nothing.
-:func:`prepared` does this once per process and package.
+:func:`prepared` does this once per process and model.
 
 The keys include the compiler's path and flags, so a worker whose compiler differs
 computes other keys and compiles the model once itself; one without a compiler
@@ -54,20 +55,25 @@ class Library:
 
 @dataclass(frozen=True)
 class ModelPackage:
-    """A System ready to travel: pickled without its loaded code, plus that code.
+    """A System ready to travel: pickled without its loaded code, plus that code, and
+    what an ensemble sends with it (its settings, pickled apart).
 
-    ``token`` identifies the package (a digest of its contents), so a worker
-    prepares each package once however many tasks bring it.
+    ``token`` identifies the model (a digest of its pickle and its libraries' keys),
+    so a worker prepares it once however many tasks and ensembles bring it;
+    ``extra_token`` identifies the settings, unpickled once per worker and ensemble.
     """
 
     token: str
     system: bytes = field(repr=False)
     libraries: tuple[Library, ...] = field(repr=False)
+    extra: bytes = field(default=b"", repr=False)
+    extra_token: str = ""
 
     @property
     def size(self) -> int:
-        """Bytes sent to each worker."""
-        return len(self.system) + sum(len(lib.data) for lib in self.libraries)
+        """Bytes sent with each task."""
+        return len(self.system) + len(self.extra) + sum(len(lib.data)
+                                                        for lib in self.libraries)
 
 
 def package(system: System, extra: Any = None) -> ModelPackage:
@@ -78,8 +84,8 @@ def package(system: System, extra: Any = None) -> ModelPackage:
     system
         Any System; its ``compiled`` functions are made now if they were not.
     extra
-        What travels with it (pickled together, with cloudpickle where it is
-        installed, so functions defined in a script travel too).
+        What travels with it (with cloudpickle where it is installed, so that
+        functions defined in a script travel too).
 
     Examples
     --------
@@ -90,17 +96,25 @@ def package(system: System, extra: Any = None) -> ModelPackage:
     (('x', 'y'), True, 'settings')
     """
     system.compiled  # noqa: B018 - compiled here, once, so that its libraries travel
-    buffer = io.BytesIO()
-    _packer(buffer).dump((system, extra))
-    data = buffer.getvalue()
+    data, settings = _dumps(system), _dumps(extra)
     libraries = tuple(_libraries(system))
     digest = hashlib.sha256(data)
     for lib in libraries:
         digest.update(lib.key.encode())
-    return ModelPackage(digest.hexdigest()[:32], data, libraries)
+    return ModelPackage(digest.hexdigest()[:32], data, libraries, settings,
+                        hashlib.sha256(settings).hexdigest()[:32])
 
 
-_PREPARED: dict[str, tuple[System, Any]] = {}
+def _dumps(obj: Any) -> bytes:
+    buffer = io.BytesIO()
+    _packer(buffer).dump(obj)
+    return buffer.getvalue()
+
+
+_PREPARED: dict[str, System] = {}
+_EXTRAS: dict[str, Any] = {}
+#: Settings of this many ensembles are kept per process (the models all are: few).
+_KEPT_EXTRAS = 8
 _PREPARING = threading.Lock()
 
 
@@ -108,8 +122,9 @@ def prepared(pack: ModelPackage) -> tuple[System, Any]:
     """The System of ``pack`` and what came with it, in this process: made on the first
     call, then reused.
 
-    Its libraries are installed in this process's code cache, the System unpickled
-    and its code loaded (found in the cache under the shipped keys).
+    The libraries are installed in this process's code cache, the System unpickled
+    and its code loaded (found in the cache under the shipped keys), once per model;
+    the settings are unpickled once per ensemble.
 
     Parameters
     ----------
@@ -117,10 +132,14 @@ def prepared(pack: ModelPackage) -> tuple[System, Any]:
         From :func:`package`.
     """
     with _PREPARING:  # threads of one worker prepare a package once
-        found = _PREPARED.get(pack.token)
-        if found is None:
-            found = _PREPARED[pack.token] = _unpack(pack)
-        return found
+        system = _PREPARED.get(pack.token)
+        if system is None:
+            system = _PREPARED[pack.token] = _unpack_system(pack)
+        if pack.extra_token not in _EXTRAS:
+            while len(_EXTRAS) >= _KEPT_EXTRAS:
+                _EXTRAS.pop(next(iter(_EXTRAS)))
+            _EXTRAS[pack.extra_token] = pickle.loads(pack.extra) if pack.extra else None
+        return system, _EXTRAS[pack.extra_token]
 
 
 def preparation_seconds(pack: ModelPackage) -> float:
@@ -132,16 +151,21 @@ def preparation_seconds(pack: ModelPackage) -> float:
 
 
 def _unpack(pack: ModelPackage) -> tuple[System, Any]:
+    """The System and the settings of ``pack``, made from scratch."""
+    return _unpack_system(pack), pickle.loads(pack.extra) if pack.extra else None
+
+
+def _unpack_system(pack: ModelPackage) -> System:
     for lib in pack.libraries:
         install(lib)
-    system, extra = pickle.loads(pack.system)
+    system = pickle.loads(pack.system)
     system.compiled  # noqa: B018 - loaded now, from the libraries just installed
     if system.compiled.backend == "c":
         from ..solvers.native.library import runtime
 
         with suppress(CompileError):  # warned about once; the Python loop runs instead
             runtime()
-    return system, extra
+    return system
 
 
 def install(lib: Library, root: Path | None = None) -> None:

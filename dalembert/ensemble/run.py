@@ -234,7 +234,7 @@ class _Run:
                         tuple(self.settings.outputs), chunk)
         out = sink(layout, self.store, indices, self.overwrite,
                    None if before is None else before.dataset)
-        out.write(list(outcomes.values()))
+        self._take(list(outcomes.values()), outcomes, out, None)  # the case auto ran here
         interrupted = any(o.status == "interrupted" for o in outcomes.values())
         bar = _bar(len(indices), self.progress)
         bar.update(len(outcomes))
@@ -304,8 +304,10 @@ class _Run:
               bar: Any) -> None:
         out.write(done)
         for o in done:
+            o.arrays = {}  # the sink has them: the client keeps each case's summary only
             outcomes[o.index] = o
-        bar.update(len(done))
+        if bar is not None:
+            bar.update(len(done))
 
     def _result(self, indices: list[int], outcomes: dict[int, CaseOutcome], out: Any,
                 scheduler: str, interrupted: bool,

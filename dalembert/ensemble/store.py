@@ -167,7 +167,7 @@ class FileSink(Sink):
         self.expected: dict[int, int] = {}
         for i in expected:
             self.expected[i // layout.chunk] = self.expected.get(i // layout.chunk, 0) + 1
-        self.pending: dict[int, list[CaseOutcome]] = {}
+        self.pending: dict[int, list[tuple[int, dict[str, np.ndarray]]]] = {}
 
     def _create(self) -> None:
         import dask.array as da
@@ -188,24 +188,24 @@ class FileSink(Sink):
 
     def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
         chunk = self.layout.chunk
-        for o in outcomes:
-            self.pending.setdefault(o.index // chunk, []).append(o)
+        for o in outcomes:  # the arrays, not the outcome: the caller drops them from it
+            self.pending.setdefault(o.index // chunk, []).append((o.index, o.arrays))
         full = [k for k, got in self.pending.items() if len(got) >= self.expected.get(k, 0)]
         for k in full:
             self._flush(k)
 
     def _flush(self, k: int) -> None:
-        got = sorted(self.pending.pop(k), key=lambda o: o.index)
+        got = self.pending.pop(k)
         start = k * self.layout.chunk
         stop = min(start + self.layout.chunk, self.layout.size)
         with self._open() as out:
             for name, (_, shape) in self.layout.variables().items():
                 block = (np.array(out[name][start:stop]) if len(got) < stop - start
                          else np.full((stop - start, *shape[1:]), np.nan))
-                for o in got:
-                    values = o.arrays[name]
-                    block[o.index - start] = np.nan
-                    block[o.index - start, : len(values)] = values
+                for index, arrays in got:
+                    values = arrays[name]
+                    block[index - start] = np.nan
+                    block[index - start, : len(values)] = values
                 out[name][start:stop] = block
 
     def finish(self) -> None:

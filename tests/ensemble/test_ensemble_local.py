@@ -263,3 +263,28 @@ def test_a_local_cluster_that_cannot_start_is_explained(pend, monkeypatch):
     with pytest.raises(EnsembleError, match="if __name__ == '__main__':"):
         pend.simulate_many((0.0, 1.0), grid(l=[1.0]), initial_state=released,
                            scheduler="processes", progress=False)
+
+
+def test_a_retry_updates_a_store_in_place(pend, tmp_path):
+    marker = tmp_path / "first-try"
+
+    def flaky(case):
+        if case["l"] == 2.0 and not marker.exists():
+            marker.write_text("seen")
+            raise OSError("the license server did not answer")
+        return released(case)
+
+    cases = grid(l=[1.0, 1.5, 2.0, 2.5, 3.0])
+    with pytest.warns(EnsembleWarning):
+        first = pend.simulate_many((0.0, 2.0), cases, initial_state=flaky, t_eval=T_EVAL,
+                                   scheduler="serial", progress=False, batch_size=2,
+                                   store=tmp_path / "run.zarr")
+    assert first.failed == [2] and np.isnan(first.dataset["q"].values[2]).all()
+    again = first.retry()
+    import xarray as xr
+
+    on_disk = xr.open_zarr(tmp_path / "run.zarr")
+    assert again.failed == [] and (on_disk["status"].values == 0).all()
+    assert np.array_equal(on_disk["q"].values[2], alone(pend, {"l": 2.0}, released).q)
+    assert np.array_equal(on_disk["q"].values[[0, 1, 3, 4]],
+                          again.dataset["q"].values[[0, 1, 3, 4]])

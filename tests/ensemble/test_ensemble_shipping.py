@@ -54,6 +54,14 @@ def test_the_package_leaves_out_what_a_system_computes_on_first_use():
     mb = small_chain()
     mb.system.compiled  # noqa: B018
     pack = model.package(mb.system)
-    system, _ = pickle.loads(pack.system)
+    system = pickle.loads(pack.system)
     assert "compiled" not in vars(system) and "_equations" not in vars(system)
     assert "system" not in vars(system._multibody)
+
+
+def test_a_process_prepares_a_model_once_whatever_the_ensembles_settings():
+    mb = small_chain()
+    first_system, first = model.prepared(model.package(mb.system, {"t_end": 1.0}))
+    second_system, second = model.prepared(model.package(mb.system, {"t_end": 2.0}))
+    assert first_system is second_system and first_system is not mb.system
+    assert (first, second) == ({"t_end": 1.0}, {"t_end": 2.0})
