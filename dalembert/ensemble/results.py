@@ -127,15 +127,21 @@ class EnsembleResult:
                 f"{self.scheduler!r}{'; interrupted' if self.interrupted else ''})")
 
 
-def summary_table(cases: Any, outcomes: dict[int, CaseOutcome]) -> Any:
-    """The summary DataFrame: the case table, then each case's outcome."""
+def summary_table(cases: Any, outcomes: Sequence[CaseOutcome]) -> Any:
+    """The summary DataFrame: the case table, then each case's outcome (in that order)."""
     import pandas as pd
 
-    rows = []
-    for i in range(len(cases)):
-        o = outcomes[i]
-        rows.append({"status": o.status, "message": o.message, **o.numbers,
-                     "seconds": o.seconds, "worker": o.worker, "warnings": o.warnings})
-    table = pd.concat([cases.reset_index(drop=True), pd.DataFrame(rows)], axis=1)
+    n = len(cases)
+    numbers: dict[str, np.ndarray] = {}
+    for row, o in enumerate(outcomes):
+        for name, value in o.numbers.items():
+            if name not in numbers:
+                numbers[name] = np.full(n, np.nan)
+            numbers[name][row] = value
+    table = pd.DataFrame({
+        **{name: cases[name].to_numpy() for name in cases.columns},
+        "status": [o.status for o in outcomes], "message": [o.message for o in outcomes],
+        **numbers, "seconds": [o.seconds for o in outcomes],
+        "worker": [o.worker for o in outcomes], "warnings": [o.warnings for o in outcomes]})
     table.index.name = "case"
     return table

@@ -28,7 +28,7 @@ from ..options import simulation_options
 from ..system import System
 from .backends import Backend, Batch, Dask, Serial, Threads
 from .cases import CaseTable, read_cases
-from .faults import SUCCESS, CaseOutcome, not_run_outcome
+from .faults import SUCCESS, CaseOutcome, not_run_outcome, pack_numbers
 from .results import EnsembleResult, summary_table
 from .store import Layout, check_store, sink
 from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
@@ -185,6 +185,7 @@ class _Run:
         self.system, self.t_span, self.arguments = system, t_span, arguments
         self.store = None if store is None else Path(store)
         self.overwrite = overwrite
+        self._names: dict[tuple[str, ...], tuple[str, ...]] = {}  # shared by packed numbers
         a = dict(arguments)
         self.cases = read_cases(cases, [p.name for p in system.parameters],
                                 system.coordinate_names, a.pop("initial_state"))
@@ -305,6 +306,8 @@ class _Run:
         out.write(done)
         for o in done:
             o.arrays = {}  # the sink has them: the client keeps each case's summary only
+            if isinstance(o.numbers, dict):
+                o.numbers = pack_numbers(o.numbers, self._names)
             outcomes[o.index] = o
         if bar is not None:
             bar.update(len(done))
@@ -314,10 +317,9 @@ class _Run:
                 before: EnsembleResult | None) -> EnsembleResult:
         dataset = out.dataset()
         if before is None:
-            summary = summary_table(self.cases.table, outcomes)
+            summary = summary_table(self.cases.table, [outcomes[i] for i in indices])
         else:
-            rows = summary_table(self.cases.table.iloc[indices], {
-                k: outcomes[i] for k, i in enumerate(indices)})
+            rows = summary_table(self.cases.table.iloc[indices], [outcomes[i] for i in indices])
             rows.index = indices
             rows.index.name = "case"
             summary = before.summary.copy()

@@ -118,8 +118,9 @@ class Sink:
         for o in outcomes:
             self.status[o.index] = CODE[o.status]
             self.numbers["seconds"][o.index] = o.seconds
+            given = dict(o.numbers.items())
             for name in ("t_end", "energy_error"):
-                self.numbers[name][o.index] = o.numbers.get(name, np.nan)
+                self.numbers[name][o.index] = given.get(name, np.nan)
         self._write_arrays([o for o in outcomes if o.arrays])
 
     def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
