@@ -52,8 +52,8 @@ class Interrupted(KeyboardInterrupt):
         self.outcomes = outcomes
 
 
-def run_here(system: System, settings: CaseSettings, batch: Batch, names: Sequence[str],
-             stop: threading.Event | None = None) -> list[CaseOutcome]:
+def run_here(system: System, settings: CaseSettings, batch: Batch,
+             names: Sequence[str]) -> list[CaseOutcome]:
     """Run ``batch`` in this process; a Ctrl-C ends it with :class:`Interrupted`.
 
     A Ctrl-C during a simulation ends that simulation (it returns what it computed,
@@ -63,8 +63,8 @@ def run_here(system: System, settings: CaseSettings, batch: Batch, names: Sequen
     try:
         for i in range(len(batch.indices)):
             done += run_batch(system, settings, batch.indices[i:i + 1], batch.rows[i:i + 1],
-                              names, stop)
-            if done and done[-1].status == "interrupted" and stop is None:
+                              names)
+            if done[-1].status == "interrupted":
                 raise Interrupted(done)
     except Interrupted:
         raise

@@ -36,8 +36,10 @@ from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
 Scheduler = Literal["auto", "serial", "threads", "processes", "dask"]
 SCHEDULERS = ("auto", "serial", "threads", "processes", "dask")
 #: ``scheduler="auto"`` runs the first case here and starts a local cluster only if
-#: the rest would take longer than this alone (seconds): starting one and sending
-#: it the model costs 2-4 s on two cores.
+#: the rest would take longer than this alone (seconds): a cluster's first results
+#: come 4-6 s after it is asked for on two cores (start 1.7-2.2 s, each worker's
+#: import of dalembert 2-3 s and preparation of the model 0.6 s, measured by
+#: bench/ensemble.py), which two workers win back from about 10 s of work.
 AUTO_PARALLEL_SECONDS = 10.0
 #: Batches per worker when the batch size is chosen: enough to balance the load,
 #: few enough that a task's overhead (milliseconds) is small against its cases.

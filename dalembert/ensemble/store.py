@@ -162,6 +162,8 @@ class FileSink(Sink):
                  overwrite: bool, before: Any = None) -> None:
         super().__init__(layout, before)
         self.path, self.kind = path, _kind(path)
+        if before is not None and self.kind == "netcdf":
+            before.close()  # HDF5 opens a file once: the earlier result reopens it to read
         if before is None:
             check_store(path, overwrite)
             self._create()
