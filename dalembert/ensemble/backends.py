@@ -210,18 +210,34 @@ class Dask(Backend):
         for batch in batches:
             pending[self._submit(batch)] = batch
         found = distributed.as_completed(list(pending))
+        # The cases of a batch whose worker died run one at a time, each alone among the
+        # suspects: a case queued on the same worker as the culprit dies with it, so two
+        # suspects in flight together could both be taken for culprits.
+        suspects: list[Batch] = []
+        suspect: Any = None
+
+        def next_suspect() -> None:
+            nonlocal suspect
+            suspect = None
+            if suspects:
+                single = suspects.pop(0)
+                suspect = self._submit(single)
+                pending[suspect] = single
+                found.add(suspect)
+
         for future in found:
             batch = pending.pop(future)
+            if future is suspect:
+                next_suspect()
             if future.status == "finished":
                 yield future.result()
                 continue
             exc = future.exception()
             if isinstance(exc, distributed.KilledWorker) and len(batch.indices) > 1:
-                for i in range(len(batch.indices)):  # find the case that kills its worker
-                    single = Batch(batch.indices[i:i + 1], batch.rows[i:i + 1])
-                    again = self._submit(single)
-                    pending[again] = single
-                    found.add(again)
+                suspects += [Batch(batch.indices[i:i + 1], batch.rows[i:i + 1])
+                             for i in range(len(batch.indices))]
+                if suspect is None:
+                    next_suspect()
             elif isinstance(exc, distributed.KilledWorker):
                 yield [lost_outcome(int(batch.indices[0]), str(exc))]
             else:  # the task itself failed (e.g. the model could not be prepared there)

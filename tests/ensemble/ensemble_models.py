@@ -7,6 +7,7 @@ value) like any user's functions.
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,13 @@ def released(case: dict[str, float]) -> tuple[dict[str, float], None]:
     """The pendulum released from rest at angle ``theta`` (rod length ``l``)."""
     l, theta = case["l"], case.get("theta", 0.5)
     return {"x": l * np.sin(theta), "y": -l * np.cos(theta)}, None
+
+
+def released_slowly(case: dict[str, float]) -> tuple[dict[str, float], None]:
+    """:func:`released`, a tenth of a second later (cases still running when a test
+    interrupts the ensemble)."""
+    time.sleep(0.1)
+    return released(case)
 
 
 def through_bottom(case: dict[str, float]) -> tuple[dict[str, float], dict[str, float]]:

@@ -23,6 +23,7 @@ from ensemble_models import (
     kill_once,
     pendulum,
     released,
+    released_slowly,
     small_chain,
     tilted_state,
     tip_z,
@@ -136,7 +137,7 @@ def test_ctrl_c_while_waiting_returns_what_finished(cluster, monkeypatch):
     pend = pendulum()
     cases = grid(l=np.linspace(0.5, 2.0, 12))
     with pytest.warns(EnsembleWarning, match="interrupted"):
-        result = pend.simulate_many((0.0, 1.5), cases, initial_state=released, client=client,
+        result = pend.simulate_many((0.0, 1.5), cases, initial_state=released_slowly, client=client,
                                     t_eval=T_EVAL, batch_size=2)
     status = result.summary["status"]
     assert result.interrupted
