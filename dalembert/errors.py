@@ -109,6 +109,11 @@ class NonholonomicLinearizationError(DalembertError, NotImplementedError):
 # --------------------------------------------------------------------------- warnings
 
 
+class EnsembleError(DalembertError, ValueError):
+    """An ensemble that cannot run as given: a case column naming nothing, no cases, a
+    bad scheduler or store (see :mod:`dalembert.ensemble`)."""
+
+
 class DalembertWarning(UserWarning):
     """Base class of every warning issued by dalembert."""
 
@@ -141,6 +146,11 @@ class BadCacheEntryWarning(DalembertWarning):
     """A cached library was found damaged or foreign; it was not loaded but rebuilt."""
 
 
+class EnsembleWarning(DalembertWarning):
+    """Some cases of an ensemble failed, were lost with a worker or did not run (the
+    others are returned; ``result.retry()`` runs the failed ones again)."""
+
+
 __all__ = [
     "BadCacheEntryWarning",
     "CompileError",
@@ -149,6 +159,8 @@ __all__ = [
     "DalembertWarning",
     "DependentConstraintsError",
     "DoubleCountingWarning",
+    "EnsembleError",
+    "EnsembleWarning",
     "EquilibriumNotFoundError",
     "ExtremumConvergenceError",
     "GuessError",

@@ -556,6 +556,39 @@ class System:
             input_names=[u.name for u in self.inputs])
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
+    def simulate_many(self, t_span: Sequence[float], cases: Any, **options: Any) -> Any:
+        """Simulate this System once per case (an ensemble): serially, on threads or on
+        Dask, the results labelled (see :func:`dalembert.ensemble.simulate_many`).
+
+        Parameters
+        ----------
+        t_span
+            ``(t0, tf)``, shared by every case.
+        cases
+            A DataFrame or list of dicts whose columns name parameters, coordinates
+            (``x``) and velocities (``x_dot``); :func:`dalembert.ensemble.grid` and
+            :func:`dalembert.ensemble.sample` make them.
+        options
+            :func:`dalembert.ensemble.simulate_many`'s keywords and ``simulate``'s.
+
+        Returns
+        -------
+        dalembert.ensemble.EnsembleResult
+            ``.dataset`` (xarray), ``.summary`` (pandas), ``.retry()``...
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> result = pendulum.simulate_many((0, 1), [{"x": 0.6, "y": -0.8}, {"x": 1.0, "y": 0}],
+        ...                                 scheduler="serial", progress=False)
+        >>> result.summary["status"].tolist()
+        ['finished', 'finished']
+        """
+        from .ensemble import simulate_many  # Dask, xarray and pandas only when asked
+
+        return simulate_many(self, t_span, cases, **options)
+
     def plan(
         self,
         t_span: Sequence[float],

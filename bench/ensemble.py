@@ -1,0 +1,489 @@
+"""Ensemble throughput: many runs of the 16-link 3D chain, serial, threads, Dask, MuJoCo.
+
+Workload: the suite's 16-link chain of solid cylinders (1 m, r = 5 cm) on spherical
+joints, each link with its own mass (``m1 .. m16`` uniform in [0.8, 1.2] kg, one
+parameter per link: one build, no compile per case), tilted as a whole by an angle
+uniform in [20, 40] degrees and turning at 0.2 rad/s about x (the suite's start),
+10 s simulated, output at 101 times. The cases are drawn with
+``dalembert.ensemble.sample(..., seed=17)``; the tolerance is the loosest of the
+suite's ladder at which every case of a sample of 40 meets the suite's energy target
+(``|E(10) - E(0)| / (E(0) - E_rest) <= 1e-6``), and the energy error of every case
+run is reported.
+
+Parts (``--part``):
+
+- ``throughput``: N cases (1000; ``--quick``: 60) as a plain loop over
+  ``simulate`` (the reference), ``simulate_many`` serially, on 2 threads, and on a
+  Dask ``LocalCluster`` of 1 and of 2 single-threaded processes. Runs per second,
+  the speed-up over the plain loop, the parallel efficiency (speed-up / workers) and
+  the overhead per case of the ensemble machinery against the plain loop. A cluster's
+  start and its workers' first preparation of the model (import, unpack, load the
+  shipped code) are timed apart: they are paid once per cluster and model.
+- ``mujoco``: the same cases with MuJoCo's ``rollout`` (one ``MjModel`` per case with
+  its link masses and inertias, the initial state of each case, 2 threads), RK4 step
+  halved from 1e-2 until the worst case of the sample meets the target.
+- ``scaling``: 10, 100, 1000, 10000 cases (``--quick``: 10, 100) of 1 s simulated
+  (not 10: the ensemble's own costs weigh ten times more against a case) on 2 Dask
+  processes, results to a Zarr store, each size in a fresh client process: time per
+  case, the client's peak memory, the store's size.
+
+Usage: ``python bench/ensemble.py [--quick] [--part all|throughput|mujoco|scaling]``
+writes ``bench/results/ensemble.json`` (``--quick``: ``ensemble_quick.json``) and its
+plot (``--plot`` only redraws it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+N_LINKS, L, R, G = 16, 1.0, 0.05, 9.81
+OMEGA = 0.2
+T_END = 10.0
+ENERGY_TARGET = 1e-6
+SEED = 17
+#: DOP853 tolerances tried (atol = rtol / 100), as the suite's ladder.
+RTOLS = (1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6)
+MUJOCO_STEPS = tuple(1e-2 / 2**k for k in range(6))
+#: Seconds simulated per case in the scaling part: a tenth of the workload's span, so
+#: that 10,000 cases fit in minutes and the ensemble's own costs weigh ten times more.
+SCALING_T_END = 1.0
+#: One BLAS thread per process, as the suite runs every tool: the threads, processes
+#: and MuJoCo's threads are the parallelism measured here (set before NumPy loads, by
+#: running the script again with them).
+SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                  "MKL_NUM_THREADS")}
+
+
+# -- the model and the cases ------------------------------------------------------------
+def link_mass_chain(n: int = N_LINKS):
+    """The chain with one mass parameter per link (``m1 .. mn``, default 1 kg)."""
+    import sympy as sp
+
+    from dalembert.multibody import Ground, Multibody, RigidBody, Spherical
+
+    masses = sp.symbols(f"m1:{n + 1}", positive=True)
+    links = [RigidBody(f"link{k + 1}", m, (m * (3 * R**2 + L**2) / 12,
+                                           m * (3 * R**2 + L**2) / 12, m * R**2 / 2))
+             for k, m in enumerate(masses)]
+    joints = [Spherical(f"joint{k + 1}", parent, child, (0, 0, 0) if k == 0 else (0, 0, -L / 2),
+                        (0, 0, L / 2))
+              for k, (parent, child) in enumerate(zip([Ground(), *links[:-1]], links))]
+    return Multibody(links, joints, gravity=(0, 0, -G), name=f"{n}-link chain",
+                     parameters=dict.fromkeys(masses, 1.0))
+
+
+def tilt(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def make_initial(mb):
+    """``initial_state(case)``: the chain straight, tilted by the case's angle, turning."""
+    names = [b.name for b in mb.bodies]
+    w = np.array([OMEGA, 0.0, 0.0])
+
+    def initial(case: dict) -> tuple[dict, dict]:
+        rot = tilt(np.radians(case["angle"]))
+        centers = np.outer(np.arange(len(names)) + 0.5, rot @ np.array([0.0, 0.0, -L]))
+        return mb.initial_state(positions=dict(zip(names, centers)),
+                                orientations=dict.fromkeys(names, rot),
+                                velocities={k: np.cross(w, c) for k, c in zip(names, centers)},
+                                angular_velocities=dict.fromkeys(names, w))
+
+    return initial
+
+
+def draw_cases(n: int):
+    from scipy import stats
+
+    from dalembert.ensemble import sample
+
+    dist = {f"m{k + 1}": stats.uniform(0.8, 0.4) for k in range(N_LINKS)}
+    dist["angle"] = stats.uniform(20.0, 20.0)
+    return sample(dist, n, seed=SEED)
+
+
+def masses(cases) -> np.ndarray:
+    return cases[[f"m{k + 1}" for k in range(N_LINKS)]].to_numpy()
+
+
+def rest_energy(m: np.ndarray) -> np.ndarray:
+    """``V`` of each case's chain hanging straight down (link k's center at -(k-1/2) L)."""
+    return -G * L * (m * (np.arange(N_LINKS) + 0.5)).sum(axis=-1)
+
+
+def energy_errors(energy: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """The suite's relative energy error per case from ``energy`` (cases x times)."""
+    return np.abs(energy[:, -1] - energy[:, 0]) / np.abs(energy[:, 0] - rest_energy(m))
+
+
+def load_average() -> float:
+    return os.getloadavg()[0]
+
+
+def peak_memory_mb() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return float(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+# -- dalembert --------------------------------------------------------------------------
+def choose_rtol(mb, initial, cases) -> tuple[float, list[dict]]:
+    """The loosest rtol at which every case of ``cases`` meets the energy target."""
+    tried = []
+    for rtol in RTOLS:
+        result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
+                                         rtol=rtol, atol=rtol / 100, keep=("energy",),
+                                         scheduler="serial", progress=False)
+        errors = energy_errors(result.dataset["energy"].values, masses(cases))
+        tried.append({"rtol": rtol, "worst_energy_error": float(errors.max()),
+                      "median_energy_error": float(np.median(errors))})
+        if errors.max() <= ENERGY_TARGET:
+            return rtol, tried
+    raise RuntimeError(f"no rtol in {RTOLS} met the energy target: {tried}")
+
+
+def plain_loop(mb, initial, cases, rtol: float) -> tuple[float, np.ndarray]:
+    """The reference: ``simulate`` in a loop, each trajectory kept."""
+    t_eval = np.linspace(0.0, T_END, 101)
+    kept = []
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # rounding-level projection of q0
+        for row in cases.to_dict("records"):
+            q0, qd0 = initial(row)
+            kept.append(mb.system.simulate(
+                (0.0, T_END), q0, qd0, parameters={k: v for k, v in row.items() if k != "angle"},
+                rtol=rtol, atol=rtol / 100, t_eval=t_eval))
+    seconds = time.perf_counter() - start
+    return seconds, np.array([traj.energy for traj in kept])
+
+
+def ensemble_run(mb, initial, cases, rtol: float, **how) -> tuple[float, object]:
+    start = time.perf_counter()
+    result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial, rtol=rtol,
+                                     atol=rtol / 100, progress=False, **how)
+    return time.perf_counter() - start, result
+
+
+def case_seconds(result) -> float:
+    """The time the cases themselves took where they ran (set-up, ``simulate``, what is
+    kept), summed: the rest of a run's time is the ensemble's own overhead."""
+    return float(result.summary["seconds"].sum())
+
+
+def throughput(n: int) -> dict:
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    start = time.perf_counter()
+    mb = link_mass_chain()
+    mb.system.compiled  # noqa: B018
+    build_s = time.perf_counter() - start
+    initial = make_initial(mb)
+    rtol, ladder = choose_rtol(mb, initial, draw_cases(40))
+    cases = draw_cases(n)
+    m = masses(cases)
+    record: dict = {"cases": n, "rtol": rtol, "atol": rtol / 100, "ladder": ladder,
+                    "build_s": build_s, "runs": {}}
+
+    def note(name: str, seconds: float, workers: int, energy: np.ndarray, **extra) -> None:
+        errors = energy_errors(energy, m)
+        record["runs"][name] = {"seconds": seconds, "runs_per_s": n / seconds,
+                                "workers": workers, "load_average": load_average(),
+                                "worst_energy_error": float(errors.max()),
+                                "median_energy_error": float(np.median(errors)), **extra}
+        print(f"{name}: {seconds:.1f} s, {n / seconds:.1f} runs/s", flush=True)
+
+    seconds, energy = plain_loop(mb, initial, cases, rtol)
+    note("loop", seconds, 1, energy)
+    seconds, result = ensemble_run(mb, initial, cases, rtol, scheduler="serial")
+    note("serial", seconds, 1, result.dataset["energy"].values,
+         case_seconds=case_seconds(result))
+    seconds, result = ensemble_run(mb, initial, cases, rtol, scheduler="threads", workers=2)
+    note("threads-2", seconds, 2, result.dataset["energy"].values,
+         case_seconds=case_seconds(result))
+    for workers in (1, 2):
+        start = time.perf_counter()
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        client = Client(cluster)
+        started = time.perf_counter() - start
+        warm = cases.iloc[: 2 * workers]
+        warm_s, _ = ensemble_run(mb, initial, warm, rtol, client=client, batch_size=1)
+        seconds, result = ensemble_run(mb, initial, cases, rtol, client=client)
+        note(f"dask-{workers}", seconds, workers, result.dataset["energy"].values,
+             case_seconds=case_seconds(result), cluster_start_s=started,
+             first_cases_s=warm_s, first_cases=len(warm))
+        client.close()
+        cluster.close()
+    loop = record["runs"]["loop"]["seconds"]
+    for run in record["runs"].values():
+        run["speedup"] = loop / run["seconds"]
+        run["efficiency"] = run["speedup"] / run["workers"]
+    # The ensemble's own time per case (wall x workers - the cases' own time), against a
+    # case's simulation: less sensitive to the machine's load than two totals' difference.
+    record["overhead_per_case"] = {}
+    for name in ("serial", "dask-1", "dask-2"):
+        run = record["runs"][name]
+        own = run["seconds"] * run["workers"] - run["case_seconds"]
+        record["overhead_per_case"][name] = {"seconds": own / n,
+                                             "of_case": own / run["case_seconds"]}
+    record["overhead_per_case"]["serial_vs_loop"] = (record["runs"]["serial"]["seconds"]
+                                                     - loop) / loop
+    record["preparation_s"] = preparation_seconds(mb)
+    return record
+
+
+def preparation_seconds(mb) -> dict:
+    """A fresh process preparing the package: with an empty code cache (the shipped
+    libraries installed) and, for comparison, compiling the model itself."""
+    import pickle
+
+    from dalembert.ensemble.model import package
+
+    pack = package(mb.system)
+    out = {}
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "pack.pkl"
+        path.write_bytes(pickle.dumps(pack))
+        script = ("import pickle, sys, time; t = time.perf_counter(); import dalembert.ensemble"
+                  ".model as m; i = time.perf_counter(); p = pickle.load(open(sys.argv[1], 'rb'))"
+                  "; {}; print(i - t, time.perf_counter() - i)")
+        for name, action in (("shipped", "m.preparation_seconds(p)"),
+                             ("compiled_there", "p = type(p)(p.token, p.system, ()); "
+                                                "m.preparation_seconds(p)")):
+            env = {**os.environ, "DALEMBERT_CACHE_DIR": str(Path(folder) / name)}
+            done = subprocess.run([sys.executable, "-c", script.format(action), str(path)],
+                                  capture_output=True, text=True, env=env, check=True)
+            imported, prepared = map(float, done.stdout.split())
+            out[name] = {"import_s": imported, "prepare_s": prepared}
+    out["package_kb"] = pack.size / 1024
+    return out
+
+
+# -- MuJoCo -----------------------------------------------------------------------------
+def mujoco_models(cases, dt: float):
+    """One ``MjModel`` per case (its link masses and inertias) and its initial states."""
+    import mujoco
+
+    sys.path.insert(0, str(HERE))
+    from peers.mujoco import spec
+
+    base = spec("spherical", N_LINKS, dt).compile()
+    m = masses(cases)
+    models, states = [], []
+    data = mujoco.MjData(base)
+    size = mujoco.mj_stateSize(base, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    for k, row in enumerate(cases.to_dict("records")):
+        model = copy.copy(base)
+        for j in range(N_LINKS):
+            mass = m[k, j]
+            model.body_mass[j + 1] = mass
+            model.body_inertia[j + 1] = [mass * (3 * R**2 + L**2) / 12,
+                                         mass * (3 * R**2 + L**2) / 12, mass * R**2 / 2]
+        mujoco.mj_resetData(model, data)
+        rot = tilt(np.radians(row["angle"]))
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, rot.ravel())
+        data.qpos[:4] = quat
+        data.qvel[:3] = rot.T @ np.array([OMEGA, 0.0, 0.0])  # ball joint: body frame
+        state = np.empty(size)
+        mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        models.append(model)
+        states.append(state)
+    return models, np.array(states)
+
+
+def mujoco_energies(models, states) -> np.ndarray:
+    """``T + V`` of each model at each state (``mj_forward`` with the energy flag)."""
+    import mujoco
+
+    data = mujoco.MjData(models[0])
+    out = np.empty(len(models))
+    for k, (model, state) in enumerate(zip(models, states)):
+        mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        mujoco.mj_forward(model, data)
+        out[k] = data.energy.sum()
+    return out
+
+
+def mujoco_rollout(cases, dt: float, threads: int = 2, chunk: int = 100) -> dict:
+    """The cases rolled out ``T_END / dt`` steps; only the rollout calls are timed (in
+    chunks of ``chunk`` cases: rollout returns every step's state)."""
+    import mujoco
+    from mujoco import rollout
+
+    models, initial = mujoco_models(cases, dt)
+    steps = round(T_END / dt)
+    datas = [mujoco.MjData(models[0]) for _ in range(threads)]
+    final = np.empty_like(initial)
+    seconds = 0.0
+    with rollout.Rollout(nthread=threads) as runner:
+        for a in range(0, len(models), chunk):
+            start = time.perf_counter()
+            state, _ = runner.rollout(models[a:a + chunk], datas, initial[a:a + chunk],
+                                      nstep=steps)
+            seconds += time.perf_counter() - start
+            final[a:a + chunk] = state[:, -1]
+    e0, e1 = mujoco_energies(models, initial), mujoco_energies(models, final)
+    errors = np.abs(e1 - e0) / np.abs(e0 - rest_energy(masses(cases)))
+    return {"dt": dt, "steps": steps, "seconds": seconds, "runs_per_s": len(models) / seconds,
+            "threads": threads, "worst_energy_error": float(errors.max()),
+            "median_energy_error": float(np.median(errors)), "load_average": load_average(),
+            "finished": bool(np.all(np.isfinite(final)))}
+
+
+def mujoco_part(n: int) -> dict:
+    import mujoco
+
+    sample = draw_cases(40)
+    ladder = []
+    for dt in MUJOCO_STEPS:
+        tried = mujoco_rollout(sample, dt)
+        ladder.append({k: tried[k] for k in ("dt", "worst_energy_error", "median_energy_error")})
+        if tried["worst_energy_error"] <= ENERGY_TARGET:
+            break
+    run = mujoco_rollout(draw_cases(n), tried["dt"])
+    print(f"mujoco rollout: {run['seconds']:.1f} s, {run['runs_per_s']:.1f} runs/s", flush=True)
+    return {"version": mujoco.__version__, "ladder": ladder, "run": run, "cases": n}
+
+
+# -- scaling ----------------------------------------------------------------------------
+def scaling_one(n: int, folder: str) -> dict:
+    """``n`` cases of ``SCALING_T_END`` seconds on 2 Dask processes into a Zarr store (run
+    in a fresh process)."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    mb = link_mass_chain()
+    initial = make_initial(mb)
+    rtol = float(os.environ["BENCH_RTOL"])
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=logging.ERROR)
+    client = Client(cluster)
+    ensemble_run(mb, initial, draw_cases(4), rtol, client=client, batch_size=1)  # warm
+    before = peak_memory_mb()
+    store = Path(folder) / f"run{n}.zarr"
+    start = time.perf_counter()
+    result = mb.system.simulate_many((0.0, SCALING_T_END), draw_cases(n),
+                                     initial_state=initial, rtol=rtol, atol=rtol / 100,
+                                     client=client, store=store, keep=("q", "energy"),
+                                     progress=False)
+    seconds = time.perf_counter() - start
+    band = result.quantile("q", [0.05, 0.5, 0.95], coordinate=f"link{N_LINKS}_x")
+    client.close()
+    cluster.close()
+    size = sum(p.stat().st_size for p in store.rglob("*") if p.is_file())
+    return {"cases": n, "t_end": SCALING_T_END, "seconds": seconds, "per_case_s": seconds / n,
+            "case_seconds": float(result.summary["seconds"].sum()),
+            "client_peak_mb_before": before, "client_peak_mb": peak_memory_mb(),
+            "store_mb": size / 2**20, "failed": len(result.failed),
+            "band_shape": list(band.shape), "load_average": load_average()}
+
+
+def scaling(sizes: list[int], rtol: float) -> list[dict]:
+    out = []
+    with tempfile.TemporaryDirectory() as folder:
+        for n in sizes:
+            done = subprocess.run([sys.executable, __file__, "--scaling-one", str(n), folder],
+                                  capture_output=True, text=True,
+                                  env={**os.environ, "BENCH_RTOL": repr(rtol)})
+            if done.returncode != 0:
+                raise RuntimeError(done.stderr[-2000:])
+            out.append(json.loads(done.stdout.strip().splitlines()[-1]))
+            print(f"scaling {n}: {out[-1]['per_case_s'] * 1e3:.1f} ms per case, client peak "
+                  f"{out[-1]['client_peak_mb']:.0f} MB", flush=True)
+    return out
+
+
+# -- plot -------------------------------------------------------------------------------
+def plot(record: dict, out: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    runs = record.get("throughput", {}).get("runs", {})
+    names = list(runs)
+    rates = [runs[k]["runs_per_s"] for k in names]
+    if "mujoco" in record:
+        names.append("MuJoCo rollout (2 threads)")
+        rates.append(record["mujoco"]["run"]["runs_per_s"])
+    axes[0].barh(names, rates, color=["C0"] * len(runs) + ["C2"] * (len(names) - len(runs)))
+    axes[0].set_xlabel("runs per second (16-link 3D chain, 10 s)")
+    axes[0].invert_yaxis()
+    for y, r in enumerate(rates):
+        axes[0].text(r, y, f" {r:.1f}", va="center")
+    scaled = record.get("scaling", [])
+    if scaled:
+        n = [s["cases"] for s in scaled]
+        axes[1].semilogx(n, [1e3 * s["per_case_s"] for s in scaled], "o-", label="ms per case")
+        axes[1].set_xlabel("cases (2 Dask processes, results to Zarr)")
+        axes[1].set_ylabel("ms per case")
+        twin = axes[1].twinx()
+        twin.semilogx(n, [s["client_peak_mb"] for s in scaled], "s--", color="C1",
+                      label="client peak memory (MB)")
+        twin.semilogx(n, [s["store_mb"] for s in scaled], "^:", color="C3",
+                      label="store on disk (MB)")
+        twin.set_yscale("log")
+        twin.set_ylabel("MB")
+        lines = axes[1].get_lines() + twin.get_lines()
+        axes[1].legend(lines, [ln.get_label() for ln in lines], loc="upper center")
+        axes[1].set_ylim(bottom=0)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    return out
+
+
+def main() -> None:
+    if any(os.environ.get(k) != v for k, v in SINGLE_THREAD.items()):
+        os.execve(sys.executable, [sys.executable, __file__, *sys.argv[1:]],
+                  {**os.environ, **SINGLE_THREAD})
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--part", default="all",
+                        choices=["all", "throughput", "mujoco", "scaling"])
+    parser.add_argument("--plot", action="store_true", help="only redraw the plot")
+    parser.add_argument("--sizes", type=int, nargs="+", help="scaling: these case counts")
+    parser.add_argument("--scaling-one", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.scaling_one:
+        print(json.dumps(scaling_one(int(args.scaling_one[0]), args.scaling_one[1])))
+        return
+    out = HERE / "results" / ("ensemble_quick.json" if args.quick else "ensemble.json")
+    record = json.loads(out.read_text()) if out.exists() else {}
+    if not args.plot:
+        n = 60 if args.quick else 1000
+        record.setdefault("machine", {}).update(cpus=os.cpu_count(),
+                                                python=platform.python_version())
+        parts = {"throughput": lambda: throughput(n), "mujoco": lambda: mujoco_part(n),
+                 "scaling": lambda: scaling(args.sizes or ([10, 100] if args.quick else
+                                                           [10, 100, 1000, 10000]),
+                                            record["throughput"]["rtol"])}
+        for name, run in parts.items():
+            if args.part in ("all", name):
+                record[name] = run()
+                out.write_text(json.dumps(record, indent=1))  # each part as it is done
+    print(f"wrote {out} and {plot(record, out.with_suffix('.png'))}")
+
+
+if __name__ == "__main__":
+    main()

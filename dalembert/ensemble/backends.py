@@ -1,0 +1,273 @@
+"""Where the batches of cases run: here, on threads, or on Dask workers.
+
+Each backend takes batches (case numbers with their rows), yields the outcomes of
+each batch as it finishes (:meth:`Backend.completed`) and, when the ensemble is
+interrupted, stops and hands over what finished meanwhile (:meth:`Backend.stop`).
+
+- :class:`Serial` runs them in order in the caller's process.
+- :class:`Threads` runs them on a thread pool sharing the one System: the C loop
+  releases the GIL during its stretches of steps, the Python around it does not.
+- :class:`Dask` runs them on a ``dask.distributed`` cluster: a ``LocalCluster``
+  of processes it starts and stops, or the ``Client`` given (any cluster). The
+  model, its compiled code and the shared settings travel as one package
+  (:mod:`~dalembert.ensemble.model`), which each worker process prepares once. A
+  batch whose worker died is run again by the scheduler (as often as its
+  ``allowed-failures`` lets it); one that kills its workers each time is then split
+  into its cases, so that only the culprit is lost (recorded as ``"lost"``).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import threading
+import warnings
+from collections.abc import Generator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import EnsembleError
+from ..system import System
+from .faults import CaseOutcome, error_outcome, lost_outcome
+from .model import ModelPackage, package, prepared
+from .worker import CaseSettings, run_batch
+
+
+@dataclass(frozen=True)
+class Batch:
+    """Cases run by one task: their numbers and rows of the case table."""
+
+    indices: np.ndarray
+    rows: np.ndarray
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C during a batch run here: carries the outcomes finished before it."""
+
+    def __init__(self, outcomes: list[CaseOutcome]) -> None:
+        super().__init__()
+        self.outcomes = outcomes
+
+
+def run_here(system: System, settings: CaseSettings, batch: Batch,
+             names: Sequence[str]) -> list[CaseOutcome]:
+    """Run ``batch`` in this process; a Ctrl-C ends it with :class:`Interrupted`.
+
+    A Ctrl-C during a simulation ends that simulation (it returns what it computed,
+    status ``"interrupted"``): the batch stops there too.
+    """
+    done: list[CaseOutcome] = []
+    try:
+        for i in range(len(batch.indices)):
+            done += run_batch(system, settings, batch.indices[i:i + 1], batch.rows[i:i + 1],
+                              names)
+            if done[-1].status == "interrupted":
+                raise Interrupted(done)
+    except Interrupted:
+        raise
+    except KeyboardInterrupt as exc:
+        raise Interrupted(done) from exc
+    return done
+
+
+class Backend:
+    """Runs batches; :attr:`workers` is how many run at once."""
+
+    name = "backend"
+    workers = 1
+
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+        raise NotImplementedError
+
+    def stop(self) -> list[CaseOutcome]:
+        """Stop after an interruption; the outcomes finished but not yet yielded."""
+        return []
+
+    def close(self) -> None:
+        return None
+
+
+class Serial(Backend):
+    """In the caller's process, batch after batch."""
+
+    name = "serial"
+
+    def __init__(self, system: System, settings: CaseSettings, names: Sequence[str]) -> None:
+        self.system, self.settings, self.names = system, settings, names
+        self._left: list[CaseOutcome] = []
+
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+        for batch in batches:
+            for i in range(len(batch.indices)):  # case by case: the progress bar moves
+                try:
+                    yield run_here(self.system, self.settings,
+                                   Batch(batch.indices[i:i + 1], batch.rows[i:i + 1]),
+                                   self.names)
+                except Interrupted as stop:
+                    self._left = stop.outcomes
+                    raise KeyboardInterrupt from None
+
+    def stop(self) -> list[CaseOutcome]:
+        left, self._left = self._left, []
+        return left
+
+
+class Threads(Backend):
+    """On a pool of threads sharing the System (its code is loaded first, once)."""
+
+    name = "threads"
+
+    def __init__(self, system: System, settings: CaseSettings, names: Sequence[str],
+                 workers: int | None) -> None:
+        self.system, self.settings, self.names = system, settings, names
+        self.workers = workers or os.cpu_count() or 1
+        system.compiled  # noqa: B018 - made once, before the threads share it
+        self._stop = threading.Event()
+        self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="dalembert-case")
+        self._futures: set[Future] = set()
+
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+        # The cases' warnings are not recorded: catch_warnings in the threads would
+        # race on the process-wide filters; they are silenced here, once, instead.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self._futures = {self._pool.submit(run_batch, self.system, self.settings,
+                                               b.indices, b.rows, self.names, self._stop,
+                                               False) for b in batches}
+            while self._futures:
+                done, _ = wait(self._futures, return_when=FIRST_COMPLETED)
+                for future in done:
+                    self._futures.discard(future)
+                    yield future.result()
+
+    def stop(self) -> list[CaseOutcome]:
+        self._stop.set()  # running batches end after their current case
+        for future in self._futures:
+            future.cancel()
+        left: list[CaseOutcome] = []
+        for future in self._futures:
+            if not future.cancelled():
+                left += future.result()
+        self._futures = set()
+        return left
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def run_packed(pack: ModelPackage, indices: np.ndarray, rows: np.ndarray,
+               names: Sequence[str]) -> list[CaseOutcome]:
+    """A Dask task: one batch, on the System and settings of ``pack`` (prepared once
+    per worker process). On a worker running several tasks at once (threads), the
+    cases' warnings are left to the worker's log: recording them is not thread-safe."""
+    system, settings = prepared(pack)
+    try:
+        from distributed import get_worker
+
+        threads = get_worker().state.nthreads
+    except (ImportError, ValueError, AttributeError):  # not on a Dask worker
+        threads = 1
+    return run_batch(system, settings, indices, rows, names, record_warnings=threads == 1)
+
+
+class Dask(Backend):
+    """On a ``dask.distributed`` cluster: the ``client`` given, or a ``LocalCluster`` of
+    ``workers`` single-threaded processes started here (and closed by :meth:`close`)."""
+
+    name = "dask"
+
+    def __init__(self, system: System, settings: CaseSettings, names: Sequence[str],
+                 client: Any = None, workers: int | None = None) -> None:
+        distributed = _distributed()
+        self.names, self._own = names, None
+        if client is None:
+            try:
+                self._own = distributed.LocalCluster(
+                    n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                    processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+            except Exception as exc:  # Dask's own message says little about the usual cause
+                raise EnsembleError(
+                    f"could not start a local Dask cluster ({type(exc).__name__}: {exc}). In "
+                    "a script, the code that runs the ensemble must be under "
+                    "`if __name__ == '__main__':` (each worker process imports the script); "
+                    "or pass scheduler='serial' or 'threads'") from exc
+            client = distributed.Client(self._own)
+        self.client = client
+        self.workers = max(1, sum(client.nthreads().values()))
+        # Each task carries the package (about 0.1 MB for a 16-link chain) rather than
+        # a scattered copy: data scattered to workers dies with them, and a worker
+        # prepares a package once however many tasks bring it.
+        self.package = package(system, settings)
+        self._pending: dict[Any, Batch] = {}
+        self._finished: list[Any] = []
+
+    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+        distributed = _distributed()
+        pending = self._pending
+        for batch in batches:
+            pending[self._submit(batch)] = batch
+        found = distributed.as_completed(list(pending))
+        # The cases of a batch whose worker died run one at a time, each alone among the
+        # suspects: a case queued on the same worker as the culprit dies with it, so two
+        # suspects in flight together could both be taken for culprits.
+        suspects: list[Batch] = []
+        suspect: Any = None
+
+        def next_suspect() -> None:
+            nonlocal suspect
+            suspect = None
+            if suspects:
+                single = suspects.pop(0)
+                suspect = self._submit(single)
+                pending[suspect] = single
+                found.add(suspect)
+
+        for future in found:
+            batch = pending.pop(future)
+            if future is suspect:
+                next_suspect()
+            if future.status == "finished":
+                yield future.result()
+                continue
+            exc = future.exception()
+            if isinstance(exc, distributed.KilledWorker) and len(batch.indices) > 1:
+                suspects += [Batch(batch.indices[i:i + 1], batch.rows[i:i + 1])
+                             for i in range(len(batch.indices))]
+                if suspect is None:
+                    next_suspect()
+            elif isinstance(exc, distributed.KilledWorker):
+                yield [lost_outcome(int(batch.indices[0]), str(exc))]
+            else:  # the task itself failed (e.g. the model could not be prepared there)
+                why = exc if exc is not None else RuntimeError(f"the task ended {future.status}")
+                yield [error_outcome(int(i), why, 0.0, "") for i in batch.indices]
+
+    def _submit(self, batch: Batch) -> Any:
+        return self.client.submit(run_packed, self.package, batch.indices, batch.rows,
+                                  self.names, pure=False)
+
+    def stop(self) -> list[CaseOutcome]:
+        left: list[CaseOutcome] = []
+        for future in list(self._pending):
+            if future.status == "finished":
+                left += future.result()
+            else:
+                future.cancel()
+        self._pending.clear()
+        return left
+
+    def close(self) -> None:
+        if self._own is not None:
+            self.client.close()
+            self._own.close()
+
+
+def _distributed() -> Any:
+    try:
+        import distributed
+    except ImportError as exc:  # pragma: no cover - Dask comes with the extra
+        raise ImportError("running an ensemble on Dask needs dask.distributed: pip install "
+                          "'dalembert[ensemble]' (or scheduler='serial' / 'threads')") from exc
+    return distributed

@@ -1,0 +1,91 @@
+"""What became of each case: its status, its message, and what it computed.
+
+A case never takes the ensemble down. An exception while it is set up or run (a
+bad parameter value, a singular KKT matrix at its initial state) is recorded as
+``"error"`` with its message; an integration that stops midway is ``"failed"``
+with the part computed; a case whose worker process died every time it was tried
+is ``"lost"``; a case the ensemble never reached, because it was interrupted, is
+``"not-run"``. :data:`SUCCESS` are the statuses that need no retry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: Every status a case can have, in the order of their codes (the ``status``
+#: variable of a stored ensemble holds the code; its attributes name them).
+STATUSES = ("finished", "event", "failed", "interrupted", "error", "lost", "not-run")
+#: A case with one of these statuses ran to the end of its span (or a terminal event).
+SUCCESS = frozenset({"finished", "event"})
+CODE = {name: code for code, name in enumerate(STATUSES)}
+
+
+@dataclass(frozen=True)
+class PackedNumbers:
+    """A case's summary numbers as the client keeps them: one array, the names shared
+    by every case that has the same ones (a dict per case costs ten times more)."""
+
+    names: tuple[str, ...]
+    values: np.ndarray
+
+    def items(self) -> Iterator[tuple[str, float]]:
+        return zip(self.names, self.values.tolist())
+
+
+def pack_numbers(numbers: dict[str, float], shared: dict[tuple[str, ...], tuple[str, ...]]
+                 ) -> PackedNumbers:
+    """``numbers`` packed; ``shared`` keeps one tuple of names per distinct set.
+
+    >>> pack_numbers({"t_end": 1.0, "nfev": 30.0}, {}).values.tolist()
+    [1.0, 30.0]
+    """
+    names = tuple(numbers)
+    return PackedNumbers(shared.setdefault(names, names),
+                         np.fromiter(numbers.values(), dtype=float, count=len(names)))
+
+
+@dataclass
+class CaseOutcome:
+    """One case's result, as a worker sends it back.
+
+    ``arrays`` holds the kept quantities at the output times the case reached
+    (``t``, ``q``, ... ; a case that failed midway has fewer rows, one that raised
+    has none); the other fields go into the summary table.
+    """
+
+    index: int
+    status: str
+    message: str = ""
+    seconds: float = 0.0
+    worker: str = ""
+    arrays: dict[str, np.ndarray] = field(default_factory=dict)
+    numbers: dict[str, float] | PackedNumbers = field(default_factory=dict)
+    warnings: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.status in SUCCESS
+
+
+def error_outcome(index: int, exc: BaseException, seconds: float, worker: str) -> CaseOutcome:
+    """The record of a case whose set-up or run raised ``exc`` (named with its class).
+
+    >>> error_outcome(3, ValueError("m = -1 is negative"), 0.0, "").message
+    'ValueError: m = -1 is negative'
+    """
+    return CaseOutcome(index, "error", f"{type(exc).__name__}: {exc}", seconds, worker)
+
+
+def lost_outcome(index: int, why: str) -> CaseOutcome:
+    """The record of a case whose worker died each time it ran it."""
+    return CaseOutcome(index, "lost", f"the worker running this case died ({why}); it was "
+                       "tried again and died again: a crash in the case itself (run it alone "
+                       "with system.simulate to see), or workers short of memory")
+
+
+def not_run_outcome(index: int) -> CaseOutcome:
+    """The record of a case the ensemble never reached (it was interrupted)."""
+    return CaseOutcome(index, "not-run", "not run: the ensemble was interrupted first")

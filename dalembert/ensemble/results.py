@@ -1,0 +1,147 @@
+"""The result of an ensemble: labelled arrays, a summary table, reductions, a retry.
+
+:attr:`EnsembleResult.dataset` is an ``xarray.Dataset`` over ``case``, ``time``,
+``coordinate`` and ``constraint`` (in memory, or read lazily from the Zarr store or
+netCDF file it was written to); :attr:`EnsembleResult.summary` a pandas DataFrame,
+one row per case: its columns of the case table, status, message, where it ended,
+its energy error and residuals, its final values, its time and its worker.
+:meth:`EnsembleResult.quantile` and :meth:`EnsembleResult.mean` reduce over the
+cases that succeeded, time by time; on a stored ensemble they run chunk by chunk
+(Dask), so the client never holds every trajectory.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .faults import CODE, SUCCESS, CaseOutcome
+
+#: Bytes of one block of a reduction over all cases (the time axis is cut to fit).
+REDUCTION_BLOCK_BYTES = 64 * 2**20
+
+
+@dataclass
+class EnsembleResult:
+    """What :func:`~dalembert.ensemble.simulate_many` returns.
+
+    Attributes
+    ----------
+    dataset
+        The arrays (``xarray.Dataset``); variables ``q``, ``qd``, ``multipliers``,
+        ``constraint_forces``, ``energy``, residuals and outputs over
+        ``(case, time[, coordinate | constraint])``, per-case ``status`` (codes, named
+        in its attributes), ``t_end``, ``energy_error``, ``seconds``, and the case
+        table's columns as coordinates along ``case``.
+    summary
+        One row per case (pandas DataFrame indexed by case).
+    scheduler
+        What ran the cases (``"serial"``, ``"threads"``, ``"dask"``).
+    interrupted
+        Whether the run was interrupted (the cases it did not reach are ``"not-run"``).
+    """
+
+    dataset: Any
+    summary: Any
+    scheduler: str
+    interrupted: bool = False
+    _rerun: Callable[..., EnsembleResult] | None = field(default=None, repr=False)
+
+    @property
+    def failed(self) -> list[int]:
+        """The cases that did not succeed (failed, error, lost, interrupted, not run)."""
+        ok = self.summary["status"].isin(sorted(SUCCESS))
+        return [int(i) for i in self.summary.index[~ok]]
+
+    @property
+    def succeeded(self) -> np.ndarray:
+        """A boolean mask over cases: those that reached the end (or a terminal event)."""
+        return np.isin(self.dataset["status"].values, [CODE[s] for s in SUCCESS])
+
+    def retry(self, cases: Sequence[int] | None = None, **changes: Any) -> EnsembleResult:
+        """Run the failed cases again (or ``cases``) and return the whole ensemble updated.
+
+        Parameters
+        ----------
+        cases
+            Case numbers to run again (default: :attr:`failed`).
+        changes
+            ``simulate_many`` keywords to change for the retry (``rtol=...``,
+            ``scheduler=...``, ``client=...``, ``method="Radau"``...).
+
+        Returns
+        -------
+        EnsembleResult
+            Every case: those run again with their new outcome, the others as they
+            were (a store is updated in place).
+        """
+        if self._rerun is None:
+            raise ValueError("this result cannot be retried (it was not made by simulate_many)")
+        return self._rerun(self, self.failed if cases is None else list(cases), changes)
+
+    def quantile(self, variable: str, q: Sequence[float] | float = (0.05, 0.5, 0.95),
+                 **selection: Any) -> Any:
+        """Quantiles over the cases that succeeded, at each output time.
+
+        Parameters
+        ----------
+        variable
+            A variable of :attr:`dataset` (``"q"``, ``"energy"``, an output...).
+        q
+            The quantile(s), in [0, 1].
+        selection
+            ``dataset.sel`` arguments, e.g. ``coordinate="link16_z"``.
+
+        Returns
+        -------
+        xarray.DataArray
+            Over ``quantile`` (for a sequence ``q``) and ``time`` (and the variable's
+            other dimensions left).
+        """
+        data = self._successful(variable, selection)
+        return data.quantile(q, dim="case").compute()
+
+    def mean(self, variable: str, **selection: Any) -> Any:
+        """The mean over the cases that succeeded, at each output time (see :meth:`quantile`)."""
+        return self._successful(variable, selection).mean("case").compute()
+
+    def _successful(self, variable: str, selection: dict[str, Any]) -> Any:
+        data = self.dataset[variable]
+        if selection:
+            data = data.sel(**selection)
+        data = data.isel(case=np.flatnonzero(self.succeeded))
+        if data.chunks:  # lazily read: all cases in one block, time cut to fit
+            per_time = data.dtype.itemsize * data.sizes["case"] * int(
+                np.prod([n for d, n in data.sizes.items() if d not in ("case", "time")]))
+            steps = max(1, REDUCTION_BLOCK_BYTES // max(per_time, 1))
+            data = data.chunk({"case": -1, "time": min(steps, data.sizes["time"])})
+        return data
+
+    def __repr__(self) -> str:
+        counts = self.summary["status"].value_counts()
+        told = ", ".join(f"{n} {s}" for s, n in counts.items())
+        return (f"EnsembleResult({len(self.summary)} cases: {told}; scheduler="
+                f"{self.scheduler!r}{'; interrupted' if self.interrupted else ''})")
+
+
+def summary_table(cases: Any, outcomes: Sequence[CaseOutcome]) -> Any:
+    """The summary DataFrame: the case table, then each case's outcome (in that order)."""
+    import pandas as pd
+
+    n = len(cases)
+    numbers: dict[str, np.ndarray] = {}
+    for row, o in enumerate(outcomes):
+        for name, value in o.numbers.items():
+            if name not in numbers:
+                numbers[name] = np.full(n, np.nan)
+            numbers[name][row] = value
+    table = pd.DataFrame({
+        **{name: cases[name].to_numpy() for name in cases.columns},
+        "status": [o.status for o in outcomes], "message": [o.message for o in outcomes],
+        **numbers, "seconds": [o.seconds for o in outcomes],
+        "worker": [o.worker for o in outcomes], "warnings": [o.warnings for o in outcomes]})
+    table.index.name = "case"
+    return table

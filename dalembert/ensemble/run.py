@@ -1,0 +1,428 @@
+"""``simulate_many``: one model, many cases, one labelled result.
+
+Everything is checked here, once, before any case runs (the case table's columns,
+``simulate``'s options, the base state and parameters, what to keep, the store);
+then the cases are cut into batches, run by a backend
+(:mod:`~dalembert.ensemble.backends`), written as they finish
+(:mod:`~dalembert.ensemble.store`) and summed up
+(:mod:`~dalembert.ensemble.results`).
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import time
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from ..errors import EnsembleError, EnsembleWarning
+from ..model.parameters import parameter_values
+from ..model.values import CoordinateValues, coordinate_values
+from ..options import simulation_options
+from ..system import System
+from .backends import Backend, Batch, Dask, Serial, Threads
+from .cases import CaseTable, read_cases
+from .faults import SUCCESS, CaseOutcome, not_run_outcome, pack_numbers
+from .results import EnsembleResult, summary_table
+from .store import Layout, check_store, sink
+from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
+
+Scheduler = Literal["auto", "serial", "threads", "processes", "dask"]
+SCHEDULERS = ("auto", "serial", "threads", "processes", "dask")
+#: ``scheduler="auto"`` runs the first case here and starts a local cluster only if
+#: the rest would take longer than this alone (seconds): a cluster's first results
+#: come 4-6 s after it is asked for on two cores (start 1.7-2.2 s, each worker's
+#: import of dalembert 2-3 s and preparation of the model 0.6 s, measured by
+#: bench/ensemble.py), which two workers win back from about 10 s of work.
+AUTO_PARALLEL_SECONDS = 10.0
+#: Batches per worker when the batch size is chosen: enough to balance the load,
+#: few enough that a task's overhead (milliseconds) is small against its cases.
+BATCHES_PER_WORKER = 4
+#: The most cases in one batch (and one chunk of a store along ``case``).
+MAX_BATCH = 64
+#: Output times when none are given.
+DEFAULT_POINTS = 101
+#: ``simulate`` keywords that an ensemble sets itself or cannot store.
+_NOT_OPTIONS = {"q0": "q0=", "qd0": "qd0=", "parameters": "parameters=",
+                "dense_output": "nothing (a dense output cannot be stored; keep outputs "
+                                "at t_eval)",
+                "progress": "progress= of simulate_many (one bar for the ensemble)"}
+
+
+def simulate_many(
+    system: System,
+    t_span: Sequence[float],
+    cases: CaseTable,
+    *,
+    q0: CoordinateValues = None,
+    qd0: CoordinateValues = None,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    parameters: Mapping[Any, object] | None = None,
+    initial_state: Callable[[dict[str, float]], Any] | None = None,
+    outputs: Mapping[str, Output] | None = None,
+    keep: Sequence[str] = DEFAULT_KEEP,
+    scheduler: Scheduler = "auto",
+    client: Any = None,
+    workers: int | None = None,
+    batch_size: int | None = None,
+    store: str | os.PathLike | None = None,
+    overwrite: bool = False,
+    progress: bool = True,
+    **options: Any,
+) -> EnsembleResult:
+    """Simulate ``system`` once per case and gather the results, labelled.
+
+    Each case is a row of ``cases``: values of parameters, initial coordinates
+    (``x``) and velocities (``x_dot``), or variables of ``initial_state``. A case is
+    exactly ``system.simulate(t_span, q0, qd0, parameters=..., t_eval=t_eval,
+    **options)`` with its values, wherever it runs, so it gives the same answer
+    serially, on threads or on any Dask cluster. A case that fails is recorded with
+    its status and message and the others go on; Ctrl-C returns what finished.
+
+    Parameters
+    ----------
+    system
+        The model (its code is compiled once, here, and sent to workers with it).
+    t_span
+        ``(t0, tf)``, shared by every case.
+    cases
+        A pandas DataFrame, a list of dicts or a dict of columns (:func:`grid`,
+        :func:`sample` make them). Its column names must be parameters,
+        coordinates or ``<coordinate>_dot``, or variables ``initial_state`` reads.
+    q0, qd0
+        The initial state of every case (a dict by coordinate or a sequence), before
+        the case's own columns replace entries of it.
+    t_eval
+        The output times every case reports (default: 101 evenly spaced).
+    parameters
+        Parameter values for every case, before the case's own columns.
+    initial_state
+        ``f(case) -> (q0, qd0)``: the initial state from a case's values (a dict by
+        column), e.g. a mechanism's state from an angle. Runs where the case runs:
+        for Dask, it must be picklable (a module-level function, or any function
+        cloudpickle takes).
+    outputs
+        Derived quantities to keep, ``name -> f(system, traj)`` giving one number
+        per output time (a tip position...); ``system`` is the worker's copy.
+    keep
+        Trajectory quantities to keep per time: any of ``q``, ``qd``, ``qdd``,
+        ``multipliers``, ``constraint_forces``, ``energy``, ``kinetic_energy``,
+        ``potential_energy``, ``jacobi_integral``, ``position_residual``,
+        ``velocity_residual`` (default: the first six but ``qdd``, and the residuals).
+    scheduler
+        ``"auto"`` (default: the first case runs here; if the others would take over
+        :data:`AUTO_PARALLEL_SECONDS` alone, a Dask ``LocalCluster`` of one process
+        per core runs them, else they run here too), ``"serial"``, ``"threads"``,
+        ``"processes"`` (a local Dask cluster) or ``"dask"`` (the ``client`` given).
+    client
+        A ``dask.distributed.Client`` of any cluster (implies ``scheduler="dask"``).
+    workers
+        Threads or local processes (default: one per core).
+    batch_size
+        Cases per task (default: about four tasks per worker, at most 64); also the
+        chunk of a store along ``case``.
+    store
+        A path ending in ``.zarr`` or ``.nc``: the arrays are written there as cases
+        finish and read back lazily, so the client holds one block at a time.
+    overwrite
+        Replace an existing ``store``.
+    progress
+        A progress bar (tqdm; it appears once the ensemble has run two seconds).
+    options
+        ``simulate``'s other keywords (``rtol``, ``method``, ``backend``...), checked
+        once here.
+
+    Returns
+    -------
+    EnsembleResult
+        ``.dataset`` (xarray), ``.summary`` (pandas), ``.failed``, ``.retry()``,
+        ``.quantile()``, ``.mean()``. Failed, lost or unreached cases raise an
+        :class:`~dalembert.errors.EnsembleWarning` saying how many and why.
+
+    Raises
+    ------
+    EnsembleError
+        A case column that names nothing, no cases, a bad scheduler, keep, output
+        or store; ``ValueError`` for ``simulate``'s options, as ``simulate`` does.
+
+    Examples
+    --------
+    The pendulum's period grows with its length; four lengths, run here:
+
+    >>> from dalembert.examples import load
+    >>> from dalembert.ensemble import grid
+    >>> pendulum = load("pendulum").build()
+    >>> result = simulate_many(pendulum, (0, 1), grid(l=[0.5, 1.0, 1.5, 2.0]),
+    ...                        initial_state=lambda case: ({"x": 0.1 * case["l"],
+    ...                                                     "y": -case["l"]}, None),
+    ...                        scheduler="serial", progress=False)
+    >>> result.dataset["q"].dims, result.summary["status"].tolist()
+    (('case', 'time', 'coordinate'), ['finished', 'finished', 'finished', 'finished'])
+    """
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        # a spawned process importing the main script (as multiprocessing's own check)
+        raise EnsembleError(
+            "simulate_many was called while a worker process was importing the script that "
+            "started it: put the script's code under `if __name__ == '__main__':`")
+    arguments = dict(q0=q0, qd0=qd0, t_eval=t_eval, parameters=parameters,
+                     initial_state=initial_state, outputs=outputs, keep=keep,
+                     scheduler=scheduler, client=client, workers=workers,
+                     batch_size=batch_size, progress=progress, **options)
+    run = _Run(system, t_span, cases, arguments, store, overwrite)
+    return run.execute(list(range(len(run.cases))), None)
+
+
+class _Run:
+    """One ensemble's checked inputs; :meth:`execute` runs some of its cases."""
+
+    def __init__(self, system: System, t_span: Sequence[float], cases: CaseTable,
+                 arguments: dict[str, Any], store: str | os.PathLike | None,
+                 overwrite: bool) -> None:
+        self.system, self.t_span, self.arguments = system, t_span, arguments
+        self.store = None if store is None else Path(store)
+        self.overwrite = overwrite
+        self._names: dict[tuple[str, ...], tuple[str, ...]] = {}  # shared by packed numbers
+        a = dict(arguments)
+        self.cases = read_cases(cases, [p.name for p in system.parameters],
+                                system.coordinate_names, a.pop("initial_state"))
+        self.settings = self._settings(a)
+
+    def _settings(self, a: dict[str, Any]) -> CaseSettings:
+        names = self.system.coordinate_names
+        self.scheduler = _scheduler(a.pop("scheduler"), a.pop("client"))
+        self.client = self.arguments["client"]
+        self.workers = _positive(a.pop("workers"), "workers")
+        self.batch_size = _positive(a.pop("batch_size"), "batch_size")
+        self.progress = a.pop("progress")
+        if not isinstance(self.progress, bool):
+            raise EnsembleError(f"progress must be True or False, got {self.progress!r}")
+        q0, qd0, t_eval = a.pop("q0"), a.pop("qd0"), a.pop("t_eval")
+        parameters, outputs, keep = a.pop("parameters"), a.pop("outputs"), a.pop("keep")
+        initial_state = self.arguments["initial_state"]
+        for name, instead in _NOT_OPTIONS.items():
+            if name in a:
+                raise EnsembleError(f"simulate_many takes no {name}= per simulation; use "
+                                    f"{instead}")
+        checked = simulation_options(self.t_span, t_eval=t_eval, state_size=2 * len(names),
+                                     **a)  # simulate's own checks and messages, once
+        times = checked.output.t_eval
+        if times is None:
+            times = np.linspace(*checked.t_span, DEFAULT_POINTS)
+        keep = _keep(keep)
+        outputs = _outputs(outputs, keep)
+        return CaseSettings(
+            checked.t_span, np.asarray(times, dtype=float), a,
+            coordinate_values(q0, names, "q0"), coordinate_values(qd0, names, "qd0"),
+            parameter_values(self.system.parameters, parameters), self.cases.columns,
+            initial_state, keep, outputs)
+
+    # -- running ---------------------------------------------------------------------
+    def execute(self, indices: list[int], before: EnsembleResult | None) -> EnsembleResult:
+        """Run the cases ``indices``; ``before``: the result a retry updates."""
+        if before is None and self.store is not None:
+            check_store(self.store, self.overwrite)  # before anything runs or starts
+        outcomes: dict[int, CaseOutcome] = {}
+        scheduler = self.scheduler
+        if scheduler == "auto":
+            scheduler = self._auto(indices, outcomes)
+        chunk = self.batch_size or _batch_size(len(indices), self._workers(scheduler))
+        layout = Layout(self.cases.table, self.settings.t_eval, self.system.coordinate_names,
+                        self.system.constraint_names, self.settings.keep,
+                        tuple(self.settings.outputs), chunk)
+        out = sink(layout, self.store, indices, self.overwrite,
+                   None if before is None else before.dataset)
+        self._take(list(outcomes.values()), outcomes, out, None)  # the case auto ran here
+        interrupted = any(o.status == "interrupted" for o in outcomes.values())
+        bar = _bar(len(indices), self.progress)
+        bar.update(len(outcomes))
+        backend: Backend | None = None
+        try:
+            if not interrupted:
+                backend = self._backend(scheduler)
+                todo = [i for i in indices if i not in outcomes]
+                found = backend.completed(_batches(todo, chunk, self.cases.values))
+                try:
+                    for done in found:
+                        self._take(done, outcomes, out, bar)
+                        if any(o.status == "interrupted" for o in done):
+                            raise KeyboardInterrupt  # Ctrl-C inside a simulation here
+                finally:
+                    found.close()
+        except KeyboardInterrupt:
+            interrupted = True
+            if backend is not None:
+                self._take(backend.stop(), outcomes, out, bar)
+        finally:
+            if backend is not None:
+                backend.close()
+            bar.close()
+        for i in indices:
+            if i not in outcomes:
+                outcomes[i] = not_run_outcome(i)
+        name = scheduler if backend is None else backend.name
+        return self._result(indices, outcomes, out, name, interrupted, before)
+
+    def _workers(self, scheduler: str) -> int:
+        """How many cases run at once on ``scheduler`` (to size the batches)."""
+        if scheduler == "serial":
+            return 1
+        if scheduler == "dask":
+            return max(1, sum(self.client.nthreads().values()))
+        return self.workers or os.cpu_count() or 1
+
+    def _auto(self, todo: list[int], outcomes: dict[int, CaseOutcome]) -> str:
+        """Run the first case here, and choose where the others run from its time."""
+        if len(todo) < 2 or (os.cpu_count() or 1) < 2:
+            return "serial"
+        first = Serial(self.system, self.settings, list(self.cases.table.columns))
+        start = time.perf_counter()
+        try:
+            for done in first.completed([Batch(np.array(todo[:1]),
+                                               self.cases.values[todo[:1]])]):
+                outcomes.update((o.index, o) for o in done)
+        except KeyboardInterrupt:  # execute() stops at once on this record
+            outcomes.update((o.index, o) for o in first.stop())
+            outcomes.setdefault(todo[0], CaseOutcome(todo[0], "interrupted",
+                                                     "interrupted by the user"))
+            return "serial"
+        rest = (time.perf_counter() - start) * (len(todo) - 1)
+        return "processes" if rest > AUTO_PARALLEL_SECONDS else "serial"
+
+    def _backend(self, scheduler: str) -> Backend:
+        names = list(self.cases.table.columns)
+        if scheduler == "serial":
+            return Serial(self.system, self.settings, names)
+        if scheduler == "threads":
+            return Threads(self.system, self.settings, names, self.workers)
+        return Dask(self.system, self.settings, names,
+                    self.client if scheduler == "dask" else None, self.workers)
+
+    def _take(self, done: list[CaseOutcome], outcomes: dict[int, CaseOutcome], out: Any,
+              bar: Any) -> None:
+        out.write(done)
+        for o in done:
+            o.arrays = {}  # the sink has them: the client keeps each case's summary only
+            if isinstance(o.numbers, dict):
+                o.numbers = pack_numbers(o.numbers, self._names)
+            outcomes[o.index] = o
+        if bar is not None:
+            bar.update(len(done))
+
+    def _result(self, indices: list[int], outcomes: dict[int, CaseOutcome], out: Any,
+                scheduler: str, interrupted: bool,
+                before: EnsembleResult | None) -> EnsembleResult:
+        dataset = out.dataset()
+        if before is None:
+            summary = summary_table(self.cases.table, [outcomes[i] for i in indices])
+        else:
+            rows = summary_table(self.cases.table.iloc[indices], [outcomes[i] for i in indices])
+            rows.index = indices
+            rows.index.name = "case"
+            summary = before.summary.copy()
+            for column in rows.columns:  # a column may be new (first final values)
+                if column not in summary.columns:
+                    summary[column] = np.nan
+            summary.loc[indices, rows.columns] = rows
+        _warn(summary.loc[indices], interrupted)
+        return EnsembleResult(dataset, summary, scheduler, interrupted, self._retry)
+
+    def _retry(self, before: EnsembleResult, indices: list[int],
+               changes: dict[str, Any]) -> EnsembleResult:
+        fixed = {"t_eval", "keep", "outputs", "cases", "store"} & set(changes)
+        if fixed:
+            raise EnsembleError(f"retry cannot change {', '.join(sorted(fixed))} (the results' "
+                                "layout); run simulate_many again for that")
+        for i in indices:
+            if not 0 <= i < len(self.cases):
+                raise EnsembleError(f"retry: there is no case {i} (cases 0..{len(self.cases) - 1})")
+        again = _Run(self.system, self.t_span, self.cases.table, {**self.arguments, **changes},
+                     self.store, self.overwrite)
+        return again.execute(sorted(set(indices)), before)
+
+
+def _warn(summary: Any, interrupted: bool) -> None:
+    bad = summary[~summary["status"].isin(sorted(SUCCESS))]
+    if not len(bad):
+        return
+    counts = ", ".join(f"{n} {s}" for s, n in bad["status"].value_counts().items())
+    first = bad.iloc[0]
+    head = (f"the ensemble was interrupted: {counts} of {len(summary)} cases"
+            if interrupted else f"{len(bad)} of {len(summary)} cases did not succeed ({counts})")
+    warnings.warn(f"{head}; the first, case {bad.index[0]}: {first['message']}. "
+                  "result.failed lists them, result.summary says why, result.retry() runs "
+                  "them again", EnsembleWarning, stacklevel=4)
+
+
+def _batches(indices: list[int], chunk: int, values: np.ndarray) -> list[Batch]:
+    """Consecutive cases of one chunk per batch (a chunk of the store is then written
+    from one place)."""
+    groups: dict[int, list[int]] = {}
+    for i in indices:
+        groups.setdefault(i // chunk, []).append(i)
+    return [Batch(np.array(g), values[g]) for g in groups.values()]
+
+
+def _batch_size(cases: int, workers: int) -> int:
+    return max(1, min(MAX_BATCH, math.ceil(cases / (workers * BATCHES_PER_WORKER))))
+
+
+def _scheduler(scheduler: Any, client: Any) -> str:
+    if scheduler not in SCHEDULERS:
+        raise EnsembleError(f"scheduler must be one of {', '.join(map(repr, SCHEDULERS))}; got "
+                            f"{scheduler!r}")
+    if client is not None:
+        if scheduler not in ("auto", "dask"):
+            raise EnsembleError(f"a client is given with scheduler={scheduler!r}; a client "
+                                "runs the cases on its cluster (scheduler='dask')")
+        return "dask"
+    if scheduler == "dask":
+        raise EnsembleError("scheduler='dask' needs client=dask.distributed.Client(...); "
+                            "scheduler='processes' starts a local cluster")
+    return scheduler
+
+
+def _positive(value: Any, name: str) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise EnsembleError(f"{name} must be a positive whole number or None, got {value!r}")
+    return int(value)
+
+
+def _keep(keep: Any) -> tuple[str, ...]:
+    if isinstance(keep, str):
+        keep = (keep,)
+    found = tuple(keep)
+    for name in found:
+        if name not in QUANTITIES:
+            raise EnsembleError(f"keep names {name!r}, which is not a trajectory quantity "
+                                f"(they are {', '.join(QUANTITIES)})")
+    return tuple(dict.fromkeys(found))
+
+
+def _outputs(outputs: Any, keep: tuple[str, ...]) -> dict[str, Output]:
+    if outputs is None:
+        return {}
+    if not isinstance(outputs, Mapping):
+        raise EnsembleError("outputs must be a dict {name: f(system, traj)}")
+    for name, fn in outputs.items():
+        if not isinstance(name, str) or not name.isidentifier():
+            raise EnsembleError(f"output names must be identifiers, got {name!r}")
+        if name in QUANTITIES or name in keep:
+            raise EnsembleError(f"the output {name!r} has the name of a trajectory quantity; "
+                                "rename it")
+        if not callable(fn):
+            raise EnsembleError(f"the output {name!r} must be a function f(system, traj)")
+    return dict(outputs)
+
+
+def _bar(total: int, show: bool) -> Any:
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, unit="case", disable=not show, delay=2.0, desc="ensemble")

@@ -1,0 +1,292 @@
+"""Where an ensemble's arrays go as cases finish: memory, a Zarr store or a netCDF file.
+
+Every case reports the same quantities at the same output times, so the results
+are dense arrays over ``(case, time[, coordinate | constraint])``. The layout is
+fixed before the first case runs (:class:`Layout`). In memory, the arrays are
+filled in place. On disk, the file is created with every variable empty, each
+finished block of cases is written into it as it arrives and dropped, and the
+result reads the file back lazily (Dask arrays, chunked as written): the client
+holds one block at a time, however many cases there are. The cases' columns are
+coordinates along ``case``; ``status`` holds each case's code (its attributes
+``flag_values`` / ``flag_meanings`` name them, CF-style), and cases that never
+ran keep the code of ``"not-run"`` and NaN values.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import EnsembleError
+from .faults import CODE, STATUSES, CaseOutcome
+from .worker import QUANTITIES
+
+#: Per-case numbers stored beside the arrays (the rest of the summary is a table).
+CASE_NUMBERS = ("t_end", "energy_error", "seconds")
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The variables of an ensemble's dataset and their shapes.
+
+    Parameters
+    ----------
+    cases
+        The case table (its columns become coordinates along ``case``).
+    t_eval
+        The output times.
+    coordinates, constraints
+        The model's names.
+    keep
+        Trajectory quantities (:data:`~dalembert.ensemble.worker.QUANTITIES`).
+    outputs
+        Names of derived quantities (one number per time).
+    chunk
+        Cases per block (the file's chunk along ``case``).
+    """
+
+    cases: Any
+    t_eval: np.ndarray
+    coordinates: tuple[str, ...]
+    constraints: tuple[str, ...]
+    keep: tuple[str, ...]
+    outputs: tuple[str, ...]
+    chunk: int
+
+    @property
+    def size(self) -> int:
+        return len(self.cases)
+
+    def variables(self) -> dict[str, tuple[tuple[str, ...], tuple[int, ...]]]:
+        """``name -> (dimensions, shape)`` of every per-time variable."""
+        sizes = {"coordinate": len(self.coordinates), "constraint": len(self.constraints)}
+        found = {}
+        for name in (*self.keep, *self.outputs):
+            extra = QUANTITIES.get(name, ())
+            dims = ("case", "time", *extra)
+            found[name] = (dims, (self.size, len(self.t_eval), *(sizes[d] for d in extra)))
+        return found
+
+    def dataset(self, data: dict[str, Any]):
+        """An ``xarray.Dataset`` of this layout holding ``data`` (arrays by variable)."""
+        import xarray as xr
+
+        coords: dict[str, Any] = {"case": np.arange(self.size), "time": self.t_eval,
+                                  "coordinate": list(self.coordinates),
+                                  "constraint": list(self.constraints)}
+        for name in self.cases.columns:
+            coords[name] = ("case", self.cases[name].to_numpy(dtype=float))
+        variables: dict[str, tuple] = {name: (dims, data[name])
+                                       for name, (dims, _) in self.variables().items()}
+        variables["status"] = (("case",), data["status"], _status_attrs())
+        for name in CASE_NUMBERS:
+            variables[name] = (("case",), data[name])
+        return xr.Dataset(variables, coords=coords)
+
+    def check_names(self) -> None:
+        """A case column must not take a variable's or a dimension's name."""
+        taken = {*self.variables(), "status", *CASE_NUMBERS, "case", "time", "coordinate",
+                 "constraint"}
+        for name in self.cases.columns:
+            if name in taken:
+                raise EnsembleError(f"the case column {name!r} has the name of a variable or "
+                                    "dimension of the results; rename it")
+
+
+def _status_attrs() -> dict[str, Any]:
+    return {"flag_values": list(range(len(STATUSES))), "flag_meanings": " ".join(STATUSES),
+            "long_name": "what became of the case"}
+
+
+class Sink:
+    """Takes finished cases (:meth:`write`), gives the dataset at the end (:meth:`dataset`)."""
+
+    def __init__(self, layout: Layout, before: Any = None) -> None:
+        self.layout = layout
+        self.status = np.full(layout.size, CODE["not-run"], dtype=np.int8)
+        self.numbers = {name: np.full(layout.size, np.nan) for name in CASE_NUMBERS}
+        if before is not None:  # a retry: the other cases keep what they had
+            self.status[:] = before["status"].values
+            for name in CASE_NUMBERS:
+                self.numbers[name][:] = before[name].values
+
+    def write(self, outcomes: Sequence[CaseOutcome]) -> None:
+        for o in outcomes:
+            self.status[o.index] = CODE[o.status]
+            self.numbers["seconds"][o.index] = o.seconds
+            given = dict(o.numbers.items())
+            for name in ("t_end", "energy_error"):
+                self.numbers[name][o.index] = given.get(name, np.nan)
+        self._write_arrays([o for o in outcomes if o.arrays])
+
+    def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
+        raise NotImplementedError
+
+    def dataset(self):
+        raise NotImplementedError
+
+
+class MemorySink(Sink):
+    """Every array held in memory, filled in place."""
+
+    def __init__(self, layout: Layout, before: Any = None) -> None:
+        super().__init__(layout, before)
+        self.data = {name: np.full(shape, np.nan) if before is None
+                     else np.array(before[name].values, dtype=float)
+                     for name, (_, shape) in layout.variables().items()}
+
+    def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
+        for o in outcomes:
+            for name, values in self.data.items():
+                got = o.arrays[name]
+                values[o.index] = np.nan
+                values[o.index, : len(got)] = got
+
+    def dataset(self):
+        return self.layout.dataset({**self.data, "status": self.status, **self.numbers})
+
+
+class FileSink(Sink):
+    """A Zarr store or a netCDF file, created empty, written block by block.
+
+    Outcomes are gathered per block of :attr:`Layout.chunk` cases and a block is
+    written once every case of it that this run has is in (each chunk is then
+    written once, from one place).
+    """
+
+    def __init__(self, layout: Layout, path: Path, expected: Sequence[int],
+                 overwrite: bool, before: Any = None) -> None:
+        super().__init__(layout, before)
+        self.path, self.kind = path, _kind(path)
+        if before is not None and self.kind == "netcdf":
+            before.close()  # HDF5 opens a file once: the earlier result reopens it to read
+        if before is None:
+            check_store(path, overwrite)
+            self._create()
+        self.expected: dict[int, int] = {}
+        for i in expected:
+            self.expected[i // layout.chunk] = self.expected.get(i // layout.chunk, 0) + 1
+        self.pending: dict[int, list[tuple[int, dict[str, np.ndarray]]]] = {}
+
+    def _create(self) -> None:
+        import dask.array as da
+
+        layout = self.layout
+        data: dict[str, Any] = {}
+        for name, (_, shape) in layout.variables().items():
+            chunks = (layout.chunk, *shape[1:])
+            data[name] = da.full(shape, np.nan, chunks=chunks)
+        data["status"] = self.status  # written now, with the code of "not-run"
+        data.update({name: da.full(layout.size, np.nan, chunks=layout.chunk)
+                     for name in CASE_NUMBERS})
+        ds = layout.dataset(data)
+        if self.kind == "zarr":
+            ds.to_zarr(self.path, mode="w", compute=False, zarr_format=2)
+        else:
+            ds.to_netcdf(self.path, engine="h5netcdf", compute=False)
+
+    def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
+        chunk = self.layout.chunk
+        for o in outcomes:  # the arrays, not the outcome: the caller drops them from it
+            self.pending.setdefault(o.index // chunk, []).append((o.index, o.arrays))
+        full = [k for k, got in self.pending.items() if len(got) >= self.expected.get(k, 0)]
+        for k in full:
+            self._flush(k)
+
+    def _flush(self, k: int) -> None:
+        got = self.pending.pop(k)
+        start = k * self.layout.chunk
+        stop = min(start + self.layout.chunk, self.layout.size)
+        with self._open() as out:
+            for name, (_, shape) in self.layout.variables().items():
+                block = (np.array(out[name][start:stop]) if len(got) < stop - start
+                         else np.full((stop - start, *shape[1:]), np.nan))
+                for index, arrays in got:
+                    values = arrays[name]
+                    block[index - start] = np.nan
+                    block[index - start, : len(values)] = values
+                out[name][start:stop] = block
+
+    def finish(self) -> None:
+        """Write what is still pending and the per-case numbers."""
+        for k in list(self.pending):
+            self._flush(k)
+        with self._open() as out:
+            out["status"][:] = self.status
+            for name, values in self.numbers.items():
+                out[name][:] = values
+
+    def _open(self) -> Any:
+        if self.kind == "zarr":
+            import zarr
+
+            return _Closing(zarr.open_group(str(self.path), mode="r+"))
+        import h5netcdf
+
+        return h5netcdf.File(self.path, "a")
+
+    def dataset(self):
+        import xarray as xr
+
+        self.finish()
+        if self.kind == "zarr":
+            return xr.open_zarr(self.path)
+        return xr.open_dataset(self.path, engine="h5netcdf", chunks={})
+
+
+class _Closing:
+    """A Zarr group as a context manager (it holds nothing to close)."""
+
+    def __init__(self, group: Any) -> None:
+        self.group = group
+
+    def __enter__(self) -> Any:
+        return self.group
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def check_store(path: Path, overwrite: bool) -> None:
+    """Refuse a store path of an unknown kind, or one that exists (unless ``overwrite``)."""
+    _kind(path)
+    if path.exists() and not overwrite:
+        raise EnsembleError(f"{path} exists; pass overwrite=True to replace it, or another "
+                            "path")
+
+
+def _kind(path: Path) -> str:
+    if path.suffix == ".zarr":
+        return "zarr"
+    if path.suffix in (".nc", ".nc4", ".netcdf"):
+        return "netcdf"
+    raise EnsembleError(f"store={str(path)!r}: a store path must end in .zarr (a Zarr store) or "
+                        ".nc (a netCDF-4 file)")
+
+
+def sink(layout: Layout, store: str | Path | None, expected: Sequence[int],
+         overwrite: bool = False, before: Any = None) -> Sink:
+    """The sink for ``store`` (``None``: memory).
+
+    Parameters
+    ----------
+    layout
+        The dataset's layout.
+    store
+        A path ending in ``.zarr`` or ``.nc``, or ``None``.
+    expected
+        The cases this run will write (a block is written once all of its are in).
+    overwrite
+        Replace an existing store.
+    before
+        For a retry, the dataset so far: the cases not run again keep its values
+        (a store is then written in place).
+    """
+    layout.check_names()
+    if store is None:
+        return MemorySink(layout, before)
+    return FileSink(layout, Path(store), expected, overwrite, before)

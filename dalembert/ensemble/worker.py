@@ -1,0 +1,220 @@
+"""Running cases where the work is done: one case, or a batch of them, on a System.
+
+:class:`CaseSettings` is what every case shares (the span, output times, the
+checked options of ``simulate``, the base initial state and parameters, what to
+keep); a case adds its row of the case table. The same function runs a batch in
+the caller's process, on a thread or on a Dask worker, so a case gives the same
+answer wherever it runs.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import threading
+import time
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from contextlib import nullcontext
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..system import System
+from ..trajectory import Trajectory
+from .cases import CaseColumns
+from .faults import CaseOutcome, error_outcome
+
+#: Quantities a trajectory has at every output time, and their dimensions beyond
+#: ``(case, time)`` (``coordinate`` or ``constraint``; none for a scalar).
+QUANTITIES: dict[str, tuple[str, ...]] = {
+    "q": ("coordinate",), "qd": ("coordinate",), "qdd": ("coordinate",),
+    "multipliers": ("constraint",), "constraint_forces": ("coordinate",),
+    "energy": (), "kinetic_energy": (), "potential_energy": (), "jacobi_integral": (),
+    "position_residual": (), "velocity_residual": (),
+}
+#: Kept unless the caller says otherwise.
+DEFAULT_KEEP = ("q", "qd", "multipliers", "constraint_forces", "energy",
+                "position_residual", "velocity_residual")
+
+#: ``f(system, traj) -> one number per output time``: a derived quantity to keep.
+Output = Callable[[System, Trajectory], Any]
+
+
+@dataclass(frozen=True)
+class CaseSettings:
+    """What every case of an ensemble shares.
+
+    Parameters
+    ----------
+    t_span, t_eval
+        The span and the output times (every case reports at these times).
+    options
+        ``simulate``'s other keywords, checked once before the ensemble starts.
+    q0, qd0
+        The base initial state, in coordinate order (case columns override it).
+    parameters
+        Base parameter values by name (case columns override them).
+    columns
+        What each case column is (:class:`~dalembert.ensemble.cases.CaseColumns`).
+    initial_state
+        ``f(case) -> (q0, qd0)``, or ``None``.
+    keep
+        The trajectory quantities kept per time (names of :data:`QUANTITIES`).
+    outputs
+        Derived quantities to keep, ``name -> f(system, traj)``.
+    """
+
+    t_span: tuple[float, float]
+    t_eval: np.ndarray
+    options: Mapping[str, Any]
+    q0: np.ndarray
+    qd0: np.ndarray
+    parameters: Mapping[str, float]
+    columns: CaseColumns
+    initial_state: Callable[[dict[str, float]], Any] | None = None
+    keep: tuple[str, ...] = DEFAULT_KEEP
+    outputs: Mapping[str, Output] = field(default_factory=dict)
+
+
+def run_batch(system: System, settings: CaseSettings,
+              indices: Sequence[int] | np.ndarray, rows: np.ndarray, names: Sequence[str],
+              stop: threading.Event | None = None,
+              record_warnings: bool = True) -> list[CaseOutcome]:
+    """Run the cases ``indices`` (their values ``rows``, columns ``names``) one after
+    the other; each one's failure is recorded and the next one runs.
+
+    Parameters
+    ----------
+    system
+        The model.
+    settings
+        What the cases share.
+    indices, rows, names
+        The cases' numbers, their rows of the case table and its column names.
+    stop
+        Set when the ensemble is interrupted: the batch ends after the current case.
+    record_warnings
+        Record each case's warnings in its outcome; ``False`` on threads, where
+        ``warnings.catch_warnings`` is not safe (the caller silences them once).
+    """
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    done = []
+    for index, row in zip(indices, rows):
+        if stop is not None and stop.is_set():
+            break
+        case = {name: float(v) for name, v in zip(names, row)}
+        done.append(run_case(system, settings, int(index), case, worker, record_warnings))
+    return done
+
+
+def run_case(system: System, settings: CaseSettings, index: int, case: dict[str, float],
+             worker: str = "", record_warnings: bool = True) -> CaseOutcome:
+    """One case: its initial state and parameters, its simulation, what is kept.
+
+    Parameters
+    ----------
+    system
+        The model.
+    settings
+        What the cases share.
+    index
+        The case's number.
+    case
+        Its row, ``{column: value}``.
+    worker
+        Where it runs (for the summary).
+    record_warnings
+        Keep the warnings the case raises in its outcome (one line each).
+
+    Examples
+    --------
+    >>> from dalembert.examples import load
+    >>> from dalembert.ensemble.cases import CaseColumns
+    >>> pendulum = load("pendulum").build()
+    >>> settings = CaseSettings((0.0, 1.0), np.array([0.0, 1.0]), {}, np.array([1.0, 0.0]),
+    ...                         np.zeros(2), {}, CaseColumns(("l",), (), (), ()))
+    >>> outcome = run_case(pendulum, settings, 0, {"l": 1.0})
+    >>> outcome.status, outcome.arrays["q"].shape
+    ('finished', (2, 2))
+    """
+    start = time.perf_counter()
+    caught: list[warnings.WarningMessage] = []
+    with warnings.catch_warnings(record=True) if record_warnings else nullcontext() as got:
+        if got is not None:
+            warnings.simplefilter("always")
+            caught = got
+        try:
+            q0, qd0, parameters = _inputs(system, settings, case)
+            traj = system.simulate(settings.t_span, q0, qd0, parameters=parameters,
+                                   t_eval=settings.t_eval, **settings.options)
+            arrays = _kept(system, settings, traj)
+        except Exception as exc:  # any failure of one case is recorded, never raised
+            return error_outcome(index, exc, time.perf_counter() - start, worker)
+    seconds = time.perf_counter() - start
+    noted = dict.fromkeys(f"{w.category.__name__}: {str(w.message).splitlines()[0]}"
+                          for w in caught)
+    return CaseOutcome(index, str(traj.status), traj.message, seconds, worker, arrays,
+                       _numbers(traj, arrays, settings), "\n".join(noted))
+
+
+def _inputs(system: System, settings: CaseSettings,
+            case: dict[str, float]) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """The case's ``q0``, ``qd0`` (coordinate order) and parameter values."""
+    from ..model.values import coordinate_values
+
+    names = system.coordinate_names
+    q0, qd0 = settings.q0.copy(), settings.qd0.copy()
+    if settings.initial_state is not None:
+        made = settings.initial_state(dict(case))
+        if not (isinstance(made, tuple) and len(made) == 2):
+            raise TypeError("initial_state(case) must return (q0, qd0), got "
+                            f"{type(made).__name__}")
+        q0 = coordinate_values(made[0], names, "q0 from initial_state")
+        qd0 = coordinate_values(made[1], names, "qd0 from initial_state")
+    at = {name: i for i, name in enumerate(names)}
+    cols = settings.columns
+    for name in cols.positions:
+        q0[at[name]] = case[name]
+    for name in cols.velocities:
+        qd0[at[name[: -len("_dot")]]] = case[name]
+    parameters = dict(settings.parameters)
+    parameters.update({name: case[name] for name in cols.parameters})
+    return q0, qd0, parameters
+
+
+def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str, np.ndarray]:
+    """The kept quantities at the output times ``traj`` reached (a prefix of ``t_eval``)."""
+    k = len(traj.t)
+    if not np.array_equal(traj.t, settings.t_eval[:k]):
+        raise RuntimeError("the trajectory's times are not the ensemble's output times")
+    arrays = {"t": np.asarray(traj.t, dtype=float)}
+    for name in settings.keep:
+        arrays[name] = np.asarray(getattr(traj, name), dtype=float)
+    for name, fn in settings.outputs.items():
+        value = np.asarray(fn(system, traj), dtype=float) if k else np.zeros(0)
+        if value.shape != (k,):
+            raise ValueError(f"the output {name!r} must give one number per output time "
+                             f"({k}), got shape {value.shape}")
+        arrays[name] = value
+    return arrays
+
+
+def _numbers(traj: Trajectory, arrays: dict[str, np.ndarray],
+             settings: CaseSettings) -> dict[str, float]:
+    """The case's line of the summary: where it ended, its errors, its final values."""
+    numbers: dict[str, float] = {"t_end": float(traj.t[-1]) if len(traj.t) else np.nan}
+    e = traj.energy
+    finite = len(e) and np.all(np.isfinite(e))
+    numbers["energy_error"] = (float(np.abs(e - e[0]).max() / max(abs(e[0]), 1e-300))
+                               if finite else np.nan)
+    for name in ("position_residual", "velocity_residual"):
+        values = getattr(traj, name)
+        numbers[f"max_{name}"] = float(values.max()) if len(values) else np.nan
+    numbers["nfev"] = float(traj.stats.get("nfev", np.nan))
+    if len(traj.t):
+        numbers.update({f"final_{name}": float(v)
+                        for name, v in zip(traj.coordinate_names, traj.q[-1])})
+        numbers.update({f"final_{name}": float(arrays[name][-1]) for name in settings.outputs})
+    return numbers
