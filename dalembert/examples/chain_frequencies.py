@@ -86,7 +86,7 @@ def study(system: System, lengths: np.ndarray = LENGTHS) -> np.ndarray:
     """The natural frequencies (rows: lengths) from ``linearize`` at each length."""
     rows = []
     for length in lengths:
-        guess = {}
+        guess: dict[str, float] = {}
         for k in range(N_LINKS):
             guess |= {f"link{k + 1}_y": -(k + 0.5) * length + 0.01, f"link{k + 1}_theta": 0.02}
         rest = system.equilibrium(guess, parameters={LENGTH: length})

@@ -38,6 +38,7 @@ from .native import NATIVE_METHODS, NotApplicable, native_solver
 from .nonfinite import Diagnosis, nonfinite_diagnosis
 from .outputs import evaluate_outputs
 from .projection import StepProjector
+from .singular_watch import Singularity, singular_diagnosis
 from .step_control import ControlledSteps, controlled_class
 
 Loop = Literal["c", "python"]
@@ -74,6 +75,10 @@ class SimulationPlan:
     diagnose
         ``diagnose(t, y)``: what is not finite at a state, for the message of a run
         that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
+    singular
+        ``singular(t, y)``: the singular configuration of the constraints at a state,
+        for the message of a run whose steps collapse there
+        (:mod:`~dalembert.solvers.singular_watch`).
     """
 
     options: SimulationOptions
@@ -88,6 +93,7 @@ class SimulationPlan:
     outputs: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]] = field(repr=False)
     events: tuple[Callable, ...] = field(repr=False)
     diagnose: Diagnosis = field(repr=False)
+    singular: Singularity | None = field(repr=False, default=None)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
 
     @property
@@ -102,6 +108,7 @@ class SimulationPlan:
             self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
+            singular=self.singular,
             **self.solver_options)
 
 
@@ -176,7 +183,8 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
         rhs=rhs, project=project, outputs=outputs,
         events=tuple(_state_event(e, n) for e in output.events), parameters=num.p,
-        diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs))
+        diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
+        singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None)
 
 
 def _state_event(event: Callable, n: int) -> Callable:

@@ -68,9 +68,7 @@ class KKTSolver:
 
     ``kept`` (independent rows, see :func:`~dalembert.numerics.rank.constraint_rank`)
     solves the reduced system of those rows, as :func:`~dalembert.solvers.kkt.solve_kkt`
-    does; ``dense`` forces (``True``) or forbids (``False``) the dense path. ``decouple``
-    adds the ``(2, 2)`` diagonal to the pattern, so that :meth:`solve_off` can leave
-    rows out at no cost in structure (near a singular configuration).
+    does; ``dense`` forces (``True``) or forbids (``False``) the dense path.
 
     >>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
     ...                         np.array([0, 0]), np.array([0, 1]))
@@ -79,8 +77,8 @@ class KKTSolver:
     """
 
     def __init__(self, pattern: SparsePattern, kept: np.ndarray | None = None,
-                 dense: bool | None = None, decouple: bool = False) -> None:
-        self.pattern, self.decouple = pattern, decouple
+                 dense: bool | None = None) -> None:
+        self.pattern = pattern
         self.kept = None if kept is None else np.asarray(kept, dtype=np.intp)
         n = pattern.n
         rows = np.arange(pattern.m) if self.kept is None else self.kept
@@ -93,14 +91,10 @@ class KKTSolver:
         a_cols = pattern.A_cols[self._a_sel]
         self.size = n + self.mk
         # Every entry of K: row, column, and where its value is in ``[M values, A values]``.
-        n_m, n_a = len(pattern.M_rows), len(pattern.A_rows)
-        diagonal = n + np.arange(self.mk if decouple else 0)
-        self._rows = np.concatenate([pattern.M_rows, a_cols, n + a_rows, diagonal]
-                                    ).astype(np.intp)
-        self._cols = np.concatenate([pattern.M_cols, n + a_rows, a_cols, diagonal]
-                                    ).astype(np.intp)
-        self._src = np.concatenate([np.arange(n_m), n_m + self._a_sel, n_m + self._a_sel,
-                                    n_m + n_a + np.arange(len(diagonal))])
+        n_m = len(pattern.M_rows)
+        self._rows = np.concatenate([pattern.M_rows, a_cols, n + a_rows]).astype(np.intp)
+        self._cols = np.concatenate([pattern.M_cols, n + a_rows, a_cols]).astype(np.intp)
+        self._src = np.concatenate([np.arange(n_m), n_m + self._a_sel, n_m + self._a_sel])
         self._data_order, self._indices, self._indptr = _csc_map(self._rows, self._cols,
                                                                  self.size)
         self._csc_src = self._src[self._data_order]
@@ -129,17 +123,12 @@ class KKTSolver:
         """``qdd`` alone (no multipliers computed with dependent constraints)."""
         return self._solve(Mv, f, Av, c, multipliers=False)[0]
 
-    def factor(self, Mv: np.ndarray, Av: np.ndarray, diagonal: np.ndarray | None = None):
-        """A function ``rhs -> K^-1 rhs`` for the KKT matrix of these values (with
-        ``diagonal`` as its ``(2, 2)`` block, one value per kept row, if ``decouple``)."""
-        if self.decouple and diagonal is None:
-            diagonal = np.zeros(self.mk)
+    def factor(self, Mv: np.ndarray, Av: np.ndarray):
+        """A function ``rhs -> K^-1 rhs`` for the KKT matrix of these values."""
         if self.method == "dense":
             K = kkt_matrix(self.pattern.dense_M(Mv), self._dense_kept_A(Av))
-            if diagonal is not None:
-                K[self.pattern.n:, self.pattern.n:] += np.diag(diagonal)
             return lambda rhs: _dense_solve(K, rhs)
-        values = np.concatenate([Mv, Av] if diagonal is None else [Mv, Av, diagonal])
+        values = np.concatenate([Mv, Av])
         if self.method == "band":
             return self._band.factor(values)
         K = sps.csc_matrix((values[self._csc_src], self._indices, self._indptr),
@@ -151,23 +140,6 @@ class KKTSolver:
         except (RuntimeError, spla.MatrixRankWarning) as exc:
             raise SingularSystemError(SINGULAR_MESSAGE) from exc
         return lu.solve
-
-    def solve_off(self, Mv: np.ndarray, f: np.ndarray, Av: np.ndarray, c: np.ndarray,
-                  off: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(qdd, lambda)`` with the rows ``off`` (one flag per constraint row) left out:
-        not enforced, their multipliers zero (a singular configuration's rows, see
-        :mod:`dalembert.numerics.singular`; the C loop's ``dl_solve`` with rows off). The
-        other multipliers are those of the reduced solve (the dependent rows' zero).
-        Needs ``decouple``: the left-out rows keep their place, with a unit ``(2, 2)``
-        diagonal and no entries in ``A``.
-        """
-        p, n = self.pattern, self.pattern.n
-        rows = np.arange(p.m) if self.kept is None else self.kept
-        x = self.factor(Mv, np.where(off[p.A_rows], 0.0, Av), off[rows].astype(float))(
-            np.concatenate([f, np.where(off, 0.0, c)[rows]]))
-        lam = np.zeros(p.m)
-        lam[rows] = -x[n:]
-        return x[:n], lam
 
     def _dense_kept_A(self, Av: np.ndarray) -> np.ndarray:
         A = self.pattern.dense_A(Av)
@@ -196,11 +168,9 @@ class KKTSolver:
         return qdd, lam, None
 
 
-def kkt_solver(pattern: SparsePattern, kept: np.ndarray | None = None,
-               decouple: bool = False) -> KKTSolver:
-    """``KKTSolver(pattern, kept, decouple=decouple)``, made once per pattern, set of
-    kept rows and ``decouple`` (a solver holds index maps only, so one serves every
-    simulation of a model).
+def kkt_solver(pattern: SparsePattern, kept: np.ndarray | None = None) -> KKTSolver:
+    """``KKTSolver(pattern, kept)``, made once per pattern and set of kept rows (a
+    solver holds index maps only, so one serves every simulation of a model).
 
     >>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
     ...                         np.array([0, 0]), np.array([0, 1]))
@@ -208,8 +178,8 @@ def kkt_solver(pattern: SparsePattern, kept: np.ndarray | None = None,
     True
     """
     rows = None if kept is None else np.asarray(kept, dtype=np.intp)
-    key = ("kkt_solver", None if rows is None else rows.tobytes(), decouple)
-    return pattern.remember(key, lambda: KKTSolver(pattern, rows, decouple=decouple))
+    key = ("kkt_solver", None if rows is None else rows.tobytes())
+    return pattern.remember(key, lambda: KKTSolver(pattern, rows))
 
 
 class _BandMap:

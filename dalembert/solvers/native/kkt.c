@@ -71,46 +71,18 @@ DL_INLINE void backward(const double *L, int64_t n, double *x) {
   }
 }
 
-/* The conditioning of one row of A A^T (see dl_model): its pivot against its diagonal,
- * and its diagonal against the one at the initial state. */
-static void note_conditioning(dl_model *md, int64_t row, double pivot, double diagonal) {
-  double ratio = diagonal > 0.0 ? pivot / diagonal : 0.0;
-  if (md->norm0 && md->norm0[row] > 0.0 && diagonal / md->norm0[row] < ratio)
-    ratio = diagonal / md->norm0[row];
-  if (!(ratio >= md->conditioning)) {  /* a NaN is recorded too */
-    md->conditioning = ratio;
-    md->conditioning_row = row;
-  }
-}
-
 /* Band Cholesky: S[i * (kd + 1) + (i - j)] holds S_ij for i - kd <= j <= i; the
- * diagonal keeps 1 / L_jj. A row that is off keeps 0 there and zeros below it: it is
- * left out as if it were not in S (its unknown comes out 0). With truncate, a row whose
- * pivot falls below truncate_rtol2 times its diagonal |a_r|^2 (gram_diagonal, before
- * any elimination: the pivot ratio is then the squared sine of the row's angle to all
- * the rows before it) is turned off here (a rank-revealing factorization); with
- * record, the pivots are noted (note_conditioning). Both only in factor_schur (M = I). */
-static int band_cholesky(dl_model *md, int truncate, int record) {
-  double *S = md->S;
-  const int64_t m = md->m_band, kd = md->kd, w = kd + 1;
+ * diagonal keeps 1 / L_jj. */
+static int band_cholesky(double *S, int64_t m, int64_t kd) {
+  const int64_t w = kd + 1;
   for (int64_t j = 0; j < m; ++j) {
-    const int64_t k0 = j > kd ? j - kd : 0, row = md->band_row[j];
+    const int64_t k0 = j > kd ? j - kd : 0;
     double *Sj = S + j * w + j;  /* Sj[-k] = S_jk */
     double d = Sj[-j];
     const double scale = fabs(d);
     for (int64_t k = k0; k < j; ++k) d -= Sj[-k] * Sj[-k];
-    double inv = 0.0;
-    if (!md->off[row]) {
-      if (record) note_conditioning(md, row, d, md->gram_diagonal[row]);
-      if (truncate && !(d > md->truncate_rtol2 * md->gram_diagonal[row]) && isfinite(d)) {
-        md->off[row] = 1;
-        ++md->n_off;
-      } else if (!(d > 1e-14 * scale) || !(d > 0.0)) {
-        return DL_SINGULAR_CONSTRAINTS;
-      } else {
-        inv = 1.0 / sqrt(d);
-      }
-    }
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
+    const double inv = 1.0 / sqrt(d);
     Sj[-j] = inv;
     const int64_t i1 = j + kd < m - 1 ? j + kd : m - 1;
     for (int64_t i = j + 1; i <= i1; ++i) {
@@ -197,7 +169,7 @@ DL_INLINE int is_active(const unsigned char *active, const dl_model *md, int64_t
  * block's external pairs is S with the pivots eliminated. elim keeps, per pivot,
  * 1 / z_i.z_i and the alphas (for eliminate_rhs and recover_internal). */
 DL_INLINE int eliminate_internal(dl_model *md, int64_t b, double *z,
-                                 const unsigned char *active, int record, int64_t nb) {
+                                 const unsigned char *active, int64_t nb) {
   const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
   const int several = pe - p0 > 1;
   if (several)  /* the pivots' scales, before any elimination (one pivot: its own) */
@@ -209,7 +181,6 @@ DL_INLINE int eliminate_internal(dl_model *md, int64_t b, double *z,
     const double *restrict zi = z + md->pair_vec[i];
     double *restrict e = md->elim + md->elim_at[i];
     const double s = dot(zi, zi, nb);
-    if (record) note_conditioning(md, md->pair_row[i], s, md->gram_diagonal[md->pair_row[i]]);
     if (!(s > 1e-14 * (several ? e[0] : s))) return DL_SINGULAR_CONSTRAINTS;  /* dependent */
     e[0] = 1.0 / s;
     for (int64_t p = i + 1; p < p1; ++p) {
@@ -302,53 +273,30 @@ static void clear_band(dl_model *md) {
   memset(md->S, 0, (size_t)(md->m_band * (md->kd + 1)) * sizeof(double));
 }
 
-/* The rows the gram products leave out get a unit diagonal; S factored (band_cholesky). */
-static int factor_band(dl_model *md, const unsigned char *active, int truncate, int record) {
+/* The rows the gram products leave out get a unit diagonal; S factored. */
+static int factor_band(dl_model *md, const unsigned char *active) {
   const int64_t w = md->kd + 1;
   if (active)
     for (int64_t k = 0; k < md->m_band; ++k)
       if (!active[md->band_row[k]]) md->S[k * w] = 1.0;
-  return md->m_band ? band_cholesky(md, truncate, record) : DL_OK;
+  return md->m_band ? band_cholesky(md->S, md->m_band, md->kd) : DL_OK;
 }
 
-/* With M = I: z = a, copied (the elimination changes it), the internal rows eliminated,
- * S = Z^T Z over the active rows (others get a unit diagonal), factored. With truncate,
- * the rows off are decided anew here (band_cholesky); the conditioning is recorded when
- * every row is active. */
-int factor_schur(dl_model *md, const unsigned char *active, int truncate) {
+/* With M = I (the projections): z = a, copied (the elimination changes it), the internal
+ * rows eliminated, S = Z^T Z over the active rows (others get a unit diagonal), factored. */
+int factor_schur(dl_model *md, const unsigned char *active) {
   double *z = md->y;
   memcpy(z, md->a, (size_t)md->pair_vec[md->n_pairs] * sizeof(double));
   md->active = active;
-  const int record = !active || md->n_hol == md->m;
-  if (record || truncate) {  /* |a_r|^2, the rows' diagonals before any elimination */
-    memset(md->gram_diagonal, 0, (size_t)md->m * sizeof(double));
-    for (int64_t p = 0; p < md->n_pairs; ++p) {
-      const int64_t nb = block_size(md, md->pair_block[p]);
-      md->gram_diagonal[md->pair_row[p]] += dot(z + md->pair_vec[p], z + md->pair_vec[p], nb);
-    }
-  }
-  if (record) {
-    md->conditioning = INFINITY;
-    md->conditioning_row = -1;
-  }
-  if (truncate) {
-    memset(md->off, 0, (size_t)md->m);
-    md->n_off = 0;
-  }
   for (int64_t k = 0; k < md->n_elim_blocks; ++k) {
     const int64_t b = md->elim_blocks[k];
-    if (BY_SIZE(block_size(md, b), eliminate_internal, md, b, z, active, record) != DL_OK)
+    if (BY_SIZE(block_size(md, b), eliminate_internal, md, b, z, active) != DL_OK)
       return DL_SINGULAR_CONSTRAINTS;
   }
   clear_band(md);
   for (int64_t b = 0; b < md->n_blocks; ++b)
     BY_SIZE(block_size(md, b), gram_block, md, b, z, active, md->S);
-  return factor_band(md, active, truncate, record);
-}
-
-/* The rows off at the current values of A (in the pair vectors), from A A^T truncated. */
-int decide_off(dl_model *md) {
-  return factor_schur(md, NULL, 1);
+  return factor_band(md, active);
 }
 
 /* lam = S^-1 rhs over the band's rows (rhs by row, overwritten by lam), then
@@ -403,7 +351,7 @@ static int unit_pass(dl_model *md, double *c) {
 DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
   if (factor_block(md, b, c, nb) != DL_OK) return DL_SINGULAR_MASS;
   if (md->block_external[b] > md->block_pairs[b]) {
-    if (eliminate_internal(md, b, md->y, NULL, 0, nb) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+    if (eliminate_internal(md, b, md->y, NULL, nb) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
     eliminate_rhs(md, b, md->y, NULL, c, md->u, nb);
   }
   gram_block(md, b, md->y, NULL, md->S, nb);
@@ -448,8 +396,7 @@ static int check_dropped(dl_model *md, const double *qdd, const double *c, doubl
 
 /* qdd and lambda from the KKT values (eval_kkt; c modified in place): S lam = c - Z^T u
  * with Z = L^-1 A^T, u = L^-1 f, then qdd = L^-T (u + Z lam). One pass over the blocks
- * factors them, eliminates their internal rows and builds S and the right-hand side.
- * The rows off (decide_off) are left out: their multipliers are zero. */
+ * factors them, eliminates their internal rows and builds S and the right-hand side. */
 int dl_solve(dl_model *md, double *qdd, double *lambda) {
   double *c = md->c;
   /* the scale of check_dropped, before the solve overwrites the kept rows of c */
@@ -460,15 +407,13 @@ int dl_solve(dl_model *md, double *qdd, double *lambda) {
   for (int64_t b = 0; b < md->n_blocks; ++b)
     if (!md->unit[b] && (status = BY_SIZE(block_size(md, b), block_pass, md, b, c)) != DL_OK)
       return status;
-  if ((status = factor_band(md, NULL, 0, 0)) != DL_OK) return status;
+  if ((status = factor_band(md, NULL)) != DL_OK) return status;
   apply_multipliers(md, md->y, c, md->u);
   for (int64_t k = 0; k < md->n_unit; ++k) md->u[md->unit_slot[k]] *= md->blocks[md->unit_mat[k]];
   for (int64_t b = 0; b < md->n_blocks; ++b)
     if (!md->unit[b]) BY_SIZE(block_size(md, b), block_backward, md, b, md->u);
   for (int64_t s = 0; s < md->n; ++s) qdd[md->slot_coord[s]] = md->u[s];
-  /* with rows off (a singular configuration) the dependent rows need not follow */
-  if (md->n_dropped && !md->n_off && (status = check_dropped(md, qdd, c, c_max)) != DL_OK)
-    return status;
+  if (md->n_dropped && (status = check_dropped(md, qdd, c, c_max)) != DL_OK) return status;
   if (lambda) {
     for (int64_t k = 0; k < md->n_elim_blocks; ++k) recover_internal(md, md->elim_blocks[k], c);
     memcpy(lambda, c, (size_t)md->m * sizeof(double));
@@ -488,12 +433,10 @@ static void baumgarte(dl_model *md, double t, const double *q, const double *qd,
   for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * md->psi[k];
 }
 
-/* y' = [qd, qdd] at (t, y); lambda may be NULL. While careful, the rows off are decided
- * at this state first. */
+/* y' = [qd, qdd] at (t, y); lambda may be NULL. */
 int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda) {
   const int64_t n = md->n;
   eval_kkt(md, t, y, y + n);
-  if (md->careful && md->m && decide_off(md) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
   if (md->baumgarte != 0.0 && md->m) baumgarte(md, t, y, y + n, md->c);
   memcpy(ydot, y + n, (size_t)n * sizeof(double));
   return dl_solve(md, ydot + n, lambda);

@@ -23,15 +23,13 @@ _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
 #: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds;
 #: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones;
 #: NOT_FINITE: a step would start from a time, step size, state or derivative that is
-#: not finite; NEAR_SINGULAR: a stretch ended after a step that ended near a singular
-#: configuration; BRANCH_JUMP: a step's projection jumped at every step size tried).
+#: not finite).
 (OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED,
- NOT_FINITE, NEAR_SINGULAR, BRANCH_JUMP) = range(10)
+ NOT_FINITE) = range(8)
 CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
          "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
-         "DL_NOT_FINITE": NOT_FINITE, "DL_NEAR_SINGULAR": NEAR_SINGULAR,
-         "DL_BRANCH_JUMP": BRANCH_JUMP}
+         "DL_NOT_FINITE": NOT_FINITE}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
 SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "layout.c")
 HEADER = "runtime.h"
@@ -63,9 +61,6 @@ class Model(ctypes.Structure):
         ("kkt_in_layout", _i64), ("c", _ptr),
         ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
         ("dropped_rtol", _f64),
-        ("careful", _i64), ("truncate_rtol2", _f64), ("off", _ptr), ("n_off", _i64),
-        ("norm0", _ptr), ("conditioning", _f64), ("conditioning_row", _i64),
-        ("gram_diagonal", _ptr),
     ]
 
 
@@ -88,9 +83,7 @@ class Run(ctypes.Structure):
                 ("accept_tol", _f64), ("max_steps", _i64), ("max_seconds", _f64),
                 ("capacity", _i64), ("t_out", _ptr), ("y_out", _ptr), ("n_steps", _i64),
                 ("n_out", _i64), ("t_old", _f64),
-                *((name, _ptr) for name in ("y_new", "y_end", "rows")),
-                *((name, _f64) for name in ("near2", "jump_rtol", "jump_atol", "jump_shrink")),
-                ("jump_tries", _i64), ("conditioning", _f64)]
+                *((name, _ptr) for name in ("y_new", "y_end", "rows"))]
 
 
 #: The C struct each mirror stands for.
@@ -207,7 +200,6 @@ def _runtime() -> ctypes.CDLL:
     signatures = {
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
         "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
-        "dl_conditioning": [_ptr, _f64, _ptr],
         "dl_rk_step": [_ptr] * 7,
         "dl_rk_run": [_ptr] * 7,
         "dl_outputs": [_ptr, _i64, *[_ptr] * 8],

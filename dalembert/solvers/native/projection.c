@@ -1,8 +1,6 @@
 /* Projection of a state onto the constraints (minimum-norm changes), with the Schur
  * solve of kkt.c for M = I: S = J J^T over the holonomic rows (positions) or A A^T
- * (velocities), the dropped dependent rows left out. While careful (near a singular
- * configuration), the rows off are left out too, and the velocities are projected in
- * the kinetic-energy metric (project_velocities_careful). */
+ * (velocities), the dropped dependent rows left out. */
 #include "runtime.h"
 
 /* Least-change step dq = -J^T (J J^T)^-1 psi with the factored S = J J^T. */
@@ -18,16 +16,7 @@ static int factor_positions(dl_model *md, double t, const double *q,
                             const unsigned char *holonomic) {
   eval_static(&md->velocity, t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
-  return factor_schur(md, holonomic, (int)md->careful) == DL_OK ? DL_OK : DL_PROJECTION;
-}
-
-/* The largest |psi| over the entries whose rows are enforced (all but the rows off). */
-static double position_residual(const dl_model *md, const double *psi) {
-  if (!md->n_off) return max_abs(psi, md->n_hol);
-  double r = 0.0;
-  for (int64_t k = 0; k < md->n_hol; ++k)
-    if (!md->off[md->holonomic[k]] && !(fabs(psi[k]) <= r)) r = fabs(psi[k]);
-  return r;
+  return factor_schur(md, holonomic) == DL_OK ? DL_OK : DL_PROJECTION;
 }
 
 /* Newton on psi(q, t) = 0, as StepProjector.positions: simplified (one factorization)
@@ -41,11 +30,9 @@ static int project_positions(dl_model *md, double t, double *q, const unsigned c
   double *psi = md->psi, *trial = md->q_trial, *dq = md->qdd;
   *moved = 0.0;
   eval_static(&md->position, t, q, md->p, psi);
-  if (md->careful) md->n_off = 0;  /* every row counts until a factorization says */
-  double residual = position_residual(md, psi);
+  double residual = max_abs(psi, md->n_hol);
   if (residual <= position_tol) return DL_OK;
   if (factor_positions(md, t, q, holonomic) != DL_OK) return DL_PROJECTION;
-  residual = position_residual(md, psi);
   for (int64_t it = 0; it < max_newton + max_full; ++it) {
     if (it >= max_newton) {  /* full Newton: psi at q again, J at q */
       eval_static(&md->position, t, q, md->p, psi);
@@ -56,7 +43,7 @@ static int project_positions(dl_model *md, double t, double *q, const unsigned c
     *moved = step > *moved ? step : *moved;
     for (int64_t i = 0; i < n; ++i) trial[i] = q[i] + dq[i];
     eval_static(&md->position, t, trial, md->p, psi);
-    const double new_residual = position_residual(md, psi);
+    const double new_residual = max_abs(psi, md->n_hol);
     if (!(new_residual < 0.5 * residual)) {
       if (it >= max_newton) break;  /* rounding floor, or divergence: judged below */
       it = max_newton - 1;          /* the simplified iteration stalled: go full */
@@ -77,7 +64,7 @@ static int project_velocities(dl_model *md, double t, const double *q, double *q
                               int refactor) {
   eval_static(&md->velocity, t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
-  if (refactor && factor_schur(md, NULL, 0) != DL_OK) return DL_PROJECTION;
+  if (refactor && factor_schur(md, NULL) != DL_OK) return DL_PROJECTION;
   const double *b = md->vel_values + md->nA;
   /* lambda = -(A qd + b): the residual, by row */
   for (int64_t r = 0; r < md->m; ++r) md->lambda[r] = -b[r];
@@ -87,35 +74,10 @@ static int project_velocities(dl_model *md, double t, const double *q, double *q
   return DL_OK;
 }
 
-/* Near a singular configuration: qd <- qd + M^-1 A^T mu with A M^-1 A^T mu = -(A qd + b)
- * over the rows enforced at q, the projection in the kinetic-energy metric. Its change is
- * M-orthogonal to the result, so where the rows off come back (leaving the singular
- * configuration) the velocity they correct changes the kinetic energy to second order
- * only. The KKT solve with f = 0 and c = -(A qd + b), M and A at q. */
-static int project_velocities_careful(dl_model *md, double t, const double *q, double *qd) {
-  eval_kkt(md, t, q, qd);
-  if (decide_off(md) != DL_OK) return DL_PROJECTION;
-  eval_static(&md->velocity, t, q, md->p, md->vel_values);
-  const double *b = md->vel_values + md->nA;
-  for (int64_t r = 0; r < md->m; ++r) md->c[r] = -b[r];
-  add_A_times(md, qd, -1.0, md->c);
-  memset(md->u, 0, (size_t)md->n * sizeof(double));
-  if (dl_solve(md, md->q_trial, NULL) != DL_OK) return DL_PROJECTION;
-  for (int64_t i = 0; i < md->n; ++i) qd[i] += md->q_trial[i];
-  return DL_OK;
-}
-
 /* y = [q, qd] projected in place: positions (holonomic rows), then velocities. */
 int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
                int64_t max_newton, int64_t max_full, double position_tol, double accept_tol) {
   if (md->m == 0) return DL_OK;
-  if (md->careful) {
-    double moved = 0.0;
-    if (md->n_hol && project_positions(md, t, y, holonomic, max_newton, max_full, position_tol,
-                                       accept_tol, &moved) != DL_OK)
-      return DL_PROJECTION;
-    return project_velocities_careful(md, t, y, y + md->n);
-  }
   double moved = 0.0;
   if (md->n_hol) {
     const int status = project_positions(md, t, y, holonomic, max_newton, max_full,
@@ -125,15 +87,4 @@ int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic
   const double scale = max_abs(y, md->n) > 1.0 ? max_abs(y, md->n) : 1.0;
   const int reuse = md->n_hol == md->m && moved > 0.0 && moved <= 1e-6 * scale;
   return project_velocities(md, t, y, y + md->n, !reuse);
-}
-
-/* The conditioning of A A^T at q (see dl_model), into md->conditioning; the rows off at q
- * too, while careful. */
-int dl_conditioning(dl_model *md, double t, const double *q) {
-  md->conditioning = INFINITY;
-  md->conditioning_row = -1;
-  if (md->m == 0) return DL_OK;
-  eval_static(&md->velocity, t, q, md->p, md->vel_values);
-  load_pairs(md, md->vel_values);
-  return factor_schur(md, NULL, (int)md->careful) == DL_OK ? DL_OK : DL_SINGULAR_CONSTRAINTS;
 }

@@ -17,7 +17,6 @@ from functools import partial
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ...numerics import singular
 from ..scipy_ivp import take_state
 from . import library
 
@@ -54,9 +53,7 @@ class StretchRunner:
             position_tol=position_tol, accept_tol=accept_tol, max_steps=MAX_STEPS,
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
-            rows=interpolant, near2=singular.NEAR**2, jump_rtol=singular.JUMP_RTOL,
-            jump_atol=singular.JUMP_ATOL_FACTOR * velocity_atol(solver),
-            jump_shrink=singular.JUMP_SHRINK, jump_tries=singular.JUMP_TRIES)
+            rows=interpolant)
         self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
                              ctypes.addressof(self._run), self._y.ctypes.data,
                              self._K.ctypes.data, solver._stage.ctypes.data)
@@ -96,9 +93,3 @@ class StretchRunner:
             solver.err_old = st.err_old
         self._pending = False
         return taken
-
-
-def velocity_atol(solver: OdeSolver) -> float:
-    """The largest absolute tolerance on the velocities (the second half of the state)."""
-    atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (solver.n,))
-    return float(atol[solver.n // 2:].max(initial=0.0))

@@ -190,55 +190,25 @@ static int project(dl_model *md, const dl_run *run, double t, double *y) {
                     run->position_tol, run->accept_tol);
 }
 
-/* Whether the projection from y_new to y_end jumped rather than corrected: a velocity
- * changed by more than jump_rtol times the largest velocity plus jump_atol (the same
- * test as numerics/singular.py's is_jump, which the Python loop applies). */
-static int jumped(const dl_model *md, const dl_run *run, const double *y_new,
-                  const double *y_end) {
-  const int64_t n = md->n;
-  double change = 0.0, speed = 0.0;
-  for (int64_t i = n; i < 2 * n; ++i) {
-    const double d = fabs(y_end[i] - y_new[i]);
-    change = d > change ? d : change;
-    speed = fabs(y_new[i]) > speed ? fabs(y_new[i]) : speed;
-    speed = fabs(y_end[i]) > speed ? fabs(y_end[i]) : speed;
-  }
-  return change > run->jump_rtol * speed + run->jump_atol;
-}
-
 /* One step from (st->t, y, K[0] = f(t, y)), finished as the Python loop finishes it:
  * the end projected into y_end, the outputs in (t_old, t_new] written after row
- * run->n_out (interpolated and projected; the one at t_new is the projected end). A
- * projection that jumps (jumped) rejects the step, which is taken again shorter. On
- * DL_OK (or DL_NEAR_SINGULAR: the step is done, but it ended near a singular
- * configuration) the outputs are counted (n_out, next_eval) and the caller restarts from
- * y_end; on any other status run is as before and the caller restores st. */
+ * run->n_out (interpolated and projected; the one at t_new is the projected end). On
+ * DL_OK the outputs are counted (n_out, next_eval) and the caller restarts from y_end;
+ * on any other status run is as before and the caller restores st. */
 static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run,
                        const double *y, double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
   const double t_old = st->t;
-  const dl_stepper before = *st;
-  int status;
-  for (int64_t tries = 0;; ++tries) {
-    status = dl_rk_step(md, tb, st, y, K, run->y_new, stage);
-    if (status != DL_OK) return status;
-    memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
-    if ((status = project(md, run, st->t, run->y_end)) != DL_OK) return status;
-    run->conditioning = md->conditioning;
-    if (!jumped(md, run, run->y_new, run->y_end)) break;
-    if (tries + 1 >= run->jump_tries) return DL_BRANCH_JUMP;
-    const double h_abs = fabs(st->h_previous) * run->jump_shrink;
-    const int64_t nfev = st->nfev;
-    *st = before;
-    st->h_abs = h_abs;
-    st->nfev = nfev;
-  }
+  int status = dl_rk_step(md, tb, st, y, K, run->y_new, stage);
+  if (status != DL_OK) return status;
   const double t_new = st->t, d = st->direction;
   const int every_step = run->n_eval < 0;
   int64_t hi = run->next_eval;
   while (hi < run->n_eval && d * run->t_eval[hi] <= d * t_new) ++hi;
   const int64_t count = every_step ? 1 : hi - run->next_eval;
   if (run->n_out + count > run->capacity) return DL_OUTPUTS;
+  memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
+  if ((status = project(md, run, t_new, run->y_end)) != DL_OK) return status;
   int made = 0;
   for (int64_t k = 0; k < count; ++k) {
     const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
@@ -257,7 +227,7 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
   }
   run->next_eval = hi;
   run->n_out += count;
-  return !md->careful && run->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
+  return DL_OK;
 }
 
 /* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
@@ -267,8 +237,6 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
  * projection, more outputs than the buffer holds): the caller takes that step
  * itself, from this state, and st->nfev does not count the dropped attempt (a step that
  * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
- * DL_NEAR_SINGULAR: the last step was finished, but it ended near a singular
- * configuration, where the caller takes the next steps one by one (careful).
  * Every loop inside a step is bounded, so the call returns within a step of the time
  * budget and Ctrl-C is served. */
 int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
@@ -281,7 +249,7 @@ int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, d
     if (run->n_steps && (double)(clock() - start) > run->max_seconds * CLOCKS_PER_SEC) break;
     const dl_stepper before = *st;
     const int status = finish_step(md, tb, st, run, y, K, stage);
-    if (status != DL_OK && status != DL_NEAR_SINGULAR) {
+    if (status != DL_OK) {
       *st = before;
       /* a full buffer after some steps just ends this call */
       return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;
@@ -293,7 +261,6 @@ int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, d
      * with the projected qd and the last stage's qdd, at the end before the projection */
     memcpy(K, y + md->n, (size_t)md->n * sizeof(double));
     memcpy(K + md->n, K + tb->n_stages * n_state + md->n, (size_t)md->n * sizeof(double));
-    if (status == DL_NEAR_SINGULAR) return status;  /* the next steps are taken carefully */
   }
   return DL_OK;
 }

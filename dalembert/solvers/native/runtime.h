@@ -23,14 +23,9 @@
 
 /* Return codes (library.py's CODES). DL_RANK_CHANGED: a dropped row no longer follows
  * from the kept ones (the rank changed since it was measured); DL_NOT_FINITE: a step
- * would start from a time, step size, state or derivative that is not finite;
- * DL_NEAR_SINGULAR: a stretch ended after a step that ended near a singular
- * configuration (the next steps are taken one by one, carefully); DL_BRANCH_JUMP: the
- * projection after a step jumped (to another branch of the constraints) at every step
- * size tried. */
+ * would start from a time, step size, state or derivative that is not finite. */
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
-       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7,
-       DL_NEAR_SINGULAR = 8, DL_BRANCH_JUMP = 9 };
+       DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);
@@ -91,22 +86,6 @@ typedef struct {
   int64_t n_dropped_pairs, n_dropped;
   const int64_t *dropped_rows;
   double dropped_rtol;
-  /* Near singular configurations (numerics/singular.py). While careful is set, a kept
-   * row whose pivot in the Cholesky factorization of the Gram matrix A A^T (the rows
-   * inside one block eliminated first, as factor_schur does) falls below
-   * truncate_rtol2 times its diagonal |a_r|^2 (gram_diagonal) is not enforced ("off":
-   * its multiplier is zero) in the solve and the projections of that state. Every
-   * factorization of A A^T with all rows active records the conditioning: the
-   * smallest over the rows of that ratio and of the row's diagonal against norm0 (its
-   * diagonal at the initial state: a constraint that vanishes), and its row. */
-  int64_t careful;
-  double truncate_rtol2;
-  unsigned char *off;         /* m */
-  int64_t n_off;
-  const double *norm0;        /* m */
-  double conditioning;
-  int64_t conditioning_row;
-  double *gram_diagonal;      /* m */
 } dl_model;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
@@ -150,14 +129,6 @@ typedef struct {
   double t_old;               /* the start of its last step */
   double *y_new, *y_end;      /* work, n_state each */
   double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
-  /* Near singular configurations (numerics/singular.py): a step whose end has a
-   * conditioning below near2 ends the call (DL_NEAR_SINGULAR) unless the model is
-   * careful already; a projection that changes a velocity by more than jump_rtol times
-   * the largest velocity plus jump_atol is a jump, not a correction: the step is taken
-   * again, jump_shrink times shorter, at most jump_tries times (then DL_BRANCH_JUMP). */
-  double near2, jump_rtol, jump_atol, jump_shrink;
-  int64_t jump_tries;
-  double conditioning;        /* at the end of the last step (after its projection) */
 } dl_run;
 
 /* Small helpers are inlined where the block size is a constant (see BY_SIZE); the
@@ -198,8 +169,7 @@ DL_INTERNAL void load_pairs(dl_model *md, const double *Av);
 DL_INTERNAL void add_A_times(const dl_model *md, const double *x, double w, double *out);
 DL_INTERNAL void eval_kkt(dl_model *md, double t, const double *q, const double *qd);
 DL_INTERNAL int dl_solve(dl_model *md, double *qdd, double *lambda);
-DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active, int truncate);
-DL_INTERNAL int decide_off(dl_model *md);
+DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active);
 DL_INTERNAL void solve_schur(dl_model *md, double *rhs, double *x);
 int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda);
 
@@ -211,7 +181,6 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
 /* projection.c */
 int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
                int64_t max_newton, int64_t max_full, double position_tol, double accept_tol);
-int dl_conditioning(dl_model *md, double t, const double *q);
 
 /* runge_kutta.c */
 int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64_t row0,

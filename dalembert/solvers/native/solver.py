@@ -9,7 +9,6 @@ import numpy as np
 from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
 from ...numerics.rank import min_norm_multipliers
-from ...numerics.singular import TRUNCATE
 from ..kkt import DROPPED_ROW_RTOL
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
 from ..sparse_kkt import SINGULAR_MESSAGE, matvec
@@ -92,9 +91,7 @@ class NativeSolver:
                               n_dropped=len(s.dropped_rows), dropped_rtol=DROPPED_ROW_RTOL,
                               n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
                               n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
-                              n_unit_gram=len(s.unit_gram_target),
-                              truncate_rtol2=TRUNCATE**2, conditioning=np.inf,
-                              conditioning_row=-1)
+                              n_unit_gram=len(s.unit_gram_target))
         for name, h in zip(("velocity", "position", "energy"), handles[1:]):
             setattr(model, name, self._function(h))
         for name, array in s.arrays().items():
@@ -102,13 +99,9 @@ class NativeSolver:
         vectors = int(s.pair_vec[-1])
         sizes = {"vel_values": nA + m, "psi": len(num.holonomic_rows), "y": vectors,
                  "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
-                 "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n,
-                 "gram_diagonal": m}
+                 "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
-        self._off = np.zeros(max(m, 1), dtype=np.uint8)  # rows off (while careful)
-        self._keep.append(self._off)
-        model.off = self._off.ctypes.data
         self._kkt(model, handles[0])
         return model
 

@@ -122,23 +122,6 @@ def schur_structure(pattern: SparsePattern, kept: np.ndarray | None = None) -> S
     return found
 
 
-def gram_structure(pattern: SparsePattern, kept: np.ndarray | None = None) -> SchurStructure:
-    """The tables of :func:`schur_structure` whatever the width of the blocks and the
-    band: the order in which the C loop factors the Gram matrix ``A A^T``, which the
-    Python loop follows too (:mod:`~dalembert.solvers.gram`), whether or not the C
-    loop applies.
-
-    >>> from dalembert.codegen.compiled import SparsePattern
-    >>> pattern = SparsePattern(2, 2, np.arange(2), np.arange(2), np.array([0, 1, 1]),
-    ...                         np.array([0, 0, 1]))
-    >>> gram_structure(pattern).band_row.tolist()
-    [0, 1]
-    """
-    rows = None if kept is None else np.asarray(kept, dtype=np.int64)
-    key = ("gram_structure", None if rows is None else rows.tobytes())
-    return pattern.remember(key, lambda: _structure(pattern, rows, limits=False))
-
-
 def _structure_or_reason(pattern: SparsePattern,
                          kept: np.ndarray | None) -> SchurStructure | NotApplicable:
     try:
@@ -147,10 +130,9 @@ def _structure_or_reason(pattern: SparsePattern,
         return reason
 
 
-def _structure(pattern: SparsePattern, kept: np.ndarray | None,
-               limits: bool = True) -> SchurStructure:
+def _structure(pattern: SparsePattern, kept: np.ndarray | None) -> SchurStructure:
     block, sizes = _blocks(pattern)
-    if limits and sizes.max(initial=0) > BLOCK_MAX:
+    if sizes.max(initial=0) > BLOCK_MAX:
         raise NotApplicable(f"the mass matrix couples {sizes.max()} coordinates in one block "
                             f"(at most {BLOCK_MAX})")
     block_start = np.concatenate([[0], np.cumsum(sizes)])
@@ -170,7 +152,7 @@ def _structure(pattern: SparsePattern, kept: np.ndarray | None,
               "pair_block": pairs["pair_block"][:n_solved],
               "pair_vec": pairs["pair_vec"][:n_solved + 1]}
     row_pos, band_row, kd = _band_order(pattern.m, solved, ~internal, dropped)
-    if limits and kd > BAND_MAX:
+    if kd > BAND_MAX:
         raise NotApplicable(f"the constraints couple too widely for a band solve "
                             f"(half bandwidth {kd}, at most {BAND_MAX})")
     gram = _gram(solved["pair_row"], pairs["block_external"], pairs["block_pairs"], row_pos, kd)
