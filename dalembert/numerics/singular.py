@@ -29,6 +29,8 @@ import numpy as np
 
 #: Singular values below this fraction of the largest: near a rank drop.
 NEAR = 1e-3
+#: While careful, rows whose Gram pivot ratio is below ``TRUNCATE**2`` are left out.
+TRUNCATE = 1e-4
 #: The steps are watched over windows of at least this many steps ...
 COLLAPSE_STEPS = 500
 #: ... and have collapsed when their mean is below this fraction of the mean before.

@@ -17,6 +17,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ..errors import DalembertError
+from .careful import CarefulSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
 from .singular_watch import Singularity
@@ -39,6 +40,7 @@ def integrate(
     stretches: bool = False,
     diagnose: Diagnosis | None = None,
     singular: Singularity | None = None,
+    careful: CarefulSteps | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -62,6 +64,9 @@ def integrate(
     singular
         ``singular(t, y)``: the singular configuration at a state, or ``""``; steps
         that collapse there end the run (:mod:`~dalembert.solvers.singular_watch`).
+    careful
+        With ``stretches``: how to take the steps near a singular configuration the
+        Python way (:mod:`~dalembert.solvers.careful`).
     solver_options
         Passed to ``method``.
 
@@ -89,7 +94,7 @@ def integrate(
             # may fail right there, and a Ctrl-C may land there too
             solver = method(fun, t0, y0, tf, **solver_options)
             if stretches and project is not None:
-                loop = StretchLoop(solver, times, project, diagnose, singular)
+                loop = StretchLoop(solver, times, project, diagnose, singular, careful)
             else:
                 loop = PythonLoop(solver, times, events, project, dense_output, diagnose,
                                   singular)

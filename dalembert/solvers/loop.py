@@ -21,10 +21,11 @@ from scipy.integrate import OdeSolver
 
 from ..errors import DalembertError
 from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS
+from .careful import CarefulSteps
 from .dense_output import DenseRecorder
 from .native.run import StretchRunner
 from .nonfinite import Diagnosis
-from .scipy_ivp import last_stages, restart_second_order, step_inputs
+from .scipy_ivp import last_stages, restart_second_order, step_inputs, take_state
 from .singular_watch import Singularity, StepCollapse
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
@@ -425,23 +426,57 @@ class StretchLoop(PythonLoop):
     way (a step from values that are not finite among them: the Python loop then
     stops with its diagnosis). Only for a native Runge-Kutta solver with its native
     projection, no events and no dense output (the plan checks). Same steps and
-    states as :class:`PythonLoop` (tested).
+    states as :class:`PythonLoop` (tested). Near a singular configuration (measured
+    after every stretch) the steps are taken the Python way, carefully (``careful``,
+    :mod:`~dalembert.solvers.careful`), until the state is clear of it.
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
                  project: Projector, diagnose: Diagnosis | None = None,
-                 singular: Singularity | None = None) -> None:
+                 singular: Singularity | None = None,
+                 careful: CarefulSteps | None = None) -> None:
         super().__init__(solver, t_eval, (), project, False, diagnose, singular)
         self.runner = StretchRunner(solver, self.t_eval)
+        self.native, self.native_project, self.careful = solver, project, careful
+        self._careful_nfev = 0  # the evaluations of the careful solvers before this one
 
     def advance(self) -> None:
+        if self.solver is not self.native:  # careful steps
+            super().advance()
+            if self.status is None and self.careful is not None \
+                    and not self.careful.model.careful:
+                self._back_to_c()
+            return
         ran = self.runner.run()
         self._absorb()
         if not ran:  # C left the next step to the step-by-step loop
             return super().advance()
         if self.solver.status == "finished":
             return self.stop("finished", "the integration reached the end of t_span")
+        if self.careful is not None and self.careful.solver is not None:
+            solver, model = self.solver, self.careful.model
+            model.measure(solver.t, solver.y[:solver.n // 2])
+            if model.careful:
+                self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+                self.project = model.project
+                return
         self._watch_steps()
+
+    def _back_to_c(self) -> None:
+        """Hand the run back to C after careful steps."""
+        careful, native = self.solver, self.native
+        self._careful_nfev += careful.nfev
+        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
+                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
+                   h_previous=careful.h_previous)
+        self.solver, self.project = native, self.native_project
+
+    def result(self, method_name: str) -> IntegrationResult:
+        result = super().result(method_name)
+        if self.solver is not self.native:  # ended in careful steps
+            result.stats["nfev"] += self.native.nfev
+        result.stats["nfev"] += self._careful_nfev
+        return result
 
     def interrupt(self) -> None:
         self._absorb()  # a stretch run in C before the Ctrl-C is kept
