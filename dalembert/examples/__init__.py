@@ -50,6 +50,7 @@ EXAMPLES: dict[str, str] = {
     "crank-press": "crank_press",
     "chain-frequencies": "chain_frequencies",
     "closed-chain": "closed_chain",
+    "n-four-bar": "n_four_bar",
 }
 
 

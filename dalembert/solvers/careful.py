@@ -96,6 +96,7 @@ class CarefulModel:
         self._reached = t_span[0]
         self.rows = np.arange(num.m) if kept is None else np.asarray(kept)
         self.careful = False
+        self._U: np.ndarray | None = None
         #: The last :func:`gram_condition` measured (``nan`` if not measured).
         self.condition = np.nan
         self.measured = num.m <= DENSE_ROWS
@@ -111,8 +112,11 @@ class CarefulModel:
     def measure(self, t: float, q: np.ndarray) -> None:
         """Careful from here if ``q`` is near a singular configuration."""
         if self.measured:
-            self.condition = gram_condition(self._A(t, q)[0])
+            A = self._A(t, q)[0]
+            self.condition = gram_condition(A)
             self.careful = self.condition > NEAR**-2
+            # the combinations enforced, fixed over the step: its right-hand side smooth
+            self._U = combinations(A) if self.careful else None
 
     def _A(self, t: float, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         A, b = self.num.velocity_constraint(t, q)
@@ -125,7 +129,7 @@ class CarefulModel:
         q, qd = y[:n], y[n:]
         Mv, f, Av, c = num.kkt_sparse(t, q, qd)
         M, A = num.pattern.dense_M(Mv), num.pattern.dense_A(Av)[self.rows]
-        U = combinations(A)
+        U = self._U if self._U is not None else combinations(A)
         Ak = U @ A
         mk = len(Ak)
         K = np.block([[M, Ak.T], [Ak, np.zeros((mk, mk))]])
