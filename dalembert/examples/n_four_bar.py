@@ -56,9 +56,12 @@ def build(N: int = N_DEFAULT, gravity: float = G) -> System:
 
 def initial_state(N: int = N_DEFAULT) -> dict[str, dict[str, float]]:
     """The row of squares, every crank turning at -1 rad/s (B0 at 1 m/s in ``x``)."""
-    pos, ori, vel, spin = {}, {}, {}, {}
+    pos: dict[str, tuple[float, float]] = {}
+    vel: dict[str, tuple[float, float]] = {}
+    ori: dict[str, float] = {}
+    spin: dict[str, float] = {}
     for k in range(N + 1):
-        pos[f"crank{k}"], ori[f"crank{k}"] = (k, 0.5), np.pi / 2
+        pos[f"crank{k}"], ori[f"crank{k}"] = (float(k), 0.5), np.pi / 2
         vel[f"crank{k}"], spin[f"crank{k}"] = (0.5, 0.0), -1.0
     for k in range(1, N + 1):
         pos[f"coupler{k}"], ori[f"coupler{k}"] = (k - 0.5, 1.0), 0.0
