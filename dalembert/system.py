@@ -640,7 +640,7 @@ class System:
         # stacklevel 3: the user's call of simulate or plan
         if report.changed:
             warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=3)
-        if report.dependent_constraints:
+        if report.dependent_constraints or (report.rank is not None and report.rank.near):
             warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=3)
         return plan_simulation(num, report, options)
 

@@ -52,6 +52,7 @@ EXAMPLES: dict[str, str] = {
     "spacecraft": "spacecraft",
     "chain-frequencies": "chain_frequencies",
     "closed-chain": "closed_chain",
+    "n-four-bar": "n_four_bar",
 }
 
 

@@ -35,7 +35,7 @@ def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, sh
     if shape[0] <= GRAM_DENSE_MAX:
         A = np.zeros(shape)
         np.add.at(A, (rows, cols), Av)
-        cond = _dense_spd_condition(A @ A.T)
+        cond = spd_condition(A @ A.T)
     else:
         A = sps.csr_matrix((Av, (rows, cols)), shape=shape)
         cond = _sparse_condition((A @ A.T).tocsc())
@@ -44,9 +44,13 @@ def gram_well_conditioned(rows: np.ndarray, cols: np.ndarray, Av: np.ndarray, sh
     return bool(cond < min(limit**2 / max(shape[0], 1), 1e13))
 
 
-def _dense_spd_condition(G: np.ndarray) -> float:
+def spd_condition(G: np.ndarray) -> float:
     """Estimated 1-norm condition number of a symmetric positive semidefinite ``G``
-    (LAPACK ``potrf`` and ``pocon``), ``inf`` when its Cholesky factorization fails."""
+    (LAPACK ``potrf`` and ``pocon``), ``inf`` when its Cholesky factorization fails.
+
+    >>> f"{spd_condition(np.diag([1.0, 1e-6])):.0e}"
+    '1e+06'
+    """
     factor, info = lapack.dpotrf(G, lower=1)
     if info != 0:
         return np.inf
@@ -71,3 +75,6 @@ def condition_1norm(K: sps.spmatrix, solve) -> float:
     with np.errstate(all="ignore"):
         value = abs(K).sum(axis=0).max() * spla.onenormest(inverse)
     return float(value) if np.isfinite(value) else np.inf
+
+
+_dense_spd_condition = spd_condition  # the former private name

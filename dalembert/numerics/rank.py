@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import ConstraintError
 from .conditioning import gram_well_conditioned
+from .singular import NEAR
 
 #: Singular values below this fraction of the largest count as zero.
 RANK_RTOL = 1e-10
@@ -80,6 +81,12 @@ class ConstraintRank:
     rank: int
     dependent: tuple[int, ...]
     names: tuple[str, ...]
+    #: Singular values counted as nonzero, but below ``singular.NEAR`` of the largest:
+    #: the count is ambiguous (a state near a singular configuration).
+    near: int = 0
+    #: The rank at nearby states along the motion, if higher than here: the rows depend
+    #: on each other at this configuration only (a singular one), else ``None``.
+    rank_nearby: int | None = None
 
     @property
     def degrees_of_freedom(self) -> int:
@@ -101,10 +108,25 @@ class ConstraintRank:
         head = (f"{self.degrees_of_freedom} degree(s) of freedom: n - rank(A) = {self.n} - "
                 f"{self.rank} ({m} constraints")
         if not self.dependent:
-            return head + ", all independent)"
-        return (head + f", {len(self.dependent)} dependent on those listed before: "
-                f"{', '.join(self.dependent_names)}). The motion is unique; the multipliers "
-                "are not (the minimum-norm ones are reported)")
+            return head + ", all independent)" + self._ambiguity()
+        text = (head + f", {len(self.dependent)} dependent on those listed before: "
+                f"{', '.join(self.dependent_names)}).")
+        if self.rank_nearby is None:
+            return (text + " The motion is unique; the multipliers are not (the "
+                    "minimum-norm ones are reported)" + self._ambiguity())
+        return (text + f" They depend at this configuration only: a singular one (at "
+                f"nearby states along the motion the rank is {self.rank_nearby}, "
+                f"{self.n - self.rank_nearby} degree(s) of freedom), where the motion may "
+                "branch and is not unique; the multipliers are the minimum-norm ones"
+                + self._ambiguity())
+
+    def _ambiguity(self) -> str:
+        if not self.near:
+            return ""
+        return (f". The count is ambiguous: {self.near} more singular value(s) of A are "
+                f"nonzero but below {NEAR:g} of the largest (near a singular "
+                f"configuration); with a looser tolerance there would be "
+                f"{self.degrees_of_freedom + self.near} degree(s) of freedom")
 
 
 def constraint_rank(A: np.ndarray, names: Sequence[str], n: int | None = None) -> ConstraintRank:

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..codegen.compiled import NumericModel
 from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
+from ..numerics.conditioning import gram_well_conditioned
 from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error, sparse_constraint_rank
+from ..numerics.singular import NEAR
 from ..options import RedundantConstraints, VelocityProjection
 from .initial_checks import check_finite, check_kinetic_energy, check_resolvable
 from .kkt import SINGULAR_COND, check_kkt, solve_kkt
@@ -72,7 +74,7 @@ class InitializationReport:
 
     def __str__(self) -> str:
         text = self.describe_changes()
-        if self.rank is not None and self.rank.dependent:
+        if self.rank is not None and (self.rank.dependent or self.rank.near):
             text += "\n" + str(self.rank)
         return text
 
@@ -341,7 +343,34 @@ def _rank_at(
         )
     if rank.dependent and mode == "error":
         raise dependent_error([labels[i] for i in rank.dependent], "at the initial state")
-    return rank
+    return _singular_start(num, t0, q, rank)
+
+
+def _singular_start(num: NumericModel, t0: float, q: np.ndarray,
+                    rank: ConstraintRank) -> ConstraintRank:
+    """``rank`` with what makes its count of degrees of freedom uncertain: singular
+    values below ``NEAR`` (a well-conditioned ``A A^T`` proves there are none, without
+    an SVD), and for dependent rows the rank at a nearby state along the motion (a step
+    of 1e-6 along the null space of ``A``: higher there at a singular configuration,
+    the same for redundant joints, whose change is second order, ~1e-12)."""
+    pat = num.pattern
+    Av, _ = num.velocity_sparse(t0, q)
+    if num.m == 0 or (not rank.dependent and gram_well_conditioned(
+            pat.A_rows, pat.A_cols, Av, (num.m, num.n), limit=1.0 / NEAR)):
+        return rank
+    A = pat.dense_A(Av)
+    kept = A if rank.kept is None else A[rank.kept]
+    _, s, vt = np.linalg.svd(A)
+    near = int(np.count_nonzero(np.linalg.svd(kept, compute_uv=False) < NEAR * s[0]))
+    nearby = None
+    if rank.dependent:
+        null = vt[rank.rank:]
+        direction = np.random.default_rng(0).standard_normal(len(null)) @ null
+        step = 1e-6 * max(1.0, float(np.abs(q).max(initial=0.0)))
+        A_near = pat.dense_A(num.velocity_sparse(t0, q + step * direction)[0])
+        found = constraint_rank(A_near, rank.names, num.n).rank
+        nearby = found if found > rank.rank else None
+    return replace(rank, near=near, rank_nearby=nearby)
 
 
 def _check_consistent(

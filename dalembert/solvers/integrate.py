@@ -17,8 +17,10 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ..errors import DalembertError, InputError
+from .careful import CarefulSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
+from .singular_watch import Singularity
 from .step_control import CONTROLLED, ControlledSteps
 
 __all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate"]
@@ -37,6 +39,8 @@ def integrate(
     progress: bool = False,
     stretches: bool = False,
     diagnose: Diagnosis | None = None,
+    singular: Singularity | None = None,
+    careful: CarefulSteps | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -57,6 +61,12 @@ def integrate(
     diagnose
         ``diagnose(t, y)``: what is not finite at a state, for the message of a run
         that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
+    singular
+        ``singular(t, y)``: the singular configuration at a state, or ``""``; steps
+        that collapse there end the run (:mod:`~dalembert.solvers.singular_watch`).
+    careful
+        With ``stretches``: how to take the steps near a singular configuration the
+        Python way (:mod:`~dalembert.solvers.careful`).
     solver_options
         Passed to ``method``.
 
@@ -70,6 +80,8 @@ def integrate(
     """
     t0, tf = t_span
     y0 = np.asarray(y0, dtype=float)
+    jac = solver_options.get("jac")
+    jac_before = getattr(jac, "evaluations", 0)  # fun's calls in a Jacobian, in nfev too
     times = None
     loop: SimulationLoop | None = None
     bar = None
@@ -82,9 +94,10 @@ def integrate(
             # may fail right there, and a Ctrl-C may land there too
             solver = method(fun, t0, y0, tf, **solver_options)
             if stretches and project is not None:
-                loop = StretchLoop(solver, times, project, diagnose)
+                loop = StretchLoop(solver, times, project, diagnose, singular, careful)
             else:
-                loop = PythonLoop(solver, times, events, project, dense_output, diagnose)
+                loop = PythonLoop(solver, times, events, project, dense_output, diagnose,
+                                  singular)
             bar = _progress_bar(t0, tf) if progress else None
             while loop.status is None:
                 loop.advance()
@@ -109,7 +122,10 @@ def integrate(
         finally:
             if bar is not None:
                 bar.close()
-    return loop.result(_method_name(method))
+    result = loop.result(_method_name(method))
+    if "nfev" in result.stats:
+        result.stats["nfev"] += getattr(jac, "evaluations", 0) - jac_before
+    return result
 
 
 def _not_started(t0: float, y0: np.ndarray, t_eval: np.ndarray | None, status: str,
@@ -135,6 +151,8 @@ def finite_difference_jacobian(fun: Callable) -> Callable:
     SciPy's own ``num_jac`` grows its step by 10x at every call for a column that
     does not change ``fun`` (a position entering only through a linear constraint).
     After ~300 Jacobians the step overflows, and BDF then crawls with tiny steps.
+    Its ``evaluations`` attribute counts the calls of ``fun`` it made (``integrate``
+    adds them to ``nfev``: SciPy counts only its own).
 
     Parameters
     ----------
@@ -147,9 +165,12 @@ def finite_difference_jacobian(fun: Callable) -> Callable:
     >>> np.round(jac(0.0, np.array([1.0, 0.0])), 6)
     array([[ 0.,  1.],
            [-4.,  0.]])
+    >>> jac.evaluations
+    3
     """
 
     def jac(t: float, y: np.ndarray) -> np.ndarray:
+        jac.evaluations += 1 + y.size  # type: ignore[attr-defined]
         f0 = np.asarray(fun(t, y), dtype=float)
         J = np.empty((f0.size, y.size))
         for j in range(y.size):
@@ -159,6 +180,7 @@ def finite_difference_jacobian(fun: Callable) -> Callable:
             J[:, j] = (np.asarray(fun(t, shifted), dtype=float) - f0) / (shifted[j] - y[j])
         return J
 
+    jac.evaluations = 0  # type: ignore[attr-defined]
     return jac
 
 

@@ -20,10 +20,13 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ..errors import DalembertError
+from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS
+from .careful import CarefulSteps
 from .dense_output import DenseRecorder
 from .native.run import StretchRunner
 from .nonfinite import Diagnosis
-from .scipy_ivp import last_stages, restart_second_order, step_inputs
+from .scipy_ivp import last_stages, restart_second_order, step_inputs, take_state
+from .singular_watch import Singularity, StepCollapse
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
 
@@ -105,16 +108,21 @@ class PythonLoop(SimulationLoop):
     state spreads to every later one), with ``diagnose(t, y)`` saying which quantity
     of the model is not finite there (:mod:`~dalembert.solvers.nonfinite`). An event
     function that raises or returns a value that is not finite ends the run too,
-    keeping the steps before.
+    keeping the steps before. Steps that collapse near a singular configuration of the
+    constraints (``singular(t, y)`` says so, naming the rows) end the run with that
+    diagnosis (:mod:`~dalembert.solvers.singular_watch`).
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None = None,
                  events: Sequence[Callable] = (), project: Projector | None = None,
-                 dense_output: bool = False, diagnose: Diagnosis | None = None) -> None:
+                 dense_output: bool = False, diagnose: Diagnosis | None = None,
+                 singular: Singularity | None = None) -> None:
         self.solver = solver
         self.direction = solver.direction if solver.direction != 0 else 1.0
         self.project = project
         self.diagnose = diagnose
+        self.singular = singular
+        self.collapse = StepCollapse(solver.t)
         self.events = list(events or ())
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
         if self.t_eval is not None:
@@ -215,6 +223,22 @@ class PythonLoop(SimulationLoop):
         if solver.status == "finished":
             return self.stop("finished", "the integration reached the end of t_span")
         self._commit()
+        self._watch_steps()
+
+    def _watch_steps(self) -> None:
+        """Stop if the steps have collapsed near a singular configuration (after a
+        complete unit of work: the trajectory so far is kept)."""
+        if self.singular is None or not self.collapse.note(self.t_reached, self.n_steps):
+            return
+        solver = self.solver
+        found = self.singular(solver.t, solver.y)
+        if not found:
+            return self.collapse.quiet(self.n_steps)
+        self.stop("failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
+                  f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
+                  f"step before, the last {solver.h_previous if solver.h_previous else 0:.1e}) "
+                  f"{found}. The trajectory up to there is returned; a looser rtol or "
+                  "another method may get through, or the mechanism may lock here")
 
     def _failed(self, message: str) -> None:
         """Stop with ``message``, or with what is not finite at the step's start."""
@@ -254,10 +278,11 @@ class PythonLoop(SimulationLoop):
                 "the model is undefined or overflows just past this state (a square root "
                 "of a negative number, a division by zero...), or the motion runs into a "
                 "singularity")
+        found = self.singular(self.solver.t, self.solver.y) if self.singular else ""
         self._failed(
-            f"integration failed at t={self.solver.t:.6g}: {message.rstrip('.')}. "
-            "The problem may be stiff (try method='Radau' or 'BDF') or the mechanism "
-            "near a singular configuration")
+            f"integration failed at t={self.solver.t:.6g}: {message.rstrip('.')}. " +
+            (f"The state is {found}" if found else "The problem may be stiff (try "
+             "method='Radau' or 'BDF') or the mechanism near a singular configuration"))
 
     def _project_step(self, t: float) -> np.ndarray:
         """The new state, projected (the solver restarts from it after the outputs)."""
@@ -402,21 +427,57 @@ class StretchLoop(PythonLoop):
     way (a step from values that are not finite among them: the Python loop then
     stops with its diagnosis). Only for a native Runge-Kutta solver with its native
     projection, no events and no dense output (the plan checks). Same steps and
-    states as :class:`PythonLoop` (tested).
+    states as :class:`PythonLoop` (tested). Near a singular configuration (measured
+    after every stretch) the steps are taken the Python way, carefully (``careful``,
+    :mod:`~dalembert.solvers.careful`), until the state is clear of it.
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
-                 project: Projector, diagnose: Diagnosis | None = None) -> None:
-        super().__init__(solver, t_eval, (), project, False, diagnose)
+                 project: Projector, diagnose: Diagnosis | None = None,
+                 singular: Singularity | None = None,
+                 careful: CarefulSteps | None = None) -> None:
+        super().__init__(solver, t_eval, (), project, False, diagnose, singular)
         self.runner = StretchRunner(solver, self.t_eval)
+        self.native, self.native_project, self.careful = solver, project, careful
+        self._careful_nfev = 0  # the evaluations of the careful solvers before this one
 
     def advance(self) -> None:
+        if self.solver is not self.native:  # careful steps
+            super().advance()
+            if self.status is None and self.careful is not None \
+                    and not self.careful.model.careful:
+                self._back_to_c()
+            return
         ran = self.runner.run()
         self._absorb()
         if not ran:  # C left the next step to the step-by-step loop
             return super().advance()
         if self.solver.status == "finished":
-            self.stop("finished", "the integration reached the end of t_span")
+            return self.stop("finished", "the integration reached the end of t_span")
+        if self.careful is not None and self.careful.solver is not None:
+            solver, model = self.solver, self.careful.model
+            model.measure(solver.t, solver.y[:solver.n // 2])
+            if model.careful:
+                self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+                self.project = model.project
+                return
+        self._watch_steps()
+
+    def _back_to_c(self) -> None:
+        """Hand the run back to C after careful steps."""
+        careful, native = self.solver, self.native
+        self._careful_nfev += careful.nfev
+        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
+                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
+                   h_previous=careful.h_previous)
+        self.solver, self.project = native, self.native_project
+
+    def result(self, method_name: str) -> IntegrationResult:
+        result = super().result(method_name)
+        if self.solver is not self.native:  # ended in careful steps
+            result.stats["nfev"] += self.native.nfev
+        result.stats["nfev"] += self._careful_nfev
+        return result
 
     def interrupt(self) -> None:
         self._absorb()  # a stretch run in C before the Ctrl-C is kept

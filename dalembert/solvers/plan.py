@@ -33,6 +33,7 @@ from scipy.integrate import BDF, OdeSolver, Radau
 from ..codegen.compiled import NumericModel
 from ..inputs import InputSignal
 from ..options import Baumgarte, Projection, SimulationOptions
+from .careful import CarefulModel, CarefulSteps
 from .dynamics import first_order_rhs
 from .initialization import InitializationReport
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
@@ -40,6 +41,7 @@ from .native import NATIVE_METHODS, NotApplicable, native_solver
 from .nonfinite import Diagnosis, nonfinite_diagnosis
 from .outputs import evaluate_outputs
 from .projection import StepProjector
+from .singular_watch import Singularity, singular_diagnosis
 from .state import accelerations_at
 from .step_control import ControlledSteps, controlled_class
 
@@ -77,6 +79,14 @@ class SimulationPlan:
     diagnose
         ``diagnose(t, y)``: what is not finite at a state, for the message of a run
         that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
+    singular
+        ``singular(t, y)``: the singular configuration of the constraints at a state,
+        for the message of a run whose steps collapse there
+        (:mod:`~dalembert.solvers.singular_watch`).
+    careful
+        The careful steps near a singular configuration (:mod:`~dalembert.solvers.careful`):
+        in the Python loop, its ``rhs`` and ``project``; the C loop takes them the Python
+        way. ``None`` without them.
     """
 
     options: SimulationOptions
@@ -91,6 +101,8 @@ class SimulationPlan:
     outputs: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]] = field(repr=False)
     events: tuple[Callable, ...] = field(repr=False)
     diagnose: Diagnosis = field(repr=False)
+    singular: Singularity | None = field(repr=False, default=None)
+    careful: CarefulSteps | None = field(repr=False, default=None)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     num: NumericModel | None = field(repr=False, default=None)
 
@@ -102,10 +114,13 @@ class SimulationPlan:
     def run(self) -> IntegrationResult:
         """Integrate: the raw states and statistics (``System.run`` adds the rest)."""
         out = self.options.output
+        if self.careful is not None:
+            self.careful.model.restart(self.options.t_span[0], self.initial.q)
         return integrate(
             self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
+            singular=self.singular, careful=self.careful if self.stretches else None,
             **self.solver_options)
 
 
@@ -162,22 +177,39 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     solver_options = step.solver_options()
     stepper = NATIVE_METHODS.get(options.method) if native is not None else None
     rhs: Callable[[float, np.ndarray], np.ndarray]
+    careful, careful_rhs = None, None
+    if projection and num.m:  # near a singular configuration: careful steps in Python
+        careful = CarefulModel(num, kept, first_order_rhs(num, 0.0, kept),
+                               StepProjector(num, kept), options.t_span)
+        careful_rhs = _with_inputs(num, signal, careful.rhs)
+    python_options = dict(solver_options)
     if native is not None:
         rhs, outputs = native.rhs, native.outputs
         project = native.project if projection else None
         if stepper is not None:
             solver, solver_options["native"] = stepper, native
+    elif careful is not None and careful_rhs is not None:
+        rhs, project = careful_rhs, careful.project
+        outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
     else:
         rhs = _with_inputs(num, signal, first_order_rhs(num, gain, kept))
         project = StepProjector(num, kept) if projection else None
         outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
     if issubclass(solver, ControlledSteps):
         solver_options["step_control"] = step.controller
+    python_solver = controlled_class(options.method, step.controller)
+    if issubclass(python_solver, ControlledSteps):
+        python_options["step_control"] = step.controller
     if solver in (Radau, BDF):
         solver_options["jac"] = finite_difference_jacobian(rhs)
     output = options.output
     stretches = stepper is not None and projection and not output.events \
         and not output.dense_output
+    steps = None
+    if careful is not None and careful_rhs is not None and (stretches or native is None):
+        steps = CarefulSteps(careful, partial(_careful_solver, python_solver, careful_rhs,
+                                              options.t_span[1], python_options)
+                             if stretches else None)
     n = num.n
     rows = initial.rank.names if initial.rank is not None else None
     return SimulationPlan(
@@ -186,7 +218,18 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         rhs=rhs, project=project, outputs=outputs,
         events=tuple(_state_event(e, n, partial(_multipliers, num, signal))
                      for e in output.events), parameters=num.p, num=num,
-        diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs))
+        diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
+        singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
+        careful=steps)
+
+
+def _careful_solver(cls: type[OdeSolver], rhs: Callable, t_bound: float,
+                    options: dict[str, object], t: float, y: np.ndarray,
+                    h_abs: float) -> OdeSolver:
+    """A Python solver of the run's method and tolerances at ``(t, y)``, its first
+    step ``h_abs`` (the careful steps of the C loop, :mod:`.careful`)."""
+    first = min(h_abs, abs(t_bound - t)) if h_abs > 0 else None
+    return cls(rhs, t, y, t_bound, **{**options, "first_step": first})
 
 
 def _with_inputs(num: NumericModel, signal: InputSignal | None,

@@ -282,6 +282,20 @@ static int factor_band(dl_model *md, const unsigned char *active) {
   return md->m_band ? band_cholesky(md->S, md->m_band, md->kd) : DL_OK;
 }
 
+/* The smallest pivot ratio of the factored S = Z^T Z (all rows active): each band
+ * row's pivot against its diagonal before the factorization (gram_diagonal), the
+ * squared sine of its angle to the rows before it. Small near a singular configuration
+ * (numerics/singular.py); a cheap by-product of the projection's factorization. */
+static double band_conditioning(const dl_model *md) {
+  const int64_t w = md->kd + 1;
+  double worst = INFINITY;
+  for (int64_t k = 0; k < md->m_band; ++k) {
+    const double d = md->gram_diagonal[k], inv = md->S[k * w];
+    if (d > 0.0 && inv > 0.0 && 1.0 / (inv * inv * d) < worst) worst = 1.0 / (inv * inv * d);
+  }
+  return worst;
+}
+
 /* With M = I (the projections): z = a, copied (the elimination changes it), the internal
  * rows eliminated, S = Z^T Z over the active rows (others get a unit diagonal), factored. */
 int factor_schur(dl_model *md, const unsigned char *active) {
@@ -296,7 +310,12 @@ int factor_schur(dl_model *md, const unsigned char *active) {
   clear_band(md);
   for (int64_t b = 0; b < md->n_blocks; ++b)
     BY_SIZE(block_size(md, b), gram_block, md, b, z, active, md->S);
-  return factor_band(md, active);
+  const int record = !active || md->n_hol == md->m, w = (int)(md->kd + 1);
+  if (record)
+    for (int64_t k = 0; k < md->m_band; ++k) md->gram_diagonal[k] = md->S[k * w];
+  const int status = factor_band(md, active);
+  if (record) md->conditioning = status == DL_OK ? band_conditioning(md) : 0.0;
+  return status;
 }
 
 /* lam = S^-1 rhs over the band's rows (rhs by row, overwritten by lam), then

@@ -36,7 +36,7 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_model, active), FIELD(dl_model, kkt_in_layout), FIELD(dl_model, c),
   FIELD(dl_model, n_dropped_pairs), FIELD(dl_model, n_dropped),
   FIELD(dl_model, dropped_rows), FIELD(dl_model, dropped_rtol), FIELD(dl_model, inputs),
-  FIELD(dl_model, input_state),
+  FIELD(dl_model, input_state), FIELD(dl_model, conditioning), FIELD(dl_model, gram_diagonal),
   SIZE(dl_tableau),
   FIELD(dl_tableau, n_stages), FIELD(dl_tableau, A), FIELD(dl_tableau, B),
   FIELD(dl_tableau, C), FIELD(dl_tableau, E), FIELD(dl_tableau, E3),
@@ -54,9 +54,10 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_run, position_tol), FIELD(dl_run, accept_tol), FIELD(dl_run, max_steps),
   FIELD(dl_run, max_seconds), FIELD(dl_run, capacity), FIELD(dl_run, t_out),
   FIELD(dl_run, y_out), FIELD(dl_run, n_steps), FIELD(dl_run, n_out), FIELD(dl_run, t_old),
-  FIELD(dl_run, y_new), FIELD(dl_run, y_end), FIELD(dl_run, rows),
+  FIELD(dl_run, y_new), FIELD(dl_run, y_end), FIELD(dl_run, rows), FIELD(dl_run, near2),
   CODE(DL_OK), CODE(DL_SINGULAR_MASS), CODE(DL_SINGULAR_CONSTRAINTS), CODE(DL_STEP_TOO_SMALL),
   CODE(DL_PROJECTION), CODE(DL_OUTPUTS), CODE(DL_RANK_CHANGED), CODE(DL_NOT_FINITE), CODE(DL_INPUT),
+  CODE(DL_NEAR_SINGULAR),
 };
 
 /* The table above: *entries points to it, the count is returned. */

@@ -25,13 +25,14 @@ INPUTS_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, _f64)
 #: Return codes of the runtime (OUTPUTS: a step has more outputs than the buffer holds;
 #: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones;
 #: NOT_FINITE: a step would start from a time, step size, state or derivative that is
-#: not finite; INPUT: the inputs' callback failed).
+#: not finite; INPUT: the inputs' callback failed; NEAR_SINGULAR: a stretch ended after
+#: a step that ended near a singular configuration).
 (OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED,
- NOT_FINITE, INPUT) = range(9)
+ NOT_FINITE, INPUT, NEAR_SINGULAR) = range(10)
 CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
          "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
-         "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT}
+         "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT, "DL_NEAR_SINGULAR": NEAR_SINGULAR}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
 SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "layout.c")
 HEADER = "runtime.h"
@@ -63,6 +64,7 @@ class Model(ctypes.Structure):
         ("kkt_in_layout", _i64), ("c", _ptr),
         ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
         ("dropped_rtol", _f64), ("inputs", _ptr), ("input_state", _ptr),
+        ("conditioning", _f64), ("gram_diagonal", _ptr),
     ]
 
 
@@ -85,7 +87,7 @@ class Run(ctypes.Structure):
                 ("accept_tol", _f64), ("max_steps", _i64), ("max_seconds", _f64),
                 ("capacity", _i64), ("t_out", _ptr), ("y_out", _ptr), ("n_steps", _i64),
                 ("n_out", _i64), ("t_old", _f64),
-                *((name, _ptr) for name in ("y_new", "y_end", "rows"))]
+                *((name, _ptr) for name in ("y_new", "y_end", "rows")), ("near2", _f64)]
 
 
 #: The C struct each mirror stands for.

@@ -1,5 +1,9 @@
 """Whole stretches of a simulation in C: steps, projections, outputs and restarts.
 
+A call also ends after a step that ends near a singular configuration (the smallest
+pivot ratio of the projection's ``A A^T`` below ``(10 NEAR)**2``): the caller then
+measures as the Python loop does and decides (:mod:`~dalembert.solvers.careful`).
+
 :class:`StretchRunner` drives ``dl_rk_run`` for one of the native Runge-Kutta
 solvers: each call takes steps as :func:`~dalembert.solvers.integrate.integrate`'s
 loop takes them (step, project the end, interpolate and project the output times
@@ -17,6 +21,7 @@ from functools import partial
 import numpy as np
 from scipy.integrate import OdeSolver
 
+from ...numerics.singular import NEAR
 from ..scipy_ivp import take_state
 from . import library
 
@@ -53,7 +58,7 @@ class StretchRunner:
             position_tol=position_tol, accept_tol=accept_tol, max_steps=MAX_STEPS,
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
-            rows=interpolant)
+            rows=interpolant, near2=(10 * NEAR) ** 2)
         self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
                              ctypes.addressof(self._run), self._y.ctypes.data,
                              self._K.ctypes.data, solver._stage.ctypes.data)
@@ -75,7 +80,7 @@ class StretchRunner:
                                                 "right"))
         run.n_steps = run.n_out = 0
         self._nfev, self._pending = solver.nfev, True
-        return self._call() == library.OK
+        return self._call() in (library.OK, library.NEAR_SINGULAR)
 
     def take(self) -> tuple[int, np.ndarray, np.ndarray] | None:
         """``(steps, t, y)`` done by the last :meth:`run`, the solver brought up to

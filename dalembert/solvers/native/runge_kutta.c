@@ -227,7 +227,7 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
   }
   run->next_eval = hi;
   run->n_out += count;
-  return DL_OK;
+  return md->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
 }
 
 /* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
@@ -249,7 +249,7 @@ int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, d
     if (run->n_steps && (double)(clock() - start) > run->max_seconds * CLOCKS_PER_SEC) break;
     const dl_stepper before = *st;
     const int status = finish_step(md, tb, st, run, y, K, stage);
-    if (status != DL_OK) {
+    if (status != DL_OK && status != DL_NEAR_SINGULAR) {
       *st = before;
       /* a full buffer after some steps just ends this call */
       return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;
@@ -261,6 +261,7 @@ int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, d
      * with the projected qd and the last stage's qdd, at the end before the projection */
     memcpy(K, y + md->n, (size_t)md->n * sizeof(double));
     memcpy(K + md->n, K + tb->n_stages * n_state + md->n, (size_t)md->n * sizeof(double));
+    if (status == DL_NEAR_SINGULAR) return status;  /* the caller measures and decides */
   }
   return DL_OK;
 }

@@ -23,10 +23,12 @@
 
 /* Return codes (library.py's CODES). DL_RANK_CHANGED: a dropped row no longer follows
  * from the kept ones (the rank changed since it was measured); DL_NOT_FINITE: a step
- * would start from a time, step size, state or derivative that is not finite. */
+ * would start from a time, step size, state or derivative that is not finite;
+ * DL_NEAR_SINGULAR: a stretch ended after a step that ended near a singular
+ * configuration (the caller measures and decides, numerics/singular.py). */
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
        DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7,
-       DL_INPUT = 8 };
+       DL_INPUT = 8, DL_NEAR_SINGULAR = 9 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);
@@ -92,6 +94,10 @@ typedef struct {
    * non-zero if it failed (DL_INPUT) */
   int (*inputs)(double t);
   double *input_state;
+  /* The smallest pivot ratio of the last factorization of A A^T with every row active
+   * (factor_schur: band_conditioning), and the band rows' diagonals before it. */
+  double conditioning;
+  double *gram_diagonal;      /* m */
 } dl_model;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
@@ -135,6 +141,7 @@ typedef struct {
   double t_old;               /* the start of its last step */
   double *y_new, *y_end;      /* work, n_state each */
   double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
+  double near2;               /* a step ending with conditioning below this ends the call */
 } dl_run;
 
 /* Small helpers are inlined where the block size is a constant (see BY_SIZE); the

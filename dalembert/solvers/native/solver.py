@@ -97,7 +97,7 @@ class NativeSolver:
                               n_dropped=len(s.dropped_rows), dropped_rtol=DROPPED_ROW_RTOL,
                               n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
                               n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
-                              n_unit_gram=len(s.unit_gram_target))
+                              n_unit_gram=len(s.unit_gram_target), conditioning=np.inf)
         for name, h in zip(("velocity", "position", "energy"), handles[1:]):
             setattr(model, name, self._function(h))
         for name, array in s.arrays().items():
@@ -105,7 +105,8 @@ class NativeSolver:
         vectors = int(s.pair_vec[-1])
         sizes = {"vel_values": nA + m, "psi": len(num.holonomic_rows), "y": vectors,
                  "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
-                 "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n}
+                 "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n,
+                 "gram_diagonal": m}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
         self._kkt(model, handles[0])

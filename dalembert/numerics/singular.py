@@ -1,0 +1,92 @@
+"""Singular configurations of the constraints: the thresholds and tests both loops share.
+
+At a singular configuration the constraint Jacobian ``A`` loses rank during a run (a
+four-bar folding flat, a closed chain stretched straight, a rod whose length goes to
+zero). The multipliers grow without bound (like ``1 / distance``), and the step-size
+controller may creep towards the rank drop with ever smaller steps. Both simulation
+loops, in C and in Python, watch the steps with the same thresholds, here, and take
+the same decision from them (:class:`~dalembert.solvers.singular_watch.StepCollapse`):
+
+- the steps have *collapsed* when the last :data:`COLLAPSE_STEPS` (or more) of them
+  advanced on average less than :data:`COLLAPSE_RATIO` of the mean step before them;
+- a state is *near a singular configuration* when the smallest singular value of the
+  kept rows of ``A`` is below :data:`NEAR` times the largest, or a row's norm is below
+  :data:`NEAR` times its norm at the start (a constraint whose gradient vanishes).
+
+A collapse near a singular configuration ends the run with a diagnosis naming the
+time and the rows involved (:func:`near_dependent_rows`). The measure is taken only
+when the steps have collapsed, so a run that never nears one pays nothing for it.
+At the start, the degrees of freedom are counted with ``RANK_RTOL``
+(:mod:`.rank`), and singular values between it and :data:`NEAR` make the count
+ambiguous (said in the report).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+#: Singular values below this fraction of the largest: near a rank drop.
+NEAR = 1e-3
+#: While careful, rows whose Gram pivot ratio is below ``TRUNCATE**2`` are left out.
+TRUNCATE = 1e-4
+#: The steps are watched over windows of at least this many steps ...
+COLLAPSE_STEPS = 500
+#: ... and have collapsed when their mean is below this fraction of the mean before.
+COLLAPSE_RATIO = 1e-3
+#: Rows named in a message, at most.
+NAMED = 6
+
+
+def near_dependent_rows(A: np.ndarray, names: Sequence[str],
+                        below: float = NEAR) -> tuple[list[str], int, float]:
+    """The rows taking part in the near dependencies of ``A``: those with a large entry
+    in a left singular vector whose singular value is below ``below`` times the largest.
+
+    Parameters
+    ----------
+    A
+        The constraint Jacobian (kept rows), dense.
+    names
+        One name per row.
+    below
+        Singular values below this fraction of the largest count as a rank drop.
+
+    Returns
+    -------
+    names, drop, ratio
+        The rows involved (largest part first), how many singular values are below,
+        and the smallest singular value over the largest.
+
+    Examples
+    --------
+    >>> rows, drop, ratio = near_dependent_rows(np.array([[1.0, 0.0], [1.0, 1e-7]]), "ab")
+    >>> rows, drop, f"{ratio:.1e}"
+    (['a', 'b'], 1, '5.0e-08')
+    """
+    if A.shape[0] == 0:
+        return [], 0, 1.0
+    u, s, _ = np.linalg.svd(A, full_matrices=True)
+    s = np.concatenate([s, np.zeros(A.shape[0] - len(s))])
+    largest = s[0] if s[0] > 0 else 1.0
+    low = np.flatnonzero(s < below * largest)
+    ratio = float(s[-1] / largest)
+    if len(low) == 0:
+        return [], 0, ratio
+    weight = np.abs(u[:, low]).max(axis=1)
+    involved = np.flatnonzero(weight > 0.1 * weight.max())
+    involved = involved[np.argsort(-weight[involved], kind="stable")]
+    return [names[int(i)] for i in involved], len(low), ratio
+
+
+def named(rows: Sequence[str]) -> str:
+    """``"a, b, c"``, at most :data:`NAMED` of them, with how many more.
+
+    >>> named(["r1", "r2"])
+    'r1, r2'
+    >>> named([f"r{k}" for k in range(9)])
+    'r0, r1, r2, r3, r4, r5 and 3 more'
+    """
+    shown = ", ".join(rows[:NAMED])
+    return shown + (f" and {len(rows) - NAMED} more" if len(rows) > NAMED else "")
