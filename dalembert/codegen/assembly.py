@@ -33,6 +33,7 @@ from ..equations.static import static_entries
 from ..model.coordinates import t
 from . import c_backend
 from .compiled import CompiledEquations, SparsePattern, _energy_vector
+from .numpy_printer import expression_values
 from .static import StaticFunctions, StaticPattern
 
 
@@ -124,13 +125,7 @@ class ParameterLayout:
         p = np.asarray(p, dtype=float)
         if not self.derived:
             return p
-        return np.concatenate([p, _evaluate(self.parameters, self.derived, p)])
-
-
-def _evaluate(symbols: tuple[sp.Symbol, ...], exprs: tuple[sp.Expr, ...],
-              p: np.ndarray) -> np.ndarray:
-    values = dict(zip(symbols, map(float, p)))
-    return np.array([float(e.xreplace(values)) for e in exprs], dtype=float)
+        return np.concatenate([p, expression_values(self.parameters, self.derived, p)])
 
 
 def compile_parts(

@@ -122,6 +122,38 @@ def generate_function(
     return _compile(source, name)
 
 
+def expression_values(symbols: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
+                      values: np.ndarray) -> np.ndarray:
+    """``exprs`` evaluated at ``symbols = values``, through one generated function per
+    pair of sequences (made on first use and kept): binding new parameter values to a
+    model evaluates its derived numbers (a link's inertia from its mass) without SymPy.
+
+    Parameters
+    ----------
+    symbols
+        The symbols the expressions are written in.
+    exprs
+        The expressions (no other free symbol).
+    values
+        A value per symbol.
+
+    Examples
+    --------
+    >>> m, l = sp.symbols("m l")
+    >>> expression_values((m, l), (m * l**2 / 12, 2 * m), np.array([3.0, 2.0]))
+    array([1., 6.])
+    """
+    if not exprs:
+        return np.zeros(0)
+    return _values_function(tuple(symbols), tuple(exprs))(np.asarray(values, dtype=float))[0]
+
+
+@functools.lru_cache(maxsize=128)
+def _values_function(symbols: tuple[sp.Symbol, ...], exprs: tuple[sp.Expr, ...]) -> Callable:
+    return generate_function("values", [("p", symbols)], [("v", sp.Matrix(exprs))],
+                             vectors={"v"})
+
+
 def _require_identifiers(*names: str) -> None:
     for n in names:
         if not n.isidentifier() or keyword.iskeyword(n):

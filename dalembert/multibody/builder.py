@@ -30,7 +30,14 @@ from .drivers import Actuator, JointSpring
 from .initial_state import body_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
-from .parametric import Scalar, array, parametric_symbols, scalar, with_numbers
+from .parametric import (
+    Scalar,
+    array,
+    evaluated_expressions,
+    parametric_symbols,
+    scalar,
+    with_numbers,
+)
 from .parts import gravity_potential
 from .system import MultibodySystem
 from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
@@ -168,7 +175,10 @@ class Multibody:
         key = tuple(numbers.values())
         if self._last_bound is not None and self._last_bound[0] == key:
             return self._last_bound[1]  # the same values as the last time: checked already
-        memo: dict[sp.Basic, float] = {}  # pieces share expressions: each evaluated once
+        # every expression of every piece evaluated at once (pieces share some)
+        memo = evaluated_expressions(
+            [self, *self.bodies, *self.joints, *self.joint_springs, *self.springs,
+             *self.forces, *self.torques], numbers)
         bound = copy.copy(self)
         bound.gravity = with_numbers(self, numbers, memo).gravity
         mapped = {id(b): with_numbers(b, numbers, memo) for b in self.bodies}

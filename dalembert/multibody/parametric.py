@@ -15,13 +15,14 @@ numbers-or-expressions each), which is what the part-by-part code generation
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any, TypeAlias, TypeVar
 
 import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from ..codegen.numpy_printer import expression_values
 from ..errors import ModelError
 from ..model.coordinates import t
 from ..model.expressions import sympify_strict
@@ -174,6 +175,44 @@ def parametric_symbols(piece: object) -> set[sp.Symbol]:
     """The parameter symbols in a piece's ``PARAMETRIC`` attributes."""
     return set().union(*(symbols_of(getattr(piece, name))
                          for name in getattr(piece, "PARAMETRIC", ())))
+
+
+def evaluated_expressions(pieces: Iterable[object],
+                          values: Mapping[sp.Symbol, float]) -> dict[sp.Basic, float]:
+    """Every expression of the pieces' parametric attributes evaluated at ``values``, at
+    once (one generated function per set of expressions, kept): the ``memo`` of
+    :func:`with_numbers` for a whole mechanism, so that binding new values runs no
+    SymPy. Values that are not finite are left out (:func:`evaluate` then names them).
+
+    Parameters
+    ----------
+    pieces
+        Bodies, joints, loads... (their ``PARAMETRIC`` attributes are read).
+    values
+        A number per parameter symbol.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Particle
+    >>> m = sp.Symbol("m")
+    >>> evaluated_expressions([Particle("p", 2 * m)], {m: 1.5})
+    {2*m: 3.0}
+    """
+    symbols = tuple(values)
+    known = set(symbols)
+    found: dict[sp.Basic, None] = {}
+    for piece in pieces:
+        for name in getattr(piece, "PARAMETRIC", ()):
+            value = getattr(piece, name)
+            entries = value.ravel() if isinstance(value, np.ndarray) else (value,)
+            found.update((e, None) for e in entries
+                         if isinstance(e, sp.Expr) and e.free_symbols <= known)
+    exprs = tuple(found)
+    try:
+        numbers = expression_values(symbols, exprs, np.array([values[s] for s in symbols]))
+    except ModelError:  # a function NumPy code cannot print: SymPy evaluates them one by one
+        return {}
+    return {e: float(v) for e, v in zip(exprs, numbers) if np.isfinite(v)}
 
 
 def with_numbers(piece: P, values: Mapping[sp.Symbol, float],

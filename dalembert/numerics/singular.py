@@ -29,6 +29,10 @@ import numpy as np
 
 #: Singular values below this fraction of the largest: near a rank drop.
 NEAR = 1e-3
+#: Models with more constraint rows get no dense measure of their conditioning (after
+#: every step, or of the degrees of freedom at the start when no row is dependent): its
+#: cost grows as rows^2 x coordinates (seconds for a 256-link chain).
+DENSE_ROWS = 400
 #: While careful, rows whose Gram pivot ratio is below ``TRUNCATE**2`` are left out.
 TRUNCATE = 1e-4
 #: The steps are watched over windows of at least this many steps ...

@@ -31,10 +31,7 @@ from scipy.integrate import OdeSolver
 from ..codegen.compiled import NumericModel
 from ..errors import SingularSystemError
 from ..numerics.conditioning import spd_condition
-from ..numerics.singular import NEAR, TRUNCATE
-
-#: Models with more constraint rows are not measured after every step (dense cost).
-DENSE_ROWS = 400
+from ..numerics.singular import DENSE_ROWS, NEAR, TRUNCATE
 
 
 def unit_rows(A: np.ndarray) -> np.ndarray:

@@ -12,7 +12,7 @@ from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
 from ..numerics.conditioning import gram_well_conditioned
 from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error, sparse_constraint_rank
-from ..numerics.singular import NEAR
+from ..numerics.singular import DENSE_ROWS, NEAR
 from ..options import RedundantConstraints, VelocityProjection
 from .initial_checks import check_finite, check_kinetic_energy, check_resolvable
 from .kkt import SINGULAR_COND, check_kkt, solve_kkt
@@ -355,8 +355,8 @@ def _singular_start(num: NumericModel, t0: float, q: np.ndarray,
     the same for redundant joints, whose change is second order, ~1e-12)."""
     pat = num.pattern
     Av, _ = num.velocity_sparse(t0, q)
-    if num.m == 0 or (not rank.dependent and gram_well_conditioned(
-            pat.A_rows, pat.A_cols, Av, (num.m, num.n), limit=1.0 / NEAR)):
+    if num.m == 0 or (not rank.dependent and (num.m > DENSE_ROWS or gram_well_conditioned(
+            pat.A_rows, pat.A_cols, Av, (num.m, num.n), limit=1.0 / NEAR))):
         return rank
     A = pat.dense_A(Av)
     kept = A if rank.kept is None else A[rank.kept]

@@ -99,8 +99,9 @@ def singular_diagnosis(num: NumericModel, constraint_names: Sequence[str] | None
     kept_names = [names[int(k)] for k in rows]
     pattern = num.pattern
 
-    def norms(q: np.ndarray) -> np.ndarray:
-        return np.linalg.norm(pattern.dense_A(num.velocity_sparse(0.0, q)[0])[rows], axis=1)
+    def norms(q: np.ndarray) -> np.ndarray:  # from the sparse values: no dense A
+        Av = num.velocity_sparse(0.0, q)[0]
+        return np.sqrt(np.bincount(pattern.A_rows, weights=Av**2, minlength=num.m))[rows]
 
     norm0 = None if q0 is None else norms(np.asarray(q0, dtype=float))
 
