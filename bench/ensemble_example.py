@@ -64,6 +64,10 @@ if __name__ == "__main__":  # Dask's worker processes import this script
     print(result.summary[["status", "energy_error", "seconds"]].describe())
 
     q = [0.05, 0.25, 0.5, 0.75, 0.95]
+    for name in ("tip_x", "tip_z"):  # the spread where the run ends
+        end = result.quantile(name, q)[:, -1].values
+        print(f"{name} at t = 10 s: " + ", ".join(f"{int(100 * k)}% {v:.3f} m"
+                                                  for k, v in zip(q, end)))
     fig, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
     for ax, name in zip(axes, ("tip_x", "tip_z")):
         band = result.quantile(name, q)

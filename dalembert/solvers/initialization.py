@@ -10,7 +10,7 @@ import numpy as np
 from ..codegen.compiled import NumericModel
 from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
-from ..numerics.conditioning import gram_well_conditioned
+from ..numerics.conditioning import spd_condition
 from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error, sparse_constraint_rank
 from ..numerics.singular import DENSE_ROWS, NEAR
 from ..options import RedundantConstraints, VelocityProjection
@@ -355,10 +355,13 @@ def _singular_start(num: NumericModel, t0: float, q: np.ndarray,
     the same for redundant joints, whose change is second order, ~1e-12)."""
     pat = num.pattern
     Av, _ = num.velocity_sparse(t0, q)
-    if num.m == 0 or (not rank.dependent and (num.m > DENSE_ROWS or gram_well_conditioned(
-            pat.A_rows, pat.A_cols, Av, (num.m, num.n), limit=1.0 / NEAR))):
+    if num.m == 0 or (not rank.dependent and num.m > DENSE_ROWS):
         return rank
     A = pat.dense_A(Av)
+    # no singular value of A under NEAR of the largest when cond(A A^T) < NEAR^-2
+    # (its LAPACK estimate, a Cholesky: an SVD only where one may be)
+    if not rank.dependent and spd_condition(A @ A.T) < NEAR**-2:
+        return rank
     kept = A if rank.kept is None else A[rank.kept]
     _, s, vt = np.linalg.svd(A)
     near = int(np.count_nonzero(np.linalg.svd(kept, compute_uv=False) < NEAR * s[0]))

@@ -454,7 +454,8 @@ class StretchLoop(PythonLoop):
             return super().advance()
         if self.solver.status == "finished":
             return self.stop("finished", "the integration reached the end of t_span")
-        if self.careful is not None and self.careful.solver is not None:
+        if self.careful is not None and self.careful.solver is not None \
+                and self.runner.near_singular:
             solver, model = self.solver, self.careful.model
             model.measure(solver.t, solver.y[:solver.n // 2])
             if model.careful:

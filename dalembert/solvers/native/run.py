@@ -64,6 +64,7 @@ class StretchRunner:
                              self._K.ctypes.data, solver._stage.ctypes.data)
         self._nfev = 0
         self._pending = False
+        self.near_singular = False
 
     def run(self) -> bool:
         """Steps from the solver's state until ``t_bound`` or the budget of one call.
@@ -80,7 +81,11 @@ class StretchRunner:
                                                 "right"))
         run.n_steps = run.n_out = 0
         self._nfev, self._pending = solver.nfev, True
-        return self._call() in (library.OK, library.NEAR_SINGULAR)
+        status = self._call()
+        #: whether the stretch ended after a step near a singular configuration (the
+        #: caller then measures it, :mod:`~dalembert.solvers.careful`)
+        self.near_singular = status == library.NEAR_SINGULAR
+        return status in (library.OK, library.NEAR_SINGULAR)
 
     def take(self) -> tuple[int, np.ndarray, np.ndarray] | None:
         """``(steps, t, y)`` done by the last :meth:`run`, the solver brought up to
