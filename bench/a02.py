@@ -47,28 +47,11 @@ def reference(N: int, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def dalembert_model(N: int):
-    from dalembert.multibody import Ground, Multibody, PlanarBody, Revolute
+    """The gallery example's mechanism and start (a row of squares, B0 at 1 m/s)."""
+    from dalembert.examples.n_four_bar import build_multibody, initial_state
 
-    ground = Ground()
-    cranks = [PlanarBody(f"crank{k}", 1.0, 1 / 12) for k in range(N + 1)]
-    couplers = [PlanarBody(f"coupler{k + 1}", 1.0, 1 / 12) for k in range(N)]
-    joints = [Revolute("O0", ground, cranks[0], (0, 0, 0), (-0.5, 0, 0))]
-    for k in range(1, N + 1):
-        joints += [Revolute(f"A{k}", cranks[k - 1], couplers[k - 1], (0.5, 0, 0), (-0.5, 0, 0)),
-                   Revolute(f"B{k}", couplers[k - 1], cranks[k], (0.5, 0, 0), (0.5, 0, 0)),
-                   Revolute(f"O{k}", ground, cranks[k], (k, 0, 0), (-0.5, 0, 0))]
-    bodies = [cranks[0]] + [b for k in range(N) for b in (couplers[k], cranks[k + 1])]
-    mb = Multibody(bodies, joints, gravity=(0, -G, 0), name=f"A02 N={N}")
-    pos, ori, vel, spin = {}, {}, {}, {}
-    for k in range(N + 1):
-        pos[f"crank{k}"], ori[f"crank{k}"] = (k, 0.5), np.pi / 2
-        vel[f"crank{k}"], spin[f"crank{k}"] = (0.5, 0.0), -1.0
-    for k in range(1, N + 1):
-        pos[f"coupler{k}"], ori[f"coupler{k}"] = (k - 0.5, 1.0), 0.0
-        vel[f"coupler{k}"], spin[f"coupler{k}"] = (1.0, 0.0), 0.0
-    q0, qd0 = mb.initial_state(positions=pos, orientations=ori, velocities=vel,
-                               angular_velocities=spin)
-    return mb, q0, qd0
+    start = initial_state(N)
+    return build_multibody(N, G), start["q0"], start["qd0"]
 
 
 def run_dalembert(N: int, t_end: float, backend: str) -> dict:

@@ -20,23 +20,16 @@ import pytest
 from scipy.integrate import Radau, solve_ivp
 
 from dalembert.errors import IntegrationWarning, RedundantConstraintsWarning
-from dalembert.multibody import Ground, Multibody, PlanarBody, Revolute
+from dalembert.examples.n_four_bar import build_multibody
+from dalembert.multibody import Multibody
 from dalembert.solvers.integrate import finite_difference_jacobian, integrate
 
 G = 9.81
 
 
 def four_bars(N: int) -> Multibody:
-    ground = Ground()
-    cranks = [PlanarBody(f"crank{k}", 1.0, 1 / 12) for k in range(N + 1)]
-    couplers = [PlanarBody(f"coupler{k + 1}", 1.0, 1 / 12) for k in range(N)]
-    joints = [Revolute("O0", ground, cranks[0], (0, 0, 0), (-0.5, 0, 0))]
-    for k in range(1, N + 1):
-        joints += [Revolute(f"A{k}", cranks[k - 1], couplers[k - 1], (0.5, 0, 0), (-0.5, 0, 0)),
-                   Revolute(f"B{k}", couplers[k - 1], cranks[k], (0.5, 0, 0), (0.5, 0, 0)),
-                   Revolute(f"O{k}", ground, cranks[k], (k, 0, 0), (-0.5, 0, 0))]
-    bodies = [cranks[0]] + [b for k in range(N) for b in (couplers[k], cranks[k + 1])]
-    return Multibody(bodies, joints, gravity=(0, -G, 0))
+    """The gallery's A02 mechanism (the model under test; the reference is apart)."""
+    return build_multibody(N, G)
 
 
 def parallel_state(mb: Multibody, N: int, phi: float, rate: float):
