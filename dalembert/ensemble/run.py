@@ -377,6 +377,11 @@ def _scheduler(scheduler: Any, client: Any) -> str:
         raise EnsembleError(f"scheduler must be one of {', '.join(map(repr, SCHEDULERS))}; got "
                             f"{scheduler!r}")
     if client is not None:
+        if not all(callable(getattr(client, name, None)) for name in ("submit", "nthreads")):
+            hint = (f"; for scheduler={client!r} write scheduler={client!r}"
+                    if isinstance(client, str) and client in SCHEDULERS else "")
+            raise EnsembleError("client must be a dask.distributed.Client, got "
+                                f"{type(client).__name__} {client!r}{hint}")
         if scheduler not in ("auto", "dask"):
             raise EnsembleError(f"a client is given with scheduler={scheduler!r}; a client "
                                 "runs the cases on its cluster (scheduler='dask')")

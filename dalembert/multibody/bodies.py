@@ -519,6 +519,11 @@ TRIANGLE_RTOL = 1e-9
 INERTIA_RATIO_MIN = 1e-12
 
 
+def _principal(eig: FloatArray) -> str:
+    """Principal moments for a message (formatted only when one is raised)."""
+    return ", ".join(f"{e:.6g}" for e in eig)
+
+
 def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
     """The inertia tensor, checked: finite, symmetric, positive definite, well enough
     conditioned to integrate, and the principal moments obeying the triangle
@@ -544,16 +549,16 @@ def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
             f"but I[{j}, {i}] = {I[j, i]:.6g}:\n{I}"
         )
     eig = np.linalg.eigvalsh(I)
-    values = ", ".join(f"{e:.6g}" for e in eig)
     if eig[0] <= 0:
         raise ModelError(
             f"the inertia tensor of {name!r} is not positive definite (principal values "
-            f"{values}); a rigid body needs inertia about every axis (use a Particle for a "
-            "point mass)"
+            f"{_principal(eig)}); a rigid body needs inertia about every axis (use a Particle "
+            "for a point mass)"
         )
     if eig[0] <= INERTIA_RATIO_MIN * eig[-1]:
         raise ModelError(
-            f"the inertia tensor of {name!r} is nearly singular (principal values {values}): "
+            f"the inertia tensor of {name!r} is nearly singular (principal values "
+            f"{_principal(eig)}): "
             f"the smallest is {eig[0] / eig[-1]:.1e} of the largest, so the spin about that "
             "axis has almost no inertia and the equations of motion cannot determine it "
             "(ill-conditioned). Give that axis more inertia (for a thin rod a larger radius, "
@@ -563,7 +568,7 @@ def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
     if eig[0] + eig[1] < eig[2] * (1 - TRIANGLE_RTOL):
         raise ModelError(
             f"the inertia tensor of {name!r} violates the triangle inequality: principal "
-            f"moments {values}, and {eig[0]:.6g} + {eig[1]:.6g} = {eig[0] + eig[1]:.6g} < "
+            f"moments {_principal(eig)}, and {eig[0]:.6g} + {eig[1]:.6g} = {eig[0] + eig[1]:.6g} < "
             f"{eig[2]:.6g}. No mass distribution has these moments (each is at most the sum "
             "of the other two; equal for a flat plate): check the values, which are about "
             "the mass center in the body frame"

@@ -34,6 +34,7 @@ from .parametric import (
     Scalar,
     array,
     evaluated_expressions,
+    parametric_expressions,
     parametric_symbols,
     scalar,
     with_numbers,
@@ -43,6 +44,10 @@ from .system import MultibodySystem
 from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
 
 _V = TypeVar("_V")
+
+
+#: How many recently bound sets of values a mechanism keeps, with what they gave.
+BOUND_KEPT = 4
 
 
 class Multibody:
@@ -113,8 +118,10 @@ class Multibody:
         self.name = name
         self.gravity = array(gravity, (3,), "gravity (world components)")
         self.defaults = dict(parameters or {})
-        #: The last values bound and the mechanism they gave (binding checks every piece)
-        self._last_bound: tuple[tuple[float, ...], Multibody] | None = None
+        #: The last values bound and the mechanisms they gave, most recent last (binding
+        #: checks every piece; a run binds the defaults for its initial state and its
+        #: own values for the simulation, so one slot would be refilled every run)
+        self._bound: dict[tuple[float, ...], Multibody] = {}
         self._check()
 
     PARAMETRIC = ("gravity",)
@@ -145,6 +152,13 @@ class Multibody:
                       if isinstance(s, sp.Symbol) and s != t}
         return tuple(sorted(found - set(self.inputs), key=lambda s: s.name))
 
+    @cached_property
+    def _parametric_expressions(self) -> tuple[sp.Expr, ...]:
+        """Every expression of every piece in the parameters, once (pieces share some)."""
+        return parametric_expressions(
+            [self, *self.bodies, *self.joints, *self.joint_springs, *self.springs,
+             *self.forces, *self.torques], self.parameters)
+
     def bound(self, *values: Mapping[Any, object] | None) -> Multibody:
         """The mechanism with its parameters replaced by numbers (each piece checked
         as if it had been given them: a positive mass, a valid inertia...).
@@ -173,12 +187,11 @@ class Multibody:
         numbers = dict(zip(self.parameters,
                            resolve_parameters(self.parameters, self.defaults, *values)))
         key = tuple(numbers.values())
-        if self._last_bound is not None and self._last_bound[0] == key:
-            return self._last_bound[1]  # the same values as the last time: checked already
+        if key in self._bound:  # values bound lately: checked already
+            self._bound[key] = self._bound.pop(key)  # now the most recent
+            return self._bound[key]
         # every expression of every piece evaluated at once (pieces share some)
-        memo = evaluated_expressions(
-            [self, *self.bodies, *self.joints, *self.joint_springs, *self.springs,
-             *self.forces, *self.torques], numbers)
+        memo = evaluated_expressions(self._parametric_expressions, numbers)
         bound = copy.copy(self)
         bound.gravity = with_numbers(self, numbers, memo).gravity
         mapped = {id(b): with_numbers(b, numbers, memo) for b in self.bodies}
@@ -206,9 +219,12 @@ class Multibody:
         bound.forces = tuple(rebody(f) for f in self.forces)
         bound.torques = tuple(rebody(tq) for tq in self.torques)
         bound.__dict__.pop("parameters", None)
+        bound.__dict__.pop("_parametric_expressions", None)
         bound.__dict__.pop("system", None)
-        bound._last_bound = None
-        self._last_bound = (key, bound)
+        bound._bound = {}
+        self._bound[key] = bound
+        while len(self._bound) > BOUND_KEPT:
+            del self._bound[next(iter(self._bound))]
         return bound
 
     # -- validation ------------------------------------------------------------------

@@ -109,13 +109,6 @@ def _pose(q0: Mapping[str, float], body: Body) -> tuple[FloatArray, FloatArray]:
     return x[0], R[0]
 
 
-def _world(q0: Mapping[str, float], body: Body, point: FloatArray) -> FloatArray:
-    if isinstance(body, Ground):
-        return point
-    x, R = _pose(q0, body)
-    return x + R @ point
-
-
 def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
     """Warn when a joint's points do not meet at ``q0`` but would with one read as world.
 
@@ -142,10 +135,23 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
     >>> "use point_b=(0.0, 0.0, 0.5)" in str(caught[-1].message)
     True
     """
+    poses: dict[int, tuple[FloatArray, FloatArray]] = {}
+
+    def pose(body: Body) -> tuple[FloatArray, FloatArray]:
+        if id(body) not in poses:  # a body is in up to two joints: its pose once
+            poses[id(body)] = _pose(q0, body)
+        return poses[id(body)]
+
+    def world(body: Body, point: FloatArray) -> FloatArray:
+        if isinstance(body, Ground):
+            return point
+        x, R = pose(body)
+        return x + R @ point
+
     for j in mb.joints:
         if not isinstance(j, _COINCIDENT):
             continue
-        pa, pb = _world(q0, j.body_a, j.point_a), _world(q0, j.body_b, j.point_b)
+        pa, pb = world(j.body_a, j.point_a), world(j.body_b, j.point_b)
         gap = float(np.linalg.norm(pb - pa))
         scale = max(float(np.linalg.norm(pa)), float(np.linalg.norm(pb)), 1e-3)
         if gap <= 1e-6 * scale:
@@ -154,7 +160,7 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
                                          ("b", j.body_b, j.point_b, pa)):
             if not isinstance(body, TurningBody) or np.linalg.norm(point - other) > 1e-9 * scale:
                 continue
-            x, R = _pose(q0, body)
+            x, R = pose(body)
             fixed = R.T @ (point - x)
             warnings.warn(
                 f"joint {j.name!r}: its points are {gap:.3g} apart at the initial state, but "

@@ -15,7 +15,7 @@ numbers-or-expressions each), which is what the part-by-part code generation
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, TypeAlias, TypeVar
 
 import numpy as np
@@ -177,28 +177,26 @@ def parametric_symbols(piece: object) -> set[sp.Symbol]:
                          for name in getattr(piece, "PARAMETRIC", ())))
 
 
-def evaluated_expressions(pieces: Iterable[object],
-                          values: Mapping[sp.Symbol, float]) -> dict[sp.Basic, float]:
-    """Every expression of the pieces' parametric attributes evaluated at ``values``, at
-    once (one generated function per set of expressions, kept): the ``memo`` of
-    :func:`with_numbers` for a whole mechanism, so that binding new values runs no
-    SymPy. Values that are not finite are left out (:func:`evaluate` then names them).
+def parametric_expressions(pieces: Iterable[object],
+                           symbols: Iterable[sp.Symbol]) -> tuple[sp.Expr, ...]:
+    """The distinct expressions of the pieces' parametric attributes written in
+    ``symbols`` only (what :func:`evaluated_expressions` evaluates; a mechanism
+    collects them once).
 
     Parameters
     ----------
     pieces
         Bodies, joints, loads... (their ``PARAMETRIC`` attributes are read).
-    values
-        A number per parameter symbol.
+    symbols
+        The parameter symbols.
 
     Examples
     --------
     >>> from dalembert.multibody import Particle
     >>> m = sp.Symbol("m")
-    >>> evaluated_expressions([Particle("p", 2 * m)], {m: 1.5})
-    {2*m: 3.0}
+    >>> parametric_expressions([Particle("p", 2 * m), Particle("q", 2 * m)], [m])
+    (2*m,)
     """
-    symbols = tuple(values)
     known = set(symbols)
     found: dict[sp.Basic, None] = {}
     for piece in pieces:
@@ -207,9 +205,33 @@ def evaluated_expressions(pieces: Iterable[object],
             entries = value.ravel() if isinstance(value, np.ndarray) else (value,)
             found.update((e, None) for e in entries
                          if isinstance(e, sp.Expr) and e.free_symbols <= known)
-    exprs = tuple(found)
+    return tuple(found)
+
+
+def evaluated_expressions(exprs: Sequence[sp.Expr],
+                          values: Mapping[sp.Symbol, float]) -> dict[sp.Basic, float]:
+    """The expressions ``exprs`` evaluated at ``values`` at once (one generated function
+    per set of expressions, kept): the ``memo`` of :func:`with_numbers` for a whole
+    mechanism, so that binding new values runs no SymPy. Values that are not finite
+    are left out (:func:`evaluate` then names them).
+
+    Parameters
+    ----------
+    exprs
+        Expressions in the symbols of ``values`` (:func:`parametric_expressions`).
+    values
+        A number per parameter symbol.
+
+    Examples
+    --------
+    >>> m = sp.Symbol("m")
+    >>> evaluated_expressions([2 * m], {m: 1.5})
+    {2*m: 3.0}
+    """
+    symbols = tuple(values)
     try:
-        numbers = expression_values(symbols, exprs, np.array([values[s] for s in symbols]))
+        numbers = expression_values(symbols, tuple(exprs),
+                                    np.array([values[s] for s in symbols]))
     except ModelError:  # a function NumPy code cannot print: SymPy evaluates them one by one
         return {}
     return {e: float(v) for e, v in zip(exprs, numbers) if np.isfinite(v)}

@@ -41,14 +41,16 @@ MatrixOrArray: TypeAlias = sp.Matrix | FloatArray
 
 
 def _is_symbolic(b: Any) -> bool:
+    if isinstance(b, np.ndarray) and b.dtype != object:
+        return False  # numbers: no need to look at each element
     return isinstance(b, sp.MatrixBase) or any(isinstance(v, sp.Basic) for v in b)
 
 
 def _assemble(rows: list[list[Any]], symbolic: bool) -> MatrixOrArray:
     if symbolic:
         return sp.Matrix(rows)
-    return np.moveaxis(np.array([[np.asarray(v, dtype=float) for v in r] for r in rows]),
-                       (0, 1), (-2, -1))
+    out = np.array(rows, dtype=float)  # (rows, columns, *batch)
+    return out.transpose(*range(2, out.ndim), 0, 1)  # (*batch, rows, columns)
 
 
 def _split(b: Any) -> tuple[Any, Any, Any, Any]:
@@ -57,6 +59,8 @@ def _split(b: Any) -> tuple[Any, Any, Any, Any]:
     b = np.asarray(b, dtype=float)
     if b.shape[-1] != 4:
         raise ValueError(f"Euler parameters need 4 components, got shape {b.shape}")
+    if b.ndim == 1:  # one quaternion: Python floats are cheaper than 0-d arrays
+        return float(b[0]), float(b[1]), float(b[2]), float(b[3])
     return b[..., 0], b[..., 1], b[..., 2], b[..., 3]
 
 
@@ -73,9 +77,10 @@ def E_matrix(b: Quaternions) -> MatrixOrArray:
     >>> bool(np.array_equal(E_matrix(np.array([1.0, 0.0, 0.0, 0.0]))[:, 1:], np.eye(3)))
     True
     """
+    symbolic = _is_symbolic(b)
     b0, b1, b2, b3 = _split(b)
     rows = [[-b1, b0, b3, -b2], [-b2, -b3, b0, b1], [-b3, b2, -b1, b0]]
-    return _assemble(rows, _is_symbolic(b))
+    return _assemble(rows, symbolic)
 
 
 def G_matrix(b: Quaternions) -> MatrixOrArray:
@@ -92,9 +97,10 @@ def G_matrix(b: Quaternions) -> MatrixOrArray:
     >>> G_matrix(b) * sp.Matrix(b) == sp.zeros(3, 1)   # G b = 0
     True
     """
+    symbolic = _is_symbolic(b)
     b0, b1, b2, b3 = _split(b)
     rows = [[-b1, b0, -b3, b2], [-b2, b3, b0, -b1], [-b3, -b2, b1, b0]]
-    return _assemble(rows, _is_symbolic(b))
+    return _assemble(rows, symbolic)
 
 
 def rotation_matrix(b: Quaternions) -> MatrixOrArray:
@@ -112,13 +118,14 @@ def rotation_matrix(b: Quaternions) -> MatrixOrArray:
     >>> rotation_matrix(np.array([0.0, 0.0, 0.0, 1.0])).tolist()
     [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
     """
+    symbolic = _is_symbolic(b)
     b0, b1, b2, b3 = _split(b)
     rows = [
         [b0**2 + b1**2 - b2**2 - b3**2, 2 * (b1 * b2 - b0 * b3), 2 * (b1 * b3 + b0 * b2)],
         [2 * (b1 * b2 + b0 * b3), b0**2 - b1**2 + b2**2 - b3**2, 2 * (b2 * b3 - b0 * b1)],
         [2 * (b1 * b3 - b0 * b2), 2 * (b2 * b3 + b0 * b1), b0**2 - b1**2 - b2**2 + b3**2],
     ]
-    return _assemble(rows, _is_symbolic(b))
+    return _assemble(rows, symbolic)
 
 
 def quaternion_from_matrix(R: ArrayLike) -> FloatArray:

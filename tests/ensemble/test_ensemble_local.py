@@ -213,6 +213,9 @@ def test_bad_arguments_are_refused_before_anything_runs(pend):
     for kwargs, match in [
         ({"scheduler": "mpi"}, "scheduler must be one of"),
         ({"scheduler": "dask"}, "needs client="),
+        ({"client": "serial"}, "client must be a dask.distributed.Client, got str 'serial'; "
+                               "for scheduler='serial' write scheduler='serial'"),
+        ({"client": 2}, "client must be a dask.distributed.Client, got int 2$"),
         ({"keep": ["q", "tension"]}, "'tension', which is not a trajectory quantity"),
         ({"outputs": {"q": tip_z}}, "name of a trajectory quantity"),
         ({"store": "run.csv"}, "must end in .zarr"),
