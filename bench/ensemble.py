@@ -13,21 +13,24 @@ run is reported.
 Parts (``--part``):
 
 - ``throughput``: N cases (1000; ``--quick``: 60) as a plain loop over
-  ``simulate`` (the reference), ``simulate_many`` serially, on 2 threads, and on a
-  Dask ``LocalCluster`` of 1 and of 2 single-threaded processes. Runs per second,
-  the speed-up over the plain loop, the parallel efficiency (speed-up / workers) and
-  the overhead per case of the ensemble machinery against the plain loop. A cluster's
-  start and its workers' first preparation of the model (import, unpack, load the
-  shipped code) are timed apart: they are paid once per cluster and model.
-- ``mujoco``: the same cases with MuJoCo's ``rollout`` (one ``MjModel`` per case with
-  its link masses and inertias, the initial state of each case, 2 threads), RK4 step
-  halved from 1e-2 until the worst case of the sample meets the target.
+  ``simulate`` (the reference), ``simulate_many`` serially, on 2 threads, on a
+  Dask ``LocalCluster`` of 1 and of 2 single-threaded processes, and with MuJoCo's
+  ``rollout`` (one ``MjModel`` per case with its link masses and inertias, the
+  initial state of each case, 2 threads; RK4 step halved from 1e-2 until the worst
+  case of a sample meets the target). Runs per second, the speed-up over the plain
+  loop, the parallel efficiency (speed-up / workers) and the overhead per case of
+  the ensemble machinery. The ways run in rounds (``--rounds``, 5): each round runs
+  its share of the cases every way, in an order turned by one each round, so a
+  spell of a slower machine falls on every way alike; ratios are given from the
+  totals and as the median of the rounds' ratios. A cluster's start and its
+  workers' first preparation of the model (import, unpack, load the shipped code)
+  are timed apart: they are paid once per cluster and model.
 - ``scaling``: 10, 100, 1000, 10000 cases (``--quick``: 10, 100) of 1 s simulated
   (not 10: the ensemble's own costs weigh ten times more against a case) on 2 Dask
   processes, results to a Zarr store, each size in a fresh client process: time per
   case, the client's peak memory, the store's size.
 
-Usage: ``python bench/ensemble.py [--quick] [--part all|throughput|mujoco|scaling]``
+Usage: ``python bench/ensemble.py [--quick] [--part all|throughput|scaling]``
 writes ``bench/results/ensemble.json`` (``--quick``: ``ensemble_quick.json``) and its
 plot (``--plot`` only redraws it).
 """
@@ -186,56 +189,105 @@ def case_seconds(result) -> float:
     return float(result.summary["seconds"].sum())
 
 
-def throughput(n: int) -> dict:
+def local_cluster(mb, initial, rtol: float, workers: int):
+    """A Dask ``LocalCluster`` of ``workers`` single-threaded processes and its client,
+    each worker's first preparation of the model done (it is paid once per cluster and
+    model, timed apart)."""
     import logging
 
     from distributed import Client, LocalCluster
 
+    start = time.perf_counter()
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=logging.ERROR)
+    client = Client(cluster)
+    started = time.perf_counter() - start
+    warm = draw_cases(2 * workers)
+    warm_s, _ = ensemble_run(mb, initial, warm, rtol, client=client, batch_size=1)
+    return cluster, client, {"cluster_start_s": started, "first_cases_s": warm_s,
+                             "first_cases": len(warm)}
+
+
+def throughput(n: int, rounds: int) -> dict:
+    """Every way of running the cases, MuJoCo's rollout included, in ``rounds`` rounds:
+    each round runs its share of the cases every way, in an order turned by one each
+    round, so that a spell of a slower machine (frequent on shared cores) falls on
+    every way alike; the ratios are taken within each round and their median reported
+    beside the ratio of the totals."""
     start = time.perf_counter()
     mb = link_mass_chain()
     mb.system.compiled  # noqa: B018
     build_s = time.perf_counter() - start
     initial = make_initial(mb)
     rtol, ladder = choose_rtol(mb, initial, draw_cases(40))
+    dt, mujoco_ladder = mujoco_step()
     cases = draw_cases(n)
-    m = masses(cases)
-    record: dict = {"cases": n, "rtol": rtol, "atol": rtol / 100, "ladder": ladder,
-                    "build_s": build_s, "runs": {}}
+    mujoco = MujocoCases(cases, dt)
+    shares = np.array_split(np.arange(n), rounds)
+    record: dict = {"cases": n, "rounds": rounds, "rtol": rtol, "atol": rtol / 100,
+                    "ladder": ladder, "build_s": build_s, "runs": {}}
+    mujoco_record = {"version": mujoco.version, "ladder": mujoco_ladder, "dt": dt}
 
-    def note(name: str, seconds: float, workers: int, energy: np.ndarray, **extra) -> None:
-        errors = energy_errors(energy, m)
-        record["runs"][name] = {"seconds": seconds, "runs_per_s": n / seconds,
-                                "workers": workers, "load_average": load_average(),
-                                "worst_energy_error": float(errors.max()),
-                                "median_energy_error": float(np.median(errors)), **extra}
-        print(f"{name}: {seconds:.1f} s, {n / seconds:.1f} runs/s", flush=True)
+    def loop(part):
+        seconds, energies = plain_loop(mb, initial, part, rtol)
+        return (seconds, energy_errors(energies, masses(part))), {}
 
-    seconds, energy = plain_loop(mb, initial, cases, rtol)
-    note("loop", seconds, 1, energy)
-    seconds, result = ensemble_run(mb, initial, cases, rtol, scheduler="serial")
-    note("serial", seconds, 1, result.dataset["energy"].values,
-         case_seconds=case_seconds(result))
-    seconds, result = ensemble_run(mb, initial, cases, rtol, scheduler="threads", workers=2)
-    note("threads-2", seconds, 2, result.dataset["energy"].values,
-         case_seconds=case_seconds(result))
-    for workers in (1, 2):
-        start = time.perf_counter()
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
-        client = Client(cluster)
-        started = time.perf_counter() - start
-        warm = cases.iloc[: 2 * workers]
-        warm_s, _ = ensemble_run(mb, initial, warm, rtol, client=client, batch_size=1)
-        seconds, result = ensemble_run(mb, initial, cases, rtol, client=client)
-        note(f"dask-{workers}", seconds, workers, result.dataset["energy"].values,
-             case_seconds=case_seconds(result), cluster_start_s=started,
-             first_cases_s=warm_s, first_cases=len(warm))
-        client.close()
-        cluster.close()
-    loop = record["runs"]["loop"]["seconds"]
-    for run in record["runs"].values():
-        run["speedup"] = loop / run["seconds"]
+    def many(**how):
+        def run(part):
+            seconds, result = ensemble_run(mb, initial, part, rtol, **how)
+            errors = energy_errors(result.dataset["energy"].values, masses(part))
+            return (seconds, errors), {"case_seconds": case_seconds(result)}
+        return run
+
+    def on_cluster(workers: int):
+        def run(part):
+            cluster, client, started = local_cluster(mb, initial, rtol, workers)
+            try:
+                done, extra = many(client=client)(part)
+            finally:
+                client.close()
+                cluster.close()
+            return done, {**extra, **started}
+        return run
+
+    def rollout(part):
+        return mujoco.rollout(part.index.to_numpy()), {}
+
+    ways = {"loop": (loop, 1), "serial": (many(scheduler="serial"), 1),
+            "threads-2": (many(scheduler="threads", workers=2), 2),
+            "dask-1": (on_cluster(1), 1), "dask-2": (on_cluster(2), 2),
+            "mujoco-2": (rollout, 2)}
+    names = list(ways)
+    seconds = {k: np.zeros(rounds) for k in names}
+    errors = {k: np.zeros(n) for k in names}
+    extras: dict[str, dict] = {k: {} for k in names}
+    for r, share in enumerate(shares):
+        part = cases.iloc[share]
+        for name in names[r % len(names):] + names[: r % len(names)]:
+            (seconds[name][r], errors[name][share]), extra = ways[name][0](part)
+            for key, value in extra.items():
+                extras[name][key] = extras[name].get(key, 0.0) + value
+        print(f"round {r + 1}/{rounds}: " + ", ".join(
+            f"{k} {len(share) / seconds[k][r]:.1f}" for k in names) + " runs/s", flush=True)
+    for name in names:
+        total = float(seconds[name].sum())
+        record["runs"][name] = {
+            "seconds": total, "runs_per_s": n / total, "workers": ways[name][1],
+            "round_seconds": seconds[name].tolist(),
+            "speedup": float(seconds["loop"].sum() / total),
+            "speedup_median_of_rounds": float(np.median(seconds["loop"] / seconds[name])),
+            "worst_energy_error": float(errors[name].max()),
+            "median_energy_error": float(np.median(errors[name])), **extras[name]}
+        run = record["runs"][name]
         run["efficiency"] = run["speedup"] / run["workers"]
+        print(f"{name}: {total:.1f} s, {n / total:.1f} runs/s", flush=True)
+    best = record["runs"]["dask-2"]
+    record["against_mujoco"] = {
+        "dask-2": float(seconds["mujoco-2"].sum() / seconds["dask-2"].sum()),
+        "dask-2_median_of_rounds": float(np.median(seconds["mujoco-2"] / seconds["dask-2"])),
+        "threads-2": float(seconds["mujoco-2"].sum() / seconds["threads-2"].sum())}
+    mujoco_record["run"] = {**record["runs"].pop("mujoco-2"), "dt": dt,
+                            "steps": round(T_END / dt), "threads": 2}
     # The ensemble's own time per case (wall x workers - the cases' own time), against a
     # case's simulation: less sensitive to the machine's load than two totals' difference.
     record["overhead_per_case"] = {}
@@ -245,9 +297,11 @@ def throughput(n: int) -> dict:
         record["overhead_per_case"][name] = {"seconds": own / n,
                                              "of_case": own / run["case_seconds"]}
     record["overhead_per_case"]["serial_vs_loop"] = (record["runs"]["serial"]["seconds"]
-                                                     - loop) / loop
+                                                     / record["runs"]["loop"]["seconds"] - 1)
+    record["best"] = {"speedup": best["speedup"],
+                      "speedup_median_of_rounds": best["speedup_median_of_rounds"]}
     record["preparation_s"] = preparation_seconds(mb)
-    return record
+    return {"throughput": record, "mujoco": mujoco_record}
 
 
 def preparation_seconds(mb) -> dict:
@@ -323,45 +377,54 @@ def mujoco_energies(models, states) -> np.ndarray:
     return out
 
 
-def mujoco_rollout(cases, dt: float, threads: int = 2, chunk: int = 100) -> dict:
-    """The cases rolled out ``T_END / dt`` steps; only the rollout calls are timed (in
-    chunks of ``chunk`` cases: rollout returns every step's state)."""
-    import mujoco
-    from mujoco import rollout
+class MujocoCases:
+    """The cases as MuJoCo models (one ``MjModel`` per case: its link masses and
+    inertias) with their initial states, rolled out ``T_END / dt`` RK4 steps."""
 
-    models, initial = mujoco_models(cases, dt)
-    steps = round(T_END / dt)
-    datas = [mujoco.MjData(models[0]) for _ in range(threads)]
-    final = np.empty_like(initial)
-    seconds = 0.0
-    with rollout.Rollout(nthread=threads) as runner:
-        for a in range(0, len(models), chunk):
-            start = time.perf_counter()
-            state, _ = runner.rollout(models[a:a + chunk], datas, initial[a:a + chunk],
-                                      nstep=steps)
-            seconds += time.perf_counter() - start
-            final[a:a + chunk] = state[:, -1]
-    e0, e1 = mujoco_energies(models, initial), mujoco_energies(models, final)
-    errors = np.abs(e1 - e0) / np.abs(e0 - rest_energy(masses(cases)))
-    return {"dt": dt, "steps": steps, "seconds": seconds, "runs_per_s": len(models) / seconds,
-            "threads": threads, "worst_energy_error": float(errors.max()),
-            "median_energy_error": float(np.median(errors)), "load_average": load_average(),
-            "finished": bool(np.all(np.isfinite(final)))}
+    def __init__(self, cases, dt: float, threads: int = 2) -> None:
+        import mujoco
+
+        self.version = mujoco.__version__
+        self.cases, self.dt, self.threads = cases, dt, threads
+        self.models, self.initial = mujoco_models(cases, dt)
+        self.steps = round(T_END / dt)
+
+    def rollout(self, rows: np.ndarray, chunk: int = 100) -> tuple[float, np.ndarray]:
+        """Seconds of the rollout calls for the cases at positions ``rows`` (in chunks of
+        ``chunk`` cases: rollout returns every step's state) and each case's energy
+        error (``nan`` where it diverged)."""
+        import mujoco
+        from mujoco import rollout
+
+        models = [self.models[k] for k in rows]
+        initial = self.initial[rows]
+        datas = [mujoco.MjData(models[0]) for _ in range(self.threads)]
+        final = np.empty_like(initial)
+        seconds = 0.0
+        with rollout.Rollout(nthread=self.threads) as runner:
+            for a in range(0, len(models), chunk):
+                start = time.perf_counter()
+                state, _ = runner.rollout(models[a:a + chunk], datas, initial[a:a + chunk],
+                                          nstep=self.steps)
+                seconds += time.perf_counter() - start
+                final[a:a + chunk] = state[:, -1]
+        e0, e1 = mujoco_energies(models, initial), mujoco_energies(models, final)
+        errors = np.abs(e1 - e0) / np.abs(e0 - rest_energy(masses(self.cases.iloc[rows])))
+        return seconds, np.where(np.isfinite(errors), errors, np.nan)
 
 
-def mujoco_part(n: int) -> dict:
-    import mujoco
-
+def mujoco_step() -> tuple[float, list[dict]]:
+    """The largest RK4 step of the ladder at which every case of a sample of 40 meets
+    the energy target."""
     sample = draw_cases(40)
     ladder = []
     for dt in MUJOCO_STEPS:
-        tried = mujoco_rollout(sample, dt)
-        ladder.append({k: tried[k] for k in ("dt", "worst_energy_error", "median_energy_error")})
-        if tried["worst_energy_error"] <= ENERGY_TARGET:
-            break
-    run = mujoco_rollout(draw_cases(n), tried["dt"])
-    print(f"mujoco rollout: {run['seconds']:.1f} s, {run['runs_per_s']:.1f} runs/s", flush=True)
-    return {"version": mujoco.__version__, "ladder": ladder, "run": run, "cases": n}
+        _, errors = MujocoCases(sample, dt).rollout(np.arange(len(sample)))
+        ladder.append({"dt": dt, "worst_energy_error": float(np.max(errors)),
+                       "median_energy_error": float(np.median(errors))})
+        if np.max(errors) <= ENERGY_TARGET:
+            return dt, ladder
+    raise RuntimeError(f"no MuJoCo step in {MUJOCO_STEPS} met the energy target: {ladder}")
 
 
 # -- scaling ----------------------------------------------------------------------------
@@ -460,7 +523,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--part", default="all",
-                        choices=["all", "throughput", "mujoco", "scaling"])
+                        choices=["all", "throughput", "scaling"])
+    parser.add_argument("--rounds", type=int, default=5,
+                        help="throughput: rounds over the ways of running (default 5)")
     parser.add_argument("--plot", action="store_true", help="only redraw the plot")
     parser.add_argument("--sizes", type=int, nargs="+", help="scaling: these case counts")
     parser.add_argument("--scaling-one", nargs=2, help=argparse.SUPPRESS)
@@ -474,14 +539,14 @@ def main() -> None:
         n = 60 if args.quick else 1000
         record.setdefault("machine", {}).update(cpus=os.cpu_count(),
                                                 python=platform.python_version())
-        parts = {"throughput": lambda: throughput(n), "mujoco": lambda: mujoco_part(n),
-                 "scaling": lambda: scaling(args.sizes or ([10, 100] if args.quick else
-                                                           [10, 100, 1000, 10000]),
-                                            record["throughput"]["rtol"])}
-        for name, run in parts.items():
-            if args.part in ("all", name):
-                record[name] = run()
-                out.write_text(json.dumps(record, indent=1))  # each part as it is done
+        if args.part in ("all", "throughput"):
+            record.update(throughput(n, 2 if args.quick else args.rounds))
+            out.write_text(json.dumps(record, indent=1))  # each part as it is done
+        if args.part in ("all", "scaling"):
+            record["scaling"] = scaling(args.sizes or ([10, 100] if args.quick else
+                                                       [10, 100, 1000, 10000]),
+                                        record["throughput"]["rtol"])
+            out.write_text(json.dumps(record, indent=1))
     print(f"wrote {out} and {plot(record, out.with_suffix('.png'))}")
 
 
