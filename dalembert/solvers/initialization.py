@@ -258,6 +258,7 @@ def plastic_impact(
         c_held = np.concatenate([-b[rows], qd0[held]])
         rank = constraint_rank(A_held, [str(i) for i in range(len(A_held))], n)
         qd, _ = solve_kkt(pat.dense_M(Mv), momentum, A_held, c_held, rank.kept)
+        qd[held] = qd0[held]  # held exactly, not to the solve's rounding
     change = qd - qd0
     impulse = matvec(pat.M_rows, pat.M_cols, Mv, change, n)
     return qd, impulse, 0.5 * float(change @ impulse)

@@ -118,8 +118,14 @@ def _compile(
 
 
 def point_text(problem: Problem, x: Array) -> str:
-    """``"x=0.5, y=1"``: the variables at ``x``, for error messages."""
-    return ", ".join(f"{n}={v:.6g}" for n, v in zip(problem.names, x, strict=True))
+    """``"x=0.5, y=1"``: the variables at ``x``, for error messages.
+
+    A value under 1e-12 of the point's scale is rounding (a solver's 6.7e-16 where the
+    answer is 0) and printed as 0.
+    """
+    floor = 1e-12 * max(1.0, max_abs(np.asarray(x, dtype=float)))
+    return ", ".join(f"{n}={v if abs(v) > floor else 0.0:.6g}"
+                     for n, v in zip(problem.names, x, strict=True))
 
 
 def max_abs(values: Array) -> float:

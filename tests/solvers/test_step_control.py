@@ -53,14 +53,28 @@ def test_pi_control_damps_rejections_at_the_stability_boundary(cls):
     for control in STEP_CONTROLS:
         t[control], y[control], rejected[control], nfev[control] = run(
             CONTROLLED[cls], fast_mode, y0, 20.0, step_control=control, **options)
-    # Measured: 195 -> 50 (DOP853), 1086 -> 158 (RK45), 964 -> 336 (RK23) rejections;
-    # 15-17% fewer evaluations.
+    # Measured: 227 -> 29 (DOP853), 1088 -> 165 (RK45), 973 -> 334 (RK23) rejections.
     assert rejected["scipy"] > 100
     assert rejected["PI"] < 0.4 * rejected["scipy"]
-    assert nfev["PI"] < 0.9 * nfev["scipy"]
     # The slow mode as accurate, the fast one kept at its size (stable steps).
     assert abs(y["PI"][-1, 2] - np.sin(20.0)) < 1e-6
     assert np.abs(y["PI"][:, 0]).max() < 1e-6
+
+
+@pytest.mark.parametrize("cls", METHODS)
+def test_pi_control_saves_evaluations_at_the_stability_boundary(cls):
+    """Fewer evaluations in all over fast modes of several sizes. One size alone is a
+    poor sample: where the fast mode sits against the tolerance decides how many
+    steps either controller takes, and that shifts with the last bit of rounding
+    (one amplitude took 25% more steps under PI on one processor, fewer on another)."""
+    options = dict(rtol=1e-4, atol=1e-7)
+    nfev = dict.fromkeys(STEP_CONTROLS, 0)
+    for amplitude in np.geomspace(3e-10, 3e-9, 5):
+        for control in STEP_CONTROLS:
+            nfev[control] += run(CONTROLLED[cls], fast_mode, [amplitude, 0.0, 0.0, 1.0],
+                                 20.0, step_control=control, **options)[3]
+    # Measured: 0.84 (DOP853), 0.83 (RK45), 0.85 (RK23).
+    assert nfev["PI"] < 0.9 * nfev["scipy"]
 
 
 def test_controller_exponents():
