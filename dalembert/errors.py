@@ -134,6 +134,11 @@ class RedundantConstraintsWarning(DalembertWarning):
     """Dependent constraints: the motion is unique, their multipliers are not."""
 
 
+class SingularConfigurationWarning(DalembertWarning):
+    """The run passed near a singular configuration of the constraints (they nearly lost
+    rank): named, with the times; the multipliers there are the minimum-norm ones."""
+
+
 class JointPointWarning(DalembertWarning):
     """A joint point looks as if it were given in the wrong frame."""
 
@@ -178,6 +183,7 @@ __all__ = [
     "NotAnEquilibriumError",
     "ParameterError",
     "RedundantConstraintsWarning",
+    "SingularConfigurationWarning",
     "SingularSystemError",
     "SymbolicSolveError",
     "TooManyConstraintsError",

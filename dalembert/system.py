@@ -26,6 +26,7 @@ from .errors import (
     IntegrationWarning,
     ModelError,
     RedundantConstraintsWarning,
+    SingularConfigurationWarning,
 )
 from .inputs import InputSignal
 from .model.coordinates import t as time_symbol
@@ -668,6 +669,9 @@ class System:
             result, derived, applied = sampled.result, sampled.derived, sampled.inputs
         else:
             result = plan.run()
+        passed = plan.careful.model.warning() if plan.careful is not None else ""
+        if passed:
+            warnings.warn(passed, SingularConfigurationWarning, stacklevel=3)
         if not result.success:
             reached = result.t[-1] if len(result.t) else plan.options.t_span[0]
             warning = IntegrationWarning(f"{result.message}; returning the trajectory up to "
@@ -779,6 +783,11 @@ class System:
         )
 
 
+def _missing(like: np.ndarray) -> np.ndarray:
+    """A row where an output could not be computed: NaN (False for a mark)."""
+    return np.zeros_like(like) if like.dtype == bool else np.full_like(like, np.nan)
+
+
 def _outputs(plan: SimulationPlan, result: IntegrationResult) -> dict[str, np.ndarray]:
     """The derived arrays at the points recorded. A run that failed because its inputs
     could not be computed has points where they still cannot: those rows are NaN."""
@@ -796,8 +805,8 @@ def _outputs(plan: SimulationPlan, result: IntegrationResult) -> dict[str, np.nd
             empty = plan.outputs(np.zeros(0), np.zeros((0, len(result.y[0]))))
             return {name: np.full((len(rows), *v.shape[1:]), np.nan)
                     for name, v in empty.items()}
-        return {name: np.concatenate([r[name] if r is not None else
-                                      np.full_like(template[name], np.nan) for r in rows])
+        return {name: np.concatenate([r[name] if r is not None else _missing(template[name])
+                                      for r in rows])
                 for name in template}
 
 

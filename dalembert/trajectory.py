@@ -59,6 +59,12 @@ class Trajectory:
         their names.
     t_events, y_events
         Event times and states, one array per event function.
+    near_singular
+        ``True`` at the times when the constraints were within a hair of losing rank
+        (a linkage through its flat position): the steps there left the nearly
+        dependent combinations of constraints out, and ``multipliers`` (and
+        ``constraint_forces``) there are the minimum-norm ones, not unique; shape
+        ``(k,)``.
     sol
         Dense output ``sol(t)`` (with ``dense_output=True``), else ``None``.
 
@@ -95,6 +101,7 @@ class Trajectory:
     input_names: tuple[str, ...] = ()
     t_events: list[np.ndarray] = field(default_factory=list)
     y_events: list[np.ndarray] = field(default_factory=list)
+    near_singular: np.ndarray | None = None
     sol: Any = None
 
     @property
@@ -146,6 +153,8 @@ class Trajectory:
     def __post_init__(self) -> None:
         if self.inputs is None or (np.size(self.inputs) == 0 and not self.input_names):
             self.inputs = np.zeros((len(self.t), len(self.input_names)))
+        if self.near_singular is None:
+            self.near_singular = np.zeros(len(self.t), dtype=bool)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -214,6 +223,8 @@ class Trajectory:
         arrays = {name: getattr(self, name) for name in trajectory_file.ARRAYS}
         if self.input_names:
             arrays["inputs"] = self.inputs
+        if self.near_singular is not None and self.near_singular.any():
+            arrays["near_singular"] = self.near_singular
         arrays.update({f"t_events_{k}": v for k, v in enumerate(self.t_events)})
         arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})
         trajectory_file.write(path, arrays, meta)

@@ -44,8 +44,9 @@ SUFFIX = ".npz"
 #: The arrays of a trajectory, one row per output time.
 ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_energy",
           "potential_energy", "jacobi_integral", "position_residual", "velocity_residual")
-#: Arrays a file of an earlier version may lack (a model's inputs, one column each).
-OPTIONAL_ARRAYS = ("inputs",)
+#: Arrays a file may lack: a model's inputs (one column each; none in files of earlier
+#: versions) and the times near a singular configuration (written where there are some).
+OPTIONAL_ARRAYS = ("inputs", "near_singular")
 #: How a trajectory can end (its ``status``).
 STATUSES = ("finished", "event", "failed", "interrupted")
 #: The metadata fields and their JSON types.
@@ -203,7 +204,8 @@ it has no 'meta' member (Trajectory.save writes one)
     k = len(t)
     shapes: dict[str, tuple[int, ...]] = {name: (k,) for name in ARRAYS}
     shapes.update({name: (k, n) for name in ("q", "qd", "qdd", "constraint_forces")},
-                  multipliers=(k, m), inputs=(k, len(fields["input_names"])))
+                  multipliers=(k, m), inputs=(k, len(fields["input_names"])),
+                  near_singular=(k,))
     n_events = sum(1 for name in members if name.startswith("t_events_"))
     for e in range(n_events):
         events = members.get(f"t_events_{e}")
@@ -221,10 +223,11 @@ it has no 'meta' member (Trajectory.save writes one)
         if array.shape != shapes[name]:
             raise bad(f"the array {name!r}", f"has shape {array.shape}; {k} times, {n} "
                       f"coordinates and {m} constraints make it {shapes[name]}")
-        if array.dtype.kind not in "fiu":
+        if array.dtype.kind not in ("b" if name == "near_singular" else "fiu"):
             raise bad(f"the array {name!r}", f"holds {array.dtype}, not numbers")
     fields.update({name: members[name] for name in ARRAYS})
     fields["inputs"] = members.get("inputs", np.zeros((k, len(fields["input_names"]))))
+    fields["near_singular"] = members.get("near_singular", np.zeros(k, dtype=bool))
     fields["t_events"] = [members[f"t_events_{e}"] for e in range(n_events)]
     fields["y_events"] = [members[f"y_events_{e}"] for e in range(n_events)]
     return fields

@@ -33,12 +33,29 @@ NEAR = 1e-3
 #: every step, or of the degrees of freedom at the start when no row is dependent): its
 #: cost grows as rows^2 x coordinates (seconds for a 256-link chain).
 DENSE_ROWS = 400
-#: While careful, rows whose Gram pivot ratio is below ``TRUNCATE**2`` are left out.
-TRUNCATE = 1e-4
+#: While careful, the combinations of rows with singular values below this fraction of
+#: the largest are left out.
+TRUNCATE = 1e-5
+#: ... and with them every larger one within this factor of the one before (a cluster
+#: of singular values falling together is left out at once).
+GAP = 20.0
+#: A smallest pivot of the rows' Gram matrix (its band Cholesky factorization, rows of
+#: unit length) below this asks for its eigenvalues: the cheap screen both loops take
+#: after every step (the C loop from the projection's factorization).
+SCREEN = (10 * NEAR) ** 2
 #: The steps are watched over windows of at least this many steps ...
 COLLAPSE_STEPS = 500
 #: ... and have collapsed when their mean is below this fraction of the mean before.
 COLLAPSE_RATIO = 1e-3
+#: A projection that moves a step's end by more than this many times the step's
+#: tolerance (its error norm; an ordinary step's correction stays under 1, and near a
+#: singular configuration an exact projection's grows like the drift over the
+#: smallest singular value: 1e3..1e5) has jumped onto another branch of the
+#: constraints, whose distance there is about that singular value itself: the step
+#: is taken again, shorter, ...
+JUMP = 1e6
+#: ... at most this many times (each a quarter of the one before).
+JUMP_RETRIES = 8
 #: Rows named in a message, at most.
 NAMED = 6
 

@@ -65,8 +65,8 @@ def integrate(
         ``singular(t, y)``: the singular configuration at a state, or ``""``; steps
         that collapse there end the run (:mod:`~dalembert.solvers.singular_watch`).
     careful
-        With ``stretches``: how to take the steps near a singular configuration the
-        Python way (:mod:`~dalembert.solvers.careful`).
+        The careful steps near a singular configuration (:mod:`~dalembert.solvers.careful`):
+        with ``stretches``, how to take them the Python way.
     solver_options
         Passed to ``method``.
 
@@ -97,7 +97,7 @@ def integrate(
                 loop = StretchLoop(solver, times, project, diagnose, singular, careful)
             else:
                 loop = PythonLoop(solver, times, events, project, dense_output, diagnose,
-                                  singular)
+                                  singular, careful)
             bar = _progress_bar(t0, tf) if progress else None
             while loop.status is None:
                 loop.advance()

@@ -20,12 +20,20 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ..errors import DalembertError
-from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS
-from .careful import CarefulSteps
+from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
+from .careful import CarefulSteps, RetakeStep
 from .dense_output import DenseRecorder
 from .native.run import StretchRunner
 from .nonfinite import Diagnosis
-from .scipy_ivp import last_stages, restart_second_order, step_inputs, take_state
+from .scipy_ivp import (
+    last_stages,
+    restart,
+    restart_second_order,
+    roll_back,
+    snapshot,
+    step_inputs,
+    take_state,
+)
 from .singular_watch import Singularity, StepCollapse
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
@@ -110,14 +118,20 @@ class PythonLoop(SimulationLoop):
     function that raises or returns a value that is not finite ends the run too,
     keeping the steps before. Steps that collapse near a singular configuration of the
     constraints (``singular(t, y)`` says so, naming the rows) end the run with that
-    diagnosis (:mod:`~dalembert.solvers.singular_watch`).
+    diagnosis (:mod:`~dalembert.solvers.singular_watch`). A step the careful model
+    rejects (:class:`~dalembert.solvers.careful.RetakeStep`: its projection jumped onto
+    another branch of the constraints, or it ran too far without the nearly dependent
+    ones) is taken again a quarter as long, up to ``JUMP_RETRIES`` times before the
+    run stops saying so.
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None = None,
                  events: Sequence[Callable] = (), project: Projector | None = None,
                  dense_output: bool = False, diagnose: Diagnosis | None = None,
-                 singular: Singularity | None = None) -> None:
+                 singular: Singularity | None = None,
+                 careful: CarefulSteps | None = None) -> None:
         self.solver = solver
+        self.careful = careful
         self.direction = solver.direction if solver.direction != 0 else 1.0
         self.project = project
         self.diagnose = diagnose
@@ -134,6 +148,7 @@ class PythonLoop(SimulationLoop):
         self.error: BaseException | None = None
         self.n_projections = 0
         self.n_steps = 0
+        self._retries = 0  # times the step now under way was taken again
         #: The time the recorded solution reaches (a terminal event stops before solver.t).
         self.t_reached = solver.t
         self.ts: list[float] = []
@@ -185,6 +200,7 @@ class PythonLoop(SimulationLoop):
         if self._inputs_not_finite():
             return
         y_old = solver.y  # the solvers replace it with a new array when they step
+        saved = snapshot(solver) if self.project is not None else None
         try:
             message = solver.step()
         except DalembertError as exc:
@@ -195,8 +211,11 @@ class PythonLoop(SimulationLoop):
         t_old, t_new = solver.t_old, solver.t
         try:
             y_new = self._project_step(t_new)
+        except RetakeStep as rejected:
+            return self._retake(saved, abs(t_new - t_old), str(rejected))
         except DalembertError as exc:
             return self.stop("failed", f"projection failed at t={t_new:.6g}: {exc}")
+        self._retries = 0
         if not np.all(np.isfinite(y_new)):  # a solver that accepts such a step (LSODA)
             return self._state_not_finite(t_old, y_old, t_new, y_new)
         state = self._interpolator(t_new, y_new)
@@ -218,12 +237,26 @@ class PythonLoop(SimulationLoop):
         self.t_reached = t_new
         if terminal is not None:
             return self.stop("event", f"a terminal event occurred at t={terminal:.6g}")
-        if self.project is not None:
+        if self.careful is not None and self.careful.model.rhs_changed:
+            restart(solver, y_new)  # the last stage's accelerations are not this rhs's
+        elif self.project is not None:
             restart_second_order(solver, y_new)
         if solver.status == "finished":
             return self.stop("finished", "the integration reached the end of t_span")
         self._commit()
         self._watch_steps()
+
+    def _retake(self, saved: dict[str, object] | None, h: float, message: str) -> None:
+        """Take the step again, a quarter as long; stop where that cannot be (a solver
+        whose history cannot be restored) or has been done ``JUMP_RETRIES`` times."""
+        if saved is not None and self._retries < JUMP_RETRIES:
+            self._retries += 1
+            roll_back(self.solver, saved, h / 4)
+            return
+        self.stop("failed", f"integration stopped at t={self.solver.t_old:.6g}: {message}" +
+                  (f", at every step size down to {h:.1e}" if saved is not None else
+                   f" ({type(self.solver).__name__} cannot take a step again)") +
+                  "; the trajectory up to there is returned")
 
     def _watch_steps(self) -> None:
         """Stop if the steps have collapsed near a singular configuration (after a
@@ -436,9 +469,9 @@ class StretchLoop(PythonLoop):
                  project: Projector, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
                  careful: CarefulSteps | None = None) -> None:
-        super().__init__(solver, t_eval, (), project, False, diagnose, singular)
+        super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful)
         self.runner = StretchRunner(solver, self.t_eval)
-        self.native, self.native_project, self.careful = solver, project, careful
+        self.native, self.native_project = solver, project
         self._careful_nfev = 0  # the evaluations of the careful solvers before this one
 
     def advance(self) -> None:
@@ -448,21 +481,30 @@ class StretchLoop(PythonLoop):
                     and not self.careful.model.careful:
                 self._back_to_c()
             return
+        if self._careful_from_here():  # a start near a singular configuration
+            return
         ran = self.runner.run()
         self._absorb()
         if not ran:  # C left the next step to the step-by-step loop
             return super().advance()
         if self.solver.status == "finished":
             return self.stop("finished", "the integration reached the end of t_span")
-        if self.careful is not None and self.careful.solver is not None \
-                and self.runner.near_singular:
-            solver, model = self.solver, self.careful.model
-            model.measure(solver.t, solver.y[:solver.n // 2])
-            if model.careful:
-                self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
-                self.project = model.project
+        if self.runner.near_singular and self.careful is not None:
+            solver = self.solver
+            self.careful.model.measure(solver.t, solver.y[:solver.n // 2])
+            if self._careful_from_here():
                 return
         self._watch_steps()
+
+    def _careful_from_here(self) -> bool:
+        """Take the next steps the Python way if the careful model says so."""
+        if self.careful is None or self.careful.solver is None or \
+                not self.careful.model.careful:
+            return False
+        solver = self.solver
+        self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+        self.project = self.careful.model.project
+        return True
 
     def _back_to_c(self) -> None:
         """Hand the run back to C after careful steps."""

@@ -33,7 +33,7 @@ from scipy.integrate import BDF, OdeSolver, Radau
 from ..codegen.compiled import NumericModel
 from ..inputs import InputSignal
 from ..options import Baumgarte, Projection, SimulationOptions
-from .careful import CarefulModel, CarefulSteps
+from .careful import CarefulModel, CarefulSteps, Outputs
 from .dynamics import first_order_rhs
 from .initialization import InitializationReport
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
@@ -120,7 +120,7 @@ class SimulationPlan:
             self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
-            singular=self.singular, careful=self.careful if self.stretches else None,
+            singular=self.singular, careful=self.careful,
             **self.solver_options)
 
 
@@ -155,7 +155,11 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     ('python', 'ControlledDOP853', False)
     """
     t0, y0 = options.t_span[0], np.concatenate([initial.q, initial.qd])
-    kept = initial.rank.kept if initial.rank is not None else None
+    rank = initial.rank
+    # Rows that depend on the others at the initial configuration only (a singular
+    # one: the rank is higher nearby) are all kept: the careful steps leave the
+    # dependency out while it lasts, where dropping a row for good would let it go.
+    kept = rank.kept if rank is not None and rank.rank_nearby is None else None
     stabilization = options.stabilization
     gain = stabilization.gain if isinstance(stabilization, Baumgarte) else 0.0
     projection = isinstance(stabilization, Projection)
@@ -177,10 +181,13 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     solver_options = step.solver_options()
     stepper = NATIVE_METHODS.get(options.method) if native is not None else None
     rhs: Callable[[float, np.ndarray], np.ndarray]
+    outputs: Outputs
     careful, careful_rhs = None, None
+    rows = initial.rank.names if initial.rank is not None else None
     if projection and num.m:  # near a singular configuration: careful steps in Python
         careful = CarefulModel(num, kept, first_order_rhs(num, 0.0, kept),
-                               StepProjector(num, kept), options.t_span)
+                               StepProjector(num, kept), options.t_span, rows,
+                               (options.step.rtol, options.step.atol))
         careful_rhs = _with_inputs(num, signal, careful.rhs)
     python_options = dict(solver_options)
     if native is not None:
@@ -211,7 +218,8 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
                                               options.t_span[1], python_options)
                              if stretches else None)
     n = num.n
-    rows = initial.rank.names if initial.rank is not None else None
+    if careful is not None:
+        outputs = careful.outputs(outputs, signal)
     return SimulationPlan(
         options=options, initial=initial, loop="c" if native else "python",
         why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,

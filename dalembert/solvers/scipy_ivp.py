@@ -44,6 +44,8 @@ __all__ = [
     "restart",
     "restart_second_order",
     "rk_step",
+    "roll_back",
+    "snapshot",
     "step_inputs",
     "take_state",
 ]
@@ -93,6 +95,45 @@ def restart_second_order(solver: OdeSolver, y: np.ndarray) -> None:
         solver.f = np.concatenate([y[n:], solver.f[n:]])
     else:
         restart(solver, y)
+
+
+#: What an explicit Runge-Kutta solver's next step depends on (the controller's
+#: ``err_old`` too, where it keeps one).
+_STEP_STATE = ("t", "t_old", "y", "f", "h_abs", "h_previous", "status", "err_old")
+
+
+def snapshot(solver: OdeSolver) -> dict[str, object] | None:
+    """What :func:`roll_back` needs to take ``solver``'s next step again, or ``None`` for
+    a solver whose history cannot be restored (the implicit and multistep ones).
+
+    >>> from scipy.integrate import RK45
+    >>> solver = RK45(lambda t, y: -y, 0.0, np.ones(1), 1.0)
+    >>> saved = snapshot(solver)
+    >>> _ = solver.step()
+    >>> roll_back(solver, saved, 0.01)
+    >>> solver.t, solver.h_abs
+    (0.0, 0.01)
+    """
+    if not isinstance(solver, RungeKutta):
+        return None
+    return {name: getattr(solver, name) for name in _STEP_STATE if hasattr(solver, name)}
+
+
+def roll_back(solver: OdeSolver, saved: dict[str, object], h_abs: float) -> None:
+    """Bring ``solver`` back to where :func:`snapshot` saw it, its next step ``h_abs``.
+
+    Parameters
+    ----------
+    solver
+        The explicit Runge-Kutta solver.
+    saved
+        Its :func:`snapshot` before the step taken back.
+    h_abs
+        The size of the step to try instead.
+    """
+    for name, value in saved.items():
+        setattr(solver, name, value)
+    solver.h_abs = h_abs
 
 
 def take_state(solver: OdeSolver, *, t: float, t_old: float, y: np.ndarray, f: np.ndarray,

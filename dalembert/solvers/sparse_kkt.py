@@ -98,7 +98,7 @@ class KKTSolver:
         self._data_order, self._indices, self._indptr = _csc_map(self._rows, self._cols,
                                                                  self.size)
         self._csc_src = self._src[self._data_order]
-        self._band = _BandMap(self._rows, self._cols, self._src, self.size)
+        self._band = BandLU(self._rows, self._cols, self._src, self.size)
         if dense is not None:
             self.method = "dense" if dense else "splu"
         elif self._band.width <= BAND_MAX:
@@ -182,7 +182,7 @@ def kkt_solver(pattern: SparsePattern, kept: np.ndarray | None = None) -> KKTSol
     return pattern.remember(key, lambda: KKTSolver(pattern, rows))
 
 
-class _BandMap:
+class BandLU:
     """Band LU (LAPACK ``gbtrf``/``gbtrs``) of the KKT matrix in a bandwidth-reducing order.
 
     For a chain or a tree numbered along it the band stays a few bodies wide, so a
@@ -194,7 +194,7 @@ class _BandMap:
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, src: np.ndarray,
                  size: int) -> None:
-        self.perm, self.kl, self.ku, self.flat = _band_layout(rows, cols, size)
+        self.perm, self.kl, self.ku, self.flat = band_layout(rows, cols, size)
         self.size, self.src, self.cols = size, src, cols
         self.width = self.kl + self.ku + 1
         self.ldab = 2 * self.kl + self.ku + 1
@@ -231,7 +231,7 @@ class _BandMap:
         return solve
 
 
-def _band_layout(rows: np.ndarray, cols: np.ndarray, size: int):
+def band_layout(rows: np.ndarray, cols: np.ndarray, size: int):
     """``(perm, kl, ku, flat)`` for the entries ``(rows, cols)`` of a symmetric pattern:
     a bandwidth-reducing order (:func:`~dalembert.numerics.band.band_order`; SciPy's
     below ``DENSE_MAX`` unknowns, where the band hardly costs and another order

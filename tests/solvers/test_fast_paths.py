@@ -135,13 +135,13 @@ def test_band_path_is_chosen_for_a_chain_and_stays_narrow():
 
 def test_peripheral_order_finds_the_band_of_a_shuffled_path():
     """A path numbered at random has bandwidth 1 in the order from one of its ends."""
-    from dalembert.solvers.sparse_kkt import _band_layout
+    from dalembert.solvers.sparse_kkt import band_layout
 
     size = 100
     label = np.random.default_rng(4).permutation(size)
     a, b = label[:-1], label[1:]
     rows, cols = np.concatenate([a, b, label]), np.concatenate([b, a, label])
-    perm, kl, ku, _ = _band_layout(rows, cols, size)
+    perm, kl, ku, _ = band_layout(rows, cols, size)
     assert sorted(perm) == list(range(size))
     assert kl == ku == 1
 

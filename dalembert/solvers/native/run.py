@@ -1,7 +1,7 @@
 """Whole stretches of a simulation in C: steps, projections, outputs and restarts.
 
 A call also ends after a step that ends near a singular configuration (the smallest
-pivot ratio of the projection's ``A A^T`` below ``(10 NEAR)**2``): the caller then
+pivot ratio of the projection's ``A A^T`` below ``SCREEN``): the caller then
 measures as the Python loop does and decides (:mod:`~dalembert.solvers.careful`).
 
 :class:`StretchRunner` drives ``dl_rk_run`` for one of the native Runge-Kutta
@@ -21,7 +21,7 @@ from functools import partial
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ...numerics.singular import NEAR
+from ...numerics.singular import SCREEN
 from ..scipy_ivp import take_state
 from . import library
 
@@ -58,7 +58,7 @@ class StretchRunner:
             position_tol=position_tol, accept_tol=accept_tol, max_steps=MAX_STEPS,
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
-            rows=interpolant, near2=(10 * NEAR) ** 2)
+            rows=interpolant, near2=SCREEN)
         self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
                              ctypes.addressof(self._run), self._y.ctypes.data,
                              self._K.ctypes.data, solver._stage.ctypes.data)
