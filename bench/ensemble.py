@@ -103,7 +103,7 @@ def make_initial(mb):
         centers = np.outer(np.arange(len(names)) + 0.5, rot @ np.array([0.0, 0.0, -L]))
         return mb.initial_state(positions=dict(zip(names, centers)),
                                 orientations=dict.fromkeys(names, rot),
-                                velocities={k: np.cross(w, c) for k, c in zip(names, centers)},
+                                velocities=dict(zip(names, np.cross(w, centers))),
                                 angular_velocities=dict.fromkeys(names, w))
 
     return initial
