@@ -23,7 +23,7 @@ from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
-from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody
+from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .drivers import Actuator, JointSpring
@@ -184,17 +184,22 @@ class Multibody:
         """
         if not self.parameters:
             return self
-        numbers = dict(zip(self.parameters,
-                           resolve_parameters(self.parameters, self.defaults, *values)))
-        key = tuple(numbers.values())
+        return self._bound_at(resolve_parameters(self.parameters, self.defaults, *values))
+
+    def _bound_at(self, p: Sequence[float] | np.ndarray) -> Multibody:
+        """:meth:`bound` to ``p``, one value per parameter in their order (resolved
+        already: a System's parameter vector)."""
+        key = tuple(float(v) for v in p)
         if key in self._bound:  # values bound lately: checked already
             self._bound[key] = self._bound.pop(key)  # now the most recent
             return self._bound[key]
+        numbers = dict(zip(self.parameters, key))
         # every expression of every piece evaluated at once (pieces share some)
         memo = evaluated_expressions(self._parametric_expressions, numbers)
         bound = copy.copy(self)
         bound.gravity = with_numbers(self, numbers, memo).gravity
-        mapped = {id(b): with_numbers(b, numbers, memo) for b in self.bodies}
+        mapped = {id(b): with_numbers(b, numbers, memo, check=False) for b in self.bodies}
+        check_bodies([mapped[id(b)] for b in self.bodies if mapped[id(b)] is not b])
         bound.bodies = tuple(mapped[id(b)] for b in self.bodies)
 
         def rebody(piece: _Piece) -> _Piece:
