@@ -190,9 +190,12 @@ class Multibody:
         """:meth:`bound` to ``p``, one value per parameter in their order (resolved
         already: a System's parameter vector)."""
         key = tuple(float(v) for v in p)
-        if key in self._bound:  # values bound lately: checked already
-            self._bound[key] = self._bound.pop(key)  # now the most recent
-            return self._bound[key]
+        # The cache is shared by an ensemble's threads: each step is one dict call (atomic
+        # under the GIL), so a race loses an entry at worst, never raises.
+        found = self._bound.pop(key, None)
+        if found is not None:  # values bound lately: checked already
+            self._bound[key] = found  # now the most recent
+            return found
         numbers = dict(zip(self.parameters, key))
         # every expression of every piece evaluated at once (pieces share some)
         memo = evaluated_expressions(self._parametric_expressions, numbers)
@@ -229,8 +232,8 @@ class Multibody:
         bound.__dict__.pop("_bodies_by_name", None)
         bound._bound = {}
         self._bound[key] = bound
-        while len(self._bound) > BOUND_KEPT:
-            del self._bound[next(iter(self._bound))]
+        if len(self._bound) > BOUND_KEPT:
+            self._bound = dict(list(self._bound.items())[-BOUND_KEPT:])
         return bound
 
     # -- validation ------------------------------------------------------------------
