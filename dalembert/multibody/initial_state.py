@@ -123,7 +123,6 @@ def _rigid(bodies: Sequence[RigidBody], frame: Frame, positions: Sequence[Vector
     names = [body.name for body in bodies]
     x = _triples(positions, "position", names)
     v = _triples(velocities, "velocity", names)
-    w = _triples(angular_velocities, "angular velocity", names)
     b = np.empty((len(bodies), 4))
     b[:] = (1.0, 0.0, 0.0, 0.0)
     matrices: dict[int, FloatArray] = {}
@@ -139,6 +138,7 @@ def _rigid(bodies: Sequence[RigidBody], frame: Frame, positions: Sequence[Vector
         rows = list(matrices)
         b[rows] = quaternion_from_matrix(_rotations(np.array(list(matrices.values())),
                                                     [names[i] for i in rows]))
+    w = _triples(angular_velocities, "angular velocity", names)
     if frame == "world":
         w = np.einsum("kji,kj->ki", rotation_matrix(b), w)  # R^T w: body components
     bd = 0.5 * np.einsum("kji,kj->ki", E_matrix(b), w)  # E^T w_body
