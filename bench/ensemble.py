@@ -5,10 +5,11 @@ joints, each link with its own mass (``m1 .. m16`` uniform in [0.8, 1.2] kg, one
 parameter per link: one build, no compile per case), tilted as a whole by an angle
 uniform in [20, 40] degrees and turning at 0.2 rad/s about x (the suite's start),
 10 s simulated, output at 101 times. The cases are drawn with
-``dalembert.ensemble.sample(..., seed=17)``; the tolerance is the loosest of the
-suite's ladder at which every case of a sample of 40 meets the suite's energy target
-(``|E(10) - E(0)| / (E(0) - E_rest) <= 1e-6``), and the energy error of every case
-run is reported.
+``dalembert.ensemble.sample(..., seed=17)``. The solver is dalembert's cheapest that
+meets the suite's energy target (``|E(10) - E(0)| / (E(0) - E_rest) <= 1e-6``) on every
+case of a sample of 40: for each method of ``METHODS`` the loosest rtol of the suite's
+ladder that meets it, and of these the one whose cases took the least time (as MuJoCo
+gets its largest step that meets it); the energy error of every case run is reported.
 
 Parts (``--part``):
 
@@ -57,8 +58,10 @@ OMEGA = 0.2
 T_END = 10.0
 ENERGY_TARGET = 1e-6
 SEED = 17
-#: DOP853 tolerances tried (atol = rtol / 100), as the suite's ladder.
+#: Tolerances tried (atol = rtol / 100), as the suite's ladder, for each method.
 RTOLS = (1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6)
+#: dalembert's explicit methods that run in C (RK23 needs ~4x DOP853's evaluations here).
+METHODS = ("DOP853", "RK45")
 MUJOCO_STEPS = tuple(1e-2 / 2**k for k in range(6))
 #: Seconds simulated per case in the scaling part: a tenth of the workload's span, so
 #: that 10,000 cases fit in minutes and the ensemble's own costs weigh ten times more.
@@ -103,7 +106,7 @@ def make_initial(mb):
         centers = np.outer(np.arange(len(names)) + 0.5, rot @ np.array([0.0, 0.0, -L]))
         return mb.initial_state(positions=dict(zip(names, centers)),
                                 orientations=dict.fromkeys(names, rot),
-                                velocities={k: np.cross(w, c) for k, c in zip(names, centers)},
+                                velocities=dict(zip(names, np.cross(w, centers))),
                                 angular_velocities=dict.fromkeys(names, w))
 
     return initial
@@ -145,22 +148,35 @@ def peak_memory_mb() -> float:
 
 
 # -- dalembert --------------------------------------------------------------------------
-def choose_rtol(mb, initial, cases) -> tuple[float, list[dict]]:
-    """The loosest rtol at which every case of ``cases`` meets the energy target."""
-    tried = []
-    for rtol in RTOLS:
-        result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
-                                         rtol=rtol, atol=rtol / 100, keep=("energy",),
-                                         scheduler="serial", progress=False)
-        errors = energy_errors(result.dataset["energy"].values, masses(cases))
-        tried.append({"rtol": rtol, "worst_energy_error": float(errors.max()),
-                      "median_energy_error": float(np.median(errors))})
-        if errors.max() <= ENERGY_TARGET:
-            return rtol, tried
-    raise RuntimeError(f"no rtol in {RTOLS} met the energy target: {tried}")
+def choose_solver(mb, initial, cases) -> tuple[dict, list[dict]]:
+    """``simulate``'s method, rtol and atol: for each method the loosest rtol at which
+    every case of ``cases`` meets the energy target, and of these the one whose cases
+    took the least time; every setting tried is listed."""
+    tried, passed = [], []
+    mb.system.simulate_many((0.0, T_END), cases.iloc[:2], initial_state=initial,
+                            scheduler="serial", progress=False)  # untimed: loads the code
+    for method in METHODS:
+        for rtol in RTOLS:
+            solver = {"method": method, "rtol": rtol, "atol": rtol / 100}
+            result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
+                                             keep=("energy",), scheduler="serial",
+                                             progress=False, **solver)
+            errors = energy_errors(result.dataset["energy"].values, masses(cases))
+            tried.append({**solver, "worst_energy_error": float(errors.max()),
+                          "median_energy_error": float(np.median(errors)),
+                          "nfev_mean": float(result.summary["nfev"].mean()),
+                          "case_seconds": case_seconds(result)})
+            if errors.max() <= ENERGY_TARGET:
+                passed.append(tried[-1])
+                break
+    if not passed:
+        raise RuntimeError(f"no method in {METHODS} and rtol in {RTOLS} met the energy "
+                           f"target: {tried}")
+    best = min(passed, key=lambda row: row["case_seconds"])
+    return {k: best[k] for k in ("method", "rtol", "atol")}, tried
 
 
-def plain_loop(mb, initial, cases, rtol: float) -> tuple[float, np.ndarray]:
+def plain_loop(mb, initial, cases, solver: dict) -> tuple[float, np.ndarray]:
     """The reference: ``simulate`` in a loop, each trajectory kept."""
     t_eval = np.linspace(0.0, T_END, 101)
     kept = []
@@ -171,15 +187,15 @@ def plain_loop(mb, initial, cases, rtol: float) -> tuple[float, np.ndarray]:
             q0, qd0 = initial(row)
             kept.append(mb.system.simulate(
                 (0.0, T_END), q0, qd0, parameters={k: v for k, v in row.items() if k != "angle"},
-                rtol=rtol, atol=rtol / 100, t_eval=t_eval))
+                t_eval=t_eval, **solver))
     seconds = time.perf_counter() - start
     return seconds, np.array([traj.energy for traj in kept])
 
 
-def ensemble_run(mb, initial, cases, rtol: float, **how) -> tuple[float, object]:
+def ensemble_run(mb, initial, cases, solver: dict, **how) -> tuple[float, object]:
     start = time.perf_counter()
-    result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial, rtol=rtol,
-                                     atol=rtol / 100, progress=False, **how)
+    result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
+                                     progress=False, **solver, **how)
     return time.perf_counter() - start, result
 
 
@@ -189,7 +205,7 @@ def case_seconds(result) -> float:
     return float(result.summary["seconds"].sum())
 
 
-def local_cluster(mb, initial, rtol: float, workers: int):
+def local_cluster(mb, initial, solver: dict, workers: int):
     """A Dask ``LocalCluster`` of ``workers`` single-threaded processes and its client,
     each worker's first preparation of the model done (it is paid once per cluster and
     model, timed apart)."""
@@ -203,7 +219,7 @@ def local_cluster(mb, initial, rtol: float, workers: int):
     client = Client(cluster)
     started = time.perf_counter() - start
     warm = draw_cases(2 * workers)
-    warm_s, _ = ensemble_run(mb, initial, warm, rtol, client=client, batch_size=1)
+    warm_s, _ = ensemble_run(mb, initial, warm, solver, client=client, batch_size=1)
     return cluster, client, {"cluster_start_s": started, "first_cases_s": warm_s,
                              "first_cases": len(warm)}
 
@@ -219,29 +235,29 @@ def throughput(n: int, rounds: int) -> dict:
     mb.system.compiled  # noqa: B018
     build_s = time.perf_counter() - start
     initial = make_initial(mb)
-    rtol, ladder = choose_rtol(mb, initial, draw_cases(40))
+    solver, ladder = choose_solver(mb, initial, draw_cases(40))
     dt, mujoco_ladder = mujoco_step()
     cases = draw_cases(n)
     mujoco = MujocoCases(cases, dt)
     shares = np.array_split(np.arange(n), rounds)
-    record: dict = {"cases": n, "rounds": rounds, "rtol": rtol, "atol": rtol / 100,
-                    "ladder": ladder, "build_s": build_s, "runs": {}}
+    record: dict = {"cases": n, "rounds": rounds, **solver, "ladder": ladder,
+                    "build_s": build_s, "runs": {}}
     mujoco_record = {"version": mujoco.version, "ladder": mujoco_ladder, "dt": dt}
 
     def loop(part):
-        seconds, energies = plain_loop(mb, initial, part, rtol)
+        seconds, energies = plain_loop(mb, initial, part, solver)
         return (seconds, energy_errors(energies, masses(part))), {}
 
     def many(**how):
         def run(part):
-            seconds, result = ensemble_run(mb, initial, part, rtol, **how)
+            seconds, result = ensemble_run(mb, initial, part, solver, **how)
             errors = energy_errors(result.dataset["energy"].values, masses(part))
             return (seconds, errors), {"case_seconds": case_seconds(result)}
         return run
 
     def on_cluster(workers: int):
         def run(part):
-            cluster, client, started = local_cluster(mb, initial, rtol, workers)
+            cluster, client, started = local_cluster(mb, initial, solver, workers)
             try:
                 done, extra = many(client=client)(part)
             finally:
@@ -437,18 +453,17 @@ def scaling_one(n: int, folder: str) -> dict:
 
     mb = link_mass_chain()
     initial = make_initial(mb)
-    rtol = float(os.environ["BENCH_RTOL"])
+    solver = json.loads(os.environ["BENCH_SOLVER"])
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                            dashboard_address=None, silence_logs=logging.ERROR)
     client = Client(cluster)
-    ensemble_run(mb, initial, draw_cases(4), rtol, client=client, batch_size=1)  # warm
+    ensemble_run(mb, initial, draw_cases(4), solver, client=client, batch_size=1)  # warm
     before = peak_memory_mb()
     store = Path(folder) / f"run{n}.zarr"
     start = time.perf_counter()
     result = mb.system.simulate_many((0.0, SCALING_T_END), draw_cases(n),
-                                     initial_state=initial, rtol=rtol, atol=rtol / 100,
-                                     client=client, store=store, keep=("q", "energy"),
-                                     progress=False)
+                                     initial_state=initial, client=client, store=store,
+                                     keep=("q", "energy"), progress=False, **solver)
     seconds = time.perf_counter() - start
     band = result.quantile("q", [0.05, 0.5, 0.95], coordinate=f"link{N_LINKS}_x")
     client.close()
@@ -461,13 +476,13 @@ def scaling_one(n: int, folder: str) -> dict:
             "band_shape": list(band.shape), "load_average": load_average()}
 
 
-def scaling(sizes: list[int], rtol: float) -> list[dict]:
+def scaling(sizes: list[int], solver: dict) -> list[dict]:
     out = []
     with tempfile.TemporaryDirectory() as folder:
         for n in sizes:
             done = subprocess.run([sys.executable, __file__, "--scaling-one", str(n), folder],
                                   capture_output=True, text=True,
-                                  env={**os.environ, "BENCH_RTOL": repr(rtol)})
+                                  env={**os.environ, "BENCH_SOLVER": json.dumps(solver)})
             if done.returncode != 0:
                 raise RuntimeError(done.stderr[-2000:])
             out.append(json.loads(done.stdout.strip().splitlines()[-1]))
@@ -545,7 +560,9 @@ def main() -> None:
         if args.part in ("all", "scaling"):
             record["scaling"] = scaling(args.sizes or ([10, 100] if args.quick else
                                                        [10, 100, 1000, 10000]),
-                                        record["throughput"]["rtol"])
+                                        {"method": "DOP853", **{  # older records: DOP853
+                                            k: v for k, v in record["throughput"].items()
+                                            if k in ("method", "rtol", "atol")}})
             out.write_text(json.dumps(record, indent=1))
     print(f"wrote {out} and {plot(record, out.with_suffix('.png'))}")
 

@@ -546,15 +546,13 @@ class System:
         >>> traj.t.tolist(), bool(traj.position_residual.max() < 1e-12)
         ([0.5, 1.0], True)
         """
-        options = simulation_options(
-            t_span, t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
+        options = self._options(t_span, dict(
+            t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
             max_step=max_step, step_control=step_control, stabilization=stabilization,
             baumgarte_gain=baumgarte_gain, backend=backend, native=native,
-            redundant_constraints=self.redundant_constraints if redundant_constraints is None
-            else redundant_constraints, velocity_projection=velocity_projection,
-            events=events, dense_output=dense_output, progress=progress, inputs=inputs,
-            sample_time=sample_time, state_size=2 * len(self.coordinate_names),
-            input_names=[u.name for u in self.inputs])
+            redundant_constraints=redundant_constraints,
+            velocity_projection=velocity_projection, events=events, dense_output=dense_output,
+            progress=progress, inputs=inputs, sample_time=sample_time))
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def simulate_many(self, t_span: Sequence[float], cases: Any, **options: Any) -> Any:
@@ -626,10 +624,15 @@ class System:
         >>> traj.status
         'finished'
         """
-        options.setdefault("redundant_constraints", self.redundant_constraints)
-        checked = simulation_options(t_span, state_size=2 * len(self.coordinate_names),
-                                     input_names=[u.name for u in self.inputs], **options)
-        return self._plan(checked, q0, qd0, parameters, fixed)
+        return self._plan(self._options(t_span, options), q0, qd0, parameters, fixed)
+
+    def _options(self, t_span: Sequence[float], options: Mapping[str, Any]) -> SimulationOptions:
+        """:meth:`simulate`'s keywords checked as :meth:`simulate` checks them (for
+        :meth:`plan`, and for an ensemble, which checks them once for all its runs)."""
+        if options.get("redundant_constraints") is None:  # None: the System's option
+            options = {**options, "redundant_constraints": self.redundant_constraints}
+        return simulation_options(t_span, state_size=2 * len(self.coordinate_names),
+                                  input_names=[u.name for u in self.inputs], **options)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,
               qd0: CoordinateValues | None, parameters: Mapping[Any, object] | None,

@@ -24,7 +24,6 @@ import numpy as np
 from ..errors import EnsembleError, EnsembleWarning
 from ..model.parameters import parameter_values
 from ..model.values import CoordinateValues, coordinate_values
-from ..options import simulation_options
 from ..system import System
 from .backends import Backend, Batch, Dask, Serial, Threads
 from .cases import CaseTable, read_cases
@@ -209,15 +208,15 @@ class _Run:
             if name in a:
                 raise EnsembleError(f"simulate_many takes no {name}= per simulation; use "
                                     f"{instead}")
-        checked = simulation_options(self.t_span, t_eval=t_eval, state_size=2 * len(names),
-                                     **a)  # simulate's own checks and messages, once
-        times = checked.output.t_eval
-        if times is None:
-            times = np.linspace(*checked.t_span, DEFAULT_POINTS)
+        # simulate's own checks and messages, once for every case
+        checked = self.system._options(self.t_span, {**a, "t_eval": t_eval})
+        if checked.output.t_eval is None:
+            checked = self.system._options(self.t_span, {
+                **a, "t_eval": np.linspace(*checked.t_span, DEFAULT_POINTS)})
         keep = _keep(keep)
         outputs = _outputs(outputs, keep)
         return CaseSettings(
-            checked.t_span, np.asarray(times, dtype=float), a,
+            checked.t_span, np.asarray(checked.output.t_eval, dtype=float), checked,
             coordinate_values(q0, names, "q0"), coordinate_values(qd0, names, "qd0"),
             parameter_values(self.system.parameters, parameters), self.cases.columns,
             initial_state, keep, outputs)

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ..options import SimulationOptions
 from ..system import System
 from ..trajectory import Trajectory
 from .cases import CaseColumns
@@ -51,7 +52,8 @@ class CaseSettings:
     t_span, t_eval
         The span and the output times (every case reports at these times).
     options
-        ``simulate``'s other keywords, checked once before the ensemble starts.
+        ``simulate``'s keywords, checked once before the ensemble starts (the span and
+        the output times among them).
     q0, qd0
         The base initial state, in coordinate order (case columns override it).
     parameters
@@ -68,7 +70,7 @@ class CaseSettings:
 
     t_span: tuple[float, float]
     t_eval: np.ndarray
-    options: Mapping[str, Any]
+    options: SimulationOptions
     q0: np.ndarray
     qd0: np.ndarray
     parameters: Mapping[str, float]
@@ -132,9 +134,12 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
     --------
     >>> from dalembert.examples import load
     >>> from dalembert.ensemble.cases import CaseColumns
+    >>> from dalembert.options import simulation_options
     >>> pendulum = load("pendulum").build()
-    >>> settings = CaseSettings((0.0, 1.0), np.array([0.0, 1.0]), {}, np.array([1.0, 0.0]),
-    ...                         np.zeros(2), {}, CaseColumns(("l",), (), (), ()))
+    >>> options = simulation_options((0.0, 1.0), t_eval=[0.0, 1.0])
+    >>> settings = CaseSettings((0.0, 1.0), np.array([0.0, 1.0]), options,
+    ...                         np.array([1.0, 0.0]), np.zeros(2), {},
+    ...                         CaseColumns(("l",), (), (), ()))
     >>> outcome = run_case(pendulum, settings, 0, {"l": 1.0})
     >>> outcome.status, outcome.arrays["q"].shape
     ('finished', (2, 2))
@@ -147,8 +152,8 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
             caught = got
         try:
             q0, qd0, parameters = _inputs(system, settings, case)
-            traj = system.simulate(settings.t_span, q0, qd0, parameters=parameters,
-                                   t_eval=settings.t_eval, **settings.options)
+            # simulate(...) with the options checked at the door
+            traj = system._run(system._plan(settings.options, q0, qd0, parameters, None))
             arrays = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
             return error_outcome(index, exc, time.perf_counter() - start, worker)

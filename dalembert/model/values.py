@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InitialConditionError
+from ..errors import InitialConditionError, ModelError
 from .coordinates import key_name
 from .expressions import listed
 
@@ -48,6 +48,10 @@ def coordinate_values(values: CoordinateValues, names: Sequence[str], what: str)
     if isinstance(values, Mapping):
         vec = np.zeros(n)
         position = {name: i for i, name in enumerate(names)}
+        rows = _rows(values, position)
+        if rows is not None:  # every key a coordinate, every value a number: at once
+            vec[rows[0]] = rows[1]
+            values = {}
         for key, value in values.items():
             name = key_name(key)
             if name not in position:
@@ -69,6 +73,22 @@ def coordinate_values(values: CoordinateValues, names: Sequence[str], what: str)
     if bad:
         raise InitialConditionError(f"{what} is not finite for {', '.join(bad)}")
     return vec
+
+
+def _rows(values: Mapping[Any, Any], position: Mapping[str, int]
+          ) -> tuple[list[int], np.ndarray] | None:
+    """The positions and numbers of ``values`` read at once, or ``None`` unless every
+    key is a distinct coordinate and every value a finite number (the entry-by-entry
+    reading then says what is wrong; NumPy reads ``None`` as NaN)."""
+    try:
+        rows = [position[key_name(key)] for key in values]
+        numbers = np.array(list(values.values()), dtype=float)
+    except (KeyError, ModelError, TypeError, ValueError):
+        return None
+    if (numbers.shape != (len(rows),) or not np.isfinite(numbers).all()
+            or len(set(rows)) != len(rows)):
+        return None
+    return rows, numbers
 
 
 def _number(value: object, what: str) -> float:

@@ -525,9 +525,7 @@ def _principal(eig: FloatArray) -> str:
 
 
 def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
-    """The inertia tensor, checked: finite, symmetric, positive definite, well enough
-    conditioned to integrate, and the principal moments obeying the triangle
-    inequality (as every real mass distribution's do)."""
+    """The inertia tensor, checked (:func:`check_inertias`)."""
     try:
         I = np.asarray(inertia, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -539,16 +537,55 @@ def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
             f"the inertia of {name!r} must be a 3x3 tensor or 3 principal values, got shape "
             f"{I.shape}"
         )
-    if not np.all(np.isfinite(I)):
+    check_inertias(I[None], [name])
+    return I
+
+
+def check_inertias(I: FloatArray, names: Sequence[str]) -> None:
+    """Check inertia tensors ``(k, 3, 3)``, every one at once: finite, symmetric,
+    positive definite, well enough conditioned to integrate, and the principal moments
+    obeying the triangle inequality (as every real mass distribution's do). The error
+    names the first body at fault.
+
+    Parameters
+    ----------
+    I
+        The tensors, about the mass centers in the body frames.
+    names
+        The bodies' names, for the message.
+
+    Examples
+    --------
+    >>> check_inertias(np.array([np.eye(3), np.diag([1.0, 1.0, 3.0])]), ["a", "b"])
+    Traceback (most recent call last):
+    ...
+    dalembert.errors.ModelError: the inertia tensor of 'b' violates the triangle ...
+    """
+    finite = np.asarray(np.isfinite(I).all(axis=(1, 2)))
+    safe = np.where(finite[:, None, None], I, np.eye(3))  # eigvalsh refuses NaN
+    asymmetry = np.abs(safe - safe.transpose(0, 2, 1))
+    symmetric = np.asarray(asymmetry.max(axis=(1, 2), initial=0.0) <= 1e-12 * np.maximum(
+        np.abs(safe).max(axis=(1, 2), initial=0.0), 1))
+    eig = np.linalg.eigvalsh(safe)
+    good = (finite & symmetric & (eig[:, 0] > 0) & (eig[:, 0] > INERTIA_RATIO_MIN * eig[:, -1])
+            & ~(eig[:, 0] + eig[:, 1] < eig[:, 2] * (1 - TRIANGLE_RTOL)))
+    if good.all():
+        return
+    k = int(np.flatnonzero(~good)[0])
+    _inertia_error(I[k], asymmetry[k], eig[k], names[k], finite[k], symmetric[k])
+
+
+def _inertia_error(I: FloatArray, asymmetry: FloatArray, eig: FloatArray, name: str,
+                   finite: bool, symmetric: bool) -> None:
+    """Raise the :class:`ModelError` of the first check ``I`` fails."""
+    if not finite:
         raise ModelError(f"the inertia tensor of {name!r} must be finite:\n{I}")
-    asymmetry = np.abs(I - I.T)
-    if asymmetry.max() > 1e-12 * max(np.abs(I).max(), 1):
+    if not symmetric:
         i, j = np.unravel_index(int(np.argmax(asymmetry)), I.shape)
         raise ModelError(
             f"the inertia tensor of {name!r} must be symmetric: I[{i}, {j}] = {I[i, j]:.6g} "
             f"but I[{j}, {i}] = {I[j, i]:.6g}:\n{I}"
         )
-    eig = np.linalg.eigvalsh(I)
     if eig[0] <= 0:
         raise ModelError(
             f"the inertia tensor of {name!r} is not positive definite (principal values "
@@ -565,15 +602,43 @@ def _inertia_tensor(inertia: ArrayLike, name: str) -> FloatArray:
             "with a ratio above 1e-8, hardly changes its swinging), or model the body "
             "without that rotation (two particles joined by a Distance joint)"
         )
-    if eig[0] + eig[1] < eig[2] * (1 - TRIANGLE_RTOL):
-        raise ModelError(
-            f"the inertia tensor of {name!r} violates the triangle inequality: principal "
-            f"moments {_principal(eig)}, and {eig[0]:.6g} + {eig[1]:.6g} = {eig[0] + eig[1]:.6g} < "
-            f"{eig[2]:.6g}. No mass distribution has these moments (each is at most the sum "
-            "of the other two; equal for a flat plate): check the values, which are about "
-            "the mass center in the body frame"
-        )
-    return I
+    raise ModelError(
+        f"the inertia tensor of {name!r} violates the triangle inequality: principal "
+        f"moments {_principal(eig)}, and {eig[0]:.6g} + {eig[1]:.6g} = {eig[0] + eig[1]:.6g} < "
+        f"{eig[2]:.6g}. No mass distribution has these moments (each is at most the sum "
+        "of the other two; equal for a flat plate): check the values, which are about "
+        "the mass center in the body frame"
+    )
+
+
+def check_bodies(bodies: Sequence[MovingBody]) -> None:
+    """Each body's ``check_values``, the rigid bodies' inertias all at once (a bound
+    mechanism checks every body it binds: one at a time, NumPy's calls on 3x3 arrays
+    would cost more than the checks).
+
+    Parameters
+    ----------
+    bodies
+        Bodies whose values are numbers; the error is about the first at fault, as
+        checking them one by one would give it.
+
+    Examples
+    --------
+    >>> check_bodies([RigidBody("a", 1.0, (1, 1, 1)), Particle("p", 2.0)])
+    """
+    together = [b for b in bodies if isinstance(b, RigidBody)
+                and type(b).check_values is RigidBody.check_values and not is_symbolic(b.inertia)]
+    try:
+        for rigid in together:
+            _positive_mass(rigid.mass, rigid.name)
+        check_inertias(np.array([b.inertia for b in together], dtype=np.float64).reshape(-1, 3, 3),
+                       [b.name for b in together])
+    except ModelError:
+        together = []  # one by one, in order: the error of the first body at fault
+    done = {id(b) for b in together}
+    for body in bodies:
+        if id(body) not in done:
+            body.check_values()
 
 
 def body_names(bodies: Sequence[Body]) -> list[str]:

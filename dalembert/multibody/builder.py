@@ -23,11 +23,11 @@ from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
-from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody
+from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .drivers import Actuator, JointSpring
-from .initial_state import body_state
+from .initial_state import bodies_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
 from .parametric import (
@@ -184,17 +184,25 @@ class Multibody:
         """
         if not self.parameters:
             return self
-        numbers = dict(zip(self.parameters,
-                           resolve_parameters(self.parameters, self.defaults, *values)))
-        key = tuple(numbers.values())
-        if key in self._bound:  # values bound lately: checked already
-            self._bound[key] = self._bound.pop(key)  # now the most recent
-            return self._bound[key]
+        return self._bound_at(resolve_parameters(self.parameters, self.defaults, *values))
+
+    def _bound_at(self, p: Sequence[float] | np.ndarray) -> Multibody:
+        """:meth:`bound` to ``p``, one value per parameter in their order (resolved
+        already: a System's parameter vector)."""
+        key = tuple(float(v) for v in p)
+        # The cache is shared by an ensemble's threads: each step is one dict call (atomic
+        # under the GIL), so a race loses an entry at worst, never raises.
+        found = self._bound.pop(key, None)
+        if found is not None:  # values bound lately: checked already
+            self._bound[key] = found  # now the most recent
+            return found
+        numbers = dict(zip(self.parameters, key))
         # every expression of every piece evaluated at once (pieces share some)
         memo = evaluated_expressions(self._parametric_expressions, numbers)
         bound = copy.copy(self)
         bound.gravity = with_numbers(self, numbers, memo).gravity
-        mapped = {id(b): with_numbers(b, numbers, memo) for b in self.bodies}
+        mapped = {id(b): with_numbers(b, numbers, memo, check=False) for b in self.bodies}
+        check_bodies([mapped[id(b)] for b in self.bodies if mapped[id(b)] is not b])
         bound.bodies = tuple(mapped[id(b)] for b in self.bodies)
 
         def rebody(piece: _Piece) -> _Piece:
@@ -221,10 +229,11 @@ class Multibody:
         bound.__dict__.pop("parameters", None)
         bound.__dict__.pop("_parametric_expressions", None)
         bound.__dict__.pop("system", None)
+        bound.__dict__.pop("_bodies_by_name", None)
         bound._bound = {}
         self._bound[key] = bound
-        while len(self._bound) > BOUND_KEPT:
-            del self._bound[next(iter(self._bound))]
+        if len(self._bound) > BOUND_KEPT:
+            self._bound = dict(list(self._bound.items())[-BOUND_KEPT:])
         return bound
 
     # -- validation ------------------------------------------------------------------
@@ -338,10 +347,16 @@ class Multibody:
         >>> chain(2, 1.0, 1.0, 0.1).body("link2")
         RigidBody('link2')
         """
-        for b in self.bodies:
-            if b.name == name:
-                return b
-        raise KeyError(f"no body {name!r}; the bodies are {', '.join(b.name for b in self.bodies)}")
+        found = self._bodies_by_name.get(name)
+        if found is None:
+            raise KeyError(f"no body {name!r}; the bodies are "
+                           f"{', '.join(b.name for b in self.bodies)}")
+        return found
+
+    @cached_property
+    def _bodies_by_name(self) -> dict[str, MovingBody]:
+        """The bodies by name (an initial state names each one: no search per name)."""
+        return {b.name: b for b in self.bodies}
 
     def joint(self, name: str) -> Joint:
         """The joint called ``name``.
@@ -364,7 +379,8 @@ class Multibody:
 
     def _resolve(self, key: Body | str) -> Body:
         if isinstance(key, Body):
-            self._check_members((key,), "initial state")
+            if self._bodies_by_name.get(key.name) is not key:
+                self._check_members((key,), "initial state")  # the ground, or raises
             return key
         return self.body(str(key))
 
@@ -420,20 +436,14 @@ class Multibody:
         """
         if angular_velocity_frame not in ("world", "body"):
             raise ValueError("angular_velocity_frame must be 'world' or 'body'")
-        x, b, v, w = (self._by_name(positions), self._by_name(orientations),
-                      self._by_name(velocities), self._by_name(angular_velocities))
-        q0: dict[str, float] = {}
-        qd0: dict[str, float] = {}
-        for body in self.bodies:
-            name = body.name
-            q, qd = body_state(body, angular_velocity_frame, x.get(name), b.get(name),
-                               v.get(name), w.get(name))
-            q0.update(zip(_names(body), map(float, q)))
-            qd0.update(zip(_names(body), map(float, qd)))
+        q, qd = bodies_state(self.bodies, angular_velocity_frame, self._by_name(positions),
+                             self._by_name(orientations), self._by_name(velocities),
+                             self._by_name(angular_velocities))
         numbers = self._with_defaults()
         if numbers is not None:  # without values for every parameter, no geometry check
-            check_initial_joint_points(numbers, q0)
-        return q0, qd0
+            check_initial_joint_points(numbers, q)
+        names = self.system.coordinate_names
+        return dict(zip(names, q.tolist())), dict(zip(names, qd.tolist()))
 
     # -- outputs (see dalembert.multibody.outputs) -----------------------------------
     def simulate(self, t_span: Sequence[float], q0: CoordinateValues,
@@ -528,10 +538,6 @@ def multibody_of(system: System) -> Multibody:
     if not isinstance(mb, Multibody):
         raise ModelError(f"{system!r} was not built by a dalembert.multibody.Multibody")
     return mb
-
-
-def _names(body: Body) -> list[str]:
-    return [c.name for c in body.coordinates]
 
 
 _Piece = TypeVar("_Piece")

@@ -25,7 +25,7 @@ which of them depend on the others (the rank and the dependent rows are those of
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import ConstraintError, JointPointWarning
 from ..model.values import CoordinateValues, coordinate_values
 from ..numerics.rank import constraint_rank
-from .bodies import Body, Ground, TurningBody
+from .bodies import Body, TurningBody
 from .joints import Fixed, Joint, Revolute, Spherical, Universal
 from .parametric import is_symbolic
 from .types import FloatArray
@@ -104,21 +104,46 @@ def check_joint_points(joint: Joint) -> None:
             )
 
 
-def _pose(q0: Mapping[str, float], body: Body) -> tuple[FloatArray, FloatArray]:
-    x, R = body.pose(np.array([q0[c.name] for c in body.coordinates]))
-    return x[0], R[0]
+def body_poses(bodies: Sequence[Body], q: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Mass centers ``(k, 3)`` and rotation matrices ``(k, 3, 3)`` of ``bodies`` at one
+    configuration, each kind of body at once (a kind's pose depends on its coordinates
+    alone).
+
+    Parameters
+    ----------
+    bodies
+        The bodies of a mechanism, in order (the ground is not one).
+    q
+        The mechanism's coordinates, in order (each body's after the previous one's).
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Particle, RigidBody
+    >>> x, R = body_poses([Particle("p", 1.0), RigidBody("b", 1.0, (1, 1, 1))],
+    ...                   np.array([1, 2, 3, 4, 5, 6, 0, 0, 0, 1.0]))
+    >>> x.tolist(), R[1].round(12).tolist()
+    ([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]])
+    """
+    start = np.cumsum([0, *(len(b.coordinates) for b in bodies)])
+    x, R = np.zeros((len(bodies), 3)), np.zeros((len(bodies), 3, 3))
+    kinds: dict[type, list[int]] = {}
+    for i, body in enumerate(bodies):
+        kinds.setdefault(type(body), []).append(i)
+    for rows in kinds.values():
+        columns = start[rows][:, None] + np.arange(start[rows[0] + 1] - start[rows[0]])
+        x[rows], R[rows] = bodies[rows[0]].pose(q[columns])
+    return x, R
 
 
-def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
-    """Warn when a joint's points do not meet at ``q0`` but would with one read as world.
+def check_initial_joint_points(mb: Multibody, q: FloatArray) -> None:
+    """Warn when a joint's points do not meet at ``q`` but would with one read as world.
 
     Parameters
     ----------
     mb
         The mechanism.
-    q0
-        Its coordinates by name (as :meth:`Multibody.initial_state` gives them, which
-        calls this check).
+    q
+        Its coordinates, in order (:meth:`Multibody.initial_state` calls this check).
 
     Examples
     --------
@@ -135,36 +160,33 @@ def check_initial_joint_points(mb: Multibody, q0: Mapping[str, float]) -> None:
     >>> "use point_b=(0.0, 0.0, 0.5)" in str(caught[-1].message)
     True
     """
-    poses: dict[int, tuple[FloatArray, FloatArray]] = {}
-
-    def pose(body: Body) -> tuple[FloatArray, FloatArray]:
-        if id(body) not in poses:  # a body is in up to two joints: its pose once
-            poses[id(body)] = _pose(q0, body)
-        return poses[id(body)]
-
-    def world(body: Body, point: FloatArray) -> FloatArray:
-        if isinstance(body, Ground):
-            return point
-        x, R = pose(body)
-        return x + R @ point
-
-    for j in mb.joints:
-        if not isinstance(j, _COINCIDENT):
-            continue
-        pa, pb = world(j.body_a, j.point_a), world(j.body_b, j.point_b)
-        gap = float(np.linalg.norm(pb - pa))
-        scale = max(float(np.linalg.norm(pa)), float(np.linalg.norm(pb)), 1e-3)
-        if gap <= 1e-6 * scale:
-            continue
-        for side, body, point, other in (("a", j.body_a, j.point_a, pb),
-                                         ("b", j.body_b, j.point_b, pa)):
-            if not isinstance(body, TurningBody) or np.linalg.norm(point - other) > 1e-9 * scale:
+    joints = [j for j in mb.joints if isinstance(j, _COINCIDENT)]
+    if not joints:
+        return
+    # every joint point in the world at once; the ground's pose is the identity
+    x, R = body_poses(mb.bodies, q)
+    row = {id(body): i for i, body in enumerate(mb.bodies)}
+    x, R = np.vstack([x, np.zeros((1, 3))]), np.vstack([R, np.eye(3)[None]])
+    ends = [(j.body_a, j.point_a) for j in joints] + [(j.body_b, j.point_b) for j in joints]
+    at = [row.get(id(body), -1) for body, _ in ends]
+    points = np.array([point for _, point in ends], dtype=float)
+    world = x[at] + np.einsum("kij,kj->ki", R[at], points)
+    pa, pb = world[: len(joints)], world[len(joints):]
+    gap = np.linalg.norm(pb - pa, axis=1)
+    scale = np.maximum(np.maximum(np.linalg.norm(pa, axis=1), np.linalg.norm(pb, axis=1)),
+                       1e-3)
+    for k in np.flatnonzero(gap > 1e-6 * scale):
+        j = joints[k]
+        for side, body, point, other in (("a", j.body_a, j.point_a, pb[k]),
+                                         ("b", j.body_b, j.point_b, pa[k])):
+            if (not isinstance(body, TurningBody)
+                    or np.linalg.norm(point - other) > 1e-9 * scale[k]):
                 continue
-            x, R = pose(body)
-            fixed = R.T @ (point - x)
+            i = row[id(body)]
+            fixed = R[i].T @ (point - x[i])
             warnings.warn(
-                f"joint {j.name!r}: its points are {gap:.3g} apart at the initial state, but "
-                f"point_{side} {tuple(point.tolist())} is where the joint is in world "
+                f"joint {j.name!r}: its points are {gap[k]:.3g} apart at the initial state, "
+                f"but point_{side} {tuple(point.tolist())} is where the joint is in world "
                 f"coordinates; joint points are in the body frame of {body.name!r}: use "
                 f"point_{side}={tuple(np.round(fixed, 12).tolist())}",
                 JointPointWarning, stacklevel=3,

@@ -151,9 +151,9 @@ def evaluate(value: Any, values: Mapping[sp.Symbol, float], what: str,
     if not is_symbolic(value):
         return value
     memo = {} if memo is None else memo
-    if isinstance(value, np.ndarray):
-        return np.array([evaluate(v, values, what, memo) for v in value.ravel()],
-                        dtype=float).reshape(value.shape)
+    if isinstance(value, np.ndarray):  # floats and expressions (see array())
+        return np.array([evaluate(v, values, what, memo) if isinstance(v, sp.Basic) else v
+                         for v in value.ravel().tolist()], dtype=float).reshape(value.shape)
     if not isinstance(value, sp.Basic):
         return value
     found = memo.get(value)
@@ -234,13 +234,16 @@ def evaluated_expressions(exprs: Sequence[sp.Expr],
                                     np.array([values[s] for s in symbols]))
     except ModelError:  # a function NumPy code cannot print: SymPy evaluates them one by one
         return {}
-    return {e: float(v) for e, v in zip(exprs, numbers) if np.isfinite(v)}
+    finite = np.isfinite(numbers).tolist()
+    return {e: v for e, v, ok in zip(exprs, np.asarray(numbers, dtype=float).tolist(), finite)
+            if ok}
 
 
 def with_numbers(piece: P, values: Mapping[sp.Symbol, float],
-                 memo: dict[sp.Basic, float] | None = None) -> P:
+                 memo: dict[sp.Basic, float] | None = None, check: bool = True) -> P:
     """A copy of ``piece`` with its parametric attributes evaluated (the piece itself
-    when none is symbolic); the piece's ``check_values`` then checks them. ``memo``: as
+    when none is symbolic); the piece's ``check_values`` then checks them (unless
+    ``check`` is false: the caller checks them, e.g. many bodies at once). ``memo``: as
     for :func:`evaluate`."""
     names = [n for n in getattr(piece, "PARAMETRIC", ()) if is_symbolic(getattr(piece, n))]
     if not names:
@@ -250,7 +253,7 @@ def with_numbers(piece: P, values: Mapping[sp.Symbol, float],
     for name in names:
         setattr(bound, name, evaluate(getattr(piece, name), values, f"{name} of {label!r}",
                                       memo))
-    check = getattr(bound, "check_values", None)
-    if check is not None:
-        check()
+    checks = getattr(bound, "check_values", None)
+    if check and checks is not None:
+        checks()
     return bound

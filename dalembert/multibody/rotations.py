@@ -24,6 +24,7 @@ True
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any, TypeAlias
 
@@ -148,31 +149,30 @@ def quaternion_from_matrix(R: ArrayLike) -> FloatArray:
     if R.shape[-2:] != (3, 3):
         raise ValueError(f"a rotation matrix is 3x3, got shape {R.shape}")
     flat = R.reshape(-1, 3, 3)
-    out = np.array([_shepperd(m) for m in flat])
+    # one 3x3 at a time in Python floats: a dozen operations on 0-d arrays cost more
+    out = np.array([_shepperd(m) for m in flat.tolist()]).reshape(-1, 4)
+    out /= np.sqrt(np.einsum("ki,ki->k", out, out))[:, None]
+    out[out[:, 0] < 0] *= -1.0  # b and -b are the same rotation: b0 >= 0
     return out.reshape((*R.shape[:-2], 4))
 
 
-def _shepperd(R: FloatArray) -> FloatArray:
-    tr = np.trace(R)
-    d = [tr, R[0, 0], R[1, 1], R[2, 2]]
-    k = int(np.argmax(d))
+def _shepperd(R: list[list[float]]) -> list[float]:
+    """The Euler parameters of one rotation matrix, not yet normalized."""
+    tr = R[0][0] + R[1][1] + R[2][2]
+    d = (tr, R[0][0], R[1][1], R[2][2])
+    k = max(range(4), key=d.__getitem__)
     if k == 0:
-        b0 = 0.5 * np.sqrt(1.0 + tr)
-        b = [b0, (R[2, 1] - R[1, 2]) / (4 * b0), (R[0, 2] - R[2, 0]) / (4 * b0),
-             (R[1, 0] - R[0, 1]) / (4 * b0)]
-    else:
-        i = k - 1
-        j, l = (i + 1) % 3, (i + 2) % 3
-        bi = 0.5 * np.sqrt(1.0 + 2 * R[i, i] - tr)
-        v = np.zeros(3)
-        v[i] = bi
-        v[j] = (R[j, i] + R[i, j]) / (4 * bi)
-        v[l] = (R[l, i] + R[i, l]) / (4 * bi)
-        b0 = (R[l, j] - R[j, l]) / (4 * bi)
-        b = [b0, *v]
-    unit = np.array(b, dtype=float)
-    unit /= np.linalg.norm(unit)
-    return -unit if unit[0] < 0 else unit
+        b0 = 0.5 * math.sqrt(1.0 + tr)
+        return [b0, (R[2][1] - R[1][2]) / (4 * b0), (R[0][2] - R[2][0]) / (4 * b0),
+                (R[1][0] - R[0][1]) / (4 * b0)]
+    i = k - 1
+    j, l = (i + 1) % 3, (i + 2) % 3
+    bi = 0.5 * math.sqrt(1.0 + 2 * R[i][i] - tr)
+    b = [(R[l][j] - R[j][l]) / (4 * bi), 0.0, 0.0, 0.0]
+    b[1 + i] = bi
+    b[1 + j] = (R[j][i] + R[i][j]) / (4 * bi)
+    b[1 + l] = (R[l][i] + R[i][l]) / (4 * bi)
+    return b
 
 
 def elementary_rotation(axis: str, angle: float) -> FloatArray:
@@ -339,9 +339,39 @@ def check_rotation(R: ArrayLike, what: str, tol: float = 1e-9) -> FloatArray:
     R = np.asarray(R, dtype=float)
     if R.shape != (3, 3):
         raise ValueError(f"{what}: a rotation matrix is 3x3, got shape {R.shape}")
-    err = np.abs(R.T @ R - np.eye(3)).max()
-    if err > tol:
-        raise ValueError(f"{what}: the matrix is not orthonormal (|R^T R - I| = {err:.2e})")
-    if np.linalg.det(R) < 0:
-        raise ValueError(f"{what}: det R = -1, a reflection, not a rotation")
+    return check_rotations(R[None], [what], tol)[0]
+
+
+def check_rotations(R: ArrayLike, what: Sequence[str], tol: float = 1e-9) -> FloatArray:
+    """Rotation matrices ``(k, 3, 3)`` checked at once, as :func:`check_rotation` checks
+    one; the error is about the first one that is not a proper rotation.
+
+    Parameters
+    ----------
+    R
+        The matrices, ``(k, 3, 3)``.
+    what
+        What each one is, for the ``ValueError`` messages.
+    tol
+        Largest ``|R^T R - I|`` accepted.
+
+    Examples
+    --------
+    >>> check_rotations(np.stack([np.eye(3), 2 * np.eye(3)]), ["the first", "the second"])
+    Traceback (most recent call last):
+    ...
+    ValueError: the second: the matrix is not orthonormal (|R^T R - I| = 3.00e+00)
+    """
+    R = np.asarray(R, dtype=float)
+    if R.ndim != 3 or R.shape[1:] != (3, 3) or len(R) != len(what):
+        raise ValueError(f"check_rotations takes {len(what)} 3x3 matrices, got shape {R.shape}")
+    err = np.abs(np.einsum("kji,kjl->kil", R, R) - np.eye(3)).max(axis=(1, 2), initial=0.0)
+    reflected = np.linalg.det(R) < 0
+    bad = np.flatnonzero((err > tol) | reflected)
+    if len(bad):
+        i = int(bad[0])
+        if err[i] > tol:
+            raise ValueError(f"{what[i]}: the matrix is not orthonormal (|R^T R - I| = "
+                             f"{err[i]:.2e})")
+        raise ValueError(f"{what[i]}: det R = -1, a reflection, not a rotation")
     return R

@@ -18,7 +18,7 @@ import sympy as sp
 from ..codegen.assembly import compile_parts
 from ..codegen.compiled import CompiledEquations, NumericModel
 from ..model.model import Model, build_model
-from ..model.parameters import parameter_values
+from ..model.parameters import parameter_values, resolve_parameters
 from ..options import RedundantConstraints
 from ..system import System, _check_redundant
 from .parts import multibody_parts
@@ -74,9 +74,10 @@ class MultibodySystem(System):
     def numeric(self, parameters: Mapping[Any, object] | None = None) -> NumericModel:
         """The compiled functions bound to parameter values, after the mechanism has been
         checked with them (a mass must come out positive, an inertia valid...)."""
+        p = resolve_parameters(self.parameters, self.parameter_values, parameters)
         if self.parameters:
-            self._multibody.bound(self.parameter_values, parameters)
-        return super().numeric(parameters)
+            self._multibody._bound_at(p)
+        return self.compiled.bind(p)
 
     @property
     def rheonomic(self) -> bool:

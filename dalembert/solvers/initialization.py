@@ -82,9 +82,13 @@ class InitializationReport:
         if not self.changed:
             return "initial conditions satisfy the constraints; nothing changed"
         lines = ["initial conditions were projected onto the constraints:"]
+        pairs = (("", self.q_given, self.q), ("_dot", self.qd_given, self.qd))
+        # each coordinate against its own size here (the report as a whole: the largest)
+        moved = [np.abs(new - given) > REPORT_TOL * np.maximum(1.0, np.abs(given))
+                 for _, given, new in pairs]
         for i, name in enumerate(self.names):
-            for label, given, new in (("", self.q_given, self.q), ("_dot", self.qd_given, self.qd)):
-                if name in _changed(self.names[i : i + 1], given[i : i + 1], new[i : i + 1]):
+            for (label, given, new), listed in zip(pairs, moved):
+                if listed[i]:
                     lines.append(f"  {name}{label}: {given[i]:.10g} -> {new[i]:.10g}")
         if self.changed_velocities():
             lines.append(self._velocity_note())
@@ -105,7 +109,7 @@ class InitializationReport:
 
 def _changed(names: Sequence[str], given: np.ndarray, new: np.ndarray) -> list[str]:
     scale = max(1.0, float(np.abs(given).max(initial=0.0)))
-    return [n for n, a, b in zip(names, given, new) if abs(a - b) > REPORT_TOL * scale]
+    return [names[int(i)] for i in np.flatnonzero(np.abs(given - new) > REPORT_TOL * scale)]
 
 
 def consistent_state(
