@@ -148,7 +148,7 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=40)
     parser.add_argument("--t-end", type=float, default=20.0)
     parser.add_argument("--steps", type=float, nargs="*",
-                        default=[1e-2, 5e-3, 4e-3, 2.5e-3, 2e-3, 1.25e-3, 1e-3])
+                        default=[1e-2, 5e-3, 4e-3, 2.5e-3, 2e-3, 1.25e-3, 1e-3, 5e-4, 2.5e-4])
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
     runs = [run_dalembert(args.n, args.t_end, backend) for backend in ("c", "python")]
