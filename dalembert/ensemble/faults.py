@@ -64,6 +64,9 @@ class CaseOutcome:
     arrays: dict[str, np.ndarray] = field(default_factory=dict)
     numbers: dict[str, float] | PackedNumbers = field(default_factory=dict)
     warnings: str = ""
+    #: It ran in stretches of C steps, which release the GIL (threads run such cases
+    #: side by side).
+    in_c: bool = False
 
     @property
     def ok(self) -> bool:

@@ -34,12 +34,18 @@ from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
 
 Scheduler = Literal["auto", "serial", "threads", "processes", "dask"]
 SCHEDULERS = ("auto", "serial", "threads", "processes", "dask")
-#: ``scheduler="auto"`` runs the first case here and starts a local cluster only if
-#: the rest would take longer than this alone (seconds): a cluster's first results
-#: come 4-6 s after it is asked for on two cores (start 1.7-2.2 s, each worker's
-#: import of dalembert 2-3 s and preparation of the model 0.6 s, measured by
-#: bench/ensemble.py), which two workers win back from about 10 s of work.
+#: ``scheduler="auto"`` runs the first case here. If it ran in the C loop, whose
+#: stretches release the GIL, the others run on threads (one per core) when they would
+#: take longer than :data:`AUTO_THREADS_SECONDS` alone: threads start at once and
+#: measured faster than local processes on two cores (bench/ensemble.py, 1,000 cases of
+#: the 16-link chain: 1.91x a plain loop against 1.71x). A case in the Python loop
+#: holds the GIL, and the others go to a local cluster of processes when they would
+#: take longer than :data:`AUTO_PARALLEL_SECONDS`: a cluster's first results come
+#: 4-6 s after it is asked for on two cores (start 1.7-2.2 s, each worker's import of
+#: dalembert 2-3 s and preparation of the model 0.6 s), which two workers win back
+#: from about 10 s of work.
 AUTO_PARALLEL_SECONDS = 10.0
+AUTO_THREADS_SECONDS = 0.5
 #: Batches per worker when the batch size is chosen: enough to balance the load,
 #: few enough that a task's overhead (milliseconds) is small against its cases.
 BATCHES_PER_WORKER = 4
@@ -115,9 +121,11 @@ def simulate_many(
         ``potential_energy``, ``jacobi_integral``, ``position_residual``,
         ``velocity_residual`` (default: the first six but ``qdd``, and the residuals).
     scheduler
-        ``"auto"`` (default: the first case runs here; if the others would take over
-        :data:`AUTO_PARALLEL_SECONDS` alone, a Dask ``LocalCluster`` of one process
-        per core runs them, else they run here too), ``"serial"``, ``"threads"``,
+        ``"auto"`` (default: the first case runs here; the others run on threads if it
+        ran in the C loop and they would take over :data:`AUTO_THREADS_SECONDS`
+        alone, on a Dask ``LocalCluster`` of one process per core if it ran in the
+        Python loop and they would take over :data:`AUTO_PARALLEL_SECONDS`, else here
+        too), ``"serial"``, ``"threads"``,
         ``"processes"`` (a local Dask cluster) or ``"dask"`` (the ``client`` given).
     client
         A ``dask.distributed.Client`` of any cluster (implies ``scheduler="dask"``).
@@ -291,6 +299,8 @@ class _Run:
                                                      "interrupted by the user"))
             return "serial"
         rest = (time.perf_counter() - start) * (len(todo) - 1)
+        if outcomes[todo[0]].in_c:
+            return "threads" if rest > AUTO_THREADS_SECONDS else "serial"
         return "processes" if rest > AUTO_PARALLEL_SECONDS else "serial"
 
     def _backend(self, scheduler: str) -> Backend:

@@ -153,7 +153,8 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
         try:
             q0, qd0, parameters = _inputs(system, settings, case)
             # simulate(...) with the options checked at the door
-            traj = system._run(system._plan(settings.options, q0, qd0, parameters, None))
+            plan = system._plan(settings.options, q0, qd0, parameters, None)
+            traj = system._run(plan)
             arrays = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
             return error_outcome(index, exc, time.perf_counter() - start, worker)
@@ -161,7 +162,7 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
     noted = dict.fromkeys(f"{w.category.__name__}: {str(w.message).splitlines()[0]}"
                           for w in caught)
     return CaseOutcome(index, str(traj.status), traj.message, seconds, worker, arrays,
-                       _numbers(traj, arrays, settings), "\n".join(noted))
+                       _numbers(traj, arrays, settings), "\n".join(noted), plan.stretches)
 
 
 def _inputs(system: System, settings: CaseSettings,

@@ -229,7 +229,10 @@ def test_bad_arguments_are_refused_before_anything_runs(pend):
         pend.simulate_many((0.0, 1.0), cases, initial_state=released, rtol=-1.0)
 
 
-def test_auto_runs_short_ensembles_here_and_long_ones_on_a_local_cluster(pend, monkeypatch):
+def test_auto_runs_short_ensembles_here_and_long_ones_in_parallel(pend, monkeypatch):
+    """Short: here. Long: on threads where the first case ran in the C loop (its
+    stretches release the GIL), on a local cluster of processes where it ran in the
+    Python loop. The same arrays every way."""
     from dalembert.ensemble import backends
     from dalembert.ensemble import run as run_module
 
@@ -248,12 +251,18 @@ def test_auto_runs_short_ensembles_here_and_long_ones_on_a_local_cluster(pend, m
                                progress=False)
     assert short.scheduler == "serial" and chosen == []
     monkeypatch.setattr(run_module, "AUTO_PARALLEL_SECONDS", 0.0)
+    monkeypatch.setattr(run_module, "AUTO_THREADS_SECONDS", 0.0)
     monkeypatch.setattr(run_module.os, "cpu_count", lambda: 2)
-    long = pend.simulate_many((0.0, 2.0), cases, initial_state=released, t_eval=T_EVAL,
+    in_c = pend.simulate_many((0.0, 2.0), cases, initial_state=released, t_eval=T_EVAL,
                               progress=False)
-    assert long.scheduler == "dask" and chosen == [None]  # a local cluster, none given
-    assert long.summary["status"].eq("finished").all()
-    assert np.array_equal(long.dataset["q"].values, short.dataset["q"].values)
+    assert in_c.scheduler == "threads" and chosen == []
+    in_python = pend.simulate_many((0.0, 2.0), cases, initial_state=released,
+                                   t_eval=T_EVAL, progress=False, backend="python")
+    assert in_python.scheduler == "dask" and chosen == [None]  # a local cluster
+    assert in_python.summary["status"].eq("finished").all()
+    for result in (in_c, in_python):
+        np.testing.assert_allclose(result.dataset["q"].values, short.dataset["q"].values,
+                                   rtol=0, atol=1e-12)
 
 
 def test_a_local_cluster_that_cannot_start_is_explained(pend, monkeypatch):
