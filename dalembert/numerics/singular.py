@@ -36,8 +36,8 @@ DENSE_ROWS = 400
 #: While careful, the combinations of rows with singular values below this fraction of
 #: the largest are left out.
 TRUNCATE = 1e-5
-#: ... and with them every larger one within this factor of the one before (a cluster
-#: of singular values falling together is left out at once).
+#: ... and with them every larger one under ``NEAR`` within this factor of the one
+#: before (a cluster of singular values falling together is left out at once).
 GAP = 20.0
 #: A smallest pivot of the rows' Gram matrix (its band Cholesky factorization, rows of
 #: unit length) below this asks for its eigenvalues: the cheap screen both loops take

@@ -5,8 +5,8 @@ Near a singular configuration (:mod:`dalembert.numerics.singular`) the kept rows
 grow like ``1 / sigma_min``: the accelerations carry rounding errors amplified as
 much, the step size collapses, and the motion may leave its branch. While
 *careful*, the combinations of rows (scaled to unit length) whose singular values are
-below ``TRUNCATE`` of the largest are left out of the KKT solve and of the
-projections: the rank-revealing, minimum-norm treatment of dependent rows, for a
+below ``TRUNCATE`` of the largest, with the cluster they fall in (:func:`cluster`),
+are left out of the KKT solve and of the projections: the rank-revealing, minimum-norm treatment of dependent rows, for a
 moment (:mod:`.truncated_kkt`). They are enforced again as soon as they are
 independent enough; the velocity projection of a careful step works in the
 kinetic-energy metric, so that their return changes the energy to second order only.
@@ -78,7 +78,7 @@ class Measurement:
     ratio: float
     #: What a careful step from here leaves out (``None`` unless ``near``).
     truncation: Truncation | None
-    #: The rows (of the solve) with a large part in the nearest dependency (unless near).
+    #: The rows (of the solve) with a large part in the nearest dependency (when near).
     rows: tuple[int, ...] = ()
 
 
@@ -103,11 +103,12 @@ def measure(gram: UnitGram, Av: np.ndarray) -> Measurement:
     ratio = float(np.sqrt(w[0] / largest)) if largest > 0 else 0.0
     if not len(w) or w[0] >= NEAR**2 * largest:
         return Measurement(False, ratio, None)
-    V = gram.near_null(values, max(cluster(w), 1))
+    k = cluster(w)
+    V = gram.near_null(values, max(k, 1))  # the nearest dependency names the rows
     weight = np.abs(V[:, 0])
     rows = np.flatnonzero(weight > 0.1 * weight.max())
     rows = rows[np.argsort(-weight[rows], kind="stable")]
-    return Measurement(True, ratio, Truncation(values.scale, V[:, :cluster(w)], largest),
+    return Measurement(True, ratio, Truncation(values.scale, V[:, :k], largest),
                        tuple(int(r) for r in rows))
 
 
@@ -120,13 +121,14 @@ def nothing_left_out(gram: UnitGram, Av: np.ndarray) -> Truncation:
 def cluster(w: np.ndarray) -> int:
     """How many eigenvalues ``w`` (ascending) a careful step leaves out: those under
     ``TRUNCATE**2`` of the largest, and every one above them that is within
-    ``GAP**2`` of the one before and under ``(GAP * NEAR)**2`` of the largest.
+    ``GAP**2`` of the one before and under ``NEAR**2`` of the largest (still near the
+    singular configuration: a careful step must end with what it left out nearly
+    dependent, :meth:`CarefulModel.project`).
 
     Near a singular configuration several singular values often fall together (N
     four-bars lying flat at once); left out together, the set changes twice per
     passage, not once per singular value (each change costs the step-size controller
-    a restart). The cap keeps a chain of small gaps from reaching the well-conditioned
-    combinations.
+    a restart).
 
     >>> cluster(np.array([1e-12, 4e-12, 1e-10, 1.0]))  # 1e-6, 2e-6, 1e-5: one cluster
     3
@@ -135,7 +137,7 @@ def cluster(w: np.ndarray) -> int:
     """
     largest = w[-1]
     k = int(np.count_nonzero(w < TRUNCATE**2 * largest))
-    while 0 < k < len(w) and w[k] < GAP**2 * w[k - 1] and w[k] < (GAP * NEAR)**2 * largest:
+    while 0 < k < len(w) and w[k] < GAP**2 * w[k - 1] and w[k] < NEAR**2 * largest:
         k += 1
     return k
 

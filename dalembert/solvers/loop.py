@@ -200,7 +200,7 @@ class PythonLoop(SimulationLoop):
         if self._inputs_not_finite():
             return
         y_old = solver.y  # the solvers replace it with a new array when they step
-        saved = snapshot(solver) if self.project is not None else None
+        saved = snapshot(solver) if self.project is not None else None  # (RetakeStep)
         try:
             message = solver.step()
         except DalembertError as exc:

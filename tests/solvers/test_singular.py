@@ -108,8 +108,9 @@ def test_a02_passes_every_flat_position_on_its_branch(backend, N):
     """The IFToMM A02 benchmark at the default settings: 20 s, 20 passes through the
     flat position (N extra instantaneous degrees of freedom each time), 400 outputs. B0
     within 1e-3 of the one-coordinate reference (the benchmark's criterion) and every
-    crank parallel to the first; each passage said in a SingularConfigurationWarning.
-    Measured: B0 errors 1e-7..2e-5, cranks parallel to 1e-10."""
+    crank parallel to the first; the passages said in a SingularConfigurationWarning.
+    Measured: B0 errors 1e-7..3e-4, cranks parallel to 3e-7 or better (the most at
+    outputs inside careful steps, which do not enforce the combinations left out)."""
     traj, said = simulate_a02(N, 20.0, backend)
     assert traj.success, traj.message
     position, velocity = b0_errors(traj, N)
@@ -210,21 +211,48 @@ def test_a_rod_shrinking_to_zero_stops_within_seconds_naming_it(backend):
     assert "the norm of rod fell" in message and "singular configuration" in message
 
 
-def test_a_closed_chain_stretched_straight_at_the_start():
-    """A planar loop of four rods pinned at one end, folded into a doubled straight line
-    (out along x and back): its hinge rows depend on each other at this configuration
-    only. Said: 3 degrees of freedom here, 2 nearby; the run starts with that
-    dependency left out, and once the loop opens it is enforced again (the loop
-    closed to rounding at the end)."""
+def folded_ring(opening: float):
+    """A planar loop of four rods pinned at one end, folded nearly flat: a rhombus of
+    half-angle ``opening`` lying along x (0: a doubled straight line, out and back)."""
     ground = Ground()
     rods = [PlanarBody(f"rod{k}", 1.0, 1 / 12) for k in range(1, 5)]
     joints = [Revolute("pivot", ground, rods[0], (0, 0, 0), (-0.5, 0, 0))]
     joints += [Revolute(f"hinge{k + 1}", rods[k], rods[(k + 1) % 4], (0.5, 0, 0), (-0.5, 0, 0))
                for k in range(4)]
     mb = Multibody(rods, joints, gravity=(0, -G, 0))
+    c, s = np.cos(opening), np.sin(opening)
+    vertices = [(0.0, 0.0), (c, s), (2 * c, 0.0), (c, -s), (0.0, 0.0)]
+    angles = [opening, -opening, np.pi + opening, np.pi - opening]
     q0, qd0 = mb.initial_state(
-        positions={"rod1": (0.5, 0), "rod2": (1.5, 0), "rod3": (1.5, 0), "rod4": (0.5, 0)},
-        orientations={"rod1": 0.0, "rod2": 0.0, "rod3": np.pi, "rod4": np.pi})
+        positions={f"rod{k + 1}": tuple((np.array(vertices[k]) + vertices[k + 1]) / 2)
+                   for k in range(4)},
+        orientations={f"rod{k + 1}": angles[k] for k in range(4)})
+    return mb, q0, qd0
+
+
+def test_a_nearly_straight_closed_chain_swings_down_within_seconds():
+    """The loop folded to 1e-4 rad of straight, released: it swings about its pivot
+    staying nearly folded, careful all the while (it took 12 million steps and 134 s
+    before careful steps existed); energy kept to 1e-5 of the swing."""
+    mb, q0, qd0 = folded_ring(1e-4)
+    start = time.perf_counter()
+    with pytest.warns(RedundantConstraintsWarning, match="ambiguous"), \
+            pytest.warns(SingularConfigurationWarning):
+        traj = mb.system.simulate((0, 3.0), q0, qd0, t_eval=np.linspace(0, 3, 301))
+    assert time.perf_counter() - start < 60.0
+    assert traj.success, traj.message
+    swing = np.ptp(traj.potential_energy)
+    assert swing > 10.0
+    assert np.abs(traj.energy - traj.energy[0]).max() < 1e-5 * swing
+
+
+def test_a_closed_chain_stretched_straight_at_the_start():
+    """A planar loop of four rods pinned at one end, folded into a doubled straight line
+    (out along x and back): its hinge rows depend on each other at this configuration
+    only. Said: 3 degrees of freedom here, 2 nearby; the run proceeds with that
+    dependency left out while it lasts, every row enforced again after (the loop
+    closed to rounding at the end), energy kept."""
+    mb, q0, qd0 = folded_ring(0.0)
     report = mb.system.consistent_initial_state(q0, qd0)
     assert report.degrees_of_freedom == 3 and report.rank.rank_nearby == 10
     assert "this configuration only" in str(report.rank)
