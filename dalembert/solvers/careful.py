@@ -6,10 +6,11 @@ grow like ``1 / sigma_min``: the accelerations carry rounding errors amplified a
 much, the step size collapses, and the motion may leave its branch. While
 *careful*, the combinations of rows (scaled to unit length) whose singular values are
 below ``TRUNCATE`` of the largest, with the cluster they fall in (:func:`cluster`),
-are left out of the KKT solve and of the projections: the rank-revealing, minimum-norm treatment of dependent rows, for a
-moment (:mod:`.truncated_kkt`). They are enforced again as soon as they are
-independent enough; the velocity projection of a careful step works in the
-kinetic-energy metric, so that their return changes the energy to second order only.
+are left out of the KKT solve and of the projections: the rank-revealing,
+minimum-norm treatment of dependent rows, for a moment (:mod:`.truncated_kkt`).
+They are enforced again as soon as they are independent enough, the state projected
+onto them at once (velocities in the kinetic-energy metric, so that their return
+changes the energy to second order only).
 The combinations are fixed over a step (found at its start), so that its right-hand
 side is smooth.
 
