@@ -455,9 +455,10 @@ are the minimum-norm ones, not unique there (Trajectory.near_singular marks them
 
 @dataclass(frozen=True)
 class CarefulSteps:
-    """The careful model of a run (its ``rhs``, ``project`` and ``measure``) and, for the
-    C loop, ``solver(t, y, h_abs)``: a Python solver of the same method and tolerances
-    starting there with that step, to take the careful steps the Python way."""
+    """The careful model of a run (its ``rhs``, ``project`` and ``measure``) and, for a
+    run whose solver steps in C, ``solver(t, y, h_abs)``: a Python solver of the same
+    method and tolerances starting there with that step, to take the careful steps the
+    Python way."""
 
     model: CarefulModel
     solver: Callable[[float, np.ndarray, float], OdeSolver] | None = None

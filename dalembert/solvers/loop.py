@@ -132,6 +132,9 @@ class PythonLoop(SimulationLoop):
                  careful: CarefulSteps | None = None) -> None:
         self.solver = solver
         self.careful = careful
+        #: The run's own solver and projection (the careful steps swap in others).
+        self.native, self.native_project = solver, project
+        self._careful_nfev = 0  # the evaluations of the careful solvers before this one
         self.direction = solver.direction if solver.direction != 0 else 1.0
         self.project = project
         self.diagnose = diagnose
@@ -195,7 +198,37 @@ class PythonLoop(SimulationLoop):
             self.stop("interrupted", f"interrupted by the user at t={self.t_reached:.6g}")
 
     def advance(self) -> None:
-        """One step: step, project, events, outputs, restart."""
+        """One step: step, project, events, outputs, restart; near a singular
+        configuration the step is careful (:meth:`_careful_from_here`)."""
+        if self._careful_from_here():
+            return
+        self._step()
+        if self.status is None and self.solver is not self.native and self.careful \
+                is not None and not self.careful.model.careful:
+            self._back_to_native()
+
+    def _careful_from_here(self) -> bool:
+        """Take the next steps with the careful solver if the careful model says so (a
+        run's own solver that steps in C cannot: ``careful.solver`` makes one of the
+        same method and tolerances that steps in Python)."""
+        if self.careful is None or self.careful.solver is None or \
+                self.solver is not self.native or not self.careful.model.careful:
+            return False
+        solver = self.solver
+        self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+        self.project = self.careful.model.project
+        return True
+
+    def _back_to_native(self) -> None:
+        """Hand the run back to its own solver after careful steps."""
+        careful, native = self.solver, self.native
+        self._careful_nfev += careful.nfev
+        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
+                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
+                   h_previous=careful.h_previous)
+        self.solver, self.project = native, self.native_project
+
+    def _step(self) -> None:
         solver = self.solver
         if self._inputs_not_finite():
             return
@@ -409,7 +442,9 @@ class PythonLoop(SimulationLoop):
     def result(self, method_name: str) -> IntegrationResult:
         solver = self.solver
         n_state = solver.y.size
-        stats = {"nfev": solver.nfev, "njev": solver.njev, "nlu": solver.nlu,
+        nfev = solver.nfev + self._careful_nfev + \
+            (self.native.nfev if solver is not self.native else 0)
+        stats = {"nfev": nfev, "njev": solver.njev, "nlu": solver.nlu,
                  "n_steps": self.n_steps, "n_projections": self.n_projections}
         stats = {k: int(v) for k, v in stats.items() if v is not None}
         y = np.array(self.ys) if self.ys else np.empty((0, n_state))
@@ -471,18 +506,10 @@ class StretchLoop(PythonLoop):
                  careful: CarefulSteps | None = None) -> None:
         super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful)
         self.runner = StretchRunner(solver, self.t_eval)
-        self.native, self.native_project = solver, project
-        self._careful_nfev = 0  # the evaluations of the careful solvers before this one
 
     def advance(self) -> None:
-        if self.solver is not self.native:  # careful steps
-            super().advance()
-            if self.status is None and self.careful is not None \
-                    and not self.careful.model.careful:
-                self._back_to_c()
-            return
-        if self._careful_from_here():  # a start near a singular configuration
-            return
+        if self.solver is not self.native or self._careful_from_here():
+            return super().advance()  # careful steps
         ran = self.runner.run()
         self._absorb()
         if not ran:  # C left the next step to the step-by-step loop
@@ -495,32 +522,6 @@ class StretchLoop(PythonLoop):
             if self._careful_from_here():
                 return
         self._watch_steps()
-
-    def _careful_from_here(self) -> bool:
-        """Take the next steps the Python way if the careful model says so."""
-        if self.careful is None or self.careful.solver is None or \
-                not self.careful.model.careful:
-            return False
-        solver = self.solver
-        self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
-        self.project = self.careful.model.project
-        return True
-
-    def _back_to_c(self) -> None:
-        """Hand the run back to C after careful steps."""
-        careful, native = self.solver, self.native
-        self._careful_nfev += careful.nfev
-        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
-                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
-                   h_previous=careful.h_previous)
-        self.solver, self.project = native, self.native_project
-
-    def result(self, method_name: str) -> IntegrationResult:
-        result = super().result(method_name)
-        if self.solver is not self.native:  # ended in careful steps
-            result.stats["nfev"] += self.native.nfev
-        result.stats["nfev"] += self._careful_nfev
-        return result
 
     def interrupt(self) -> None:
         self._absorb()  # a stretch run in C before the Ctrl-C is kept

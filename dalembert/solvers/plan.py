@@ -186,15 +186,21 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     rows = initial.rank.names if initial.rank is not None else None
     if projection and num.m:  # near a singular configuration: careful steps in Python
         careful = CarefulModel(num, kept, first_order_rhs(num, 0.0, kept),
+                               native.project if native is not None else
                                StepProjector(num, kept), options.t_span, rows,
                                (options.step.rtol, options.step.atol))
         careful_rhs = _with_inputs(num, signal, careful.rhs)
     python_options = dict(solver_options)
+    output = options.output
+    stretches = stepper is not None and projection and not output.events \
+        and not output.dense_output
     if native is not None:
         rhs, outputs = native.rhs, native.outputs
         project = native.project if projection else None
         if stepper is not None:
             solver, solver_options["native"] = stepper, native
+            if careful is not None and not stretches:  # measured after each step
+                project = careful.project
     elif careful is not None and careful_rhs is not None:
         rhs, project = careful_rhs, careful.project
         outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
@@ -209,14 +215,14 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         python_options["step_control"] = step.controller
     if solver in (Radau, BDF):
         solver_options["jac"] = finite_difference_jacobian(rhs)
-    output = options.output
-    stretches = stepper is not None and projection and not output.events \
-        and not output.dense_output
     steps = None
-    if careful is not None and careful_rhs is not None and (stretches or native is None):
+    # careful steps: in the Python loop's own solver, or (a solver stepping in C) in one
+    # of the same method stepping in Python; not for the implicit solvers with the C rhs
+    if careful is not None and careful_rhs is not None and (stepper is not None or
+                                                            native is None):
         steps = CarefulSteps(careful, partial(_careful_solver, python_solver, careful_rhs,
                                               options.t_span[1], python_options)
-                             if stretches else None)
+                             if stepper is not None else None)
     n = num.n
     if careful is not None:
         outputs = careful.outputs(outputs, signal)

@@ -19,6 +19,7 @@ import warnings
 import numpy as np
 import pytest
 from scipy.integrate import RK45, Radau, solve_ivp
+from scipy.optimize import brentq
 
 from dalembert import Holonomic, System, coordinates
 from dalembert import t as time_symbol
@@ -134,6 +135,37 @@ def test_a02_at_every_tolerance_stays_on_its_branch(backend, rtol):
     assert traj.success, traj.message
     assert crank_spread(traj, 8) < 1e-6
     assert max(b0_errors(traj, 8)) < max(1000 * rtol, 1e-5)
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_events_and_dense_output_through_the_flat_positions(backend):
+    """With an event (the first crank's centre crossing y = 0: a flat position) and dense
+    output the run steps one step at a time (the C loop's solver stepping in C), and
+    still takes careful steps there: every event at the reference's flat time (to
+    1e-7), on the branch, the dense output through them."""
+    N = 2
+    mb = four_bars(N)
+    q0, qd0 = parallel_state(mb, N, np.pi / 2, -1.0)
+    height = mb.system.coordinate_names.index("crank0_y")
+
+    def flat(t, q, qd):
+        return q[height]
+
+    with pytest.warns(SingularConfigurationWarning):
+        traj = mb.system.simulate((0, 5.0), q0, qd0, backend=backend, events=[flat],
+                                  dense_output=True, t_eval=np.linspace(0, 5.0, 101))
+    assert traj.success, traj.message
+    J, V = (N + 1) / 3 + N, G * ((N + 1) / 2 + N)
+    reference = solve_ivp(lambda t, y: [y[1], -V * np.cos(y[0]) / J], (0.0, 5.0),
+                          [np.pi / 2, -1.0], method="DOP853", rtol=1e-13, atol=1e-13,
+                          dense_output=True).sol
+    expected = [brentq(lambda t: np.sin(reference(t)[0]), a, b, xtol=1e-14)
+                for a, b in zip(flat_times(N, 5.0) - 1e-3, flat_times(N, 5.0) + 1e-3)]
+    assert len(traj.t_events[0]) == len(expected) == 5
+    assert np.abs(traj.t_events[0] - expected).max() < 1e-7
+    assert crank_spread(traj, N) < 1e-6 and max(b0_errors(traj, N)) < 1e-5
+    n = len(mb.system.coordinate_names)
+    np.testing.assert_allclose(traj.sol(traj.t[1:-1])[:n].T, traj.q[1:-1], atol=1e-9)
 
 
 def test_the_multipliers_at_a_flat_position_are_bounded_and_marked():
