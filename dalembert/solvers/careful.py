@@ -265,9 +265,13 @@ class CarefulModel:
         self.careful, self.truncation = found.near, found.truncation
 
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        if not self.careful or self.truncation is None:
+        """The right-hand side, careful or not: as the step under way is taken, or, at a
+        time inside the step just taken (its dense output's extra stages, evaluated
+        after the switch at its end), as that step was."""
+        careful, cut = self._mode(t)
+        if not careful or cut is None:
             return self._rhs(t, y)
-        num, n, cut = self.num, self.num.n, self.truncation
+        num, n = self.num, self.num.n
         q, qd = y[:n], y[n:]
         Mv, f, Av, c = num.kkt_sparse(t, q, qd)
         try:
@@ -289,7 +293,7 @@ class CarefulModel:
         their small singular values.
         """
         if self.direction * (t - self._reached) <= 0:  # an output inside the last step
-            careful, cut = self._last_step
+            careful, cut = self._mode(t)
             return self._careful_project(t, y, cut) if careful else self._project(t, y)
         projected = self._careful_project(t, y, self.truncation) if self.careful \
             else self._project(t, y)
@@ -337,6 +341,13 @@ class CarefulModel:
             raise RetakeStep(f"the projection at t={t:.6g} moved the state by {size:.3g} "
                                  "times the tolerance (the step's error norm), a jump onto "
                                  "another branch of the constraints")
+
+    def _mode(self, t: float) -> tuple[bool, Truncation | None]:
+        """Careful or not, and what is left out, at ``t``: the step under way's from the
+        last step's end on, that step's before it."""
+        if self.direction * (t - self._reached) < 0:
+            return self._last_step
+        return self.careful, self.truncation
 
     def _left_out(self) -> int:
         """How many combinations the next step leaves out."""

@@ -17,13 +17,15 @@ with the left-out combinations' own unknowns ``s``, it is the bordered system
 whose matrix is regular where the KKT matrix alone is nearly singular. It is solved
 by block elimination on the band LU (:class:`~.sparse_kkt.BandLU`, linear in the
 mechanism) of the *regularized* KKT matrix ``[[M, A^T], [A, -eps I]]``, which stays
-regular however the rows depend on each other; the shift ``eps`` is removed again
-by proximal iterations (``A x + eps lambda_{j+1} = c + eps lambda_j``; the
-augmented Lagrangian iteration of Bayo and Ledesma's formulation, seen from the
-multipliers), each gaining the factor ``eps / (sigma^2 + eps)`` on a combination of
-squared singular value ``sigma^2``. With ``eps`` at :data:`SHIFT` of the largest
-and every kept combination's ``sigma^2`` above ``TRUNCATE**2`` of it
-(:mod:`dalembert.numerics.singular`), :data:`PROXIMAL` iterations reach rounding.
+regular however the rows depend on each other, and refined on the bordered system
+itself (its residual computed without the shift): each iteration removes the shift's
+effect on a kept combination of squared singular value ``sigma^2`` by the factor
+``eps / (sigma^2 + eps)`` (the proximal, augmented Lagrangian iteration of Bayo and
+Ledesma's formulation, seen from the multipliers) and the rounding of the
+elimination, which is large where ``eps`` is tiny, alike. With ``eps`` at
+:data:`SHIFT` of the largest and every kept combination's ``sigma^2`` above
+``TRUNCATE**2`` of it (:mod:`dalembert.numerics.singular`), :data:`PROXIMAL`
+iterations reach rounding.
 """
 
 from __future__ import annotations
@@ -39,9 +41,9 @@ from .sparse_kkt import BandLU
 #: The regularization of the KKT matrix, relative to the largest eigenvalue of
 #: ``A M^-1 A^T`` (rows scaled to unit length; ``M`` by its mean diagonal).
 SHIFT = 1e-12
-#: Proximal iterations removing the regularization: ``(SHIFT / TRUNCATE**2)**3``
-#: is below rounding.
-PROXIMAL = 3
+#: Refinement iterations removing the regularization and the elimination's rounding:
+#: ``(SHIFT / TRUNCATE**2)**4`` is below rounding.
+PROXIMAL = 4
 
 #: ``solve(top, bottom) -> (x, lambda)``.
 Solve = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -99,6 +101,7 @@ class TruncatedKKT:
         self._band = BandLU(entry_rows.astype(np.intp), entry_cols.astype(np.intp), src,
                             n + self.size)
         self._unit = np.ones(n) if unit_mass else None
+        self._m_entries = (np.asarray(m_rows, dtype=np.intp), np.asarray(m_cols, dtype=np.intp))
         self._on_diagonal = np.flatnonzero(m_rows == m_cols)
         self._diagonal_row = np.asarray(m_rows)[self._on_diagonal]
 
@@ -136,14 +139,34 @@ class TruncatedKKT:
             border[n:] = V
             X = solve_k(border)
             capacitance = lu_factor(V.T @ X[n:])
+        m_rows, m_cols = self._m_entries
+        a_row, a_col = self._a_row, self._a_col
+
+        def kkt_times(z: np.ndarray) -> np.ndarray:
+            """``[[M, A^T], [A, 0]] z`` (``A`` of the scaled rows)."""
+            q, y = z[:n], z[n:]
+            return np.concatenate([
+                np.bincount(m_rows, weights=mass * q[m_cols], minlength=n)
+                + np.bincount(a_col, weights=a * y[a_row], minlength=n),
+                np.bincount(a_row, weights=a * q[a_col], minlength=size)])
+
+        def correction(r: np.ndarray, r_border: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            """The bordered system with the shifted matrix, by block elimination."""
+            z = solve_k(r)
+            if not k:
+                return z, np.zeros(0)
+            t = lu_solve(capacitance, V.T @ z[n:] - r_border)
+            return z - X @ t, t
 
         def solve(top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            lam = np.zeros(size)
-            for _ in range(PROXIMAL):
-                x = solve_k(np.concatenate([top, bottom + eps * lam]))
+            rhs = np.concatenate([top, bottom])
+            z, t = np.zeros(n + size), np.zeros(k)
+            for _ in range(PROXIMAL):  # refinement on the unshifted bordered system
+                r = rhs - kkt_times(z)
                 if k:
-                    x -= X @ lu_solve(capacitance, V.T @ x[n:])
-                lam = -x[n:]
-            return x[:n], lam
+                    r[n:] -= V @ t
+                dz, dt = correction(r, -(V.T @ z[n:]) if k else np.zeros(0))
+                z, t = z + dz, t + dt
+            return z[:n], -z[n:]
 
         return solve
