@@ -97,12 +97,16 @@ class UnitGram:
         self._target = (low - high) * self.size + high
         self._e1, self._e2 = e1, e2
 
-    def values(self, Av: np.ndarray) -> GramValues:
-        """``G`` for the values ``Av`` of ``A`` (all of them, in pattern order)."""
+    def scale(self, Av: np.ndarray) -> np.ndarray:
+        """``1 / |row|`` for the values ``Av`` of ``A`` (0 for a row of zeros)."""
         a = np.asarray(Av, dtype=float)[self._entries]
         norm2 = np.bincount(self._row, weights=a * a, minlength=self.size)
-        scale = np.divide(1.0, np.sqrt(norm2), out=np.zeros(self.size), where=norm2 > 0)
-        a = a * scale[self._row]
+        return np.divide(1.0, np.sqrt(norm2), out=np.zeros(self.size), where=norm2 > 0)
+
+    def values(self, Av: np.ndarray) -> GramValues:
+        """``G`` for the values ``Av`` of ``A`` (all of them, in pattern order)."""
+        scale = self.scale(Av)
+        a = np.asarray(Av, dtype=float)[self._entries] * scale[self._row]
         band = np.bincount(self._target, weights=a[self._e1] * a[self._e2],
                            minlength=(self.kd + 1) * self.size)
         return GramValues(band.reshape(self.kd + 1, self.size), scale)

@@ -7,18 +7,21 @@ controller may creep towards the rank drop with ever smaller steps. Both simulat
 loops, in C and in Python, watch the steps with the same thresholds, here, and take
 the same decision from them (:class:`~dalembert.solvers.singular_watch.StepCollapse`):
 
-- the steps have *collapsed* when the last :data:`COLLAPSE_STEPS` (or more) of them
-  advanced on average less than :data:`COLLAPSE_RATIO` of the mean step before them;
 - a state is *near a singular configuration* when the smallest singular value of the
-  kept rows of ``A`` is below :data:`NEAR` times the largest, or a row's norm is below
-  :data:`NEAR` times its norm at the start (a constraint whose gradient vanishes).
+  kept rows of ``A`` (scaled to unit length) is below :data:`NEAR` times the largest;
+  after every step a band Cholesky screen (:data:`SCREEN`) decides whether to measure
+  it, and near one the steps are careful (:mod:`~dalembert.solvers.careful`: what
+  they leave out, :data:`TRUNCATE` and :data:`GAP`; when they are retaken,
+  :data:`JUMP` and :data:`JUMP_RETRIES`);
+- the steps have *collapsed* when the last :data:`COLLAPSE_STEPS` (or more) of them
+  advanced on average less than :data:`COLLAPSE_RATIO` of the mean step before them.
 
-A collapse near a singular configuration ends the run with a diagnosis naming the
-time and the rows involved (:func:`near_dependent_rows`). The measure is taken only
-when the steps have collapsed, so a run that never nears one pays nothing for it.
-At the start, the degrees of freedom are counted with ``RANK_RTOL``
-(:mod:`.rank`), and singular values between it and :data:`NEAR` make the count
-ambiguous (said in the report).
+A collapse near a singular configuration (there, also a row whose norm fell below
+:data:`NEAR` times its norm at the start: a constraint whose gradient vanishes) ends
+the run with a diagnosis naming the time and the rows involved
+(:func:`near_dependent_rows`, a dense SVD taken only then). At the start, the degrees
+of freedom are counted with ``RANK_RTOL`` (:mod:`.rank`), and singular values between
+it and :data:`NEAR` make the count ambiguous (said in the report).
 """
 
 from __future__ import annotations
@@ -29,9 +32,9 @@ import numpy as np
 
 #: Singular values below this fraction of the largest: near a rank drop.
 NEAR = 1e-3
-#: Models with more constraint rows get no dense measure of their conditioning (after
-#: every step, or of the degrees of freedom at the start when no row is dependent): its
-#: cost grows as rows^2 x coordinates (seconds for a 256-link chain).
+#: Models with more constraint rows get no dense measure of the degrees of freedom at the
+#: start when no row is dependent: its cost grows as rows^2 x coordinates (seconds for a
+#: 256-link chain).
 DENSE_ROWS = 400
 #: While careful, the combinations of rows with singular values below this fraction of
 #: the largest are left out.

@@ -116,7 +116,7 @@ def measure(gram: UnitGram, Av: np.ndarray) -> Measurement:
 def nothing_left_out(gram: UnitGram, Av: np.ndarray) -> Truncation:
     """The truncation that leaves nothing out (its ``largest``, 1, is the Gram matrix's
     diagonal: a lower bound of its largest eigenvalue, enough to set a shift)."""
-    return Truncation(gram.values(Av).scale, np.zeros((gram.size, 0)), 1.0)
+    return Truncation(gram.scale(Av), np.zeros((gram.size, 0)), 1.0)
 
 
 def cluster(w: np.ndarray) -> int:
@@ -253,11 +253,12 @@ class CarefulModel:
         self.careful, self._last_step = False, (False, None)
         self.measure(t, q)
 
-    def measure(self, t: float, q: np.ndarray) -> None:
-        """Careful from here if ``q`` is near a singular configuration (a passage noted)."""
+    def measure(self, t: float, q: np.ndarray, Av: np.ndarray | None = None) -> None:
+        """Careful from here if ``q`` is near a singular configuration (a passage noted);
+        ``Av``: the values of ``A`` there, if the caller has them."""
         if self.num.m == 0:
             return
-        found = measure(self._gram, self.num.velocity_sparse(t, q)[0])
+        found = measure(self._gram, self.num.velocity_sparse(t, q)[0] if Av is None else Av)
         if found.near:
             if not self.careful:
                 self.passages.append(Passage(t, t, found.ratio, 0, found.rows))
@@ -297,31 +298,29 @@ class CarefulModel:
             return self._careful_project(t, y, cut) if careful else self._project(t, y)
         projected = self._careful_project(t, y, self.truncation) if self.careful \
             else self._project(t, y)
+        Av = self.num.velocity_sparse(t, projected[:self.num.n])[0]  # the step end's A
         if self._left_out():  # (leaving combinations out, it cannot jump)
-            self._check_reach(t, projected)
+            self._check_reach(t, Av)
         else:
             self._check_correction(t, y, projected)
         y = projected
         self._reached = t
         before, was_careful = self._left_out(), self.careful
         self._last_step = (self.careful, self.truncation)
-        self.measure(t, y[:self.num.n])
+        self.measure(t, y[:self.num.n], Av)
         self.rhs_changed = was_careful or self.careful
         if self._left_out() < before:
-            y = self._careful_project(t, y, self.truncation or nothing_left_out(
-                self._gram, self.num.velocity_sparse(t, y[:self.num.n])[0]))
+            y = self._careful_project(t, y, self.truncation or nothing_left_out(self._gram, Av))
         return y
 
-    def _check_reach(self, t: float, y: np.ndarray) -> None:
+    def _check_reach(self, t: float, Av: np.ndarray) -> None:
         """Raise :class:`RetakeStep` if the combinations the step left out are no longer
         nearly dependent at its end (singular values above ``NEAR`` of the largest): the
         step ran on without them too far from the singular configuration, where they
         carry real constraint forces."""
         cut = self.truncation
         assert cut is not None
-        Av = self.num.velocity_sparse(t, y[:self.num.n])[0]
-        scale = self._gram.values(Av).scale
-        spread = _singular_values(self._dynamics, Av, scale, cut.V)
+        spread = _singular_values(self._dynamics, Av, self._gram.scale(Av), cut.V)
         if spread.max(initial=0.0) > NEAR * np.sqrt(cut.largest):
             raise RetakeStep(f"the step to t={t:.6g} left out combinations of constraints "
                              "that are no longer nearly dependent at its end")
