@@ -131,15 +131,13 @@ void add_A_times(const dl_model *md, const double *x, double w, double *out) {
   }
 }
 
-/* Block b of M (scattered) with its internal rows folded in, factored (Mt = L L^T);
- * u_b = L^-1 f_b and z_p = L^-1 a_p for its pairs. */
-DL_INLINE int factor_block(dl_model *md, int64_t b, const double *c, int64_t nb) {
+/* Block b of M (scattered) with its internal rows folded in, factored (Mt = L L^T). */
+DL_INLINE int fold_factor_block(dl_model *md, int64_t b, const double *c, int64_t nb) {
   double *restrict B = md->blocks + md->block_mat[b];
   double *restrict u = md->u + md->block_start[b];
   double trace = 0.0;
   for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
-  const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
-  for (int64_t p = p0; p < md->block_external[b]; ++p) {
+  for (int64_t p = md->block_pairs[b]; p < md->block_external[b]; ++p) {
     const double *restrict a = md->a + md->pair_vec[p];
     const double norm2 = dot(a, a, nb);
     if (norm2 == 0.0) continue;
@@ -150,13 +148,18 @@ DL_INLINE int factor_block(dl_model *md, int64_t b, const double *c, int64_t nb)
       for (int64_t j = 0; j <= i; ++j) B[i * nb + j] += w * a[i] * a[j];
     }
   }
-  if (cholesky(B, nb) != DL_OK) return DL_SINGULAR_MASS;
-  forward(B, nb, u);
+  return cholesky(B, nb);
+}
+
+/* u_b = L^-1 f_b and z_p = L^-1 a_p for block b's pairs (fold_factor_block first). */
+DL_INLINE void block_forward(dl_model *md, int64_t b, int64_t nb) {
+  const double *restrict B = md->blocks + md->block_mat[b];
+  forward(B, nb, md->u + md->block_start[b]);
+  const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
   const double *restrict a = md->a + md->pair_vec[p0];
   double *restrict z = md->y + md->pair_vec[p0];
   for (int64_t k = 0; k < (p1 - p0) * nb; ++k) z[k] = a[k];
   for (int64_t k = 0; k < p1 - p0; ++k) forward(B, nb, z + k * nb);
-  return DL_OK;
 }
 
 DL_INLINE int is_active(const unsigned char *active, const dl_model *md, int64_t p) {
@@ -342,7 +345,7 @@ void solve_schur(dl_model *md, double *rhs, double *x) {
 }
 
 /* The unit blocks' part of block_pass, in flat loops without per-block branching: the
- * same operations as factor_block, gram_block and block_residual with nb = 1 (the
+ * same operations as fold_factor_block, block_forward, gram_block and block_residual with nb = 1 (the
  * block keeps 1 / L), only the order of the sums into S and c differs. */
 static int unit_pass(dl_model *md, double *c) {
   double *restrict blocks = md->blocks, *restrict u = md->u, *restrict z = md->y;
@@ -368,7 +371,7 @@ static int unit_pass(dl_model *md, double *c) {
 /* Block b factored, its internal rows eliminated, its gram products into S and its
  * part of c - Z^T u. */
 DL_INLINE int block_pass(dl_model *md, int64_t b, double *c, int64_t nb) {
-  if (factor_block(md, b, c, nb) != DL_OK) return DL_SINGULAR_MASS;
+  block_forward(md, b, nb);
   if (md->block_external[b] > md->block_pairs[b]) {
     if (eliminate_internal(md, b, md->y, NULL, nb) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
     eliminate_rhs(md, b, md->y, NULL, c, md->u, nb);
@@ -429,6 +432,11 @@ int dl_solve(dl_model *md, double *qdd, double *lambda) {
   clear_band(md);
   if (unit_pass(md, c) != DL_OK) return DL_SINGULAR_MASS;
   int status;
+  /* the blocks factored first, in a loop of their own: the square roots and divisions
+   * of one block's factorization are a chain, those of different blocks are not */
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    if (!md->unit[b] && BY_SIZE(block_size(md, b), fold_factor_block, md, b, c) != DL_OK)
+      return DL_SINGULAR_MASS;
   for (int64_t b = 0; b < md->n_blocks; ++b)
     if (!md->unit[b] && (status = BY_SIZE(block_size(md, b), block_pass, md, b, c)) != DL_OK)
       return status;
