@@ -381,15 +381,16 @@ def mujoco_models(cases, dt: float):
 
 
 def mujoco_energies(models, states) -> np.ndarray:
-    """``T + V`` of each model at each state (``mj_forward`` with the energy flag)."""
+    """``T + V`` of each model at each state (the energy flag on for this only: the
+    models roll out with it off, :func:`peers.mujoco.energy`)."""
     import mujoco
+    from peers.mujoco import energy
 
     data = mujoco.MjData(models[0])
     out = np.empty(len(models))
     for k, (model, state) in enumerate(zip(models, states)):
         mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        mujoco.mj_forward(model, data)
-        out[k] = data.energy.sum()
+        out[k] = energy(model, data)
     return out
 
 
