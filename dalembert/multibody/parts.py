@@ -38,6 +38,7 @@ from .bodies import Body, Ground, MovingBody, Particle, PlanarBody, RigidBody
 from .derivatives import NotPolynomial, holonomic_rates
 from .joints import Joint
 from .parametric import sympy_vector, to_sympy
+from .rotations import E_matrix, times_vector
 
 if TYPE_CHECKING:
     from .builder import Multibody
@@ -177,10 +178,54 @@ def _body_parts(bodies: Sequence[MovingBody], gravity: np.ndarray,
             potential=gravity_potential(template, np.asarray(first.values[1])),
             constraints=template.constraints(), name=f"body {members[0].name}",
         )
+        equations = derive_equations(model)
+        if isinstance(template, RigidBody):
+            equations = _compact_rotation(equations, template)
         parts.append(_localized_part(
-            members, [local[id(b)] for b in members], derive_equations(model),
+            members, [local[id(b)] for b in members], equations,
             np.array([offsets[id(b)] for b in members]), np.array([rows[id(b)] for b in members])))
     return parts
+
+
+def _compact_rotation(equations: Equations, body: RigidBody) -> Equations:
+    """A rigid body's equations with the Euler parameters' rows of ``f`` written
+    through the angular velocity: ``f_b = -4 E(bdot)^T J w``, ``w = 2 E(b) bdot``.
+
+    Lagrange's ``f_b = dT/db - (dp/db) bdot`` comes out of the derivation as an
+    expanded cubic polynomial (some 60 products per row, evaluated at every step).
+    ``E(a) c = -E(c) a`` for any two 4-vectors, so ``dw/db = -2 E(bdot)``,
+    ``dT/db = -2 E(bdot)^T J w`` and ``(dp/db) bdot = 2 E(bdot)^T J w``, which add up
+    to the form above (no unit norm assumed). It is used only where it equals the
+    derived row (:func:`_same_polynomial`), else the derived row is kept.
+    """
+    q, qd = equations.q, equations.qd
+    b, bd = sp.Matrix(q[3:7]), sp.Matrix(qd[3:7])
+    inertia = sp.Matrix(3, 3, lambda i, j: to_sympy(body.inertia[i, j]))
+    momentum = times_vector(inertia, E_matrix(b) * bd)  # J w / 2
+    compact = -8 * (E_matrix(bd).T * momentum)
+    f = sp.Matrix(equations.f)
+    for k in range(4):
+        if _same_polynomial(f[3 + k], compact[k]):
+            f[3 + k] = compact[k]
+    return dataclasses.replace(equations, f=f)
+
+
+#: Numeric coefficients (a body's inertia given as floats) round differently in two
+#: equal forms: their expanded difference is this small against the largest.
+ROUNDING = 1e-12
+
+
+def _same_polynomial(a: sp.Expr, b: sp.Expr) -> bool:
+    """Whether two polynomials are equal: their expanded difference is zero, or, with
+    floating-point coefficients, under ``ROUNDING`` of the largest of ``a``'s."""
+    difference = sp.expand(a - b)
+    if difference == 0:
+        return True
+    left = sp.expand(a).as_coefficients_dict().values()
+    rest = difference.as_coefficients_dict().values()
+    if not all(c.is_Number for c in (*left, *rest)):
+        return False
+    return max(abs(float(c)) for c in rest) <= ROUNDING * max(abs(float(c)) for c in left)
 
 
 def _template_body(body: Body, name: str, fields: Sequence[object] | None = None) -> Body:
