@@ -25,7 +25,7 @@ block positive definite), each block gets a dense Cholesky factor, and the
 multipliers solve ``A Mt^-1 A^T lambda = c - A Mt^-1 f``. The rows inside a
 block couple nothing else, so they are eliminated there (Gaussian pivots on the
 block's part of ``S``); the rest is a banded positive definite system for chains
-and trees (band Cholesky in reverse Cuthill-McKee order; see :mod:`.structure`).
+and trees (band LDL^T in reverse Cuthill-McKee order; see :mod:`.structure`).
 This is Baraff's linear-time multiplier method in sparse form. The projections
 solve ``J J^T`` with the same code.
 

@@ -71,31 +71,37 @@ DL_INLINE void backward(const double *L, int64_t n, double *x) {
   }
 }
 
-/* Band Cholesky: S[i * (kd + 1) + (i - j)] holds S_ij for i - kd <= j <= i; the
- * diagonal keeps 1 / L_jj. */
-static int band_cholesky(double *S, int64_t m, int64_t kd) {
+/* Band LDL^T, row by row: S[i * (kd + 1) + (i - j)] holds S_ij for i - kd <= j <= i;
+ * on return the unit lower L below the diagonal and 1 / D_i on it. No square roots:
+ * a pivot waits only for the division of the one before (in L L^T also for its root),
+ * and the rows follow each other in one chain. The row's products u_j = L_ij D_j
+ * first take the places of S_ij, then turn into L_ij. */
+static int band_ldl(double *S, int64_t m, int64_t kd) {
   const int64_t w = kd + 1;
-  for (int64_t j = 0; j < m; ++j) {
-    const int64_t k0 = j > kd ? j - kd : 0;
-    double *Sj = S + j * w + j;  /* Sj[-k] = S_jk */
-    double d = Sj[-j];
-    const double scale = fabs(d);
-    for (int64_t k = k0; k < j; ++k) d -= Sj[-k] * Sj[-k];
-    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
-    const double inv = 1.0 / sqrt(d);
-    Sj[-j] = inv;
-    const int64_t i1 = j + kd < m - 1 ? j + kd : m - 1;
-    for (int64_t i = j + 1; i <= i1; ++i) {
-      double *Si = S + i * w + i;
-      const int64_t kk = i > kd ? i - kd : 0;
-      double s = Si[-j];
-      for (int64_t k = kk; k < j; ++k) s -= Si[-k] * Sj[-k];
-      Si[-j] = s * inv;
+  for (int64_t i = 0; i < m; ++i) {
+    const int64_t k0 = i > kd ? i - kd : 0;
+    double *Si = S + i * w + i;  /* Si[-j] = S_ij */
+    for (int64_t j = k0; j < i; ++j) {
+      const double *Sj = S + j * w + j;
+      const int64_t kk = j > kd ? j - kd : 0;
+      double u = Si[-j];
+      for (int64_t k = kk > k0 ? kk : k0; k < j; ++k) u -= Si[-k] * Sj[-k];
+      Si[-j] = u;
     }
+    double d = Si[-i];
+    const double scale = fabs(d);
+    for (int64_t j = k0; j < i; ++j) {
+      const double l = Si[-j] * S[j * w];
+      d -= Si[-j] * l;
+      Si[-j] = l;
+    }
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
+    Si[-i] = 1.0 / d;
   }
   return DL_OK;
 }
 
+/* x <- S^-1 x from band_ldl's factors. */
 static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
   const int64_t w = kd + 1;
   for (int64_t i = 0; i < m; ++i) {
@@ -103,13 +109,14 @@ static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
     const double *Si = S + i * w + i;
     double s = x[i];
     for (int64_t k = k0; k < i; ++k) s -= Si[-k] * x[k];
-    x[i] = s * Si[-i];
+    x[i] = s;
   }
+  for (int64_t i = 0; i < m; ++i) x[i] *= S[i * w];
   for (int64_t i = m - 1; i >= 0; --i) {
     const int64_t k1 = i + kd < m - 1 ? i + kd : m - 1;
     double s = x[i];
     for (int64_t k = i + 1; k <= k1; ++k) s -= S[k * w + (k - i)] * x[k];
-    x[i] = s * S[i * w];
+    x[i] = s;
   }
 }
 
@@ -282,7 +289,7 @@ static int factor_band(dl_model *md, const unsigned char *active) {
   if (active)
     for (int64_t k = 0; k < md->m_band; ++k)
       if (!active[md->band_row[k]]) md->S[k * w] = 1.0;
-  return md->m_band ? band_cholesky(md->S, md->m_band, md->kd) : DL_OK;
+  return md->m_band ? band_ldl(md->S, md->m_band, md->kd) : DL_OK;
 }
 
 /* The smallest pivot ratio of the factored S = Z^T Z (all rows active): each band
@@ -293,8 +300,8 @@ static double band_conditioning(const dl_model *md) {
   const int64_t w = md->kd + 1;
   double worst = INFINITY;
   for (int64_t k = 0; k < md->m_band; ++k) {
-    const double d = md->gram_diagonal[k], inv = md->S[k * w];
-    if (d > 0.0 && inv > 0.0 && 1.0 / (inv * inv * d) < worst) worst = 1.0 / (inv * inv * d);
+    const double d = md->gram_diagonal[k], inv = md->S[k * w];  /* inv = 1 / D_k */
+    if (d > 0.0 && inv > 0.0 && 1.0 / (inv * d) < worst) worst = 1.0 / (inv * d);
   }
   return worst;
 }

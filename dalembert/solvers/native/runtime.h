@@ -4,7 +4,7 @@
  * constraint) are called through pointers; everything else here is hand-written
  * and model independent. See native/__init__.py for the method and the tables.
  * The sources, compiled together into one library (library.py):
- *   kkt.c          the KKT solve (block Cholesky, Schur complement in band form)
+ *   kkt.c          the KKT solve (block Cholesky, Schur complement in band LDL^T form)
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
