@@ -352,8 +352,9 @@ void solve_schur(dl_model *md, double *rhs, double *x) {
 }
 
 /* The unit blocks' part of block_pass, in flat loops without per-block branching: the
- * same operations as fold_factor_block, block_forward, gram_block and block_residual with nb = 1 (the
- * block keeps 1 / L), only the order of the sums into S and c differs. */
+ * same operations as fold_factor_block, block_forward, gram_block and block_residual
+ * with nb = 1 (the block keeps 1 / L), only the order of the sums into S and c
+ * differs. */
 static int unit_pass(dl_model *md, double *c) {
   double *restrict blocks = md->blocks, *restrict u = md->u, *restrict z = md->y;
   const double *restrict a = md->a;
