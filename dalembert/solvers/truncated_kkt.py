@@ -36,7 +36,7 @@ import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
 from ..codegen.compiled import SparsePattern
-from .sparse_kkt import BandLU
+from .sparse_kkt import BandLU, matvec
 
 #: The regularization of the KKT matrix, relative to the largest eigenvalue of
 #: ``A M^-1 A^T`` (rows scaled to unit length; ``M`` by its mean diagonal).
@@ -146,9 +146,8 @@ class TruncatedKKT:
             """``[[M, A^T], [A, 0]] z`` (``A`` of the scaled rows)."""
             q, y = z[:n], z[n:]
             return np.concatenate([
-                np.bincount(m_rows, weights=mass * q[m_cols], minlength=n)
-                + np.bincount(a_col, weights=a * y[a_row], minlength=n),
-                np.bincount(a_row, weights=a * q[a_col], minlength=size)])
+                matvec(m_rows, m_cols, mass, q, n) + matvec(a_col, a_row, a, y, n),
+                matvec(a_row, a_col, a, q, size)])
 
         def correction(r: np.ndarray, r_border: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             """The bordered system with the shifted matrix, by block elimination."""
