@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # peers/ (MuJoCo's model and ladder), however this is run
 N_LINKS, L, R, G = 16, 1.0, 0.05, 9.81
 OMEGA = 0.2
 T_END = 10.0
@@ -62,7 +63,6 @@ SEED = 17
 RTOLS = (1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6)
 #: dalembert's explicit methods that run in C (RK23 needs ~4x DOP853's evaluations here).
 METHODS = ("DOP853", "RK45")
-MUJOCO_STEPS = tuple(2e-2 / 2 ** (k / 3) for k in range(16))  # as the suite's (peers/mujoco.py)
 #: Seconds simulated per case in the scaling part: a tenth of the workload's span, so
 #: that 10,000 cases fit in minutes and the ensemble's own costs weigh ten times more.
 SCALING_T_END = 1.0
@@ -351,8 +351,6 @@ def preparation_seconds(mb) -> dict:
 def mujoco_models(cases, dt: float):
     """One ``MjModel`` per case (its link masses and inertias) and its initial states."""
     import mujoco
-
-    sys.path.insert(0, str(HERE))
     from peers.mujoco import spec
 
     base = spec("spherical", N_LINKS, dt).compile()
@@ -431,17 +429,19 @@ class MujocoCases:
 
 
 def mujoco_step() -> tuple[float, list[dict]]:
-    """The largest RK4 step of the ladder at which every case of a sample of 40 meets
-    the energy target."""
+    """The largest RK4 step of the suite's ladder (peers/mujoco.py) at which every case
+    of a sample of 40 meets the energy target."""
+    from peers.mujoco import STEPS
+
     sample = draw_cases(40)
     ladder = []
-    for dt in MUJOCO_STEPS:
+    for dt in STEPS:
         _, errors = MujocoCases(sample, dt).rollout(np.arange(len(sample)))
         ladder.append({"dt": dt, "worst_energy_error": float(np.max(errors)),
                        "median_energy_error": float(np.median(errors))})
         if np.max(errors) <= ENERGY_TARGET:
             return dt, ladder
-    raise RuntimeError(f"no MuJoCo step in {MUJOCO_STEPS} met the energy target: {ladder}")
+    raise RuntimeError(f"no MuJoCo step in {STEPS} met the energy target: {ladder}")
 
 
 # -- scaling ----------------------------------------------------------------------------
