@@ -338,8 +338,8 @@ class CarefulModel:
         size = float(np.sqrt(np.mean(((projected - y) / scale) ** 2)))
         if size > JUMP:
             raise RetakeStep(f"the projection at t={t:.6g} moved the state by {size:.3g} "
-                                 "times the tolerance (the step's error norm), a jump onto "
-                                 "another branch of the constraints")
+                             "times the tolerance (the step's error norm), a jump onto "
+                             "another branch of the constraints")
 
     def _mode(self, t: float) -> tuple[bool, Truncation | None]:
         """Careful or not, and what is left out, at ``t``: the step under way's from the
@@ -392,7 +392,6 @@ class CarefulModel:
             q = q + solve(np.zeros(n), -psi)[0]
             residual_before = residual
         return q
-
 
     def outputs(self, outputs: Outputs,
                 inputs: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None

@@ -183,7 +183,7 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     rhs: Callable[[float, np.ndarray], np.ndarray]
     outputs: Outputs
     careful, careful_rhs = None, None
-    rows = initial.rank.names if initial.rank is not None else None
+    rows = rank.names if rank is not None else None
     if projection and num.m:  # near a singular configuration: careful steps in Python
         careful = CarefulModel(num, kept, first_order_rhs(num, 0.0, kept),
                                native.project if native is not None else
