@@ -15,6 +15,7 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 import sympy as sp
 
+from ..codegen.numpy_printer import expression_values
 from ..errors import ConstraintError, InitialConditionError, ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from ..model.coordinates import t
@@ -23,7 +24,7 @@ from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
-from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies
+from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies, check_inertias
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .drivers import Actuator, JointSpring
@@ -34,6 +35,7 @@ from .parametric import (
     Scalar,
     array,
     evaluated_expressions,
+    is_symbolic,
     parametric_expressions,
     parametric_symbols,
     scalar,
@@ -186,6 +188,47 @@ class Multibody:
             return self
         return self._bound_at(resolve_parameters(self.parameters, self.defaults, *values))
 
+    def _check_at(self, p: Sequence[float] | np.ndarray) -> None:
+        """Check the mechanism at the parameter values ``p`` (resolved already: a System's
+        parameter vector) as :meth:`bound` does, raising its error. Where only rigid
+        bodies' masses and inertias depend on the parameters (the usual case), these are
+        computed in one call and checked together, without binding every piece; a value
+        at fault, or parameters in other pieces, go through :meth:`bound`'s checks."""
+        checked = self._body_values
+        if checked is None:
+            self._bound_at(p)
+            return
+        names, exprs = checked
+        values = expression_values(self.parameters, exprs, np.asarray(p, dtype=float))
+        k = len(names)
+        try:
+            if not (values[:k] > 0).all():
+                raise ModelError("a mass is not positive")  # bound names the body
+            check_inertias(values[k:].reshape(k, 3, 3), names)
+        except ModelError:
+            self._bound_at(p)  # its error names the first piece at fault, in order
+
+    @cached_property
+    def _body_values(self) -> tuple[list[str], tuple[sp.Expr, ...]] | None:
+        """The rigid bodies whose mass or inertia depends on the parameters (by name) and
+        these values as one list (the masses, then each inertia's nine entries); ``None``
+        when a piece of another kind depends on them (its own checks then run)."""
+        def parametric(piece: object) -> bool:
+            return any(is_symbolic(getattr(piece, name))
+                       for name in getattr(piece, "PARAMETRIC", ()))
+
+        moving = [b for b in self.bodies if parametric(b)]
+        bodies = [b for b in moving if isinstance(b, RigidBody)
+                  and type(b).check_values is RigidBody.check_values]
+        others = [x for x in (*self.joints, *self.joint_springs, *self.springs,
+                              *self.forces, *self.torques) if parametric(x)]
+        if others or len(bodies) < len(moving):
+            return None
+        masses = [sp.sympify(b.mass) for b in bodies]
+        inertias = [sp.sympify(v) for b in bodies
+                    for v in np.asarray(b.inertia, dtype=object).ravel()]
+        return [b.name for b in bodies], tuple(masses + inertias)
+
     def _bound_at(self, p: Sequence[float] | np.ndarray) -> Multibody:
         """:meth:`bound` to ``p``, one value per parameter in their order (resolved
         already: a System's parameter vector)."""
@@ -228,6 +271,7 @@ class Multibody:
         bound.torques = tuple(rebody(tq) for tq in self.torques)
         bound.__dict__.pop("parameters", None)
         bound.__dict__.pop("_parametric_expressions", None)
+        bound.__dict__.pop("_body_values", None)
         bound.__dict__.pop("system", None)
         bound.__dict__.pop("_bodies_by_name", None)
         bound._bound = {}

@@ -76,7 +76,7 @@ class MultibodySystem(System):
         checked with them (a mass must come out positive, an inertia valid...)."""
         p = resolve_parameters(self.parameters, self.parameter_values, parameters)
         if self.parameters:
-            self._multibody._bound_at(p)
+            self._multibody._check_at(p)
         return self.compiled.bind(p)
 
     @property

@@ -10,8 +10,14 @@ import numpy as np
 from ..codegen.compiled import NumericModel
 from ..errors import ConstraintError, InitialConditionError, SingularSystemError
 from ..model.values import free_mask
-from ..numerics.conditioning import spd_condition
-from ..numerics.rank import ConstraintRank, constraint_rank, dependent_error, sparse_constraint_rank
+from ..numerics.conditioning import GRAM_DENSE_MAX, spd_condition
+from ..numerics.rank import (
+    SCREEN_FROM,
+    ConstraintRank,
+    constraint_rank,
+    dependent_error,
+    sparse_constraint_rank,
+)
 from ..numerics.singular import DENSE_ROWS, NEAR
 from ..options import RedundantConstraints, VelocityProjection
 from .initial_checks import check_finite, check_kinetic_energy, check_resolvable
@@ -338,7 +344,10 @@ def _rank_at(
     Av, _ = num.velocity_sparse(t0, q)
     pat = num.pattern
     label = labels if constraint_names is None else constraint_names
-    rank = sparse_constraint_rank(pat.A_rows, pat.A_cols, Av, (num.m, num.n), label)
+    rank = _well_conditioned(num, Av, label)
+    if rank is None:
+        rank = _singular_start(num, t0, q, Av, sparse_constraint_rank(
+            pat.A_rows, pat.A_cols, Av, (num.m, num.n), label))
     if rank.degrees_of_freedom == 0 and not driven:
         raise ConstraintError(
             f"the constraints leave no degree of freedom at the initial state: rank(A) = "
@@ -348,10 +357,27 @@ def _rank_at(
         )
     if rank.dependent and mode == "error":
         raise dependent_error([labels[i] for i in rank.dependent], "at the initial state")
-    return _singular_start(num, t0, q, rank)
+    return rank
 
 
-def _singular_start(num: NumericModel, t0: float, q: np.ndarray,
+def _well_conditioned(num: NumericModel, Av: np.ndarray,
+                      names: Sequence[str]) -> ConstraintRank | None:
+    """Full rank and no singular value of ``A`` under ``NEAR`` of the largest, from one
+    condition estimate of ``A A^T`` below ``NEAR^-2``; ``None`` if it is not, or where
+    the rank test would not screen with ``A A^T`` (few rows, or no fewer rows than
+    coordinates): then :func:`~dalembert.numerics.rank.sparse_constraint_rank` and
+    :func:`_singular_start` measure. Their screens estimate the same condition number
+    (the rank's against a looser bound), which this computes once."""
+    m, n = num.m, num.n
+    if not (SCREEN_FROM < m < n and m <= min(GRAM_DENSE_MAX, DENSE_ROWS)):
+        return None
+    A = num.pattern.dense_A(Av)
+    if spd_condition(A @ A.T) < NEAR**-2:
+        return ConstraintRank(n, m, (), tuple(names))
+    return None
+
+
+def _singular_start(num: NumericModel, t0: float, q: np.ndarray, Av: np.ndarray,
                     rank: ConstraintRank) -> ConstraintRank:
     """``rank`` with what makes its count of degrees of freedom uncertain: singular
     values below ``NEAR`` (a well-conditioned ``A A^T`` proves there are none, without
@@ -359,7 +385,6 @@ def _singular_start(num: NumericModel, t0: float, q: np.ndarray,
     of 1e-6 along the null space of ``A``: higher there at a singular configuration,
     the same for redundant joints, whose change is second order, ~1e-12)."""
     pat = num.pattern
-    Av, _ = num.velocity_sparse(t0, q)
     if num.m == 0 or (not rank.dependent and num.m > DENSE_ROWS):
         return rank
     A = pat.dense_A(Av)

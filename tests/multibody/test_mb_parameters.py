@@ -168,6 +168,25 @@ def test_values_that_break_a_piece_are_refused_naming_it():
         lopsided.simulate((0.0, 1.0), *lopsided.initial_state(), parameters={I: 3.0})
 
 
+def test_body_values_checked_together_still_name_the_first_body_at_fault():
+    """Where only rigid bodies' masses and inertias are parameters, a run checks them
+    all at once (no bound copy of the mechanism): the error is still about the first
+    body at fault, in order, as checking them one by one gives it."""
+    m1, m2, I = sp.symbols("m1 m2 I")
+    a = RigidBody("a", m1, (1.0, 1.0, I))
+    b = RigidBody("b", m2, (1.0, 1.0, 1.0))
+    mb = Multibody([a, b], [Spherical("j", a, b, (0, 0, -0.5), (0, 0, 0.5))])
+    q0, qd0 = mb.initial_state(positions={"b": (0, 0, -1.0)})
+    values = {m1: 1.0, m2: 1.0, I: 1.0}
+    assert mb.simulate((0.0, 0.1), q0, qd0, parameters=values).status == "finished"
+    with pytest.raises(ModelError, match="the mass of 'b' must be positive and finite, got -1"):
+        mb.simulate((0.0, 0.1), q0, qd0, parameters={**values, m2: -1.0})
+    with pytest.raises(ModelError, match="'a' violates the triangle inequality"):
+        mb.simulate((0.0, 0.1), q0, qd0, parameters={**values, I: 3.0, m2: -1.0})
+    with pytest.raises(ModelError, match="the mass of 'a' must be positive and finite, got 0.0"):
+        mb.simulate((0.0, 0.1), q0, qd0, parameters={**values, m1: 0.0})
+
+
 def test_geometry_may_not_depend_on_the_motion():
     x = sp.Function("x")(time)
     with pytest.raises(ModelError, match="depends on the motion or the time"):

@@ -63,11 +63,13 @@ class NativeSolver:
         self.lib = library.runtime()
         self.kept = None if kept is None else np.asarray(kept, dtype=np.int64)
         self.structure = schur_structure(num.pattern, self.kept)
+        self._tables = num.pattern.remember(
+            ("native tables", None if self.kept is None else self.kept.tobytes()),
+            lambda: _Tables(self.structure, num, handles[0]))
         self._keep: list[object] = []  # every array the C struct points to (kept alive)
         self.model = self._model(handles, baumgarte)
         self._address = ctypes.addressof(self.model)
-        self._holonomic_mask = self._array(np.isin(np.arange(self.m), num.holonomic_rows),
-                                           np.uint8)
+        self._holonomic_mask = self._tables.address["holonomic_mask"]
         self._fallback: StepProjector | None = None  # made on first need
         self._io()
         self._input_error: BaseException | None = None  # what the inputs' callback raised
@@ -89,9 +91,10 @@ class NativeSolver:
         nM, nA = len(num.pattern.M_rows), len(num.pattern.A_rows)
         # the vector itself (no copy): the inputs' callback writes into it
         self._parameters = num.p
+        tables = self._tables.address
         model = library.Model(n=n, m=m, nM=nM, nA=nA, n_hol=len(num.holonomic_rows),
                               p=self._array(num.p, np.float64), baumgarte=baumgarte,
-                              holonomic=self._array(num.holonomic_rows),
+                              holonomic=tables["holonomic"],
                               n_blocks=s.n_blocks, n_pairs=s.n_pairs, kd=s.kd,
                               n_dropped_pairs=s.n_dropped_pairs,
                               n_dropped=len(s.dropped_rows), dropped_rtol=DROPPED_ROW_RTOL,
@@ -100,8 +103,8 @@ class NativeSolver:
                               n_unit_gram=len(s.unit_gram_target), conditioning=np.inf)
         for name, h in zip(("velocity", "position", "energy"), handles[1:]):
             setattr(model, name, self._function(h))
-        for name, array in s.arrays().items():
-            setattr(model, name, self._array(array))
+        for name in s.arrays():
+            setattr(model, name, tables[name])
         vectors = int(s.pair_vec[-1])
         sizes = {"vel_values": nA + m, "psi": len(num.holonomic_rows), "y": vectors,
                  "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
@@ -120,9 +123,7 @@ class NativeSolver:
         """The KKT values' buffer: in the solve's layout ``[blocks, u, a, c]`` when the
         kkt function is a scatter driver (its targets remapped, so it writes each value
         where the solve reads it), else ``[M, f, A, c]`` beside the layout's buffers."""
-        s, n, m = self.structure, self.n, self.m
-        parts = {"blocks": int(s.block_mat[-1]), "u": n, "a": int(s.pair_vec[-1])}
-        start = dict(zip(parts, np.cumsum([0, *parts.values()]).tolist()))
+        m, parts, start = self.m, self._tables.parts, self._tables.start
         model.kkt_in_layout = bool(h.K and h.targets)
         if not model.kkt_in_layout:
             model.kkt = self._function(h)
@@ -131,16 +132,8 @@ class NativeSolver:
             values = self._buffer(h.size)
             model.values, model.c = values, values + DOUBLE * (h.size - m)
             return
-        slot = np.empty(n, dtype=np.int64)
-        slot[s.slot_coord] = np.arange(n)
         c_at = start["a"] + parts["a"]
-        place = np.concatenate([s.M_at, start["u"] + slot, start["a"] + s.A_at,
-                                c_at + np.arange(m)])
-        assert len(place) == h.size  # [M, f, A, c]
-        targets = [self._array(place[t]) for t in h.targets]
-        table = (ctypes.c_void_p * len(targets))(*targets)
-        self._keep.append(table)
-        model.kkt = self._function(h, ctypes.addressof(table), c_at + m)
+        model.kkt = self._function(h, self._tables.address["kkt_targets"], c_at + m)
         values = self._buffer(c_at + m)
         model.values, model.c = values, values + DOUBLE * c_at
         for name in parts:
@@ -250,3 +243,37 @@ class NativeSolver:
         if self._fallback is None:
             self._fallback = StepProjector(self.num, self.kept)
         return self._fallback(t, np.asarray(y, dtype=float))
+
+
+class _Tables:
+    """The index tables a :class:`NativeSolver`'s C struct points to, made once per
+    pattern and set of kept rows (C only reads them): the Schur structure's, the
+    holonomic rows and their mask, and, where the kkt function scatters, the targets
+    that make it write each value where the solve reads it. ``address[name]`` is the
+    address C reads."""
+
+    def __init__(self, structure, num: NumericModel, kkt) -> None:
+        m = num.m
+        arrays = {name: np.ascontiguousarray(a, dtype=np.int64)
+                  for name, a in structure.arrays().items()}
+        arrays["holonomic"] = np.ascontiguousarray(num.holonomic_rows, dtype=np.int64)
+        arrays["holonomic_mask"] = np.isin(np.arange(m), num.holonomic_rows).astype(np.uint8)
+        self._arrays = arrays
+        self.address = {name: a.ctypes.data for name, a in arrays.items()}
+        s, n = structure, num.n
+        #: sizes and offsets of the solve's layout [blocks, u, a, c] in the KKT buffer
+        self.parts = {"blocks": int(s.block_mat[-1]), "u": n, "a": int(s.pair_vec[-1])}
+        self.start = dict(zip(self.parts, np.cumsum([0, *self.parts.values()]).tolist()))
+        if kkt.K and kkt.targets:
+            start = self.start
+            slot = np.empty(n, dtype=np.int64)
+            slot[s.slot_coord] = np.arange(n)
+            c_at = start["a"] + self.parts["a"]
+            place = np.concatenate([s.M_at, start["u"] + slot, start["a"] + s.A_at,
+                                    c_at + np.arange(m)])
+            assert len(place) == kkt.size  # [M, f, A, c]
+            self._targets = [np.ascontiguousarray(place[t], dtype=np.int64)
+                             for t in kkt.targets]
+            self._table = (ctypes.c_void_p * len(self._targets))(
+                *(t.ctypes.data for t in self._targets))
+            self.address["kkt_targets"] = ctypes.addressof(self._table)
