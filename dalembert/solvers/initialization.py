@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -73,10 +74,19 @@ class InitializationReport:
         return bool(self.changed_positions() or self.changed_velocities())
 
     def changed_positions(self) -> list[str]:
-        return _changed(self.names, self.q_given, self.q)
+        return list(self._changed_positions)
 
     def changed_velocities(self) -> list[str]:
-        return _changed(self.names, self.qd_given, self.qd)
+        return list(self._changed_velocities)
+
+    # measured once: a run asks for them to warn and again to describe the report
+    @cached_property
+    def _changed_positions(self) -> tuple[str, ...]:
+        return tuple(_changed(self.names, self.q_given, self.q))
+
+    @cached_property
+    def _changed_velocities(self) -> tuple[str, ...]:
+        return tuple(_changed(self.names, self.qd_given, self.qd))
 
     def __str__(self) -> str:
         text = self.describe_changes()

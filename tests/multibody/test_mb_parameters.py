@@ -183,7 +183,7 @@ def test_body_values_checked_together_still_name_the_first_body_at_fault():
         mb.simulate((0.0, 0.1), q0, qd0, parameters={**values, m2: -1.0})
     with pytest.raises(ModelError, match="'a' violates the triangle inequality"):
         mb.simulate((0.0, 0.1), q0, qd0, parameters={**values, I: 3.0, m2: -1.0})
-    with pytest.raises(ModelError, match="the mass of 'a' must be positive and finite, got 0.0"):
+    with pytest.raises(ModelError, match=r"the mass of 'a' must be positive and finite, got 0\.0"):
         mb.simulate((0.0, 0.1), q0, qd0, parameters={**values, m1: 0.0})
 
 

@@ -25,8 +25,8 @@ from ...numerics.singular import SCREEN
 from ..scipy_ivp import take_state
 from . import library
 
-#: The budget of one call: CPU seconds (it returns after the step that exceeds them)
-#: and steps.
+#: The budget of one call: seconds on the wall clock (it returns after the step that
+#: exceeds them) and steps.
 MAX_SECONDS, MAX_STEPS = 0.05, 1 << 62
 #: Output rows one call may write: about this many doubles, within ``ROWS``.
 BUFFER_DOUBLES, ROWS = 1 << 20, (64, 4096)

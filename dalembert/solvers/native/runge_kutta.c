@@ -254,14 +254,23 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
  * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
  * Every loop inside a step is bounded, so the call returns within a step of the time
  * budget and Ctrl-C is served. */
+/* Seconds on the monotonic clock: a call's budget serves Ctrl-C and the progress bar,
+ * which wait on the wall clock, and it is read in nanoseconds where clock() (the
+ * process's CPU time, summed over its threads) is a system call of about 0.5 us. */
+static double wall_seconds(void) {
+  struct timespec now;
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
+}
+
 int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
               double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
-  const clock_t start = clock();
+  const double start = wall_seconds();
   run->n_steps = run->n_out = 0;
   if (!isfinite(st->t)) return DL_NOT_FINITE;  /* the loop below would not start */
   while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
-    if (run->n_steps && (double)(clock() - start) > run->max_seconds * CLOCKS_PER_SEC) break;
+    if (run->n_steps && wall_seconds() - start > run->max_seconds) break;
     const dl_stepper before = *st;
     const int status = finish_step(md, tb, st, run, y, K, stage);
     if (status != DL_OK && status != DL_NEAR_SINGULAR) {

@@ -133,7 +133,7 @@ typedef struct {
   const unsigned char *holonomic;  /* dl_project's arguments */
   int64_t max_newton, max_full;
   double position_tol, accept_tol;
-  int64_t max_steps;          /* budget of one call: steps, and CPU seconds */
+  int64_t max_steps;          /* budget of one call: steps, and seconds (wall clock) */
   double max_seconds;
   int64_t capacity;           /* rows of t_out and y_out */
   double *t_out, *y_out;
