@@ -45,6 +45,8 @@ class StretchRunner:
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
         self.solver, native, n_state = solver, solver._native, solver.n
         rows = max(ROWS[0], min(ROWS[1], BUFFER_DOUBLES // n_state))
+        if t_eval is not None:  # no more than the output times (a large buffer is mapped anew)
+            rows = max(1, min(rows, len(t_eval)))
         self._K, self._y = solver._stages(), np.empty(n_state)
         self._t_out, self._y_out = np.empty(rows), np.empty((rows, n_state))
         self._work = np.empty((2 + solver._n_rows, n_state))  # y_new, y_end, rows

@@ -17,6 +17,7 @@ decides when.
 from __future__ import annotations
 
 import ctypes
+from typing import ClassVar
 
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
@@ -30,14 +31,14 @@ from .solver import NativeSolver
 class _NativeSteps(RungeKutta):
     """Mixin for a SciPy ``RungeKutta`` subclass; ``native`` is a :class:`NativeSolver`."""
 
+    _TABLEAU: ClassVar[tuple[library.Tableau, int, list]]  # per class, made on first use
+
     def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self._native = native
-        self._keep = [None if a is None else np.ascontiguousarray(a, dtype=np.float64)
-                      for a in self._coefficients()]
-        A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in self._keep)
-        self._tableau = library.Tableau(self.n_stages, A, B, C, E, E3)
-        self._n_rows = self._interpolant(self._tableau)
+        # the tableau with the arrays it points to (kept alive by this solver too)
+        self._tableau_kept = self._made_tableau()
+        self._tableau, self._n_rows, _ = self._tableau_kept
         self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
                                         rtol=self.rtol, max_step=self.max_step,
@@ -46,18 +47,35 @@ class _NativeSteps(RungeKutta):
         self._stage = np.empty(self.n)
         self._fixed = (ctypes.addressof(self._tableau), ctypes.addressof(self._stepper))
 
-    def _coefficients(self) -> list:
-        s = self.n_stages
-        A = np.zeros((s, s))  # SciPy's RK45 leaves out the last (zero) column
-        A[:, :self.A.shape[1]] = self.A[:s, :s]
-        if isinstance(self, DOP853):
-            return [A, self.B, self.C, self.E5, self.E3]
-        return [A, self.B, self.C, self.E, None]
+    @classmethod
+    def _made_tableau(cls) -> tuple[library.Tableau, int, list]:
+        """The method's tableau for C, the rows of its interpolant and the arrays the
+        tableau points to, made once per class (C only reads them)."""
+        made = cls.__dict__.get("_TABLEAU")
+        if made is None:
+            keep = [None if a is None else np.ascontiguousarray(a, dtype=np.float64)
+                    for a in cls._coefficients()]
+            A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in keep)
+            tableau = library.Tableau(cls.n_stages, A, B, C, E, E3)
+            made = (tableau, cls._interpolant(tableau, keep), keep)
+            cls._TABLEAU = made
+        return made
 
-    def _interpolant(self, tableau: library.Tableau) -> int:
-        """The dense output's coefficients into ``tableau``; the rows of its interpolant."""
-        P = np.ascontiguousarray(self.P, dtype=np.float64)
-        self._keep.append(P)
+    @classmethod
+    def _coefficients(cls) -> list:
+        s = cls.n_stages
+        A = np.zeros((s, s))  # SciPy's RK45 leaves out the last (zero) column
+        A[:, :cls.A.shape[1]] = cls.A[:s, :s]
+        if issubclass(cls, DOP853):
+            return [A, cls.B, cls.C, cls.E5, cls.E3]
+        return [A, cls.B, cls.C, cls.E, None]
+
+    @classmethod
+    def _interpolant(cls, tableau: library.Tableau, keep: list) -> int:
+        """The dense output's coefficients into ``tableau`` (their arrays into ``keep``);
+        the rows of its interpolant."""
+        P = np.ascontiguousarray(cls.P, dtype=np.float64)
+        keep.append(P)
         tableau.n_P, tableau.P = P.shape[1], P.ctypes.data
         return P.shape[1]
 
@@ -89,11 +107,11 @@ class _NativeSteps(RungeKutta):
 class NativeDOP853(_NativeSteps, ControlledDOP853):
     """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
 
-    def _interpolant(self, tableau: library.Tableau) -> int:
-        A, C, D = (np.ascontiguousarray(a, dtype=np.float64) for a in (self.A_EXTRA, self.C_EXTRA,
-                                                                   self.D))
-        self._keep.append(D)
-        self._extra = [A, C]
+    @classmethod
+    def _interpolant(cls, tableau: library.Tableau, keep: list) -> int:
+        A, C, D = (np.ascontiguousarray(a, dtype=np.float64) for a in (cls.A_EXTRA, cls.C_EXTRA,
+                                                                   cls.D))
+        keep.extend([A, C, D])
         tableau.n_extra, tableau.A_extra, tableau.C_extra = len(C), A.ctypes.data, C.ctypes.data
         tableau.n_D, tableau.D = len(D), D.ctypes.data
         return INTERPOLATOR_POWER
@@ -104,11 +122,12 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
     def _dense_output_impl(self):
         # SciPy's DOP853._dense_output_impl with the three extra stages evaluated in C.
         K, h, s = self.K_extended, self.h_previous, self.n_stages + 1
-        A, C = self._extra
+        A, C = self._tableau.A_extra, self._tableau.C_extra  # addresses
+        width = len(K)
         y_old = np.ascontiguousarray(self.y_old, dtype=np.float64)
         nfev = ctypes.c_int64(0)
         status = self._native.lib.dl_stages(
-            self._native._address, A.ctypes.data, A.shape[1], C.ctypes.data, s, s, len(K),
+            self._native._address, A, width, C, s, s, width,
             self.t_old, h, y_old.ctypes.data, K.ctypes.data, self._stage.ctypes.data,
             ctypes.addressof(nfev))
         self.nfev += nfev.value
