@@ -126,6 +126,7 @@ class Threads(Backend):
         self.workers = workers or os.cpu_count() or 1
         system.compiled  # noqa: B018 - made once, before the threads share it
         self._stop = threading.Event()
+        self._turns = threading.Lock()  # the threads take turns for their Python
         self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="dalembert-case")
         self._futures: set[Future] = set()
 
@@ -136,7 +137,7 @@ class Threads(Backend):
             warnings.simplefilter("ignore")
             self._futures = {self._pool.submit(run_batch, self.system, self.settings,
                                                b.indices, b.rows, self.names, self._stop,
-                                               False) for b in batches}
+                                               False, self._turns) for b in batches}
             while self._futures:
                 done, _ = wait(self._futures, return_when=FIRST_COMPLETED)
                 for future in done:
@@ -158,6 +159,10 @@ class Threads(Backend):
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+#: A Dask worker's threads take turns for their Python (one lock per process).
+_TURNS = threading.Lock()
+
+
 def run_packed(pack: ModelPackage, indices: np.ndarray, rows: np.ndarray,
                names: Sequence[str]) -> list[CaseOutcome]:
     """A Dask task: one batch, on the System and settings of ``pack`` (prepared once
@@ -170,7 +175,8 @@ def run_packed(pack: ModelPackage, indices: np.ndarray, rows: np.ndarray,
         threads = get_worker().state.nthreads
     except (ImportError, ValueError, AttributeError):  # not on a Dask worker
         threads = 1
-    return run_batch(system, settings, indices, rows, names, record_warnings=threads == 1)
+    return run_batch(system, settings, indices, rows, names, record_warnings=threads == 1,
+                     turns=_TURNS if threads > 1 else None)
 
 
 class Dask(Backend):

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..options import SimulationOptions
+from ..solvers.native.turns import python_turn
 from ..system import System
 from ..trajectory import Trajectory
 from .cases import CaseColumns
@@ -83,7 +84,8 @@ class CaseSettings:
 def run_batch(system: System, settings: CaseSettings,
               indices: Sequence[int] | np.ndarray, rows: np.ndarray, names: Sequence[str],
               stop: threading.Event | None = None,
-              record_warnings: bool = True) -> list[CaseOutcome]:
+              record_warnings: bool = True,
+              turns: threading.Lock | None = None) -> list[CaseOutcome]:
     """Run the cases ``indices`` (their values ``rows``, columns ``names``) one after
     the other; each one's failure is recorded and the next one runs.
 
@@ -100,6 +102,10 @@ def run_batch(system: System, settings: CaseSettings,
     record_warnings
         Record each case's warnings in its outcome; ``False`` on threads, where
         ``warnings.catch_warnings`` is not safe (the caller silences them once).
+    turns
+        On threads, one lock for all of them: they take turns for their Python
+        (:mod:`dalembert.solvers.native.turns`), each letting go of it around its long
+        C calls.
     """
     worker = f"{socket.gethostname()}:{os.getpid()}"
     done = []
@@ -107,7 +113,8 @@ def run_batch(system: System, settings: CaseSettings,
         if stop is not None and stop.is_set():
             break
         case = {name: float(v) for name, v in zip(names, row)}
-        done.append(run_case(system, settings, int(index), case, worker, record_warnings))
+        with python_turn(turns) if turns is not None else nullcontext():
+            done.append(run_case(system, settings, int(index), case, worker, record_warnings))
     return done
 
 

@@ -24,6 +24,7 @@ from scipy.integrate import OdeSolver
 from ...numerics.singular import SCREEN
 from ..scipy_ivp import take_state
 from . import library
+from .turns import outside_python
 
 #: The budget of one call: seconds on the wall clock (it returns after the step that
 #: exceeds them) and steps.
@@ -83,7 +84,8 @@ class StretchRunner:
                                                 "right"))
         run.n_steps = run.n_out = 0
         self._nfev, self._pending = solver.nfev, True
-        status = self._call()
+        with outside_python():  # the GIL is released: other threads run their Python
+            status = self._call()
         #: whether the stretch ended after a step near a singular configuration (the
         #: caller then measures it, :mod:`~dalembert.solvers.careful`)
         self.near_singular = status == library.NEAR_SINGULAR

@@ -245,15 +245,6 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
   return md->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
 }
 
-/* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
- * until t_bound, the step or time budget, or a full output buffer. On return y,
- * K[0] and st hold the state after the last finished step; a non-OK status means
- * the next step could not be finished here (too small, a singular system, a failed
- * projection, more outputs than the buffer holds): the caller takes that step
- * itself, from this state, and st->nfev does not count the dropped attempt (a step that
- * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
- * Every loop inside a step is bounded, so the call returns within a step of the time
- * budget and Ctrl-C is served. */
 /* Seconds on the monotonic clock: a call's budget serves Ctrl-C and the progress bar,
  * which wait on the wall clock, and it is read in nanoseconds where clock() (the
  * process's CPU time, summed over its threads) is a system call of about 0.5 us. */
@@ -263,6 +254,15 @@ static double wall_seconds(void) {
   return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
+/* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
+ * until t_bound, the step or time budget, or a full output buffer. On return y,
+ * K[0] and st hold the state after the last finished step; a non-OK status means
+ * the next step could not be finished here (too small, a singular system, a failed
+ * projection, more outputs than the buffer holds): the caller takes that step
+ * itself, from this state, and st->nfev does not count the dropped attempt (a step that
+ * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
+ * Every loop inside a step is bounded, so the call returns within a step of the time
+ * budget and Ctrl-C is served. */
 int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
               double *K, double *stage) {
   const int64_t n_state = 2 * md->n;

@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ...codegen.c_backend import NativeHandle
 from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
 from ...numerics.rank import min_norm_multipliers
@@ -14,7 +15,8 @@ from ..kkt import DROPPED_ROW_RTOL
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
 from ..sparse_kkt import SINGULAR_MESSAGE, matvec
 from . import library
-from .structure import NotApplicable, schur_structure
+from .structure import NotApplicable, SchurStructure, schur_structure
+from .turns import outside_python
 
 DOUBLE = np.dtype(np.float64).itemsize  # bytes, for addresses inside a buffer
 #: Output points per call of dl_outputs (a few milliseconds for a large mechanism).
@@ -57,7 +59,8 @@ class NativeSolver:
         handles = [getattr(f, "native", None) for f in (
             compiled.kkt_values, compiled.velocity_values, compiled.position_values,
             compiled.energy_values)]
-        if any(h is None for h in handles):
+        kkt = handles[0]
+        if kkt is None or any(h is None for h in handles):
             raise NotApplicable("the model's functions were not generated in C")
         self.num, self.n, self.m = num, num.n, num.m
         self.lib = library.runtime()
@@ -65,7 +68,7 @@ class NativeSolver:
         self.structure = schur_structure(num.pattern, self.kept)
         self._tables = num.pattern.remember(
             ("native tables", None if self.kept is None else self.kept.tobytes()),
-            lambda: _Tables(self.structure, num, handles[0]))
+            lambda: _Tables(self.structure, num, kkt))
         self._keep: list[object] = []  # every array the C struct points to (kept alive)
         self.model = self._model(handles, baumgarte)
         self._address = ctypes.addressof(self.model)
@@ -207,9 +210,11 @@ class NativeSolver:
         # in chunks, so that a Ctrl-C is served between calls on a long trajectory
         for lo in range(0, k, OUTPUT_CHUNK):
             hi = min(k, lo + OUTPUT_CHUNK)
-            self._check(self.lib.dl_outputs(
-                self._address, hi - lo, times[lo:].ctypes.data, states[lo:].ctypes.data,
-                *(a[lo:].ctypes.data for a in out.values())))
+            with outside_python():  # the GIL is released: other threads run their Python
+                status = self.lib.dl_outputs(
+                    self._address, hi - lo, times[lo:].ctypes.data, states[lo:].ctypes.data,
+                    *(a[lo:].ctypes.data for a in out.values()))
+            self._check(status)
         if self.kept is not None:
             self._minimum_norm(times, states, out)
         return out
@@ -252,7 +257,8 @@ class _Tables:
     that make it write each value where the solve reads it. ``address[name]`` is the
     address C reads."""
 
-    def __init__(self, structure, num: NumericModel, kkt) -> None:
+    def __init__(self, structure: SchurStructure, num: NumericModel,
+                 kkt: NativeHandle) -> None:
         m = num.m
         arrays = {name: np.ascontiguousarray(a, dtype=np.int64)
                   for name, a in structure.arrays().items()}
