@@ -483,8 +483,10 @@ class Multibody:
         q, qd = bodies_state(self.bodies, angular_velocity_frame, self._by_name(positions),
                              self._by_name(orientations), self._by_name(velocities),
                              self._by_name(angular_velocities))
-        numbers = self._with_defaults()
-        if numbers is not None:  # without values for every parameter, no geometry check
+        # the joints' points as numbers: the mechanism's own where no joint depends on
+        # the parameters, else bound to their defaults (without values, no check)
+        numbers = self if self._body_values is not None else self._with_defaults()
+        if numbers is not None:
             check_initial_joint_points(numbers, q)
         names = self.system.coordinate_names
         return dict(zip(names, q.tolist())), dict(zip(names, qd.tolist()))

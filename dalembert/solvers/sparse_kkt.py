@@ -198,12 +198,22 @@ class BandLU:
         self.size, self.src, self.cols = size, src, cols
         self.width = self.kl + self.ku + 1
         self.ldab = 2 * self.kl + self.ku + 1
+        #: the last factorization and the values it is of: the initial state's checks
+        #: and its impact solve factor the same matrix (one tuple, replaced whole, so
+        #: threads sharing the solver read a consistent pair)
+        self._last: tuple[bytes, tuple[np.ndarray, np.ndarray, int]] | None = None
 
     def _lu(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+        key = values.tobytes()
+        last = self._last
+        if last is not None and last[0] == key:
+            return last[1]
         ab = np.zeros(self.ldab * self.size)
         ab[self.flat] = values[self.src]
-        return lapack.dgbtrf(ab.reshape(self.size, self.ldab).T, self.kl, self.ku,
-                             overwrite_ab=1)
+        lu = lapack.dgbtrf(ab.reshape(self.size, self.ldab).T, self.kl, self.ku,
+                           overwrite_ab=1)
+        self._last = (key, lu)
+        return lu
 
     def condition(self, values: np.ndarray) -> float:
         """Estimated 1-norm condition number (LAPACK ``gbcon`` on the band LU), ``inf``

@@ -85,3 +85,23 @@ def test_kkt_solvers_are_made_once_per_pattern():
     kept = np.arange(num.m - 1)
     assert kkt_solver(num.pattern, kept) is kkt_solver(num.pattern, kept.copy())
     assert kkt_solver(num.pattern, kept).mk == num.m - 1
+
+
+def test_band_solves_alternating_between_matrices_solve_each_one():
+    """The band LU keeps its last factorization (the initial checks and the impact solve
+    factor the same matrix): solves that alternate between two matrices, as threads
+    sharing a model do, each solve their own, against the dense solve."""
+    mb = chain(12, 1.0, 1.0, 0.05)
+    num = mb.system.numeric()
+    q0, qd0 = mb.initial_state()
+    names = mb.system.coordinate_names
+    q, qd = np.array([q0[k] for k in names]), np.array([qd0[k] for k in names])
+    Mv, f, Av, c = num.kkt_sparse(0.0, q, qd)
+    solver = kkt_solver(num.pattern)
+    assert solver.method == "band"
+    heavier = (2.0 * Mv, f, Av, c)
+    for values in [(Mv, f, Av, c), heavier, (Mv, f, Av, c), heavier]:
+        M, A = num.pattern.dense_M(values[0]), num.pattern.dense_A(values[2])
+        qdd, _ = solver.solve(*values)
+        expected = np.linalg.solve(kkt_matrix(M, A), np.concatenate([values[1], values[3]]))
+        assert np.allclose(qdd, expected[:num.n], rtol=1e-10, atol=1e-12)
