@@ -9,6 +9,7 @@ answer wherever it runs.
 
 from __future__ import annotations
 
+import functools
 import os
 import socket
 import threading
@@ -227,7 +228,12 @@ def _numbers(traj: Trajectory, arrays: dict[str, np.ndarray],
         numbers[f"max_{name}"] = float(values.max()) if len(values) else np.nan
     numbers["nfev"] = float(traj.stats.get("nfev", np.nan))
     if len(traj.t):
-        numbers.update({f"final_{name}": float(v)
-                        for name, v in zip(traj.coordinate_names, traj.q[-1])})
+        numbers.update(zip(_final_names(traj.coordinate_names), traj.q[-1].tolist()))
         numbers.update({f"final_{name}": float(arrays[name][-1]) for name in settings.outputs})
     return numbers
+
+
+@functools.lru_cache(maxsize=8)
+def _final_names(names: tuple[str, ...]) -> tuple[str, ...]:
+    """The summary's names of the final values of ``names`` (made once per model)."""
+    return tuple(f"final_{name}" for name in names)
