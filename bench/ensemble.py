@@ -307,7 +307,7 @@ def throughput(n: int, rounds: int) -> dict:
     # The ensemble's own time per case (wall x workers - the cases' own time), against a
     # case's simulation: less sensitive to the machine's load than two totals' difference.
     record["overhead_per_case"] = {}
-    for name in ("serial", "dask-1", "dask-2"):
+    for name in ("serial", "threads-2", "dask-1", "dask-2"):
         run = record["runs"][name]
         own = run["seconds"] * run["workers"] - run["case_seconds"]
         record["overhead_per_case"][name] = {"seconds": own / n,

@@ -131,22 +131,35 @@ class Sink:
 
 
 class MemorySink(Sink):
-    """Every array held in memory, filled in place."""
+    """Every array held in memory, filled in place.
+
+    The arrays are allocated empty and each case's rows are written as it arrives (NaN
+    after the times it reached); the rows of cases that never arrive are set to NaN at
+    the end. Filling them all with NaN first would touch every page of them before the
+    first case runs: on a machine that maps fresh memory page by page, a serial pause of
+    about 0.6 ms a case (325 KB a case for the 16-link chain)."""
 
     def __init__(self, layout: Layout, before: Any = None) -> None:
         super().__init__(layout, before)
-        self.data = {name: np.full(shape, np.nan) if before is None
+        self.data = {name: np.empty(shape) if before is None
                      else np.array(before[name].values, dtype=float)
                      for name, (_, shape) in layout.variables().items()}
+        self.written = np.full(layout.size, before is not None)
 
     def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
         for o in outcomes:
             for name, values in self.data.items():
                 got = o.arrays[name]
-                values[o.index] = np.nan
                 values[o.index, : len(got)] = got
+                values[o.index, len(got):] = np.nan
+            self.written[o.index] = True
 
     def dataset(self):
+        missing = ~self.written
+        if missing.any():
+            for values in self.data.values():
+                values[missing] = np.nan
+            self.written[:] = True
         return self.layout.dataset({**self.data, "status": self.status, **self.numbers})
 
 
