@@ -6,7 +6,8 @@ interrupted, stops and hands over what finished meanwhile (:meth:`Backend.stop`)
 
 - :class:`Serial` runs them in order in the caller's process.
 - :class:`Threads` runs them on a thread pool sharing the one System: the C loop
-  releases the GIL during its stretches of steps, the Python around it does not.
+  releases the GIL during its stretches of steps, the Python around it does not, so
+  the threads take turns for their Python (:mod:`dalembert.solvers.native.turns`).
 - :class:`Dask` runs them on a ``dask.distributed`` cluster: a ``LocalCluster``
   of processes it starts and stops, or the ``Client`` given (any cluster). The
   model, its compiled code and the shared settings travel as one package

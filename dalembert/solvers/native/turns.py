@@ -11,7 +11,10 @@ only around the long C calls (:func:`outside_python`: the C loop's stretches of 
 the outputs), so the other thread runs its Python meanwhile, uninterrupted.
 
 Measured on the ensemble benchmark's 16-link chain (2 threads on 2 cores, 400 cases,
-best of 3): 113-115 runs/s with the turns against 107-110 without.
+best of 3): 113-115 runs/s with the turns against 107-110 without. A simulation in the
+Python loop (events, dense output, a model without C code) keeps its turn throughout:
+its C calls are single evaluations, too short to let go for (such ensembles belong on
+processes, where ``scheduler="auto"`` sends them).
 
 :func:`outside_python` does nothing in a thread that holds no turn (a plain
 ``simulate``), so the C loop calls it whatever runs it.
