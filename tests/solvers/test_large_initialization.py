@@ -58,18 +58,24 @@ def test_singular_kkt_found_by_the_sparse_screen_and_named_by_the_dense_check(mo
         system.consistent_initial_state(q0)
 
 
-@pytest.mark.parametrize("joint", ["spherical", "revolute"])
-def test_condition_screens_agree_with_the_exact_condition_numbers(joint):
-    """The band KKT screen (LAPACK gbcon) and the dense rank screen (pocon) estimate
-    the 1-norm condition numbers NumPy computes exactly from the dense matrices."""
+def _band_kkt(joint: str):
+    """A 12-link chain's numeric model and its KKT values ``(M, f, A, c)`` at rest, a
+    model large enough for the band solver."""
     mb = chain(12, 1.0, 1.0, 0.05, joint=joint, planar=joint == "revolute")
     num = mb.system.numeric()
     q0, qd0 = mb.initial_state()
     names = mb.system.coordinate_names
     q, qd = np.array([q0[k] for k in names]), np.array([qd0[k] for k in names])
-    Mv, _, Av, _ = num.kkt_sparse(0.0, q, qd)
+    assert kkt_solver(num.pattern).method == "band"
+    return num, num.kkt_sparse(0.0, q, qd)
+
+
+@pytest.mark.parametrize("joint", ["spherical", "revolute"])
+def test_condition_screens_agree_with_the_exact_condition_numbers(joint):
+    """The band KKT screen (LAPACK gbcon) and the dense rank screen (pocon) estimate
+    the 1-norm condition numbers NumPy computes exactly from the dense matrices."""
+    num, (Mv, _, Av, _) = _band_kkt(joint)
     solver = kkt_solver(num.pattern)
-    assert solver.method == "band"
     K = kkt_matrix(num.pattern.dense_M(Mv), num.pattern.dense_A(Av))
     exact = np.linalg.cond(K, 1)
     assert abs(kkt_condition(solver, Mv, Av) / exact - 1) < 1e-6
@@ -91,14 +97,8 @@ def test_band_solves_alternating_between_matrices_solve_each_one():
     """The band LU keeps its last factorization (the initial checks and the impact solve
     factor the same matrix): solves that alternate between two matrices, as threads
     sharing a model do, each solve their own, against the dense solve."""
-    mb = chain(12, 1.0, 1.0, 0.05)
-    num = mb.system.numeric()
-    q0, qd0 = mb.initial_state()
-    names = mb.system.coordinate_names
-    q, qd = np.array([q0[k] for k in names]), np.array([qd0[k] for k in names])
-    Mv, f, Av, c = num.kkt_sparse(0.0, q, qd)
+    num, (Mv, f, Av, c) = _band_kkt("spherical")
     solver = kkt_solver(num.pattern)
-    assert solver.method == "band"
     heavier = (2.0 * Mv, f, Av, c)
     for values in [(Mv, f, Av, c), heavier, (Mv, f, Av, c), heavier]:
         M, A = num.pattern.dense_M(values[0]), num.pattern.dense_A(values[2])
