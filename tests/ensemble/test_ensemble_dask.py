@@ -148,3 +148,24 @@ def test_ctrl_c_while_waiting_returns_what_finished(cluster, monkeypatch):
                               alone(pend, cases.iloc[i].to_dict(), released).q)
     assert np.isnan(result.dataset["q"].values[np.flatnonzero(status == "not-run")]).all()
     assert client.run(lambda: True)  # the cluster is still there for the next run
+
+
+def test_a_worker_with_two_threads_gives_the_serial_answers():
+    """A Dask worker running two tasks at once: its threads take turns for their Python
+    (dalembert.solvers.native.turns) and each case gives the serial run's arrays."""
+    mb = small_chain()
+    cases = sample({"m": stats.uniform(0.5, 1.0), "angle": stats.uniform(0.2, 0.6)}, 6, seed=3)
+
+    def initial(case):
+        return tilted_state(mb, case["angle"])
+
+    options = dict(initial_state=initial, t_eval=T_EVAL, rtol=1e-8, atol=1e-10,
+                   batch_size=1, progress=False)
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                      dashboard_address=None, silence_logs=logging.CRITICAL) as local, \
+            Client(local) as client:
+        threaded = mb.system.simulate_many((0.0, 1.5), cases, client=client, **options)
+    serial = mb.system.simulate_many((0.0, 1.5), cases, scheduler="serial", **options)
+    assert threaded.failed == []
+    for name in ("q", "qd", "multipliers", "energy"):
+        assert np.array_equal(threaded.dataset[name].values, serial.dataset[name].values), name
