@@ -162,7 +162,8 @@ def test_a_worker_with_two_threads_gives_the_serial_answers():
     options = dict(initial_state=initial, t_eval=T_EVAL, rtol=1e-8, atol=1e-10,
                    batch_size=1, progress=False)
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                      dashboard_address=None, silence_logs=logging.CRITICAL) as local, \
+                      scheduler_kwargs={"dashboard": False}, silence_logs=logging.CRITICAL
+                      ) as local, \
             Client(local) as client:
         threaded = mb.system.simulate_many((0.0, 1.5), cases, client=client, **options)
     serial = mb.system.simulate_many((0.0, 1.5), cases, scheduler="serial", **options)
