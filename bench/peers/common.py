@@ -67,8 +67,10 @@ def energy_error(e0: float, e_end: float, n: int) -> float:
 
 
 def meets(record: dict) -> bool:
-    """Whether a run reached the accuracy target."""
-    return (record["energy_error"] <= ENERGY_TARGET
+    """Whether a run reached the end of the span with the accuracy target met (a run that
+    stopped early is measured only up to where it stopped: it meets nothing)."""
+    return (record.get("finished", True)
+            and record["energy_error"] <= ENERGY_TARGET
             and record.get("residual", 0.0) <= RESIDUAL_TARGET)
 
 
