@@ -201,12 +201,13 @@ class Multibody:
         names, exprs = checked
         values = expression_values(self.parameters, exprs, np.asarray(p, dtype=float))
         k = len(names)
-        try:
-            if not (values[:k] > 0).all():
-                raise ModelError("a mass is not positive")  # bound names the body
-            check_inertias(values[k:].reshape(k, 3, 3), names)
-        except ModelError:
-            self._bound_at(p)  # its error names the first piece at fault, in order
+        if (values[:k] > 0).all():
+            try:
+                check_inertias(values[k:].reshape(k, 3, 3), names)
+                return
+            except ModelError:
+                pass
+        self._bound_at(p)  # a value at fault: its error names the first piece, in order
 
     @cached_property
     def _body_values(self) -> tuple[list[str], tuple[sp.Expr, ...]] | None:

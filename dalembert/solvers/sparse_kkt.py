@@ -198,27 +198,24 @@ class BandLU:
         self.size, self.src, self.cols = size, src, cols
         self.width = self.kl + self.ku + 1
         self.ldab = 2 * self.kl + self.ku + 1
-        #: the last factorization and the values it is of: the initial state's checks
-        #: and its impact solve factor the same matrix (one tuple, replaced whole, so
-        #: threads sharing the solver read a consistent pair)
-        self._last: tuple[bytes, tuple[np.ndarray, np.ndarray, int]] | None = None
+        #: the factorization :meth:`condition` made and the values it is of, for the
+        #: next :meth:`factor` (the initial state's checks estimate the condition of the
+        #: matrix its impact solve then factors); one tuple, replaced whole, so threads
+        #: sharing the solver read a consistent pair. Loops that only factor never
+        #: make it, and pay no comparison of values.
+        self._conditioned: tuple[bytes, tuple[np.ndarray, np.ndarray, int]] | None = None
 
     def _lu(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-        key = values.tobytes()
-        last = self._last
-        if last is not None and last[0] == key:
-            return last[1]
         ab = np.zeros(self.ldab * self.size)
         ab[self.flat] = values[self.src]
-        lu = lapack.dgbtrf(ab.reshape(self.size, self.ldab).T, self.kl, self.ku,
-                           overwrite_ab=1)
-        self._last = (key, lu)
-        return lu
+        return lapack.dgbtrf(ab.reshape(self.size, self.ldab).T, self.kl, self.ku,
+                             overwrite_ab=1)
 
     def condition(self, values: np.ndarray) -> float:
         """Estimated 1-norm condition number (LAPACK ``gbcon`` on the band LU), ``inf``
         if the matrix is singular."""
         lu, piv, info = self._lu(values)
+        self._conditioned = (values.tobytes(), (lu, piv, info))
         if info != 0:
             return np.inf
         norm = np.bincount(self.cols, weights=np.abs(values[self.src]), minlength=self.size)
@@ -228,7 +225,11 @@ class BandLU:
     def factor(self, values: np.ndarray):
         """A function ``rhs -> K^-1 rhs``; ``values`` indexed by the ``src`` given."""
         kl, ku, perm = self.kl, self.ku, self.perm
-        lu, piv, info = self._lu(values)
+        conditioned, self._conditioned = self._conditioned, None
+        if conditioned is not None and conditioned[0] == values.tobytes():
+            lu, piv, info = conditioned[1]
+        else:
+            lu, piv, info = self._lu(values)
         if info != 0:
             raise SingularSystemError(SINGULAR_MESSAGE)
 
