@@ -94,13 +94,16 @@ def test_kkt_solvers_are_made_once_per_pattern():
 
 
 def test_band_solves_alternating_between_matrices_solve_each_one():
-    """The band LU keeps its last factorization (the initial checks and the impact solve
-    factor the same matrix): solves that alternate between two matrices, as threads
-    sharing a model do, each solve their own, against the dense solve."""
+    """A condition estimate hands its factorization to the next solve (the initial
+    checks and the impact solve factor the same matrix): solves that alternate between
+    two matrices, each after the other's or its own condition estimate, as threads
+    sharing a model may, each solve their own, against the dense solve."""
     num, (Mv, f, Av, c) = _band_kkt("spherical")
     solver = kkt_solver(num.pattern)
     heavier = (2.0 * Mv, f, Av, c)
-    for values in [(Mv, f, Av, c), heavier, (Mv, f, Av, c), heavier]:
+    for values, estimated in [((Mv, f, Av, c), heavier), (heavier, heavier),
+                              ((Mv, f, Av, c), (Mv, f, Av, c)), (heavier, (Mv, f, Av, c))]:
+        kkt_condition(solver, estimated[0], estimated[2])
         M, A = num.pattern.dense_M(values[0]), num.pattern.dense_A(values[2])
         qdd, _ = solver.solve(*values)
         expected = np.linalg.solve(kkt_matrix(M, A), np.concatenate([values[1], values[3]]))
