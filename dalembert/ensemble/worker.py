@@ -205,7 +205,10 @@ def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str,
         raise RuntimeError("the trajectory's times are not the ensemble's output times")
     arrays = {"t": np.asarray(traj.t, dtype=float)}
     for name in settings.keep:
-        arrays[name] = np.asarray(getattr(traj, name), dtype=float)
+        # contiguous (``q``, ``qd`` are views into the state's rows): pickle sends such
+        # an array as it is, a view it copies into its stream (five times the time, on
+        # the worker, and again on the client when it reads it)
+        arrays[name] = np.ascontiguousarray(getattr(traj, name), dtype=float)
     for name, fn in settings.outputs.items():
         value = np.asarray(fn(system, traj), dtype=float) if k else np.zeros(0)
         if value.shape != (k,):

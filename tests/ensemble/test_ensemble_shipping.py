@@ -65,3 +65,26 @@ def test_a_process_prepares_a_model_once_whatever_the_ensembles_settings():
     second_system, second = model.prepared(model.package(mb.system, {"t_end": 2.0}))
     assert first_system is second_system and first_system is not mb.system
     assert (first, second) == ({"t_end": 1.0}, {"t_end": 2.0})
+
+
+def test_a_cases_arrays_travel_beside_the_pickle_not_inside_it():
+    """A worker's outcome pickles each kept array as one out-of-band buffer (protocol 5,
+    as Dask sends results): nothing of the arrays is copied into the stream, views into
+    the trajectory's state (``q``, ``qd``) included."""
+    from dalembert.ensemble.cases import CaseColumns
+    from dalembert.ensemble.worker import CaseSettings, run_case
+    from dalembert.options import simulation_options
+
+    mb = small_chain()
+    t_eval = np.linspace(0.0, 1.0, 101)
+    settings = CaseSettings((0.0, 1.0), t_eval, simulation_options((0.0, 1.0), t_eval=t_eval),
+                            np.zeros(21), np.zeros(21), {"m": 1.0},
+                            CaseColumns(("m",), (), (), ()),
+                            lambda case: tilted_state(mb, case["angle"]))
+    outcome = run_case(mb.system, settings, 0, {"m": 1.5, "angle": 0.4})
+    assert outcome.status == "finished"
+    buffers: list[pickle.PickleBuffer] = []
+    stream = pickle.dumps(outcome, protocol=5, buffer_callback=buffers.append)
+    sizes = sorted(memoryview(b).nbytes for b in buffers)
+    assert sizes == sorted(a.nbytes for a in outcome.arrays.values())
+    assert len(stream) < min(a.nbytes for a in outcome.arrays.values() if a.ndim == 2)

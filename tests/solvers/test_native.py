@@ -207,21 +207,41 @@ def test_unit_block_tables():
     assert s.unit_gram_i.tolist() == s.unit_gram_j.tolist() == s.unit_pair_vec.tolist()
 
 
-def test_planar_chain_solve_matches_dense_reference():
-    """Planar bodies: all blocks 1 x 1 (flat loops), against the dense KKT solve."""
-    mb = chain(5, 1.0, 1.0, 0.05, joint="revolute", planar=True)
+def chain_solves_match_dense_reference(mb) -> NativeSolver:
+    """The C solve of a chain's KKT system at states off its initial one against the
+    dense KKT solve; the solver, for what the caller checks of its structure."""
     num = mb.system.numeric()
     q0, _ = mb.initial_state()
     names = mb.system.coordinate_names
     q = np.array([q0[k] for k in names])
     rng = np.random.default_rng(3)
     solver = native_solver(num, np.concatenate([q, np.zeros(num.n)]))
-    assert solver.structure.unit.all()
     for _ in range(3):
         qs, qd = q + 0.05 * rng.standard_normal(num.n), rng.standard_normal(num.n)
         qdd, lam = solver.solve(0.3, qs, qd)
         qdd_ref, lam_ref = solve_kkt(*num.kkt_blocks(0.3, qs, qd))
         assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
+    return solver
+
+
+def test_planar_chain_solve_matches_dense_reference():
+    """Planar bodies: all blocks 1 x 1 (flat loops), against the dense KKT solve."""
+    solver = chain_solves_match_dense_reference(
+        chain(5, 1.0, 1.0, 0.05, joint="revolute", planar=True))
+    assert solver.structure.unit.all()
+
+
+@pytest.mark.parametrize(("links", "joint", "kd", "rows"), [
+    (1, "spherical", 2, 3),   # fewer rows than a full-width row needs
+    (4, "spherical", 5, 12),  # a width the band kernels take as a constant
+    (2, "revolute", 7, 8),    # a width they take as a variable, one full-width row
+    (6, "revolute", 9, 28),
+])
+def test_band_widths_solve_matches_dense_reference(links, joint, kd, rows):
+    """The band's factorization and solves, whose rows of full width are unrolled for
+    some widths, against the dense KKT solve at every kind of width and length."""
+    solver = chain_solves_match_dense_reference(chain(links, 1.0, 1.0, 0.05, joint=joint))
+    assert (solver.structure.kd, len(solver.structure.band_row)) == (kd, rows)
 
 
 def block_with_internal_rows():

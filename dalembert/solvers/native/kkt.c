@@ -54,7 +54,7 @@ DL_INLINE int cholesky(double *L, int64_t n) {
 }
 
 /* x <- L^-1 x */
-DL_INLINE void forward(const double *L, int64_t n, double *x) {
+DL_INLINE void forward(const double *restrict L, int64_t n, double *restrict x) {
   for (int64_t i = 0; i < n; ++i) {
     double s = x[i];
     for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
@@ -63,7 +63,7 @@ DL_INLINE void forward(const double *L, int64_t n, double *x) {
 }
 
 /* x <- L^-T x */
-DL_INLINE void backward(const double *L, int64_t n, double *x) {
+DL_INLINE void backward(const double *restrict L, int64_t n, double *restrict x) {
   for (int64_t i = n - 1; i >= 0; --i) {
     double s = x[i];
     for (int64_t k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
@@ -75,49 +75,75 @@ DL_INLINE void backward(const double *L, int64_t n, double *x) {
  * on return the unit lower L below the diagonal and 1 / D_i on it. No square roots:
  * a pivot waits only for the division of the one before (in L L^T also for its root),
  * and the rows follow each other in one chain. The row's products u_j = L_ij D_j
- * first take the places of S_ij, then turn into L_ij. */
-static int band_ldl(double *S, int64_t m, int64_t kd) {
-  const int64_t w = kd + 1;
-  for (int64_t i = 0; i < m; ++i) {
-    const int64_t k0 = i > kd ? i - kd : 0;
-    double *Si = S + i * w + i;  /* Si[-j] = S_ij */
-    for (int64_t j = k0; j < i; ++j) {
-      const double *Sj = S + j * w + j;
-      const int64_t kk = j > kd ? j - kd : 0;
-      double u = Si[-j];
-      for (int64_t k = kk > k0 ? kk : k0; k < j; ++k) u -= Si[-k] * Sj[-k];
-      Si[-j] = u;
-    }
-    double d = Si[-i];
-    const double scale = fabs(d);
-    for (int64_t j = k0; j < i; ++j) {
-      const double l = Si[-j] * S[j * w];
-      d -= Si[-j] * l;
-      Si[-j] = l;
-    }
-    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
-    Si[-i] = 1.0 / d;
+ * first take the places of S_ij, then turn into L_ij; row i's band starts at column
+ * k0, and so does every sum (the rows j >= k0 before it reach back to k0 at least). */
+DL_INLINE int ldl_row(double *restrict S, int64_t i, int64_t k0, int64_t w) {
+  double *Si = S + i * w + i;  /* Si[-j] = S_ij */
+  for (int64_t j = k0; j < i; ++j) {
+    const double *Sj = S + j * w + j;
+    double u = Si[-j];
+    for (int64_t k = k0; k < j; ++k) u -= Si[-k] * Sj[-k];
+    Si[-j] = u;
   }
+  double d = Si[-i];
+  const double scale = fabs(d);
+  for (int64_t j = k0; j < i; ++j) {
+    const double l = Si[-j] * S[j * w];
+    d -= Si[-j] * l;
+    Si[-j] = l;
+  }
+  if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
+  Si[-i] = 1.0 / d;
   return DL_OK;
 }
 
-/* x <- S^-1 x from band_ldl's factors. */
-static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
-  const int64_t w = kd + 1;
-  for (int64_t i = 0; i < m; ++i) {
-    const int64_t k0 = i > kd ? i - kd : 0;
-    const double *Si = S + i * w + i;
-    double s = x[i];
-    for (int64_t k = k0; k < i; ++k) s -= Si[-k] * x[k];
-    x[i] = s;
-  }
+/* The first kd rows (shorter), then the others, whose band is kd wide: with kd a
+ * constant (BY_WIDTH) their loops unroll into straight code. */
+DL_INLINE int band_ldl_by_width(double *restrict S, int64_t m, int64_t kd) {
+  const int64_t w = kd + 1, head = kd < m ? kd : m;
+  for (int64_t i = 0; i < head; ++i)
+    if (ldl_row(S, i, 0, w) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+  for (int64_t i = head; i < m; ++i)
+    if (ldl_row(S, i, i - kd, w) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+  return DL_OK;
+}
+
+static int band_ldl(double *S, int64_t m, int64_t kd) {
+  return BY_WIDTH(kd, band_ldl_by_width, S, m);
+}
+
+/* x_i -= sum over k0 <= k < i of L_ik x_k (the last term the x just found). */
+DL_INLINE void forward_row(const double *restrict S, int64_t i, int64_t k0, int64_t w,
+                           double *restrict x) {
+  const double *Si = S + i * w + i;
+  double s = x[i];
+  for (int64_t k = k0; k < i; ++k) s -= Si[-k] * x[k];
+  x[i] = s;
+}
+
+/* x_i -= sum over i < k <= k1 of L_ki x_k, from k1 down: each sum ends with the x just
+ * found (as the forward sums do), so a row waits for the one before by one
+ * multiply-add, not kd. */
+DL_INLINE void backward_row(const double *restrict S, int64_t i, int64_t k1, int64_t w,
+                            double *restrict x) {
+  double s = x[i];
+  for (int64_t k = k1; k > i; --k) s -= S[k * w + (k - i)] * x[k];
+  x[i] = s;
+}
+
+/* x <- S^-1 x from band_ldl's factors (rows whose band is kd wide apart, as there). */
+DL_INLINE void band_solve_by_width(const double *restrict S, int64_t m, double *restrict x,
+                                   int64_t kd) {
+  const int64_t w = kd + 1, head = kd < m ? kd : m;
+  for (int64_t i = 0; i < head; ++i) forward_row(S, i, 0, w, x);
+  for (int64_t i = head; i < m; ++i) forward_row(S, i, i - kd, w, x);
   for (int64_t i = 0; i < m; ++i) x[i] *= S[i * w];
-  for (int64_t i = m - 1; i >= 0; --i) {
-    const int64_t k1 = i + kd < m - 1 ? i + kd : m - 1;
-    double s = x[i];
-    for (int64_t k = i + 1; k <= k1; ++k) s -= S[k * w + (k - i)] * x[k];
-    x[i] = s;
-  }
+  for (int64_t i = m - 1; i >= m - head; --i) backward_row(S, i, m - 1, w, x);
+  for (int64_t i = m - head - 1; i >= 0; --i) backward_row(S, i, i + kd, w, x);
+}
+
+static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
+  BY_WIDTH(kd, band_solve_by_width, S, m, x);
 }
 
 /* Scatter the values of A (pattern order) into the pair vectors. Nothing else writes

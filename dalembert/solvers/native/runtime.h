@@ -173,6 +173,14 @@ DL_INLINE int64_t block_size(const dl_model *md, int64_t b) {
   ((nb) == 1 ? F(__VA_ARGS__, 1) : (nb) == 2 ? F(__VA_ARGS__, 2)                          \
    : (nb) == 3 ? F(__VA_ARGS__, 3) : (nb) == 4 ? F(__VA_ARGS__, 4) : F(__VA_ARGS__, nb))
 
+/* The band kernels take the band's half width kd last; BY_WIDTH calls them with a
+ * constant kd for the common narrow bands (2 rows a joint: 3; 3 rows: 5; 5 rows: 9),
+ * so that the loops of a full-width row unroll. */
+#define BY_WIDTH(kd, F, ...)                                                              \
+  ((kd) == 1 ? F(__VA_ARGS__, 1) : (kd) == 2 ? F(__VA_ARGS__, 2)                          \
+   : (kd) == 3 ? F(__VA_ARGS__, 3) : (kd) == 4 ? F(__VA_ARGS__, 4)                        \
+   : (kd) == 5 ? F(__VA_ARGS__, 5) : (kd) == 9 ? F(__VA_ARGS__, 9) : F(__VA_ARGS__, kd))
+
 /* kkt.c: the generated functions, A's values, the KKT solve */
 DL_INTERNAL void eval_state(const dl_function *F, double t, const double *q, const double *qd,
                             const double *p, double *out);
