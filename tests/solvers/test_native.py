@@ -60,6 +60,24 @@ def test_solve_matches_dense_reference(name):
         assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
 
 
+def test_masses_that_change_between_solves_are_factored_again():
+    """A 1 x 1 mass that depends on the state (a particle on a cone in polar
+    coordinates: M = diag(m, m r^2, m)) takes its new value at every solve, while the
+    constant ones keep theirs: solves at alternating states against the dense one."""
+    r, th, z = coordinates("r th z")
+    system = System([r, th, z], kinetic=(r.diff() ** 2 + r**2 * th.diff() ** 2
+                                         + z.diff() ** 2) / 2,
+                    potential=9.81 * z, constraints=[Holonomic(z - r, name="cone")])
+    num = system.numeric()
+    solver = native_solver(num, np.array([1.0, 0.0, 1.0, 0.0, 1.0, 0.0]))
+    assert solver.structure.unit.all()
+    for radius in (1.0, 2.0, 1.0, 0.5, 0.5):
+        q, qd = np.array([radius, 0.3, radius]), np.array([0.2, 1.5, 0.2])
+        qdd, lam = solver.solve(0.0, q, qd)
+        qdd_ref, lam_ref = solve_kkt(*num.kkt_blocks(0.0, q, qd))
+        assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
+
+
 def test_dependent_constraints_solve_the_kept_rows():
     """The four-bar's loop has a dependent row: the dense solve of the kept rows is the
     reference for qdd and the kept rows' multipliers; the dropped rows' are zero."""

@@ -62,6 +62,16 @@ DL_INLINE void forward(const double *restrict L, int64_t n, double *restrict x) 
   }
 }
 
+/* x = L^-1 b (b left as it is) */
+DL_INLINE void forward_into(const double *restrict L, int64_t n, const double *restrict b,
+                            double *restrict x) {
+  for (int64_t i = 0; i < n; ++i) {
+    double s = b[i];
+    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
 /* x <- L^-T x */
 DL_INLINE void backward(const double *restrict L, int64_t n, double *restrict x) {
   for (int64_t i = n - 1; i >= 0; --i) {
@@ -191,8 +201,7 @@ DL_INLINE void block_forward(dl_model *md, int64_t b, int64_t nb) {
   const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
   const double *restrict a = md->a + md->pair_vec[p0];
   double *restrict z = md->y + md->pair_vec[p0];
-  for (int64_t k = 0; k < (p1 - p0) * nb; ++k) z[k] = a[k];
-  for (int64_t k = 0; k < p1 - p0; ++k) forward(B, nb, z + k * nb);
+  for (int64_t k = 0; k < p1 - p0; ++k) forward_into(B, nb, a + k * nb, z + k * nb);
 }
 
 DL_INLINE int is_active(const unsigned char *active, const dl_model *md, int64_t p) {
@@ -387,7 +396,12 @@ static int unit_pass(dl_model *md, double *c) {
   for (int64_t k = 0; k < md->n_unit; ++k) {
     const double d = blocks[md->unit_mat[k]];
     if (!(d > 0.0)) return DL_SINGULAR_MASS;
-    const double inv = 1.0 / sqrt(d);
+    if (d != md->unit_mass[k]) {  /* most are constant (a mass, a planar body's inertia):
+                                   * their roots and divisions are made once */
+      md->unit_mass[k] = d;
+      md->unit_root[k] = 1.0 / sqrt(d);
+    }
+    const double inv = md->unit_root[k];
     blocks[md->unit_mat[k]] = inv;
     u[md->unit_slot[k]] *= inv;
   }

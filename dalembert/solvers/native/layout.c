@@ -37,6 +37,7 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_model, n_dropped_pairs), FIELD(dl_model, n_dropped),
   FIELD(dl_model, dropped_rows), FIELD(dl_model, dropped_rtol), FIELD(dl_model, inputs),
   FIELD(dl_model, input_state), FIELD(dl_model, conditioning), FIELD(dl_model, gram_diagonal),
+  FIELD(dl_model, unit_mass), FIELD(dl_model, unit_root),
   SIZE(dl_tableau),
   FIELD(dl_tableau, n_stages), FIELD(dl_tableau, A), FIELD(dl_tableau, B),
   FIELD(dl_tableau, C), FIELD(dl_tableau, E), FIELD(dl_tableau, E3),

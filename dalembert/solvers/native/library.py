@@ -64,7 +64,8 @@ class Model(ctypes.Structure):
         ("kkt_in_layout", _i64), ("c", _ptr),
         ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
         ("dropped_rtol", _f64), ("inputs", _ptr), ("input_state", _ptr),
-        ("conditioning", _f64), ("gram_diagonal", _ptr),
+        ("conditioning", _f64), ("gram_diagonal", _ptr), ("unit_mass", _ptr),
+        ("unit_root", _ptr),
     ]
 
 

@@ -98,6 +98,8 @@ typedef struct {
    * (factor_schur: band_conditioning), and the band rows' diagonals before it. */
   double conditioning;
   double *gram_diagonal;      /* m */
+  /* n_unit: the 1 x 1 masses of the last solve and 1 / sqrt of them (unit_pass) */
+  double *unit_mass, *unit_root;
 } dl_model;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */

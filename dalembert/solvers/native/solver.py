@@ -112,7 +112,8 @@ class NativeSolver:
         sizes = {"vel_values": nA + m, "psi": len(num.holonomic_rows), "y": vectors,
                  "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
                  "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n,
-                 "gram_diagonal": m}
+                 "gram_diagonal": m, "unit_mass": len(s.unit_slot),
+                 "unit_root": len(s.unit_slot)}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
         self._kkt(model, handles[0])
