@@ -122,34 +122,40 @@ static int band_ldl(double *S, int64_t m, int64_t kd) {
   return BY_WIDTH(kd, band_ldl_by_width, S, m);
 }
 
-/* x_i -= sum over k0 <= k < i of L_ik x_k (the last term the x just found). */
-DL_INLINE void forward_row(const double *restrict S, int64_t i, int64_t k0, int64_t w,
-                           double *restrict x) {
+/* x_i -= sum over k0 <= k < i of L_ik x_k, x_{i-1} = prev: the x just found, the one
+ * the row waits for, carried in a register instead of read back from x, where it was
+ * stored an instant before; the new x_i is returned. */
+DL_INLINE double forward_row(const double *restrict S, int64_t i, int64_t k0, int64_t w,
+                             double *restrict x, double prev) {
   const double *Si = S + i * w + i;
   double s = x[i];
-  for (int64_t k = k0; k < i; ++k) s -= Si[-k] * x[k];
-  x[i] = s;
+  for (int64_t k = k0; k < i - 1; ++k) s -= Si[-k] * x[k];
+  if (k0 < i) s -= Si[-(i - 1)] * prev;
+  return x[i] = s;
 }
 
-/* x_i -= sum over i < k <= k1 of L_ki x_k, from k1 down: each sum ends with the x just
- * found (as the forward sums do), so a row waits for the one before by one
- * multiply-add, not kd. */
-DL_INLINE void backward_row(const double *restrict S, int64_t i, int64_t k1, int64_t w,
-                            double *restrict x) {
+/* x_i -= sum over i < k <= k1 of L_ki x_k, from k1 down, x_{i+1} = prev (as in
+ * forward_row: each sum ends with the x just found, so a row waits for the one before
+ * by one multiply-add, not kd); the new x_i is returned. */
+DL_INLINE double backward_row(const double *restrict S, int64_t i, int64_t k1, int64_t w,
+                              double *restrict x, double prev) {
   double s = x[i];
-  for (int64_t k = k1; k > i; --k) s -= S[k * w + (k - i)] * x[k];
-  x[i] = s;
+  for (int64_t k = k1; k > i + 1; --k) s -= S[k * w + (k - i)] * x[k];
+  if (k1 > i) s -= S[(i + 1) * w + 1] * prev;
+  return x[i] = s;
 }
 
 /* x <- S^-1 x from band_ldl's factors (rows whose band is kd wide apart, as there). */
 DL_INLINE void band_solve_by_width(const double *restrict S, int64_t m, double *restrict x,
                                    int64_t kd) {
   const int64_t w = kd + 1, head = kd < m ? kd : m;
-  for (int64_t i = 0; i < head; ++i) forward_row(S, i, 0, w, x);
-  for (int64_t i = head; i < m; ++i) forward_row(S, i, i - kd, w, x);
+  double prev = 0.0;
+  for (int64_t i = 0; i < head; ++i) prev = forward_row(S, i, 0, w, x, prev);
+  for (int64_t i = head; i < m; ++i) prev = forward_row(S, i, i - kd, w, x, prev);
   for (int64_t i = 0; i < m; ++i) x[i] *= S[i * w];
-  for (int64_t i = m - 1; i >= m - head; --i) backward_row(S, i, m - 1, w, x);
-  for (int64_t i = m - head - 1; i >= 0; --i) backward_row(S, i, i + kd, w, x);
+  prev = 0.0;
+  for (int64_t i = m - 1; i >= m - head; --i) prev = backward_row(S, i, m - 1, w, x, prev);
+  for (int64_t i = m - head - 1; i >= 0; --i) prev = backward_row(S, i, i + kd, w, x, prev);
 }
 
 static void band_solve(const double *S, int64_t m, int64_t kd, double *x) {
