@@ -250,10 +250,10 @@ def test_planar_chain_solve_matches_dense_reference():
 
 
 @pytest.mark.parametrize(("links", "joint", "kd", "rows"), [
-    (1, "spherical", 2, 3),   # fewer rows than a full-width row needs
-    (4, "spherical", 5, 12),  # a width the band kernels take as a constant
-    (2, "revolute", 7, 8),    # a width they take as a variable, one full-width row
-    (6, "revolute", 9, 28),
+    (1, "spherical", 2, 3),   # a width the band kernels take as a constant, one full row
+    (4, "spherical", 5, 12),  # a constant width, most rows full
+    (2, "revolute", 7, 8),    # a width they take as a variable, one full row
+    (6, "revolute", 9, 28),   # a constant width, most rows full
 ])
 def test_band_widths_solve_matches_dense_reference(links, joint, kd, rows):
     """The band's factorization and solves, whose rows of full width are unrolled for
