@@ -37,8 +37,8 @@ SCHEDULERS = ("auto", "serial", "threads", "processes", "dask")
 #: ``scheduler="auto"`` runs the first case here. If it ran in the C loop, whose
 #: stretches release the GIL, the others run on threads (one per core) when they would
 #: take longer than :data:`AUTO_THREADS_SECONDS` alone: threads start at once and
-#: measured faster than local processes on two cores (bench/ensemble.py, 1,000 cases of
-#: the 16-link chain: 1.91x a plain loop against 1.71x). A case in the Python loop
+#: measured faster than local processes on two cores (bench/README.md, "Ensembles":
+#: the 16-link chain's 1,000 cases). A case in the Python loop
 #: holds the GIL, and the others go to a local cluster of processes when they would
 #: take longer than :data:`AUTO_PARALLEL_SECONDS`: a cluster's first results come
 #: 4-6 s after it is asked for on two cores (start 1.7-2.2 s, each worker's import of
