@@ -36,9 +36,8 @@ class _NativeSteps(RungeKutta):
     def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self._native = native
-        # the tableau with the arrays it points to (kept alive by this solver too)
-        self._tableau_kept = self._made_tableau()
-        self._tableau, self._n_rows, _ = self._tableau_kept
+        # the class keeps the arrays the tableau points to alive
+        self._tableau, self._n_rows, _ = self._made_tableau()
         self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
                                         rtol=self.rtol, max_step=self.max_step,
