@@ -1,7 +1,8 @@
 """Where the batches of cases run: here, on threads, or on Dask workers.
 
-Each backend takes batches (case numbers with their rows), yields the outcomes of
-each batch as it finishes (:meth:`Backend.completed`) and, when the ensemble is
+Each backend takes batches (case numbers with their rows), yields each batch's
+outcome as it finishes (:meth:`Backend.completed`, a
+:class:`~dalembert.ensemble.faults.BatchOutcome`) and, when the ensemble is
 interrupted, stops and hands over what finished meanwhile (:meth:`Backend.stop`).
 
 - :class:`Serial` runs them in order in the caller's process.
@@ -14,7 +15,9 @@ interrupted, stops and hands over what finished meanwhile (:meth:`Backend.stop`)
   (:mod:`~dalembert.ensemble.model`), which each worker process prepares once. A
   batch whose worker died is run again by the scheduler (as often as its
   ``allowed-failures`` lets it); one that kills its workers each time is then split
-  into its cases, so that only the culprit is lost (recorded as ``"lost"``).
+  into its cases, so that only the culprit is lost (recorded as ``"lost"``). From
+  workers on this machine the client takes results straight, not relayed by the
+  scheduler.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ import numpy as np
 
 from ..errors import EnsembleError
 from ..system import System
-from .faults import CaseOutcome, error_outcome, lost_outcome
+from .faults import BatchOutcome, error_outcome, lost_outcome
 from .model import ModelPackage, package, prepared
 from .worker import CaseSettings, run_batch
 
@@ -46,31 +49,23 @@ class Batch:
 
 
 class Interrupted(KeyboardInterrupt):
-    """Ctrl-C during a batch run here: carries the outcomes finished before it."""
+    """Ctrl-C during a batch run here: carries the cases finished before it."""
 
-    def __init__(self, outcomes: list[CaseOutcome]) -> None:
+    def __init__(self, done: BatchOutcome) -> None:
         super().__init__()
-        self.outcomes = outcomes
+        self.done = done
 
 
 def run_here(system: System, settings: CaseSettings, batch: Batch,
-             names: Sequence[str]) -> list[CaseOutcome]:
+             names: Sequence[str]) -> BatchOutcome:
     """Run ``batch`` in this process; a Ctrl-C ends it with :class:`Interrupted`.
 
     A Ctrl-C during a simulation ends that simulation (it returns what it computed,
     status ``"interrupted"``): the batch stops there too.
     """
-    done: list[CaseOutcome] = []
-    try:
-        for i in range(len(batch.indices)):
-            done += run_batch(system, settings, batch.indices[i:i + 1], batch.rows[i:i + 1],
-                              names)
-            if done[-1].status == "interrupted":
-                raise Interrupted(done)
-    except Interrupted:
-        raise
-    except KeyboardInterrupt as exc:
-        raise Interrupted(done) from exc
+    done = run_batch(system, settings, batch.indices, batch.rows, names)
+    if done.interrupted:
+        raise Interrupted(done)
     return done
 
 
@@ -80,10 +75,10 @@ class Backend:
     name = "backend"
     workers = 1
 
-    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[BatchOutcome, None, None]:
         raise NotImplementedError
 
-    def stop(self) -> list[CaseOutcome]:
+    def stop(self) -> list[BatchOutcome]:
         """Stop after an interruption; the outcomes finished but not yet yielded."""
         return []
 
@@ -98,9 +93,9 @@ class Serial(Backend):
 
     def __init__(self, system: System, settings: CaseSettings, names: Sequence[str]) -> None:
         self.system, self.settings, self.names = system, settings, names
-        self._left: list[CaseOutcome] = []
+        self._left: list[BatchOutcome] = []
 
-    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[BatchOutcome, None, None]:
         for batch in batches:
             for i in range(len(batch.indices)):  # case by case: the progress bar moves
                 try:
@@ -108,10 +103,10 @@ class Serial(Backend):
                                    Batch(batch.indices[i:i + 1], batch.rows[i:i + 1]),
                                    self.names)
                 except Interrupted as stop:
-                    self._left = stop.outcomes
+                    self._left = [stop.done]
                     raise KeyboardInterrupt from None
 
-    def stop(self) -> list[CaseOutcome]:
+    def stop(self) -> list[BatchOutcome]:
         left, self._left = self._left, []
         return left
 
@@ -131,7 +126,7 @@ class Threads(Backend):
         self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="dalembert-case")
         self._futures: set[Future] = set()
 
-    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[BatchOutcome, None, None]:
         # The cases' warnings are not recorded: catch_warnings in the threads would
         # race on the process-wide filters; they are silenced here, once, instead.
         with warnings.catch_warnings():
@@ -145,14 +140,11 @@ class Threads(Backend):
                     self._futures.discard(future)
                     yield future.result()
 
-    def stop(self) -> list[CaseOutcome]:
+    def stop(self) -> list[BatchOutcome]:
         self._stop.set()  # running batches end after their current case
         for future in self._futures:
             future.cancel()
-        left: list[CaseOutcome] = []
-        for future in self._futures:
-            if not future.cancelled():
-                left += future.result()
+        left = [future.result() for future in self._futures if not future.cancelled()]
         self._futures = set()
         return left
 
@@ -165,7 +157,7 @@ _TURNS = threading.Lock()
 
 
 def run_packed(pack: ModelPackage, indices: np.ndarray, rows: np.ndarray,
-               names: Sequence[str]) -> list[CaseOutcome]:
+               names: Sequence[str]) -> BatchOutcome:
     """A Dask task: one batch, on the System and settings of ``pack`` (prepared once
     per worker process). On a worker running several tasks at once (threads), the
     cases' warnings are left to the worker's log: recording them is not thread-safe."""
@@ -203,7 +195,15 @@ class Dask(Backend):
                     "or pass scheduler='serial' or 'threads'") from exc
             client = distributed.Client(self._own)
         self.client = client
-        self.workers = max(1, sum(client.nthreads().values()))
+        threads = client.nthreads()
+        self.workers = max(1, sum(threads.values()))
+        # Results straight from workers on this machine: relayed by the scheduler, every
+        # byte of them would cross two more sockets in the client's process (where a
+        # local cluster's scheduler runs). A remote cluster's workers may not be
+        # reachable from here: there the client's own setting holds.
+        self.direct = client.direct_to_workers
+        if self.direct is None:
+            self.direct = bool(threads) and all(_on_this_machine(a) for a in threads)
         # Each task carries the package (about 0.1 MB for a 16-link chain) rather than
         # a scattered copy: data scattered to workers dies with them, and a worker
         # prepares a package once however many tasks bring it.
@@ -211,7 +211,7 @@ class Dask(Backend):
         self._pending: dict[Any, Batch] = {}
         self._finished: list[Any] = []
 
-    def completed(self, batches: Sequence[Batch]) -> Generator[list[CaseOutcome], None, None]:
+    def completed(self, batches: Sequence[Batch]) -> Generator[BatchOutcome, None, None]:
         distributed = _distributed()
         pending = self._pending
         for batch in batches:
@@ -237,7 +237,7 @@ class Dask(Backend):
             if future is suspect:
                 next_suspect()
             if future.status == "finished":
-                yield future.result()
+                yield self.client.gather(future, direct=self.direct)
                 continue
             exc = future.exception()
             if isinstance(exc, distributed.KilledWorker) and len(batch.indices) > 1:
@@ -246,20 +246,20 @@ class Dask(Backend):
                 if suspect is None:
                     next_suspect()
             elif isinstance(exc, distributed.KilledWorker):
-                yield [lost_outcome(int(batch.indices[0]), str(exc))]
+                yield BatchOutcome([lost_outcome(int(batch.indices[0]), str(exc))])
             else:  # the task itself failed (e.g. the model could not be prepared there)
                 why = exc if exc is not None else RuntimeError(f"the task ended {future.status}")
-                yield [error_outcome(int(i), why, 0.0, "") for i in batch.indices]
+                yield BatchOutcome([error_outcome(int(i), why, 0.0, "") for i in batch.indices])
 
     def _submit(self, batch: Batch) -> Any:
         return self.client.submit(run_packed, self.package, batch.indices, batch.rows,
                                   self.names, pure=False)
 
-    def stop(self) -> list[CaseOutcome]:
-        left: list[CaseOutcome] = []
+    def stop(self) -> list[BatchOutcome]:
+        left: list[BatchOutcome] = []
         for future in list(self._pending):
             if future.status == "finished":
-                left += future.result()
+                left.append(self.client.gather(future, direct=self.direct))
             else:
                 future.cancel()
         self._pending.clear()
@@ -269,6 +269,24 @@ class Dask(Backend):
         if self._own is not None:
             self.client.close()
             self._own.close()
+
+
+def _on_this_machine(address: str) -> bool:
+    """Whether a Dask address is of this machine (loopback, or in this process)."""
+    import ipaddress
+
+    from distributed.comm import get_address_host
+
+    try:
+        host = get_address_host(address)
+    except ValueError:
+        return False
+    if host in ("localhost", ""):
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a host name
+        return False
 
 
 def _distributed() -> Any:

@@ -34,6 +34,9 @@ class PackedNumbers:
     def items(self) -> Iterator[tuple[str, float]]:
         return zip(self.names, self.values.tolist())
 
+    def get(self, name: str, default: float = np.nan) -> float:
+        return float(self.values[self.names.index(name)]) if name in self.names else default
+
 
 def pack_numbers(numbers: dict[str, float], shared: dict[tuple[str, ...], tuple[str, ...]]
                  ) -> PackedNumbers:
@@ -53,7 +56,8 @@ class CaseOutcome:
 
     ``arrays`` holds the kept quantities at the output times the case reached
     (``t``, ``q``, ... ; a case that failed midway has fewer rows, one that raised
-    has none); the other fields go into the summary table.
+    has none) until its batch stacks them (:class:`BatchOutcome`); the other fields
+    go into the summary table.
     """
 
     index: int
@@ -71,6 +75,27 @@ class CaseOutcome:
     @property
     def ok(self) -> bool:
         return self.status in SUCCESS
+
+
+@dataclass
+class BatchOutcome:
+    """The cases of one batch as they come back from where they ran.
+
+    ``cases`` are their records, in the batch's order, without arrays; ``arrays`` the
+    quantities they kept, stacked: one array per name over ``(case, time, ...)`` in
+    the order of ``cases``, NaN after the times a case reached and for a case that
+    kept nothing (empty when no case of the batch kept anything). A batch's values
+    travel and are written as a few blocks, not as every case's own arrays.
+    ``interrupted``: a Ctrl-C ended the batch before its last case.
+    """
+
+    cases: list[CaseOutcome]
+    arrays: dict[str, np.ndarray] = field(default_factory=dict)
+    interrupted: bool = False
+
+    @property
+    def indices(self) -> np.ndarray:
+        return np.fromiter((o.index for o in self.cases), dtype=np.intp, count=len(self.cases))
 
 
 def error_outcome(index: int, exc: BaseException, seconds: float, worker: str) -> CaseOutcome:

@@ -25,9 +25,9 @@ from ..errors import EnsembleError, EnsembleWarning
 from ..model.parameters import parameter_values
 from ..model.values import CoordinateValues, coordinate_values
 from ..system import System
-from .backends import Backend, Batch, Dask, Serial, Threads
+from .backends import Backend, Batch, Dask, Interrupted, Serial, Threads, run_here
 from .cases import CaseTable, read_cases
-from .faults import SUCCESS, CaseOutcome, not_run_outcome, pack_numbers
+from .faults import SUCCESS, BatchOutcome, CaseOutcome, not_run_outcome, pack_numbers
 from .results import EnsembleResult, summary_table
 from .store import Layout, check_store, sink
 from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
@@ -235,17 +235,17 @@ class _Run:
         if before is None and self.store is not None:
             check_store(self.store, self.overwrite)  # before anything runs or starts
         outcomes: dict[int, CaseOutcome] = {}
-        scheduler = self.scheduler
+        scheduler, first = self.scheduler, BatchOutcome([])
         if scheduler == "auto":
-            scheduler = self._auto(indices, outcomes)
+            scheduler, first = self._auto(indices)
         chunk = self.batch_size or _batch_size(len(indices), self._workers(scheduler))
         layout = Layout(self.cases.table, self.settings.t_eval, self.system.coordinate_names,
                         self.system.constraint_names, self.settings.keep,
                         tuple(self.settings.outputs), chunk)
         out = sink(layout, self.store, indices, self.overwrite,
                    None if before is None else before.dataset)
-        self._take(list(outcomes.values()), outcomes, out, None)  # the case auto ran here
-        interrupted = any(o.status == "interrupted" for o in outcomes.values())
+        self._take(first, outcomes, out, None)  # the case auto ran here
+        interrupted = first.interrupted
         bar = _bar(len(indices), self.progress)
         bar.update(len(outcomes))
         backend: Backend | None = None
@@ -257,14 +257,15 @@ class _Run:
                 try:
                     for done in found:
                         self._take(done, outcomes, out, bar)
-                        if any(o.status == "interrupted" for o in done):
+                        if done.interrupted:
                             raise KeyboardInterrupt  # Ctrl-C inside a simulation here
                 finally:
                     found.close()
         except KeyboardInterrupt:
             interrupted = True
             if backend is not None:
-                self._take(backend.stop(), outcomes, out, bar)
+                for done in backend.stop():
+                    self._take(done, outcomes, out, bar)
         finally:
             if backend is not None:
                 backend.close()
@@ -283,25 +284,24 @@ class _Run:
             return max(1, sum(self.client.nthreads().values()))
         return self.workers or os.cpu_count() or 1
 
-    def _auto(self, todo: list[int], outcomes: dict[int, CaseOutcome]) -> str:
+    def _auto(self, todo: list[int]) -> tuple[str, BatchOutcome]:
         """Run the first case here, and choose where the others run from its time."""
         if len(todo) < 2 or (os.cpu_count() or 1) < 2:
-            return "serial"
-        first = Serial(self.system, self.settings, list(self.cases.table.columns))
+            return "serial", BatchOutcome([])
         start = time.perf_counter()
         try:
-            for done in first.completed([Batch(np.array(todo[:1]),
-                                               self.cases.values[todo[:1]])]):
-                outcomes.update((o.index, o) for o in done)
-        except KeyboardInterrupt:  # execute() stops at once on this record
-            outcomes.update((o.index, o) for o in first.stop())
-            outcomes.setdefault(todo[0], CaseOutcome(todo[0], "interrupted",
-                                                     "interrupted by the user"))
-            return "serial"
+            done = run_here(self.system, self.settings,
+                            Batch(np.array(todo[:1]), self.cases.values[todo[:1]]),
+                            list(self.cases.table.columns))
+        except KeyboardInterrupt as stop:  # execute() stops at once on this record
+            done = stop.done if isinstance(stop, Interrupted) else BatchOutcome([], {}, True)
+            if not done.cases:
+                done.cases.append(CaseOutcome(todo[0], "interrupted", "interrupted by the user"))
+            return "serial", done
         rest = (time.perf_counter() - start) * (len(todo) - 1)
-        if outcomes[todo[0]].in_c:
-            return "threads" if rest > AUTO_THREADS_SECONDS else "serial"
-        return "processes" if rest > AUTO_PARALLEL_SECONDS else "serial"
+        if done.cases[0].in_c:
+            return ("threads" if rest > AUTO_THREADS_SECONDS else "serial"), done
+        return ("processes" if rest > AUTO_PARALLEL_SECONDS else "serial"), done
 
     def _backend(self, scheduler: str) -> Backend:
         names = list(self.cases.table.columns)
@@ -312,16 +312,15 @@ class _Run:
         return Dask(self.system, self.settings, names,
                     self.client if scheduler == "dask" else None, self.workers)
 
-    def _take(self, done: list[CaseOutcome], outcomes: dict[int, CaseOutcome], out: Any,
+    def _take(self, done: BatchOutcome, outcomes: dict[int, CaseOutcome], out: Any,
               bar: Any) -> None:
-        out.write(done)
-        for o in done:
-            o.arrays = {}  # the sink has them: the client keeps each case's summary only
+        out.write(done)  # the arrays: the client keeps each case's summary only
+        for o in done.cases:
             if isinstance(o.numbers, dict):
                 o.numbers = pack_numbers(o.numbers, self._names)
             outcomes[o.index] = o
         if bar is not None:
-            bar.update(len(done))
+            bar.update(len(done.cases))
 
     def _result(self, indices: list[int], outcomes: dict[int, CaseOutcome], out: Any,
                 scheduler: str, interrupted: bool,

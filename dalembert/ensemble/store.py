@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import EnsembleError
-from .faults import CODE, STATUSES, CaseOutcome
+from .faults import CODE, STATUSES, BatchOutcome
 from .worker import QUANTITIES
 
 #: Per-case numbers stored beside the arrays (the rest of the summary is a table).
@@ -114,16 +114,17 @@ class Sink:
             for name in CASE_NUMBERS:
                 self.numbers[name][:] = before[name].values
 
-    def write(self, outcomes: Sequence[CaseOutcome]) -> None:
-        for o in outcomes:
+    def write(self, done: BatchOutcome) -> None:
+        for o in done.cases:
             self.status[o.index] = CODE[o.status]
             self.numbers["seconds"][o.index] = o.seconds
-            given = dict(o.numbers.items())
             for name in ("t_end", "energy_error"):
-                self.numbers[name][o.index] = given.get(name, np.nan)
-        self._write_arrays([o for o in outcomes if o.arrays])
+                self.numbers[name][o.index] = o.numbers.get(name, np.nan)
+        if done.arrays:
+            self._write_arrays(done.indices, done.arrays)
 
-    def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
+    def _write_arrays(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+        """Write the rows ``arrays`` (stacked by name) of the cases ``indices``."""
         raise NotImplementedError
 
     def dataset(self):
@@ -133,11 +134,11 @@ class Sink:
 class MemorySink(Sink):
     """Every array held in memory, filled in place.
 
-    The arrays are allocated empty and each case's rows are written as it arrives (NaN
-    after the times it reached); the rows of cases that never arrive are set to NaN at
-    the end. Filling them all with NaN first would touch every page of them before the
-    first case runs: on a machine that maps fresh memory page by page, a serial pause of
-    about 0.6 ms a case (325 KB a case for the 16-link chain)."""
+    The arrays are allocated empty and each batch's rows are written as they arrive;
+    the rows of cases that never arrive are set to NaN at the end. Filling them all
+    with NaN first would touch every page of them before the first case runs: on a
+    machine that maps fresh memory page by page, a serial pause of about 0.6 ms a case
+    (325 KB a case for the 16-link chain)."""
 
     def __init__(self, layout: Layout, before: Any = None) -> None:
         super().__init__(layout, before)
@@ -146,13 +147,10 @@ class MemorySink(Sink):
                      for name, (_, shape) in layout.variables().items()}
         self.written = np.full(layout.size, before is not None)
 
-    def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
-        for o in outcomes:
-            for name, values in self.data.items():
-                got = o.arrays[name]
-                values[o.index, : len(got)] = got
-                values[o.index, len(got):] = np.nan
-            self.written[o.index] = True
+    def _write_arrays(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+        for name, values in self.data.items():
+            values[indices] = arrays[name]
+        self.written[indices] = True
 
     def dataset(self):
         missing = ~self.written
@@ -183,7 +181,7 @@ class FileSink(Sink):
         self.expected: dict[int, int] = {}
         for i in expected:
             self.expected[i // layout.chunk] = self.expected.get(i // layout.chunk, 0) + 1
-        self.pending: dict[int, list[tuple[int, dict[str, np.ndarray]]]] = {}
+        self.pending: dict[int, list[tuple[np.ndarray, dict[str, np.ndarray]]]] = {}
 
     def _create(self) -> None:
         import dask.array as da
@@ -202,11 +200,14 @@ class FileSink(Sink):
         else:
             ds.to_netcdf(self.path, engine="h5netcdf", compute=False)
 
-    def _write_arrays(self, outcomes: Sequence[CaseOutcome]) -> None:
-        chunk = self.layout.chunk
-        for o in outcomes:  # the arrays, not the outcome: the caller drops them from it
-            self.pending.setdefault(o.index // chunk, []).append((o.index, o.arrays))
-        full = [k for k, got in self.pending.items() if len(got) >= self.expected.get(k, 0)]
+    def _write_arrays(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+        blocks = indices // self.layout.chunk
+        for k in np.unique(blocks):
+            part = blocks == k
+            rows = arrays if part.all() else {name: a[part] for name, a in arrays.items()}
+            self.pending.setdefault(int(k), []).append((indices[part], rows))
+        full = [k for k, got in self.pending.items()
+                if sum(len(i) for i, _ in got) >= self.expected.get(k, 0)]
         for k in full:
             self._flush(k)
 
@@ -214,14 +215,17 @@ class FileSink(Sink):
         got = self.pending.pop(k)
         start = k * self.layout.chunk
         stop = min(start + self.layout.chunk, self.layout.size)
+        whole = sum(len(i) for i, _ in got) == stop - start
+        as_came = len(got) == 1 and np.array_equal(got[0][0], np.arange(start, stop))
         with self._open() as out:
             for name, (_, shape) in self.layout.variables().items():
-                block = (np.array(out[name][start:stop]) if len(got) < stop - start
-                         else np.full((stop - start, *shape[1:]), np.nan))
-                for index, arrays in got:
-                    values = arrays[name]
-                    block[index - start] = np.nan
-                    block[index - start, : len(values)] = values
+                if as_came:  # one batch made the block: written as it came
+                    out[name][start:stop] = got[0][1][name]
+                    continue
+                block = (np.full((stop - start, *shape[1:]), np.nan) if whole
+                         else np.array(out[name][start:stop]))
+                for indices, arrays in got:
+                    block[indices - start] = arrays[name]
                 out[name][start:stop] = block
 
     def finish(self) -> None:

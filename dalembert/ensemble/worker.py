@@ -27,7 +27,7 @@ from ..solvers.native.turns import python_turn
 from ..system import System
 from ..trajectory import Trajectory
 from .cases import CaseColumns
-from .faults import CaseOutcome, error_outcome
+from .faults import BatchOutcome, CaseOutcome, error_outcome
 
 #: Quantities a trajectory has at every output time, and their dimensions beyond
 #: ``(case, time)`` (``coordinate`` or ``constraint``; none for a scalar).
@@ -86,9 +86,11 @@ def run_batch(system: System, settings: CaseSettings,
               indices: Sequence[int] | np.ndarray, rows: np.ndarray, names: Sequence[str],
               stop: threading.Event | None = None,
               record_warnings: bool = True,
-              turns: threading.Lock | None = None) -> list[CaseOutcome]:
+              turns: threading.Lock | None = None) -> BatchOutcome:
     """Run the cases ``indices`` (their values ``rows``, columns ``names``) one after
-    the other; each one's failure is recorded and the next one runs.
+    the other; each one's failure is recorded and the next one runs. Their arrays
+    come back stacked (:class:`~dalembert.ensemble.faults.BatchOutcome`); a Ctrl-C
+    here ends the batch with what finished.
 
     Parameters
     ----------
@@ -109,14 +111,57 @@ def run_batch(system: System, settings: CaseSettings,
         C calls.
     """
     worker = f"{socket.gethostname()}:{os.getpid()}"
-    done = []
-    for index, row in zip(indices, rows):
-        if stop is not None and stop.is_set():
-            break
-        case = {name: float(v) for name, v in zip(names, row)}
-        with python_turn(turns) if turns is not None else nullcontext():
-            done.append(run_case(system, settings, int(index), case, worker, record_warnings))
-    return done
+    done: list[CaseOutcome] = []
+    interrupted = False
+    try:
+        for index, row in zip(indices, rows):
+            if stop is not None and stop.is_set():
+                break
+            case = {name: float(v) for name, v in zip(names, row)}
+            with python_turn(turns) if turns is not None else nullcontext():
+                done.append(run_case(system, settings, int(index), case, worker,
+                                     record_warnings))
+            if done[-1].status == "interrupted":  # Ctrl-C inside the simulation
+                interrupted = True
+                break
+    except KeyboardInterrupt:  # Ctrl-C between two simulations
+        interrupted = True
+    return BatchOutcome(done, stack(done, len(settings.t_eval)), interrupted)
+
+
+def stack(outcomes: Sequence[CaseOutcome], times: int) -> dict[str, np.ndarray]:
+    """The arrays of ``outcomes`` stacked by name, each over ``(case, time, ...)`` with
+    ``times`` output times (NaN where a case has no value); each outcome's own arrays
+    are dropped.
+
+    Parameters
+    ----------
+    outcomes
+        The cases, with the arrays they kept.
+    times
+        How many output times the ensemble has.
+
+    Examples
+    --------
+    >>> done = [CaseOutcome(0, "finished", arrays={"energy": np.array([1.0, 1.0])}),
+    ...         CaseOutcome(1, "failed", arrays={"energy": np.array([2.0])}),
+    ...         CaseOutcome(2, "error")]
+    >>> stack(done, 2)["energy"].tolist()
+    [[1.0, 1.0], [2.0, nan], [nan, nan]]
+    """
+    first = next((o.arrays for o in outcomes if o.arrays), {})
+    blocks = {}
+    for name, values in first.items():
+        block = np.empty((len(outcomes), times, *values.shape[1:]))
+        for row, o in zip(block, outcomes):
+            got = o.arrays.get(name)
+            reached = 0 if got is None else len(got)
+            row[:reached] = got
+            row[reached:] = np.nan
+        blocks[name] = block
+    for o in outcomes:
+        o.arrays = {}
+    return blocks
 
 
 def run_case(system: System, settings: CaseSettings, index: int, case: dict[str, float],
@@ -203,12 +248,8 @@ def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str,
     k = len(traj.t)
     if not np.array_equal(traj.t, settings.t_eval[:k]):
         raise RuntimeError("the trajectory's times are not the ensemble's output times")
-    arrays = {"t": np.asarray(traj.t, dtype=float)}
-    for name in settings.keep:
-        # contiguous (``q``, ``qd`` are views into the state's rows): pickle sends such
-        # an array as it is, a view it copies into its stream (five times the time, on
-        # the worker, and again on the client when it reads it)
-        arrays[name] = np.ascontiguousarray(getattr(traj, name), dtype=float)
+    # views where the trajectory has them (``q``, ``qd``): the batch's stack copies them
+    arrays = {name: np.asarray(getattr(traj, name), dtype=float) for name in settings.keep}
     for name, fn in settings.outputs.items():
         value = np.asarray(fn(system, traj), dtype=float) if k else np.zeros(0)
         if value.shape != (k,):

@@ -114,6 +114,27 @@ def test_a_case_that_kills_every_worker_is_lost_alone(cluster):
                           alone(pend, cases.iloc[2].to_dict(), released).q)
 
 
+def _relayed(client) -> int:
+    """How many times the scheduler has gathered results for a client."""
+    return sum(event.get("action") == "gather" for _, event in client.get_events("all"))
+
+
+def test_results_come_straight_from_workers_on_this_machine(cluster):
+    """Not relayed by the scheduler (which runs in the client's process): unless the
+    client says otherwise, as a client of a remote cluster may have to."""
+    client, _ = cluster
+    pend = pendulum()
+    cases = grid(l=[0.8, 1.0, 1.2, 1.4])
+    options = dict(initial_state=released, t_eval=T_EVAL, batch_size=2, progress=False)
+    before = _relayed(client)
+    straight = pend.simulate_many((0.0, 1.5), cases, client=client, **options)
+    assert _relayed(client) == before
+    with Client(client.scheduler.address, direct_to_workers=False) as relaying:
+        relayed = pend.simulate_many((0.0, 1.5), cases, client=relaying, **options)
+        assert _relayed(relaying) >= before + 2  # a gather for each batch
+    assert np.array_equal(straight.dataset["q"].values, relayed.dataset["q"].values)
+
+
 class _CtrlCAfter:
     """A progress bar whose second update is a Ctrl-C (the user's, while the client
     waits for the cluster)."""

@@ -67,12 +67,12 @@ def test_a_process_prepares_a_model_once_whatever_the_ensembles_settings():
     assert (first, second) == ({"t_end": 1.0}, {"t_end": 2.0})
 
 
-def test_a_cases_arrays_travel_beside_the_pickle_not_inside_it():
-    """A worker's outcome pickles each kept array as one out-of-band buffer (protocol 5,
-    as Dask sends results): nothing of the arrays is copied into the stream, views into
-    the trajectory's state (``q``, ``qd``) included."""
+def test_a_batchs_arrays_travel_beside_the_pickle_not_inside_it():
+    """A worker's batch pickles each kept quantity as one out-of-band buffer over its
+    cases (protocol 5, as Dask sends results): nothing of the arrays is copied into the
+    stream, the trajectories' views (``q``, ``qd``) included."""
     from dalembert.ensemble.cases import CaseColumns
-    from dalembert.ensemble.worker import CaseSettings, run_case
+    from dalembert.ensemble.worker import CaseSettings, run_batch
     from dalembert.options import simulation_options
 
     mb = small_chain()
@@ -81,10 +81,12 @@ def test_a_cases_arrays_travel_beside_the_pickle_not_inside_it():
                             np.zeros(21), np.zeros(21), {"m": 1.0},
                             CaseColumns(("m",), (), (), ()),
                             lambda case: tilted_state(mb, case["angle"]))
-    outcome = run_case(mb.system, settings, 0, {"m": 1.5, "angle": 0.4})
-    assert outcome.status == "finished"
+    done = run_batch(mb.system, settings, [0, 1], np.array([[1.5, 0.4], [0.8, 0.2]]),
+                     ["m", "angle"])
+    assert [o.status for o in done.cases] == ["finished", "finished"]
+    assert done.arrays["q"].shape == (2, 101, 21)
     buffers: list[pickle.PickleBuffer] = []
-    stream = pickle.dumps(outcome, protocol=5, buffer_callback=buffers.append)
+    stream = pickle.dumps(done, protocol=5, buffer_callback=buffers.append)
     sizes = sorted(memoryview(b).nbytes for b in buffers)
-    assert sizes == sorted(a.nbytes for a in outcome.arrays.values())
-    assert len(stream) < min(a.nbytes for a in outcome.arrays.values() if a.ndim == 2)
+    assert sizes == sorted(a.nbytes for a in done.arrays.values())
+    assert len(stream) < min(a.nbytes for a in done.arrays.values() if a.ndim == 3)
