@@ -14,10 +14,10 @@ interrupted, stops and hands over what finished meanwhile (:meth:`Backend.stop`)
   model, its compiled code and the shared settings travel as one package
   (:mod:`~dalembert.ensemble.model`), which each worker process prepares once. A
   batch whose worker died is run again by the scheduler (as often as its
-  ``allowed-failures`` lets it); one that kills its workers each time is then split
-  into its cases, so that only the culprit is lost (recorded as ``"lost"``). From
-  workers on this machine the client takes results straight, not relayed by the
-  scheduler.
+  ``allowed-failures`` lets it); if its workers died each time, each of its cases
+  runs once more, alone, so that only a culprit is lost (recorded as ``"lost"``). A
+  client on the scheduler's machine takes results straight from the workers, not
+  relayed by the scheduler.
 """
 
 from __future__ import annotations
@@ -197,13 +197,14 @@ class Dask(Backend):
         self.client = client
         threads = client.nthreads()
         self.workers = max(1, sum(threads.values()))
-        # Results straight from workers on this machine: relayed by the scheduler, every
-        # byte of them would cross two more sockets in the client's process (where a
-        # local cluster's scheduler runs). A remote cluster's workers may not be
-        # reachable from here: there the client's own setting holds.
+        # Results straight from the workers when the scheduler runs on this machine
+        # (what it reaches, this client reaches): relayed by it, every byte of them
+        # would cross two more sockets in the client's process (where a local cluster's
+        # scheduler runs). A remote cluster's workers may not be reachable from here:
+        # there the client's own setting holds.
         self.direct = client.direct_to_workers
         if self.direct is None:
-            self.direct = bool(threads) and all(_on_this_machine(a) for a in threads)
+            self.direct = _on_this_machine(client.scheduler.address)
         # Each task carries the package (about 0.1 MB for a 16-link chain) rather than
         # a scattered copy: data scattered to workers dies with them, and a worker
         # prepares a package once however many tasks bring it.
@@ -217,9 +218,10 @@ class Dask(Backend):
         for batch in batches:
             pending[self._submit(batch)] = batch
         found = distributed.as_completed(list(pending))
-        # The cases of a batch whose worker died run one at a time, each alone among the
-        # suspects: a case queued on the same worker as the culprit dies with it, so two
-        # suspects in flight together could both be taken for culprits.
+        # The cases of a batch whose worker died (a batch of one case too) run again one
+        # at a time, each alone among the suspects: a case queued on the same worker as
+        # the culprit dies with it, so two suspects in flight together could both be
+        # taken for culprits. A suspect that dies again is lost.
         suspects: list[Batch] = []
         suspect: Any = None
 
@@ -234,13 +236,14 @@ class Dask(Backend):
 
         for future in found:
             batch = pending.pop(future)
-            if future is suspect:
+            alone = future is suspect
+            if alone:
                 next_suspect()
             if future.status == "finished":
                 yield self.client.gather(future, direct=self.direct)
                 continue
             exc = future.exception()
-            if isinstance(exc, distributed.KilledWorker) and len(batch.indices) > 1:
+            if isinstance(exc, distributed.KilledWorker) and not alone:
                 suspects += [Batch(batch.indices[i:i + 1], batch.rows[i:i + 1])
                              for i in range(len(batch.indices))]
                 if suspect is None:
@@ -277,6 +280,8 @@ def _on_this_machine(address: str) -> bool:
 
     from distributed.comm import get_address_host
 
+    if address.startswith("inproc://"):
+        return True
     try:
         host = get_address_host(address)
     except ValueError:

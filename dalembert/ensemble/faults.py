@@ -71,6 +71,9 @@ class CaseOutcome:
     #: It ran in stretches of C steps, which release the GIL (threads run such cases
     #: side by side).
     in_c: bool = False
+    #: When it started (seconds since the epoch): with ``seconds`` and ``worker``, the
+    #: ensemble's timeline.
+    started: float = np.nan
 
     @property
     def ok(self) -> bool:
@@ -98,13 +101,15 @@ class BatchOutcome:
         return np.fromiter((o.index for o in self.cases), dtype=np.intp, count=len(self.cases))
 
 
-def error_outcome(index: int, exc: BaseException, seconds: float, worker: str) -> CaseOutcome:
+def error_outcome(index: int, exc: BaseException, seconds: float, worker: str,
+                  started: float = np.nan) -> CaseOutcome:
     """The record of a case whose set-up or run raised ``exc`` (named with its class).
 
     >>> error_outcome(3, ValueError("m = -1 is negative"), 0.0, "").message
     'ValueError: m = -1 is negative'
     """
-    return CaseOutcome(index, "error", f"{type(exc).__name__}: {exc}", seconds, worker)
+    return CaseOutcome(index, "error", f"{type(exc).__name__}: {exc}", seconds, worker,
+                       started=started)
 
 
 def lost_outcome(index: int, why: str) -> CaseOutcome:

@@ -4,7 +4,8 @@
 ``coordinate`` and ``constraint`` (in memory, or read lazily from the Zarr store or
 netCDF file it was written to); :attr:`EnsembleResult.summary` a pandas DataFrame,
 one row per case: its columns of the case table, status, message, where it ended,
-its energy error and residuals, its final values, its time and its worker.
+its energy error and residuals, its final values, its time, when it started and
+its worker.
 :meth:`EnsembleResult.quantile` and :meth:`EnsembleResult.mean` reduce over the
 cases that succeeded, time by time; on a stored ensemble they run chunk by chunk
 (Dask), so the client never holds every trajectory.
@@ -37,7 +38,10 @@ class EnsembleResult:
         in its attributes), ``t_end``, ``energy_error``, ``seconds``, and the case
         table's columns as coordinates along ``case``.
     summary
-        One row per case (pandas DataFrame indexed by case).
+        One row per case (pandas DataFrame indexed by case): the case table's columns,
+        ``status``, ``message``, the case's numbers (``t_end``, ``energy_error``, its
+        largest residuals, ``nfev``, its final values), ``seconds`` it took, when it
+        ``started`` (UTC) and on which ``worker``, its ``warnings``.
     scheduler
         What ran the cases (``"serial"``, ``"threads"``, ``"dask"``).
     interrupted
@@ -142,6 +146,7 @@ def summary_table(cases: Any, outcomes: Sequence[CaseOutcome]) -> Any:
         **{name: cases[name].to_numpy() for name in cases.columns},
         "status": [o.status for o in outcomes], "message": [o.message for o in outcomes],
         **numbers, "seconds": [o.seconds for o in outcomes],
+        "started": pd.to_datetime([o.started for o in outcomes], unit="s", utc=True),
         "worker": [o.worker for o in outcomes], "warnings": [o.warnings for o in outcomes]})
     table.index.name = "case"
     return table

@@ -112,6 +112,7 @@ def run_batch(system: System, settings: CaseSettings,
     """
     worker = f"{socket.gethostname()}:{os.getpid()}"
     done: list[CaseOutcome] = []
+    blocks: dict[str, np.ndarray] = {}
     interrupted = False
     try:
         for index, row in zip(indices, rows):
@@ -119,49 +120,59 @@ def run_batch(system: System, settings: CaseSettings,
                 break
             case = {name: float(v) for name, v in zip(names, row)}
             with python_turn(turns) if turns is not None else nullcontext():
-                done.append(run_case(system, settings, int(index), case, worker,
-                                     record_warnings))
-            if done[-1].status == "interrupted":  # Ctrl-C inside the simulation
+                outcome = run_case(system, settings, int(index), case, worker, record_warnings)
+                place(blocks, outcome, len(done), len(indices), len(settings.t_eval))
+            done.append(outcome)
+            if outcome.status == "interrupted":  # Ctrl-C inside the simulation
                 interrupted = True
                 break
     except KeyboardInterrupt:  # Ctrl-C between two simulations
         interrupted = True
-    return BatchOutcome(done, stack(done, len(settings.t_eval)), interrupted)
+    return BatchOutcome(done, {name: block[: len(done)] for name, block in blocks.items()},
+                        interrupted)
 
 
-def stack(outcomes: Sequence[CaseOutcome], times: int) -> dict[str, np.ndarray]:
-    """The arrays of ``outcomes`` stacked by name, each over ``(case, time, ...)`` with
-    ``times`` output times (NaN where a case has no value); each outcome's own arrays
-    are dropped.
+def place(blocks: dict[str, np.ndarray], outcome: CaseOutcome, row: int, rows: int,
+          times: int) -> None:
+    """Copy the arrays ``outcome`` kept into row ``row`` of a batch's ``blocks`` (one
+    per name over ``(case, time, ...)``, made for ``rows`` cases and ``times`` output
+    times by the first case that kept any), NaN where it has no value; its own
+    arrays are then dropped. Each case is copied as it finishes, from memory still
+    in the processor's cache, not read back at the batch's end.
 
     Parameters
     ----------
-    outcomes
-        The cases, with the arrays they kept.
+    blocks
+        The batch's blocks so far (empty before the first case that kept arrays).
+    outcome
+        The case.
+    row, rows
+        Its row, and how many cases the batch has.
     times
         How many output times the ensemble has.
 
     Examples
     --------
-    >>> done = [CaseOutcome(0, "finished", arrays={"energy": np.array([1.0, 1.0])}),
-    ...         CaseOutcome(1, "failed", arrays={"energy": np.array([2.0])}),
-    ...         CaseOutcome(2, "error")]
-    >>> stack(done, 2)["energy"].tolist()
-    [[1.0, 1.0], [2.0, nan], [nan, nan]]
+    >>> blocks = {}
+    >>> done = [CaseOutcome(0, "error"),
+    ...         CaseOutcome(1, "finished", arrays={"energy": np.array([1.0, 1.0])}),
+    ...         CaseOutcome(2, "failed", arrays={"energy": np.array([2.0])})]
+    >>> for row, outcome in enumerate(done):
+    ...     place(blocks, outcome, row, 3, 2)
+    >>> blocks["energy"].tolist()
+    [[nan, nan], [1.0, 1.0], [2.0, nan]]
     """
-    first = next((o.arrays for o in outcomes if o.arrays), {})
-    blocks = {}
-    for name, values in first.items():
-        block = np.empty((len(outcomes), times, *values.shape[1:]))
-        for row, o in zip(block, outcomes):
-            got = o.arrays.get(name)
-            reached = 0 if got is None else len(got)
-            row[:reached] = got
-            row[reached:] = np.nan
-        blocks[name] = block
-    for o in outcomes:
-        o.arrays = {}
-    return blocks
+    if outcome.arrays and not blocks:
+        for name, values in outcome.arrays.items():
+            blocks[name] = np.empty((rows, times, *values.shape[1:]))
+            blocks[name][:row] = np.nan
+    for name, block in blocks.items():
+        got = outcome.arrays.get(name)
+        reached = 0 if got is None else len(got)
+        if reached:
+            block[row, :reached] = got
+        block[row, reached:] = np.nan
+    outcome.arrays = {}
 
 
 def run_case(system: System, settings: CaseSettings, index: int, case: dict[str, float],
@@ -197,7 +208,7 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
     >>> outcome.status, outcome.arrays["q"].shape
     ('finished', (2, 2))
     """
-    start = time.perf_counter()
+    start, started = time.perf_counter(), time.time()
     caught: list[warnings.WarningMessage] = []
     with warnings.catch_warnings(record=True) if record_warnings else nullcontext() as got:
         if got is not None:
@@ -210,12 +221,13 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
             traj = system._run(plan)
             arrays = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
-            return error_outcome(index, exc, time.perf_counter() - start, worker)
+            return error_outcome(index, exc, time.perf_counter() - start, worker, started)
     seconds = time.perf_counter() - start
     noted = dict.fromkeys(f"{w.category.__name__}: {str(w.message).splitlines()[0]}"
                           for w in caught)
     return CaseOutcome(index, str(traj.status), traj.message, seconds, worker, arrays,
-                       _numbers(traj, arrays, settings), "\n".join(noted), plan.stretches)
+                       _numbers(traj, arrays, settings), "\n".join(noted), plan.stretches,
+                       started)
 
 
 def _inputs(system: System, settings: CaseSettings,
@@ -248,7 +260,7 @@ def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str,
     k = len(traj.t)
     if not np.array_equal(traj.t, settings.t_eval[:k]):
         raise RuntimeError("the trajectory's times are not the ensemble's output times")
-    # views where the trajectory has them (``q``, ``qd``): the batch's stack copies them
+    # views where the trajectory has them (``q``, ``qd``): the batch's blocks copy them
     arrays = {name: np.asarray(getattr(traj, name), dtype=float) for name in settings.keep}
     for name, fn in settings.outputs.items():
         value = np.asarray(fn(system, traj), dtype=float) if k else np.zeros(0)

@@ -119,7 +119,7 @@ def _relayed(client) -> int:
     return sum(event.get("action") == "gather" for _, event in client.get_events("all"))
 
 
-def test_results_come_straight_from_workers_on_this_machine(cluster):
+def test_results_come_straight_from_the_workers_of_a_scheduler_on_this_machine(cluster):
     """Not relayed by the scheduler (which runs in the client's process): unless the
     client says otherwise, as a client of a remote cluster may have to."""
     client, _ = cluster

@@ -3,6 +3,7 @@ closed form, faults recorded per case, retry, interruption, stores and reduction
 
 from __future__ import annotations
 
+import time
 import warnings
 
 import numpy as np
@@ -52,11 +53,19 @@ def test_every_case_equals_the_case_simulated_alone(mb, scheduler):
     def initial(case):
         return tilted_state(mb, case["angle"])
 
+    before = time.time()
     result = mb.system.simulate_many((0.0, 2.0), cases, initial_state=initial, t_eval=T_EVAL,
                                      rtol=1e-8, atol=1e-10, outputs={"tip_z": tip_z},
                                      scheduler=scheduler, workers=2, batch_size=3,
                                      progress=False)
+    after = time.time()
     assert result.scheduler == scheduler and result.failed == []
+    # the timeline: every case within the call; serially, each after the one before
+    started = result.summary["started"].map(lambda t: t.timestamp()).to_numpy()
+    ended = started + result.summary["seconds"].to_numpy()
+    assert before <= started.min() and ended.max() <= after
+    if scheduler == "serial":
+        assert np.all(started[1:] >= ended[:-1] - 1e-3)  # two clocks: rounding of theirs
     ds = result.dataset
     for i in (0, 4, 7):  # sampled
         traj = alone(mb.system, cases.iloc[i].to_dict(), initial, rtol=1e-8, atol=1e-10)
@@ -196,7 +205,8 @@ def test_a_stored_ensemble_reads_back_equal_and_reduces_lazily(pend, tmp_path, s
         assert np.array_equal(stored.dataset[name].values, memory.dataset[name].values,
                               equal_nan=True), name
     assert stored.summary.equals(memory.summary.assign(
-        seconds=stored.summary["seconds"]))  # all but the times taken
+        seconds=stored.summary["seconds"], started=stored.summary["started"])
+    )  # all but the times taken
     ok = np.arange(13) != 4
     y = memory.dataset["q"].sel(coordinate="y").values[ok]
     band = stored.quantile("q", [0.1, 0.5, 0.9], coordinate="y")
@@ -303,3 +313,18 @@ def test_a_retry_updates_a_store_in_place(pend, tmp_path, suffix):
     assert np.array_equal(on_disk["q"].values[[0, 1, 3, 4]],
                           again.dataset["q"].values[[0, 1, 3, 4]])
     on_disk.close()
+
+
+@pytest.mark.parametrize("suffix", [".zarr", ".nc"])
+def test_a_store_block_made_of_several_batches_reads_back_equal(pend, tmp_path, suffix):
+    """On 2 threads the last round of batches is cut in parts: a store's block is then
+    written once all of its parts are in, and equals the run kept in memory."""
+    cases = grid(l=np.linspace(0.5, 2.0, 10))
+    options = dict(initial_state=released, t_eval=T_EVAL, progress=False, batch_size=4)
+    memory = pend.simulate_many((0.0, 2.0), cases, scheduler="serial", **options)
+    stored = pend.simulate_many((0.0, 2.0), cases, scheduler="threads", workers=2,
+                                store=tmp_path / f"run{suffix}", **options)
+    if suffix == ".zarr":  # netCDF is read back in one chunk
+        assert stored.dataset["q"].chunks[0] == (4, 4, 2)
+    for name in ("q", "qd", "multipliers", "energy", "status", "t_end"):
+        assert np.array_equal(stored.dataset[name].values, memory.dataset[name].values), name
