@@ -25,7 +25,11 @@ Parts (``--part``):
   spell of a slower machine falls on every way alike; ratios are given from the
   totals and as the median of the rounds' ratios. A cluster's start and its
   workers' first preparation of the model (import, unpack, load the shipped code)
-  are timed apart: they are paid once per cluster and model.
+  are timed apart: they are paid once per cluster and model. The ensemble's own
+  time (wall time x workers - the cases' own) is split by the cases' timeline
+  (:func:`timeline`) into what each case adds and what each call adds; the rounds
+  make five calls of the cases, so each way also runs all of them in one call
+  (``whole``), as one ensemble of N cases, whose own time is the target's measure.
 - ``scaling``: 10, 100, 1000, 10000 cases (``--quick``: 10, 100) of 1 s simulated
   (not 10: the ensemble's own costs weigh ten times more against a case) on 2 Dask
   processes, results to a Zarr store, each size in a fresh client process: time per
@@ -193,10 +197,43 @@ def plain_loop(mb, initial, cases, solver: dict) -> tuple[float, np.ndarray]:
 
 
 def ensemble_run(mb, initial, cases, solver: dict, **how) -> tuple[float, object]:
-    start = time.perf_counter()
+    """Seconds of one ``simulate_many`` call and its result; ``result.call`` holds the
+    call's start and end on the clock of the cases' ``started`` (for :func:`timeline`)."""
+    start, clock = time.perf_counter(), time.time()
     result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
                                      progress=False, **solver, **how)
+    result.call = (clock, time.time())
     return time.perf_counter() - start, result
+
+
+def timeline(result) -> dict:
+    """Where a call's time went beside its cases, in seconds summed over the lanes that
+    ran cases side by side (a worker process, or a thread of one): ``head``, from the
+    call to each lane's first case (the cases read and checked, the model packed, the
+    first batch sent); ``gaps``, between a lane's consecutive cases (the batches'
+    hand-over and arrays, a task's overhead); ``tail``, from each lane's last case to
+    the call's return (the last results received, a lane waiting for the others, the
+    dataset and summary made). With the cases' own time they add up to the call's wall
+    time x lanes."""
+    start, end = result.call
+    summary = result.summary
+    began = summary["started"].map(lambda t: t.timestamp()).to_numpy()
+    took = summary["seconds"].to_numpy()
+    head = gaps = tail = 0.0
+    for _, rows in summary.groupby("worker").indices.items():
+        lanes: list[list[int]] = []  # threads of one process: cases that overlap
+        for i in sorted(rows, key=lambda i: began[i]):
+            free = [lane for lane in lanes if began[lane[-1]] + took[lane[-1]] <= began[i] + 1e-4]
+            if free:
+                max(free, key=lambda lane: began[lane[-1]]).append(i)
+            else:
+                lanes.append([i])
+        for lane in lanes:
+            first, last = began[lane], began[lane] + took[lane]
+            head += first[0] - start
+            gaps += float(np.sum(first[1:] - last[:-1]))
+            tail += end - last[-1]
+    return {"head_s": head, "gaps_s": gaps, "tail_s": tail}
 
 
 def case_seconds(result) -> float:
@@ -252,7 +289,8 @@ def throughput(n: int, rounds: int) -> dict:
         def run(part):
             seconds, result = ensemble_run(mb, initial, part, solver, **how)
             errors = energy_errors(result.dataset["energy"].values, masses(part))
-            return (seconds, errors), {"case_seconds": case_seconds(result)}
+            return (seconds, errors), {"case_seconds": case_seconds(result),
+                                       **timeline(result)}
         return run
 
     def on_cluster(workers: int):
@@ -312,8 +350,25 @@ def throughput(n: int, rounds: int) -> dict:
         own = run["seconds"] * run["workers"] - run["case_seconds"]
         record["overhead_per_case"][name] = {"seconds": own / n,
                                              "of_case": own / run["case_seconds"]}
+        # split: what each case adds (gaps) and what each call adds (head and tail)
+        record["overhead_per_case"][name].update(
+            gaps_of_case=run["gaps_s"] / run["case_seconds"],
+            per_call_s=(run["head_s"] + run["tail_s"]) / rounds)
     record["overhead_per_case"]["serial_vs_loop"] = (record["runs"]["serial"]["seconds"]
                                                      / record["runs"]["loop"]["seconds"] - 1)
+    # All the cases as one ensemble, one call each way: the rounds split them into
+    # `rounds` calls, each paying a call's own head and tail; an ensemble pays them once.
+    record["whole"] = {}
+    for name in ("serial", "threads-2", "dask-1", "dask-2"):
+        (seconds_, errors_), extra = ways[name][0](cases)
+        own = seconds_ * ways[name][1] - extra["case_seconds"]
+        record["whole"][name] = {"seconds": seconds_, "runs_per_s": n / seconds_,
+                                 "speedup": record["runs"]["loop"]["seconds"] / seconds_,
+                                 "own_s": own, "own_of_case": own / extra["case_seconds"],
+                                 "gaps_of_case": extra["gaps_s"] / extra["case_seconds"],
+                                 "worst_energy_error": float(errors_.max()), **extra}
+        print(f"whole, {name}: {n / seconds_:.1f} runs/s, own time "
+              f"{100 * own / extra['case_seconds']:.1f}% of the cases'", flush=True)
     record["best"] = {"speedup": best["speedup"],
                       "speedup_median_of_rounds": best["speedup_median_of_rounds"]}
     record["preparation_s"] = preparation_seconds(mb)
