@@ -35,6 +35,7 @@ class PackedNumbers:
         return zip(self.names, self.values.tolist())
 
     def get(self, name: str, default: float = np.nan) -> float:
+        """The number ``name``, or ``default`` if the case has none (as ``dict.get``)."""
         return float(self.values[self.names.index(name)]) if name in self.names else default
 
 
@@ -55,9 +56,9 @@ class CaseOutcome:
     """One case's result, as a worker sends it back.
 
     ``arrays`` holds the kept quantities at the output times the case reached
-    (``t``, ``q``, ... ; a case that failed midway has fewer rows, one that raised
-    has none) until its batch stacks them (:class:`BatchOutcome`); the other fields
-    go into the summary table.
+    (``q``, ``qd``, ... ; a case that failed midway has fewer rows, one that raised
+    has none) until its batch's blocks take them (:class:`BatchOutcome`); the other
+    fields go into the summary table.
     """
 
     index: int

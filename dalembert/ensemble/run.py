@@ -52,10 +52,9 @@ BATCHES_PER_WORKER = 4
 #: The most cases in one batch (and one chunk of a store along ``case``).
 MAX_BATCH = 64
 #: The last round of batches is cut in this many parts. Cutting every batch smaller
-#: would cost a task's overhead more often; at the end, where a worker that has
-#: finished waits for the others, a whole batch left on one worker cost a 1,000-case
-#: ensemble on 2 processes 0.5 s of the workers' time, its parts 0.1 s
-#: (bench/README.md, "Ensembles").
+#: would cost a task's hand-over more often; at the end, where a worker that has
+#: finished waits for the others, a whole batch left on one worker keeps them waiting
+#: longest (measured in bench/README.md, "Ensembles").
 LAST_ROUND_PARTS = 4
 #: Output times when none are given.
 DEFAULT_POINTS = 101

@@ -201,9 +201,9 @@ class FileSink(Sink):
             ds.to_netcdf(self.path, engine="h5netcdf", compute=False)
 
     def _write_arrays(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
-        blocks = indices // self.layout.chunk
-        for k in np.unique(blocks):
-            part = blocks == k
+        chunks = indices // self.layout.chunk
+        for k in np.unique(chunks):
+            part = chunks == k
             rows = arrays if part.all() else {name: a[part] for name, a in arrays.items()}
             self.pending.setdefault(int(k), []).append((indices[part], rows))
         full = [k for k, got in self.pending.items()
