@@ -210,7 +210,6 @@ class Dask(Backend):
         # prepares a package once however many tasks bring it.
         self.package = package(system, settings)
         self._pending: dict[Any, Batch] = {}
-        self._finished: list[Any] = []
 
     def completed(self, batches: Sequence[Batch]) -> Generator[BatchOutcome, None, None]:
         distributed = _distributed()
