@@ -17,8 +17,10 @@ Parts (``--part``):
   ``simulate`` (the reference), ``simulate_many`` serially, on 2 threads, on a
   Dask ``LocalCluster`` of 1 and of 2 single-threaded processes, and with MuJoCo's
   ``rollout`` (one ``MjModel`` per case with its link masses and inertias, the
-  initial state of each case, 2 threads; RK4 step halved from 1e-2 until the worst
-  case of a sample meets the target). Runs per second, the speed-up over the plain
+  initial state of each case, both made within its time as dalembert's ensemble binds
+  each case's masses and runs its ``initial_state`` within its own; 2 threads; the
+  largest RK4 step of the suite's ladder, 2e-2 down by factors of 2^(1/3), at which
+  every case of a sample meets the target). Runs per second, the speed-up over the plain
   loop, the parallel efficiency (speed-up / workers) and the overhead per case of
   the ensemble machinery. The ways run in rounds (``--rounds``, 5): each round runs
   its share of the cases every way, in an order turned by one each round, so a
@@ -305,7 +307,8 @@ def throughput(n: int, rounds: int) -> dict:
         return run
 
     def rollout(part):
-        return mujoco.rollout(part.index.to_numpy()), {}
+        seconds, prepare, errors = mujoco.rollout(part.index.to_numpy())
+        return (seconds, errors), {"prepare_s": prepare}
 
     ways = {"loop": (loop, 1), "serial": (many(scheduler="serial"), 1),
             "threads-2": (many(scheduler="threads", workers=2), 2),
@@ -339,7 +342,13 @@ def throughput(n: int, rounds: int) -> dict:
     record["against_mujoco"] = {
         "dask-2": float(seconds["mujoco-2"].sum() / seconds["dask-2"].sum()),
         "dask-2_median_of_rounds": float(np.median(seconds["mujoco-2"] / seconds["dask-2"])),
-        "threads-2": float(seconds["mujoco-2"].sum() / seconds["threads-2"].sum())}
+        "threads-2": float(seconds["mujoco-2"].sum() / seconds["threads-2"].sum()),
+        "threads-2_median_of_rounds": float(np.median(seconds["mujoco-2"]
+                                                      / seconds["threads-2"])),
+        # MuJoCo's rollout calls alone, without making the cases' models and states
+        "threads-2_rollout_only": float((seconds["mujoco-2"].sum()
+                                         - extras["mujoco-2"]["prepare_s"])
+                                        / seconds["threads-2"].sum())}
     mujoco_record["run"] = {**record["runs"].pop("mujoco-2"), "dt": dt,
                             "steps": round(T_END / dt), "threads": 2}
     # The ensemble's own time per case (wall x workers - the cases' own time), against a
@@ -468,21 +477,23 @@ class MujocoCases:
 
         self.version = mujoco.__version__
         self.cases, self.dt, self.threads = cases, dt, threads
-        self.models, self.initial = mujoco_models(cases, dt)
         self.steps = round(T_END / dt)
 
-    def rollout(self, rows: np.ndarray, chunk: int = 100) -> tuple[float, np.ndarray]:
-        """Seconds of the rollout calls for the cases at positions ``rows`` (in chunks of
-        ``chunk`` cases: rollout returns every step's state) and each case's energy
-        error (``nan`` where it diverged)."""
+    def rollout(self, rows: np.ndarray, chunk: int = 100) -> tuple[float, float, np.ndarray]:
+        """Seconds of running the cases at positions ``rows``: making their models and
+        initial states (as dalembert's ensemble binds each case's masses and runs its
+        ``initial_state`` in its time), then the rollout calls (in chunks of ``chunk``
+        cases: rollout returns every step's state); the first part's seconds alone; and
+        each case's energy error (``nan`` where it diverged)."""
         import mujoco
         from mujoco import rollout
 
-        models = [self.models[k] for k in rows]
-        initial = self.initial[rows]
+        start = time.perf_counter()
+        models, initial = mujoco_models(self.cases.iloc[rows], self.dt)
+        prepare = time.perf_counter() - start
         datas = [mujoco.MjData(models[0]) for _ in range(self.threads)]
         final = np.empty_like(initial)
-        seconds = 0.0
+        seconds = prepare
         with rollout.Rollout(nthread=self.threads) as runner:
             for a in range(0, len(models), chunk):
                 start = time.perf_counter()
@@ -492,7 +503,7 @@ class MujocoCases:
                 final[a:a + chunk] = state[:, -1]
         e0, e1 = mujoco_energies(models, initial), mujoco_energies(models, final)
         errors = np.abs(e1 - e0) / np.abs(e0 - rest_energy(masses(self.cases.iloc[rows])))
-        return seconds, np.where(np.isfinite(errors), errors, np.nan)
+        return seconds, prepare, np.where(np.isfinite(errors), errors, np.nan)
 
 
 def mujoco_step() -> tuple[float, list[dict]]:
@@ -503,7 +514,7 @@ def mujoco_step() -> tuple[float, list[dict]]:
     sample = draw_cases(40)
     ladder = []
     for dt in STEPS:
-        _, errors = MujocoCases(sample, dt).rollout(np.arange(len(sample)))
+        _, _, errors = MujocoCases(sample, dt).rollout(np.arange(len(sample)))
         ladder.append({"dt": dt, "worst_energy_error": float(np.max(errors)),
                        "median_energy_error": float(np.median(errors))})
         if np.max(errors) <= ENERGY_TARGET:
