@@ -14,6 +14,7 @@ ran keep the code of ``"not-run"`` and NaN values.
 
 from __future__ import annotations
 
+import mmap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,6 +98,34 @@ class Layout:
                                     "dimension of the results; rename it")
 
 
+def written_once(shape: tuple[int, ...]) -> np.ndarray:
+    """An empty float array for results written once, a few rows at a time, as cases
+    finish: anonymous memory without the huge-page advice NumPy gives arrays of 4 MB
+    and more.
+
+    Under that advice the kernel may compact memory when a page is first written (its
+    transparent huge pages' default ``defrag=madvise``): pauses of milliseconds between
+    two cases, which a loop over ``simulate``, whose arrays are smaller, does not pay
+    (measured in bench/README.md). Small pages cost the same at every first write.
+
+    Parameters
+    ----------
+    shape
+        The array's shape.
+
+    Examples
+    --------
+    >>> values = written_once((2, 3))
+    >>> values[:] = 1.0
+    >>> values.shape, values.dtype, float(values.sum())
+    ((2, 3), dtype('float64'), 6.0)
+    """
+    size = int(np.prod(shape, dtype=np.int64))
+    if size == 0:
+        return np.empty(shape)
+    return np.frombuffer(mmap.mmap(-1, size * 8), dtype=float).reshape(shape)
+
+
 def _status_attrs() -> dict[str, Any]:
     return {"flag_values": list(range(len(STATUSES))), "flag_meanings": " ".join(STATUSES),
             "long_name": "what became of the case"}
@@ -134,17 +163,17 @@ class Sink:
 class MemorySink(Sink):
     """Every array held in memory, filled in place.
 
-    The arrays are allocated empty and each batch's rows are written as they arrive;
-    the rows of cases that never arrive are set to NaN at the end. Filling them all
-    with NaN first would touch every page of them before the first case runs: on a
-    machine that maps fresh memory page by page, a serial pause of about 0.6 ms a case
-    (325 KB a case for the 16-link chain)."""
+    The arrays are allocated empty (:func:`written_once`) and each batch's rows are
+    written as they arrive; the rows of cases that never arrive are set to NaN at the
+    end. Filling them all with NaN first would touch every page of them before the
+    first case runs: a serial pause as long as writing them all."""
 
     def __init__(self, layout: Layout, before: Any = None) -> None:
         super().__init__(layout, before)
-        self.data = {name: np.empty(shape) if before is None
-                     else np.array(before[name].values, dtype=float)
-                     for name, (_, shape) in layout.variables().items()}
+        self.data = {name: written_once(shape) for name, (_, shape) in layout.variables().items()}
+        if before is not None:  # a retry: the other cases keep what they had
+            for name, values in self.data.items():
+                values[...] = before[name].values
         self.written = np.full(layout.size, before is not None)
 
     def _write_arrays(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
