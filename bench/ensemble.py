@@ -367,7 +367,7 @@ def throughput(n: int, rounds: int) -> dict:
                                                      / record["runs"]["loop"]["seconds"] - 1)
     # All the cases as one ensemble, one call each way: the rounds split them into
     # `rounds` calls, each paying a call's own head and tail; an ensemble pays them once.
-    record["whole"] = {"memory_first_touch_s": touch_memory(mb, n)}
+    record["whole"] = {}
     for name in ("serial", "threads-2", "dask-1", "dask-2"):
         (seconds_, errors_), extra = ways[name][0](cases)
         own = seconds_ * ways[name][1] - extra["case_seconds"]
@@ -382,18 +382,6 @@ def throughput(n: int, rounds: int) -> dict:
                       "speedup_median_of_rounds": best["speedup_median_of_rounds"]}
     record["preparation_s"] = preparation_seconds(mb)
     return {"throughput": record, "mujoco": mujoco_record}
-
-
-def touch_memory(mb, n: int) -> float:
-    """Seconds to write, once, as much memory as ``n`` cases' kept arrays take. On these
-    virtual machines memory a process has not touched before costs up to ten times
-    more to write the first time (bench/README.md): the first whole ensemble would pay
-    it for all (0.6 ms a case), while a process pays it once in its life."""
-    system = mb.system
-    per_case = 101 * (3 * len(system.coordinate_names) + len(system.constraint_names) + 3)
-    start = time.perf_counter()
-    np.ones(n * per_case)
-    return time.perf_counter() - start
 
 
 def preparation_seconds(mb) -> dict:
