@@ -41,17 +41,19 @@ def coordinate_values(values: CoordinateValues, names: Sequence[str], what: str)
 
     >>> coordinate_values({"y": -1.0}, ("x", "y"), "q0")
     array([ 0., -1.])
+    >>> coordinate_values({"x": 0.5, "y": -1.0}, ("x", "y"), "q0")
+    array([ 0.5, -1. ])
     """
     n = len(names)
     if values is None:
         return np.zeros(n)
     if isinstance(values, Mapping):
         vec = np.zeros(n)
-        position = {name: i for i, name in enumerate(names)}
-        rows = _rows(values, position)
+        rows = _rows(values, names)
         if rows is not None:  # every key a coordinate, every value a number: at once
             vec[rows[0]] = rows[1]
             values = {}
+        position = {name: i for i, name in enumerate(names)} if values else {}
         for key, value in values.items():
             name = key_name(key)
             if name not in position:
@@ -75,20 +77,24 @@ def coordinate_values(values: CoordinateValues, names: Sequence[str], what: str)
     return vec
 
 
-def _rows(values: Mapping[Any, Any], position: Mapping[str, int]
-          ) -> tuple[list[int], np.ndarray] | None:
+def _rows(values: Mapping[Any, Any], names: Sequence[str]
+          ) -> tuple[list[int] | slice, np.ndarray] | None:
     """The positions and numbers of ``values`` read at once, or ``None`` unless every
     key is a distinct coordinate and every value a finite number (the entry-by-entry
     reading then says what is wrong; NumPy reads ``None`` as NaN)."""
+    # every name in order (as a mechanism's initial_state gives them): no key to look up
+    keys: list[int] | None = None
     try:
-        rows = [position[key_name(key)] for key in values]
+        if tuple(values) != tuple(names):
+            position = {name: i for i, name in enumerate(names)}
+            keys = [position[key_name(key)] for key in values]
         numbers = np.array(list(values.values()), dtype=float)
     except (KeyError, ModelError, TypeError, ValueError):
         return None
-    if (numbers.shape != (len(rows),) or not np.isfinite(numbers).all()
-            or len(set(rows)) != len(rows)):
+    if (numbers.shape != (len(values),) or not np.isfinite(numbers).all()
+            or (keys is not None and len(set(keys)) != len(keys))):
         return None
-    return rows, numbers
+    return (slice(None) if keys is None else keys), numbers
 
 
 def _number(value: object, what: str) -> float:

@@ -45,6 +45,9 @@ def pend() -> System:
     ([1.0, 0.0], [0.0, -np.inf], InitialConditionError, "qd0 is not finite for y"),
     (["a", 0.0], None, InitialConditionError, "q0 must be numbers"),
     ({"x": "a"}, None, InitialConditionError, "q0['x'] = 'a' is not a number"),
+    # every coordinate, in order (as a mechanism's initial_state gives them)
+    ({"x": np.nan, "y": 0.0}, None, InitialConditionError, "q0 is not finite for x"),
+    ({"x": 1.0, "y": "a"}, None, InitialConditionError, "q0['y'] = 'a' is not a number"),
     ([1.0, 0.0, 0.0], None, InitialConditionError, "q0 has 3 values for 2 coordinates (x, y)"),
     ({"z": 1.0}, None, InitialConditionError, "q0 names 'z', which is not a coordinate"),
     ({42: 1.0}, None, ModelError, "42 is not a coordinate or parameter name"),
