@@ -10,7 +10,6 @@ is ``"lost"``; a case the ensemble never reached, because it was interrupted, is
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,34 +20,6 @@ STATUSES = ("finished", "event", "failed", "interrupted", "error", "lost", "not-
 #: A case with one of these statuses ran to the end of its span (or a terminal event).
 SUCCESS = frozenset({"finished", "event"})
 CODE = {name: code for code, name in enumerate(STATUSES)}
-
-
-@dataclass(frozen=True)
-class PackedNumbers:
-    """A case's summary numbers as the client keeps them: one array, the names shared
-    by every case that has the same ones (a dict per case costs ten times more)."""
-
-    names: tuple[str, ...]
-    values: np.ndarray
-
-    def items(self) -> Iterator[tuple[str, float]]:
-        return zip(self.names, self.values.tolist())
-
-    def get(self, name: str, default: float = np.nan) -> float:
-        """The number ``name``, or ``default`` if the case has none (as ``dict.get``)."""
-        return float(self.values[self.names.index(name)]) if name in self.names else default
-
-
-def pack_numbers(numbers: dict[str, float], shared: dict[tuple[str, ...], tuple[str, ...]]
-                 ) -> PackedNumbers:
-    """``numbers`` packed; ``shared`` keeps one tuple of names per distinct set.
-
-    >>> pack_numbers({"t_end": 1.0, "nfev": 30.0}, {}).values.tolist()
-    [1.0, 30.0]
-    """
-    names = tuple(numbers)
-    return PackedNumbers(shared.setdefault(names, names),
-                         np.fromiter(numbers.values(), dtype=float, count=len(names)))
 
 
 @dataclass
@@ -67,7 +38,7 @@ class CaseOutcome:
     seconds: float = 0.0
     worker: str = ""
     arrays: dict[str, np.ndarray] = field(default_factory=dict)
-    numbers: dict[str, float] | PackedNumbers = field(default_factory=dict)
+    numbers: dict[str, float] = field(default_factory=dict)
     warnings: str = ""
     #: It ran in stretches of C steps, which release the GIL (threads run such cases
     #: side by side).

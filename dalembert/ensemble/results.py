@@ -131,22 +131,74 @@ class EnsembleResult:
                 f"{self.scheduler!r}{'; interrupted' if self.interrupted else ''})")
 
 
-def summary_table(cases: Any, outcomes: Sequence[CaseOutcome]) -> Any:
-    """The summary DataFrame: the case table, then each case's outcome (in that order)."""
-    import pandas as pd
+class SummaryRows:
+    """The summary's rows, filled in as the cases finish.
 
-    n = len(cases)
-    numbers: dict[str, np.ndarray] = {}
-    for row, o in enumerate(outcomes):
-        for name, value in o.numbers.items():
-            if name not in numbers:
-                numbers[name] = np.full(n, np.nan)
-            numbers[name][row] = value
-    table = pd.DataFrame({
-        **{name: cases[name].to_numpy() for name in cases.columns},
-        "status": [o.status for o in outcomes], "message": [o.message for o in outcomes],
-        **numbers, "seconds": [o.seconds for o in outcomes],
-        "started": pd.to_datetime([o.started for o in outcomes], unit="s", utc=True),
-        "worker": [o.worker for o in outcomes], "warnings": [o.warnings for o in outcomes]})
-    table.index.name = "case"
-    return table
+    Each case's record is read into columns as it arrives and dropped: the client
+    holds about the summary's own size, not a record per case (its numbers as a dict
+    or an array of their own, several times that).
+
+    Parameters
+    ----------
+    indices
+        The cases of the run, in increasing order (its rows, in that order).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> rows = SummaryRows([0, 1])
+    >>> rows.add(CaseOutcome(1, "finished", numbers={"t_end": 1.0}))
+    >>> rows.missing()
+    [0]
+    >>> rows.add(CaseOutcome(0, "error", "ValueError: m = -1 is negative"))
+    >>> table = rows.table(pd.DataFrame({"m": [-1.0, 1.0]}))
+    >>> table[["m", "status", "t_end"]].values.tolist()
+    [[-1.0, 'error', nan], [1.0, 'finished', 1.0]]
+    """
+
+    def __init__(self, indices: Sequence[int]) -> None:
+        self.indices = np.asarray(indices, dtype=np.int64)
+        if np.any(np.diff(self.indices) <= 0):
+            raise ValueError("SummaryRows takes the cases in increasing order")
+        n = len(self.indices)
+        self.filled = np.zeros(n, dtype=bool)
+        self.text = {name: np.full(n, "", dtype=object)
+                     for name in ("status", "message", "worker", "warnings")}
+        self.seconds, self.started = np.full(n, np.nan), np.full(n, np.nan)
+        #: by name, in the order they are first met: every case's names come in one
+        #: order (a case that reached no output time has no final values), so the
+        #: columns do not depend on the order the cases finish in
+        self.numbers: dict[str, np.ndarray] = {}
+
+    def add(self, outcome: CaseOutcome) -> None:
+        """Read one case's record into its row."""
+        row = int(np.searchsorted(self.indices, outcome.index))
+        if self.filled[row]:  # a record again (a retry): nothing of the first one stays
+            for column in self.numbers.values():
+                column[row] = np.nan
+        self.filled[row] = True
+        for name, column in self.text.items():
+            column[row] = getattr(outcome, name)
+        self.seconds[row], self.started[row] = outcome.seconds, outcome.started
+        for name, value in outcome.numbers.items():
+            if name not in self.numbers:
+                self.numbers[name] = np.full(len(self.indices), np.nan)
+            self.numbers[name][row] = value
+
+    def missing(self) -> list[int]:
+        """The cases no record has come for yet."""
+        return [int(i) for i in self.indices[~self.filled]]
+
+    def table(self, cases: Any) -> Any:
+        """The summary DataFrame: ``cases`` (the case table's rows of these cases), then
+        each case's record."""
+        import pandas as pd
+
+        table = pd.DataFrame({
+            **{name: cases[name].to_numpy() for name in cases.columns},
+            "status": self.text["status"], "message": self.text["message"],
+            **self.numbers, "seconds": self.seconds,
+            "started": pd.to_datetime(self.started, unit="s", utc=True),
+            "worker": self.text["worker"], "warnings": self.text["warnings"]})
+        table.index.name = "case"
+        return table

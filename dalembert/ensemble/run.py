@@ -27,8 +27,8 @@ from ..model.values import CoordinateValues, coordinate_values
 from ..system import System
 from .backends import Backend, Batch, Dask, Interrupted, Serial, Threads, run_here
 from .cases import CaseTable, read_cases
-from .faults import SUCCESS, BatchOutcome, CaseOutcome, not_run_outcome, pack_numbers
-from .results import EnsembleResult, summary_table
+from .faults import SUCCESS, BatchOutcome, CaseOutcome, not_run_outcome
+from .results import EnsembleResult, SummaryRows
 from .store import Layout, check_store, sink
 from .worker import DEFAULT_KEEP, QUANTITIES, CaseSettings, Output
 
@@ -199,7 +199,6 @@ class _Run:
         self.system, self.t_span, self.arguments = system, t_span, arguments
         self.store = None if store is None else Path(store)
         self.overwrite = overwrite
-        self._names: dict[tuple[str, ...], tuple[str, ...]] = {}  # shared by packed numbers
         a = dict(arguments)
         self.cases = read_cases(cases, [p.name for p in system.parameters],
                                 system.coordinate_names, a.pop("initial_state"))
@@ -239,7 +238,7 @@ class _Run:
         """Run the cases ``indices``; ``before``: the result a retry updates."""
         if before is None and self.store is not None:
             check_store(self.store, self.overwrite)  # before anything runs or starts
-        outcomes: dict[int, CaseOutcome] = {}
+        rows = SummaryRows(indices)
         scheduler, first = self.scheduler, BatchOutcome([])
         if scheduler == "auto":
             scheduler, first = self._auto(indices)
@@ -249,20 +248,20 @@ class _Run:
                         tuple(self.settings.outputs), chunk)
         out = sink(layout, self.store, indices, self.overwrite,
                    None if before is None else before.dataset)
-        self._take(first, outcomes, out, None)  # the case auto ran here
+        self._take(first, rows, out, None)  # the case auto ran here
         interrupted = first.interrupted
         bar = _bar(len(indices), self.progress)
-        bar.update(len(outcomes))
+        bar.update(len(first.cases))
         backend: Backend | None = None
         try:
             if not interrupted:
                 backend = self._backend(scheduler)
-                todo = [i for i in indices if i not in outcomes]
+                todo = rows.missing()
                 found = backend.completed(_batches(todo, chunk, self.cases.values,
                                                     backend.workers))
                 try:
                     for done in found:
-                        self._take(done, outcomes, out, bar)
+                        self._take(done, rows, out, bar)
                         if done.interrupted:
                             raise KeyboardInterrupt  # Ctrl-C inside a simulation here
                 finally:
@@ -271,16 +270,15 @@ class _Run:
             interrupted = True
             if backend is not None:
                 for done in backend.stop():
-                    self._take(done, outcomes, out, bar)
+                    self._take(done, rows, out, bar)
         finally:
             if backend is not None:
                 backend.close()
             bar.close()
-        for i in indices:
-            if i not in outcomes:
-                outcomes[i] = not_run_outcome(i)
+        for i in rows.missing():
+            rows.add(not_run_outcome(i))
         name = scheduler if backend is None else backend.name
-        return self._result(indices, outcomes, out, name, interrupted, before)
+        return self._result(indices, rows, out, name, interrupted, before)
 
     def _workers(self, scheduler: str) -> int:
         """How many cases run at once on ``scheduler`` (to size the batches)."""
@@ -318,31 +316,27 @@ class _Run:
         return Dask(self.system, self.settings, names,
                     self.client if scheduler == "dask" else None, self.workers)
 
-    def _take(self, done: BatchOutcome, outcomes: dict[int, CaseOutcome], out: Any,
-              bar: Any) -> None:
-        out.write(done)  # the arrays: the client keeps each case's summary only
+    def _take(self, done: BatchOutcome, rows: SummaryRows, out: Any, bar: Any) -> None:
+        out.write(done)  # the arrays: the client keeps each case's summary row only
         for o in done.cases:
-            if isinstance(o.numbers, dict):
-                o.numbers = pack_numbers(o.numbers, self._names)
-            outcomes[o.index] = o
+            rows.add(o)
         if bar is not None:
             bar.update(len(done.cases))
 
-    def _result(self, indices: list[int], outcomes: dict[int, CaseOutcome], out: Any,
-                scheduler: str, interrupted: bool,
-                before: EnsembleResult | None) -> EnsembleResult:
+    def _result(self, indices: list[int], rows: SummaryRows, out: Any, scheduler: str,
+                interrupted: bool, before: EnsembleResult | None) -> EnsembleResult:
         dataset = out.dataset()
         if before is None:
-            summary = summary_table(self.cases.table, [outcomes[i] for i in indices])
+            summary = rows.table(self.cases.table)
         else:
-            rows = summary_table(self.cases.table.iloc[indices], [outcomes[i] for i in indices])
-            rows.index = indices
-            rows.index.name = "case"
+            retried = rows.table(self.cases.table.iloc[indices])
+            retried.index = indices
+            retried.index.name = "case"
             summary = before.summary.copy()
-            for column in rows.columns:  # a column may be new (first final values)
+            for column in retried.columns:  # a column may be new (first final values)
                 if column not in summary.columns:
                     summary[column] = np.nan
-            summary.loc[indices, rows.columns] = rows
+            summary.loc[indices, retried.columns] = retried
         _warn(summary.loc[indices], interrupted)
         return EnsembleResult(dataset, summary, scheduler, interrupted, self._retry)
 
