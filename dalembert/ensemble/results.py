@@ -165,25 +165,38 @@ class SummaryRows:
         self.text = {name: np.full(n, "", dtype=object)
                      for name in ("status", "message", "worker", "warnings")}
         self.seconds, self.started = np.full(n, np.nan), np.full(n, np.nan)
-        #: by name, in the order they are first met: every case's names come in one
-        #: order (a case that reached no output time has no final values), so the
-        #: columns do not depend on the order the cases finish in
-        self.numbers: dict[str, np.ndarray] = {}
+        #: the cases' numbers, a column per name in the order they are first met: every
+        #: case's names come in one order (a case that reached no output time has no
+        #: final values), so the columns do not depend on the order the cases finish in
+        self.numbers = np.full((n, 0), np.nan)
+        self.columns: dict[str, int] = {}
+        self._last: tuple[tuple[str, ...], np.ndarray] = ((), np.zeros(0, dtype=np.intp))
 
     def add(self, outcome: CaseOutcome) -> None:
         """Read one case's record into its row."""
         row = int(np.searchsorted(self.indices, outcome.index))
         if self.filled[row]:  # a record again (a retry): nothing of the first one stays
-            for column in self.numbers.values():
-                column[row] = np.nan
+            self.numbers[row] = np.nan
         self.filled[row] = True
         for name, column in self.text.items():
             column[row] = getattr(outcome, name)
         self.seconds[row], self.started[row] = outcome.seconds, outcome.started
-        for name, value in outcome.numbers.items():
-            if name not in self.numbers:
-                self.numbers[name] = np.full(len(self.indices), np.nan)
-            self.numbers[name][row] = value
+        names = tuple(outcome.numbers)
+        places = self._places(names)  # first: new names widen self.numbers
+        self.numbers[row, places] = np.fromiter(outcome.numbers.values(), dtype=float,
+                                                count=len(names))
+
+    def _places(self, names: tuple[str, ...]) -> np.ndarray:
+        """The columns of ``names`` (new ones added); most cases have the last case's."""
+        if names != self._last[0]:
+            new = [name for name in names if name not in self.columns]
+            if new:
+                first = len(self.columns)
+                self.columns.update(zip(new, range(first, first + len(new))))
+                self.numbers = np.hstack([self.numbers,
+                                          np.full((len(self.indices), len(new)), np.nan)])
+            self._last = names, np.array([self.columns[name] for name in names], dtype=np.intp)
+        return self._last[1]
 
     def missing(self) -> list[int]:
         """The cases no record has come for yet."""
@@ -197,7 +210,8 @@ class SummaryRows:
         table = pd.DataFrame({
             **{name: cases[name].to_numpy() for name in cases.columns},
             "status": self.text["status"], "message": self.text["message"],
-            **self.numbers, "seconds": self.seconds,
+            **{name: self.numbers[:, j] for name, j in self.columns.items()},
+            "seconds": self.seconds,
             "started": pd.to_datetime(self.started, unit="s", utc=True),
             "worker": self.text["worker"], "warnings": self.text["warnings"]})
         table.index.name = "case"
