@@ -663,7 +663,9 @@ class System:
         """
         return self._run(plan)
 
-    def _run(self, plan: SimulationPlan) -> Trajectory:
+    def _run(self, plan: SimulationPlan, dynamics: bool = True) -> Trajectory:
+        """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
+        constraint forces are not computed (NaN), for a caller that keeps none of them."""
         signal, num = plan.options.inputs, plan.num
         derived, applied = None, None
         if signal is not None and signal.sample_time is not None and num is not None:
@@ -681,7 +683,7 @@ class System:
                                          f"t={reached:.6g}")
             warning.__cause__ = result.error  # an event function's exception, chained
             warnings.warn(warning, stacklevel=3)  # 3: the user's call of simulate or run
-        return self._trajectory(result, plan, derived, applied)
+        return self._trajectory(result, plan, derived, applied, dynamics)
 
     def _segment(self, plan: SimulationPlan, a: float, b: float, y: np.ndarray,
                  t_eval: np.ndarray | None) -> SimulationPlan:
@@ -762,11 +764,11 @@ class System:
 
     def _trajectory(self, result: IntegrationResult, plan: SimulationPlan,
                     derived: dict[str, np.ndarray] | None = None,
-                    applied: np.ndarray | None = None) -> Trajectory:
+                    applied: np.ndarray | None = None, dynamics: bool = True) -> Trajectory:
         n = len(self.coordinate_names)
         signal = plan.options.inputs
         if derived is None:
-            derived = _outputs(plan, result)
+            derived = _outputs(plan, result, dynamics)
         derived = dict(derived)
         energies = derived.pop("energies")
         if applied is None and signal is not None:  # the inputs at the points recorded
@@ -791,21 +793,24 @@ def _missing(like: np.ndarray) -> np.ndarray:
     return np.zeros_like(like) if like.dtype == bool else np.full_like(like, np.nan)
 
 
-def _outputs(plan: SimulationPlan, result: IntegrationResult) -> dict[str, np.ndarray]:
-    """The derived arrays at the points recorded. A run that failed because its inputs
-    could not be computed has points where they still cannot: those rows are NaN."""
+def _outputs(plan: SimulationPlan, result: IntegrationResult,
+             dynamics: bool = True) -> dict[str, np.ndarray]:
+    """The derived arrays at the points recorded (see :meth:`System._run` for
+    ``dynamics``). A run that failed because its inputs could not be computed has
+    points where they still cannot: those rows are NaN."""
     try:
-        return plan.outputs(result.t, result.y)
+        return plan.outputs(result.t, result.y, dynamics=dynamics)
     except InputError:
         rows: list[dict[str, np.ndarray] | None] = []
         for t, y in zip(result.t, result.y):
             try:
-                rows.append(plan.outputs(np.array([t]), y[None]))
+                rows.append(plan.outputs(np.array([t]), y[None], dynamics=dynamics))
             except InputError:
                 rows.append(None)
         template = next((r for r in rows if r is not None), None)
         if template is None:
-            empty = plan.outputs(np.zeros(0), np.zeros((0, len(result.y[0]))))
+            empty = plan.outputs(np.zeros(0), np.zeros((0, len(result.y[0]))),
+                                 dynamics=dynamics)
             return {name: np.full((len(rows), *v.shape[1:]), np.nan)
                     for name, v in empty.items()}
         return {name: np.concatenate([r[name] if r is not None else _missing(template[name])

@@ -37,6 +37,8 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
     "energy": (), "kinetic_energy": (), "potential_energy": (), "jacobi_integral": (),
     "position_residual": (), "velocity_residual": (),
 }
+#: The quantities that take a solve of the KKT system at each output time.
+DYNAMICS = frozenset({"qdd", "multipliers", "constraint_forces"})
 #: Kept unless the caller says otherwise.
 DEFAULT_KEEP = ("q", "qd", "multipliers", "constraint_forces", "energy",
                 "position_residual", "velocity_residual")
@@ -80,6 +82,14 @@ class CaseSettings:
     initial_state: Callable[[dict[str, float]], Any] | None = None
     keep: tuple[str, ...] = DEFAULT_KEEP
     outputs: Mapping[str, Output] = field(default_factory=dict)
+
+    @property
+    def dynamics(self) -> bool:
+        """Whether the cases' trajectories need their accelerations, multipliers and
+        constraint forces: kept, or maybe read by an output function. Else no KKT system
+        is solved at the output times (the summary needs only the energy, the residuals
+        and the final state)."""
+        return bool(self.outputs) or not DYNAMICS.isdisjoint(self.keep)
 
 
 def run_batch(system: System, settings: CaseSettings,
@@ -218,7 +228,7 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
             q0, qd0, parameters = _inputs(system, settings, case)
             # simulate(...) with the options checked at the door
             plan = system._plan(settings.options, q0, qd0, parameters, None)
-            traj = system._run(plan)
+            traj = system._run(plan, settings.dynamics)
             arrays = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
             return error_outcome(index, exc, time.perf_counter() - start, worker, started)

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from scipy.integrate import OdeSolver
@@ -39,8 +40,16 @@ from ..numerics.singular import GAP, JUMP, NEAR, SCREEN, TRUNCATE, named
 from .sparse_kkt import matvec
 from .truncated_kkt import TruncatedKKT
 
-#: ``outputs(t, y)``: the derived arrays at the states ``y`` (rows) at times ``t``.
-Outputs = Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]]
+
+class Outputs(Protocol):
+    """``outputs(t, y)``: the derived arrays at the states ``y`` (rows) at times ``t``;
+    with ``dynamics=False`` the KKT system is not solved (``qdd``, the multipliers and
+    the constraint forces are NaN), for runs that keep none of them."""
+
+    def __call__(self, t: np.ndarray, y: np.ndarray,
+                 dynamics: bool = True) -> dict[str, np.ndarray]: ...
+
+
 #: Passages a warning lists by their times, at most.
 SHOWN = 4
 #: Newton iterations of a careful position projection, at most.
@@ -403,11 +412,12 @@ class CarefulModel:
         (:attr:`passages`) is measured at its output times: the others pay nothing."""
         num, pattern = self.num, self.num.pattern
 
-        def truncated(t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
-            out = outputs(t, y)
+        def truncated(t: np.ndarray, y: np.ndarray, dynamics: bool = True
+                      ) -> dict[str, np.ndarray]:
+            out = outputs(t, y, dynamics=dynamics)
             near = np.zeros(len(t), dtype=bool)
             out["near_singular"] = near
-            if not self.passages:
+            if not (self.passages and dynamics):
                 return out
             for i, (ti, yi) in enumerate(zip(t, y)):
                 q, qd = yi[:num.n], yi[num.n:]

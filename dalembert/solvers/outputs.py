@@ -13,6 +13,7 @@ solution of ``A^T lambda = M qdd - f``: one choice among infinitely many, while
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
@@ -23,14 +24,17 @@ from .sparse_kkt import kkt_solver, matvec
 def evaluate_outputs(
     num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None,
     inputs: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None,
+    dynamics: bool = True,
 ) -> dict[str, np.ndarray]:
     """Arrays with one row per output time (see module docstring); ``inputs(t, q, qd)``
-    sets the model's inputs at each state first, if given."""
+    sets the model's inputs at each state first, if given. Without ``dynamics`` the KKT
+    system is not solved: ``qdd``, the multipliers and the constraint forces are NaN."""
     n, m, k = num.n, num.m, len(t)
+    fill = np.empty if dynamics else partial(np.full, fill_value=np.nan)
     out = {
-        "qdd": np.empty((k, n)),
-        "multipliers": np.empty((k, m)),
-        "constraint_forces": np.empty((k, n)),
+        "qdd": fill((k, n)),
+        "multipliers": fill((k, m)),
+        "constraint_forces": fill((k, n)),
         "position_residual": np.zeros(k),
         "velocity_residual": np.zeros(k),
         "energies": np.empty((k, 3)),
@@ -40,26 +44,30 @@ def evaluate_outputs(
     # The last state of a run stopped by a NaN or an overflow may overflow here too: its
     # outputs are then not finite, without NumPy's warnings (the run's message says why)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        _fill(out, num, solver, t, y, rows, cols, inputs)
+        _fill(out, num, solver if dynamics else None, t, y, rows, cols, inputs)
     return out
 
 
 def _fill(out: dict[str, np.ndarray], num: NumericModel, solver, t: np.ndarray,
           y: np.ndarray, rows: np.ndarray, cols: np.ndarray,
           inputs: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None) -> None:
+    """The rows of ``out`` (``solver``: ``None`` leaves the KKT system unsolved)."""
     n, m = num.n, num.m
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
         if inputs is not None:
             num.set_inputs(inputs(ti, q, qd))
-        Mv, f, Av, c = num.kkt_sparse(ti, q, qd)
-        qdd, lam = solver.solve(Mv, f, Av, c)
-        out["qdd"][i] = qdd
-        out["multipliers"][i] = lam
-        out["constraint_forces"][i] = matvec(cols, rows, Av, lam, n)
+        Av = None
+        if solver is not None:
+            Mv, f, Av, c = num.kkt_sparse(ti, q, qd)
+            qdd, lam = solver.solve(Mv, f, Av, c)
+            out["qdd"][i] = qdd
+            out["multipliers"][i] = lam
+            out["constraint_forces"][i] = matvec(cols, rows, Av, lam, n)
         if num.holonomic_rows:
             out["position_residual"][i] = np.abs(num.position_constraint(ti, q)).max()
         if m:
-            _, b = num.velocity_sparse(ti, q)
-            out["velocity_residual"][i] = np.abs(matvec(rows, cols, Av, qd, m) + b).max()
+            A_values, b = num.velocity_sparse(ti, q)
+            A_values = A_values if Av is None else Av  # the same A (the solve's, as before)
+            out["velocity_residual"][i] = np.abs(matvec(rows, cols, A_values, qd, m) + b).max()
         out["energies"][i] = num.energies(ti, q, qd)

@@ -98,7 +98,7 @@ class SimulationPlan:
     stretches: bool
     rhs: Callable[[float, np.ndarray], np.ndarray] = field(repr=False)
     project: Callable[[float, np.ndarray], np.ndarray] | None = field(repr=False)
-    outputs: Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]] = field(repr=False)
+    outputs: Outputs = field(repr=False)
     events: tuple[Callable, ...] = field(repr=False)
     diagnose: Diagnosis = field(repr=False)
     singular: Singularity | None = field(repr=False, default=None)

@@ -81,6 +81,35 @@ def test_every_case_equals_the_case_simulated_alone(mb, scheduler):
                    / abs(traj.energy[0])) <= 1e-15
 
 
+def test_an_ensemble_that_keeps_no_dynamics_gives_the_same_cases(pend):
+    """Kept without accelerations, multipliers or forces (and no output function that
+    might read them), the cases solve no KKT system at their output times: their states,
+    energies, residuals and summaries are still those of the cases simulated alone; an
+    output function gets the whole trajectory."""
+    cases = grid(l=[0.8, 1.0, 1.3], theta=[0.3, 1.1])
+    result = pend.simulate_many((0.0, 2.0), cases, initial_state=released, t_eval=T_EVAL,
+                                keep=("q", "energy"), scheduler="serial", progress=False)
+    forces = pend.simulate_many((0.0, 2.0), cases, initial_state=released, t_eval=T_EVAL,
+                                keep=("q",), outputs={"force_x": force_x},
+                                scheduler="serial", progress=False)
+    assert set(result.dataset.data_vars) >= {"q", "energy"}
+    assert "multipliers" not in result.dataset
+    for i in range(len(cases)):
+        traj = alone(pend, cases.iloc[i].to_dict(), released)
+        assert np.abs(result.dataset["q"].values[i] - traj.q).max() <= 1e-12
+        assert np.abs(result.dataset["energy"].values[i] - traj.energy).max() <= 1e-12
+        row = result.summary.loc[i]
+        for name in ("position_residual", "velocity_residual"):
+            assert abs(row[f"max_{name}"] - getattr(traj, name).max()) <= 1e-14, name
+        assert row["final_x"] == traj["x"][-1]
+        assert np.abs(forces.dataset["force_x"].values[i] - force_x(pend, traj)).max() <= 1e-12
+
+
+def force_x(system, traj) -> np.ndarray:
+    """The rod's pull on the bob along x (an output that reads the multipliers)."""
+    return traj.constraint_forces[:, 0]
+
+
 def test_a_length_sweep_follows_the_pendulums_period_law(pend):
     """T(l) = 2 pi sqrt(l / g) (1 + theta0^2 / 16), the period measured where the bob
     next crosses the bottom going the same way (cubic Hermite on x, x_dot)."""

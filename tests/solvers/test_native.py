@@ -136,6 +136,25 @@ def test_outputs_match_python(name):
         assert relative(native[key], value) < 1e-12, key
 
 
+@pytest.mark.parametrize("name", ["hanging-chain", "heavy-top", "rolling-disk", "whirled-string"])
+def test_outputs_without_dynamics_leave_the_solve_out(name):
+    """Without ``dynamics`` (an ensemble that keeps none of them) ``qdd``, the multipliers
+    and the constraint forces are NaN, not stale; the residuals and energies are those
+    computed beside the solve, in C and in Python."""
+    num, report = initial(name)
+    t, q, qd = zip(*states(num, report))
+    t, y = np.array(t), np.hstack([np.array(q), np.array(qd)])
+    solved = evaluate_outputs(num, t, y)
+    for out in (NativeSolver(num).outputs(t, y, dynamics=False),
+                evaluate_outputs(num, t, y, dynamics=False)):
+        assert out.keys() == solved.keys()
+        for key in ("qdd", "multipliers", "constraint_forces"):
+            assert out[key].shape == solved[key].shape and np.isnan(out[key]).all(), key
+        for key in ("position_residual", "velocity_residual"):
+            np.testing.assert_allclose(out[key], solved[key], rtol=0, atol=1e-14, err_msg=key)
+        assert relative(out["energies"], solved["energies"]) < 1e-14
+
+
 @pytest.mark.parametrize("step_control", STEP_CONTROLS)
 @pytest.mark.parametrize("method", ["DOP853", "RK45", "RK23"])
 def test_runge_kutta_steps_are_pythons(method, step_control):

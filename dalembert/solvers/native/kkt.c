@@ -445,13 +445,20 @@ static void load_kkt(dl_model *md) {
   for (int64_t s = 0; s < md->n; ++s) md->u[s] = f[md->slot_coord[s]];
 }
 
-/* The KKT values at (t, q, qd), in the solve's layout (the inputs set first). */
-int eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
+/* The model's inputs at (t, q, qd) into the parameter vector (none: nothing to do). */
+int load_inputs(dl_model *md, double t, const double *q, const double *qd) {
   if (md->inputs) {
     memcpy(md->input_state, q, (size_t)md->n * sizeof(double));
     memcpy(md->input_state + md->n, qd, (size_t)md->n * sizeof(double));
     if (md->inputs(t) != 0) return DL_INPUT;
   }
+  return DL_OK;
+}
+
+/* The KKT values at (t, q, qd), in the solve's layout (the inputs set first). */
+int eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
+  const int status = load_inputs(md, t, q, qd);
+  if (status != DL_OK) return status;
   eval_state(&md->kkt, t, q, qd, md->p, md->values);
   if (!md->kkt_in_layout) load_kkt(md);
   return DL_OK;

@@ -3,27 +3,31 @@
 
 /* Outputs at k states Y (rows [q, qd]): qdd, lambda (no stabilization terms), the
  * constraint force A^T lambda, the largest position and velocity residuals, and the
- * energies [T, V, h]. */
+ * energies [T, V, h]. With qdd NULL (lambda and force too) the KKT solves are left
+ * out: the residuals and energies alone. */
 int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, double *qdd,
                double *lambda, double *force, double *position_residual,
                double *velocity_residual, double *energies) {
   const int64_t n = md->n, m = md->m;
   for (int64_t i = 0; i < k; ++i) {
     const double t = times[i], *q = Y + i * 2 * n, *qd = q + n;
-    int status = eval_kkt(md, t, q, qd);
-    if (status == DL_OK) status = dl_solve(md, qdd + i * n, lambda + i * m);
+    int status = qdd ? eval_kkt(md, t, q, qd) : load_inputs(md, t, q, qd);
+    if (status == DL_OK && qdd) status = dl_solve(md, qdd + i * n, lambda + i * m);
     if (status != DL_OK) return status;
-    double *F = force + i * n;
-    const double *lam = lambda + i * m;
-    memset(F, 0, (size_t)n * sizeof(double));
     eval_static(&md->velocity, t, q, md->p, md->vel_values);
     double *vres = md->lambda;  /* A qd + b by row */
     for (int64_t r = 0; r < m; ++r) vres[r] = md->vel_values[md->nA + r];
+    if (!qdd) load_pairs(md, md->vel_values);  /* A, else loaded by eval_kkt */
     add_A_times(md, qd, 1.0, vres);
-    for (int64_t p = 0; p < md->n_pairs; ++p) {  /* F = A^T lam */
-      const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
-      const double *a = md->a + md->pair_vec[p];
-      for (int64_t j = 0; j < nb; ++j) F[md->slot_coord[s0 + j]] += a[j] * lam[md->pair_row[p]];
+    if (qdd) {
+      double *F = force + i * n;
+      const double *lam = lambda + i * m;
+      memset(F, 0, (size_t)n * sizeof(double));
+      for (int64_t p = 0; p < md->n_pairs; ++p) {  /* F = A^T lam */
+        const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
+        const double *a = md->a + md->pair_vec[p];
+        for (int64_t j = 0; j < nb; ++j) F[md->slot_coord[s0 + j]] += a[j] * lam[md->pair_row[p]];
+      }
     }
     velocity_residual[i] = max_abs(vres, m);
     eval_static(&md->position, t, q, md->p, md->psi);

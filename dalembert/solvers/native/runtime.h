@@ -190,6 +190,7 @@ DL_INTERNAL void eval_static(const dl_function *F, double t, const double *q, co
                              double *out);
 DL_INTERNAL void load_pairs(dl_model *md, const double *Av);
 DL_INTERNAL void add_A_times(const dl_model *md, const double *x, double w, double *out);
+DL_INTERNAL int load_inputs(dl_model *md, double t, const double *q, const double *qd);
 DL_INTERNAL int eval_kkt(dl_model *md, double t, const double *q, const double *qd);
 DL_INTERNAL int dl_solve(dl_model *md, double *qdd, double *lambda);
 DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active);

@@ -200,23 +200,29 @@ class NativeSolver:
         self._evaluate(t, np.concatenate([q, qd]), self._lam_at)
         return self._ydot[self.n:].copy(), self._lam[: self.m].copy()
 
-    def outputs(self, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
-        """What :func:`~dalembert.solvers.outputs.evaluate_outputs` returns, in one call."""
+    def outputs(self, t: np.ndarray, y: np.ndarray, dynamics: bool = True
+                ) -> dict[str, np.ndarray]:
+        """What :func:`~dalembert.solvers.outputs.evaluate_outputs` returns, in one call
+        (without ``dynamics``, no KKT solve: ``qdd``, multipliers and forces NaN)."""
         k, n, m = len(t), self.n, self.m
         times = np.ascontiguousarray(t, dtype=float)
         states = np.ascontiguousarray(y, dtype=float).reshape(k, 2 * n)
-        out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m)),
-               "constraint_forces": np.zeros((k, n)), "position_residual": np.zeros(k),
-               "velocity_residual": np.zeros(k), "energies": np.zeros((k, 3))}
+        solved = {"qdd": (k, n), "multipliers": (k, m), "constraint_forces": (k, n)}
+        out: dict[str, np.ndarray] = {
+            name: np.zeros(shape) if dynamics else np.full(shape, np.nan)
+            for name, shape in solved.items()}
+        out.update(position_residual=np.zeros(k), velocity_residual=np.zeros(k),
+                   energies=np.zeros((k, 3)))
         # in chunks, so that a Ctrl-C is served between calls on a long trajectory
         for lo in range(0, k, OUTPUT_CHUNK):
             hi = min(k, lo + OUTPUT_CHUNK)
+            at = [a[lo:].ctypes.data if dynamics or name not in solved else None
+                  for name, a in out.items()]  # NULL: C leaves the solves out
             with outside_python():  # the GIL is released: other threads run their Python
-                status = self.lib.dl_outputs(
-                    self._address, hi - lo, times[lo:].ctypes.data, states[lo:].ctypes.data,
-                    *(a[lo:].ctypes.data for a in out.values()))
+                status = self.lib.dl_outputs(self._address, hi - lo, times[lo:].ctypes.data,
+                                             states[lo:].ctypes.data, *at)
             self._check(status)
-        if self.kept is not None:
+        if self.kept is not None and dynamics:
             self._minimum_norm(times, states, out)
         return out
 
