@@ -14,7 +14,9 @@ gets its largest step that meets it); the energy error of every case run is repo
 Parts (``--part``):
 
 - ``throughput``: N cases (1000; ``--quick``: 60) as a plain loop over
-  ``simulate`` (the reference), ``simulate_many`` serially, on 2 threads, on a
+  ``simulate`` (the reference), ``simulate_many`` serially, on 2 threads (and on 2
+  threads keeping only the states and the energy, ``threads-2-states``: MuJoCo's
+  rollout gives the states, neither multipliers nor constraint forces), on a
   Dask ``LocalCluster`` of 1 and of 2 single-threaded processes, and with MuJoCo's
   ``rollout`` (one ``MjModel`` per case with its link masses and inertias, the
   initial state of each case, both made within its time as dalembert's ensemble binds
@@ -67,6 +69,10 @@ ENERGY_TARGET = 1e-6
 SEED = 17
 #: Tolerances tried (atol = rtol / 100), as the suite's ladder, for each method.
 RTOLS = (1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6)
+#: What the ``threads-2-states`` way keeps: the states, as MuJoCo's rollout gives them
+#: (and the energy, for the accuracy; MuJoCo's is computed outside its time), without
+#: the multipliers and constraint forces the other ways keep (MuJoCo computes neither).
+STATES = ("q", "qd", "energy")
 #: dalembert's explicit methods that run in C (RK23 needs ~4x DOP853's evaluations here).
 METHODS = ("DOP853", "RK45")
 #: Seconds simulated per case in the scaling part: a tenth of the workload's span, so
@@ -312,6 +318,7 @@ def throughput(n: int, rounds: int) -> dict:
 
     ways = {"loop": (loop, 1), "serial": (many(scheduler="serial"), 1),
             "threads-2": (many(scheduler="threads", workers=2), 2),
+            "threads-2-states": (many(scheduler="threads", workers=2, keep=STATES), 2),
             "dask-1": (on_cluster(1), 1), "dask-2": (on_cluster(2), 2),
             "mujoco-2": (rollout, 2)}
     names = list(ways)
@@ -345,6 +352,11 @@ def throughput(n: int, rounds: int) -> dict:
         "threads-2": float(seconds["mujoco-2"].sum() / seconds["threads-2"].sum()),
         "threads-2_median_of_rounds": float(np.median(seconds["mujoco-2"]
                                                       / seconds["threads-2"])),
+        # at equal outputs: the states (and the energy), as MuJoCo's rollout gives them
+        "threads-2-states": float(seconds["mujoco-2"].sum()
+                                  / seconds["threads-2-states"].sum()),
+        "threads-2-states_median_of_rounds": float(np.median(
+            seconds["mujoco-2"] / seconds["threads-2-states"])),
         # MuJoCo's rollout calls alone, without making the cases' models and states
         "threads-2_rollout_only": float((seconds["mujoco-2"].sum()
                                          - extras["mujoco-2"]["prepare_s"])

@@ -125,6 +125,8 @@ def simulate_many(
         ``multipliers``, ``constraint_forces``, ``energy``, ``kinetic_energy``,
         ``potential_energy``, ``jacobi_integral``, ``position_residual``,
         ``velocity_residual`` (default: the first six but ``qdd``, and the residuals).
+        Without ``qdd``, ``multipliers``, ``constraint_forces`` and ``outputs`` no KKT
+        system is solved at the output times.
     scheduler
         ``"auto"`` (default: the first case runs here; the others run on threads if it
         ran in the C loop and they would take over :data:`AUTO_THREADS_SECONDS`
