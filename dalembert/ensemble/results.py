@@ -134,9 +134,8 @@ class EnsembleResult:
 class SummaryRows:
     """The summary's rows, filled in as the cases finish.
 
-    Each case's record is read into columns as it arrives and dropped: the client
-    holds about the summary's own size, not a record per case (its numbers as a dict
-    or an array of their own, several times that).
+    Each case's record is read into the summary's columns as it arrives and dropped:
+    the client keeps columns, not a record per case.
 
     Parameters
     ----------
