@@ -665,7 +665,8 @@ class System:
 
     def _run(self, plan: SimulationPlan, dynamics: bool = True) -> Trajectory:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
-        constraint forces are not computed (NaN), for a caller that keeps none of them."""
+        constraint forces may be left uncomputed (NaN), for a caller that keeps none of
+        them (a run with sampled inputs computes them anyway)."""
         signal, num = plan.options.inputs, plan.num
         derived, applied = None, None
         if signal is not None and signal.sample_time is not None and num is not None:

@@ -39,12 +39,12 @@ def evaluate_outputs(
         "velocity_residual": np.zeros(k),
         "energies": np.empty((k, 3)),
     }
-    solver = kkt_solver(num.pattern, kept)
+    solver = kkt_solver(num.pattern, kept) if dynamics else None
     rows, cols = num.pattern.A_rows, num.pattern.A_cols
     # The last state of a run stopped by a NaN or an overflow may overflow here too: its
     # outputs are then not finite, without NumPy's warnings (the run's message says why)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        _fill(out, num, solver if dynamics else None, t, y, rows, cols, inputs)
+        _fill(out, num, solver, t, y, rows, cols, inputs)
     return out
 
 
@@ -68,6 +68,7 @@ def _fill(out: dict[str, np.ndarray], num: NumericModel, solver, t: np.ndarray,
             out["position_residual"][i] = np.abs(num.position_constraint(ti, q)).max()
         if m:
             A_values, b = num.velocity_sparse(ti, q)
-            A_values = A_values if Av is None else Av  # the same A (the solve's, as before)
+            if Av is not None:  # the same A: the solve's, as the residual always took it
+                A_values = Av
             out["velocity_residual"][i] = np.abs(matvec(rows, cols, A_values, qd, m) + b).max()
         out["energies"][i] = num.energies(ti, q, qd)
