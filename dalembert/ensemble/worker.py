@@ -24,6 +24,7 @@ import numpy as np
 
 from ..options import SimulationOptions
 from ..solvers.native.turns import python_turn
+from ..solvers.outputs import SOLVED
 from ..system import System
 from ..trajectory import Trajectory
 from .cases import CaseColumns
@@ -38,7 +39,7 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
     "position_residual": (), "velocity_residual": (),
 }
 #: The quantities that take a solve of the KKT system at each output time.
-DYNAMICS = frozenset({"qdd", "multipliers", "constraint_forces"})
+DYNAMICS = frozenset(SOLVED)
 #: Kept unless the caller says otherwise.
 DEFAULT_KEEP = ("q", "qd", "multipliers", "constraint_forces", "energy",
                 "position_residual", "velocity_residual")

@@ -20,6 +20,33 @@ import numpy as np
 from ..codegen.compiled import NumericModel
 from .sparse_kkt import kkt_solver, matvec
 
+#: The outputs that take a solve of the KKT system (NaN when it is left out).
+SOLVED = ("qdd", "multipliers", "constraint_forces")
+
+
+def output_arrays(k: int, n: int, m: int, dynamics: bool = True) -> dict[str, np.ndarray]:
+    """The outputs' arrays for ``k`` states of ``n`` coordinates and ``m`` constraints,
+    zero; without ``dynamics`` those of :data:`SOLVED` are NaN (nothing fills them).
+
+    Parameters
+    ----------
+    k, n, m
+        States, coordinates, constraints.
+    dynamics
+        Whether the KKT system is solved at each state.
+
+    Examples
+    --------
+    >>> out = output_arrays(2, 3, 1, dynamics=False)
+    >>> list(out), out["multipliers"].shape, bool(np.isnan(out["qdd"]).all())
+    (['qdd', 'multipliers', 'constraint_forces', 'position_residual', \
+'velocity_residual', 'energies'], (2, 1), True)
+    """
+    solved = np.zeros if dynamics else partial(np.full, fill_value=np.nan)
+    return {"qdd": solved((k, n)), "multipliers": solved((k, m)),
+            "constraint_forces": solved((k, n)), "position_residual": np.zeros(k),
+            "velocity_residual": np.zeros(k), "energies": np.zeros((k, 3))}
+
 
 def evaluate_outputs(
     num: NumericModel, t: np.ndarray, y: np.ndarray, kept: np.ndarray | None = None,
@@ -29,16 +56,7 @@ def evaluate_outputs(
     """Arrays with one row per output time (see module docstring); ``inputs(t, q, qd)``
     sets the model's inputs at each state first, if given. Without ``dynamics`` the KKT
     system is not solved: ``qdd``, the multipliers and the constraint forces are NaN."""
-    n, m, k = num.n, num.m, len(t)
-    fill = np.empty if dynamics else partial(np.full, fill_value=np.nan)
-    out = {
-        "qdd": fill((k, n)),
-        "multipliers": fill((k, m)),
-        "constraint_forces": fill((k, n)),
-        "position_residual": np.zeros(k),
-        "velocity_residual": np.zeros(k),
-        "energies": np.empty((k, 3)),
-    }
+    out = output_arrays(len(t), num.n, num.m, dynamics)
     solver = kkt_solver(num.pattern, kept) if dynamics else None
     rows, cols = num.pattern.A_rows, num.pattern.A_cols
     # The last state of a run stopped by a NaN or an overflow may overflow here too: its

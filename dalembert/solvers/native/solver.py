@@ -12,6 +12,7 @@ from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
 from ...numerics.rank import min_norm_multipliers
 from ..kkt import DROPPED_ROW_RTOL
+from ..outputs import SOLVED, output_arrays
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
 from ..sparse_kkt import SINGULAR_MESSAGE, matvec
 from . import library
@@ -207,16 +208,11 @@ class NativeSolver:
         k, n, m = len(t), self.n, self.m
         times = np.ascontiguousarray(t, dtype=float)
         states = np.ascontiguousarray(y, dtype=float).reshape(k, 2 * n)
-        solved = {"qdd": (k, n), "multipliers": (k, m), "constraint_forces": (k, n)}
-        out: dict[str, np.ndarray] = {
-            name: np.zeros(shape) if dynamics else np.full(shape, np.nan)
-            for name, shape in solved.items()}
-        out.update(position_residual=np.zeros(k), velocity_residual=np.zeros(k),
-                   energies=np.zeros((k, 3)))
+        out = output_arrays(k, n, m, dynamics)  # in dl_outputs' order of arguments
         # in chunks, so that a Ctrl-C is served between calls on a long trajectory
         for lo in range(0, k, OUTPUT_CHUNK):
             hi = min(k, lo + OUTPUT_CHUNK)
-            at = [a[lo:].ctypes.data if dynamics or name not in solved else None
+            at = [a[lo:].ctypes.data if dynamics or name not in SOLVED else None
                   for name, a in out.items()]  # NULL: C leaves the solves out
             with outside_python():  # the GIL is released: other threads run their Python
                 status = self.lib.dl_outputs(self._address, hi - lo, times[lo:].ctypes.data,
