@@ -9,12 +9,13 @@ largest cut: with dependent constraints ``J`` has singular values at rounding le
 and LAPACK's default cut-off (``eps * max(shape)``) can keep them and divide rounding
 noise by them.
 
-Newton stops at :data:`POSITION_TOL` or once a step no longer halves the largest
-residual (the rounding floor of large coordinates); the caller then judges the
-result against :data:`ACCEPT_TOL` (relative to the coordinates' size) and raises
-its own error, which knows what it was projecting. With ``line_search`` a step
-that does not reduce ``|psi|`` is halved up to :data:`MAX_HALVINGS` times before
-the iteration gives up (for starting points far from the constraints).
+Newton stops at :data:`POSITION_TOL` or once a step makes no progress
+(:func:`newton_progress`: near the rounding floor of large coordinates, a step must
+halve the largest residual); the caller then judges the result against
+:data:`ACCEPT_TOL` (relative to the coordinates' size) and raises its own error,
+which knows what it was projecting. With ``line_search`` a step that makes no
+progress far from the constraints is halved up to :data:`MAX_HALVINGS` times before
+the iteration gives up (a full step from far off can overshoot a curved constraint).
 
 >>> import numpy as np
 >>> circle = lambda q: np.array([q @ q - 1.0])
@@ -73,7 +74,8 @@ def gauss_newton(
     free
         Boolean mask of the coordinates that may change (default: all).
     line_search
-        Halve a step that does not reduce ``|psi|`` (2-norm) instead of stopping.
+        Halve a step that makes no progress, far from the constraints, instead of
+        stopping.
     max_iter
         Gauss-Newton iterations at most.
 
@@ -93,25 +95,56 @@ def gauss_newton(
             break
         J = np.asarray(jacobian(q), dtype=float)[:, cols]
         step = min_norm_solve(J, values)
-        found = _descend(psi, q, cols, step, values, residual, line_search)
+        found = _descend(psi, q, cols, step, values, scale, line_search)
         if found is None:
             break  # rounding floor reached (or divergence, judged below)
         q, values, residual = found
     return Projected(q, residual, residual <= max(POSITION_TOL, ACCEPT_TOL * scale))
 
 
-def _descend(psi, q, cols, step, values, residual, line_search):
-    """The next point: the full step if it halves the largest residual; with a line
-    search, the first of the halved steps that reduces ``|psi|``; else ``None``."""
-    norm = float(np.linalg.norm(values))
+def newton_progress(new: np.ndarray, values: np.ndarray, scale: float) -> bool:
+    """Whether a Newton step that took the residuals from ``values`` to ``new`` made
+    progress: it halved the largest residual or, while that is above the acceptance
+    level (:data:`ACCEPT_TOL` times ``scale``, far from rounding), reduced ``|psi|``.
+
+    Far from the constraints a full step can gain less than half and still be on its
+    way: a pendulum of length 2 started at distance 1 from its pivot goes from
+    ``x^2 + y^2 - 4 = -3`` to ``2.25``, then converges quadratically. Near the rounding
+    floor only halving counts, or the floor would never be detected.
+
+    Parameters
+    ----------
+    new, values
+        The residuals after and before the step.
+    scale
+        ``max(1, max|q|)``, the size of the coordinates.
+
+    Examples
+    --------
+    >>> newton_progress(np.array([2.25]), np.array([-3.0]), 1.0)
+    True
+    >>> newton_progress(np.array([0.9e-11]), np.array([1e-11]), 1.0)
+    False
+    """
+    residual, new_residual = _largest(values), _largest(new)
+    if new_residual < 0.5 * residual:
+        return True
+    return bool(residual > ACCEPT_TOL * scale
+                and np.linalg.norm(new) < np.linalg.norm(values))
+
+
+def _descend(psi, q, cols, step, values, scale, line_search):
+    """The next point: the full step if it makes progress (:func:`newton_progress`);
+    with a line search and far from rounding, the first of the halved steps that
+    does; else ``None``."""
+    far = _largest(values) > ACCEPT_TOL * scale
     alpha = 1.0
-    for _ in range(MAX_HALVINGS if line_search else 1):
+    for _ in range(MAX_HALVINGS if line_search and far else 1):
         trial = q.copy()
         trial[cols] -= alpha * step
         new = np.asarray(psi(trial), dtype=float)
-        new_residual = _largest(new)
-        if (line_search and np.linalg.norm(new) < norm) or new_residual < 0.5 * residual:
-            return trial, new, new_residual
+        if newton_progress(new, values, scale):
+            return trial, new, _largest(new)
         alpha /= 2
     return None
 

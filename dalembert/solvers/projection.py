@@ -26,7 +26,13 @@ import numpy as np
 
 from ..codegen.compiled import NumericModel, SparsePattern
 from ..errors import InitialConditionError, SingularSystemError
-from ..numerics.gauss_newton import ACCEPT_TOL, MAX_NEWTON, POSITION_TOL, gauss_newton
+from ..numerics.gauss_newton import (
+    ACCEPT_TOL,
+    MAX_NEWTON,
+    POSITION_TOL,
+    gauss_newton,
+    newton_progress,
+)
 from ..numerics.rank import RANK_RTOL
 from .sparse_kkt import kkt_solver, matvec
 
@@ -42,7 +48,8 @@ def project_positions(
     if not rows:
         return q
     found = gauss_newton(lambda x: num.position_constraint(t, x),
-                         lambda x: num.velocity_constraint(t, x)[0][rows], q, free)
+                         lambda x: num.velocity_constraint(t, x)[0][rows], q, free,
+                         line_search=True)  # initial values may be far off
     if found.converged:
         return found.q
     raise InitialConditionError(
@@ -143,7 +150,10 @@ class StepProjector:
             trial = q + solve(np.concatenate([self._zeros, -psi[self._psi]]))[: num.n]
             psi_trial = num.position_constraint(t, trial)
             new_residual = np.abs(psi_trial).max()
-            if not new_residual < 0.5 * residual:
+            # full Newton starts from initial values, maybe far: any progress counts
+            progressed = (newton_progress(psi_trial, psi, max(1.0, np.abs(q).max()))
+                          if refactor else new_residual < 0.5 * residual)
+            if not progressed:
                 break
             q, psi, residual = trial, psi_trial, new_residual
             if residual <= POSITION_TOL:

@@ -51,6 +51,24 @@ def test_positions_by_least_change(pendulum):
     assert report.changed_positions() == ["x", "y"] and report.changed
 
 
+@pytest.mark.parametrize("start", [(0.1, -0.2), (0.01, -0.02), (1e-3, 0.0), (0.0, -0.5)])
+def test_positions_by_least_change_from_far_inside(pendulum, start):
+    # A full Newton step from inside the circle overshoots it (or gains less than
+    # half): the projection still ends on the ray through the start.
+    report = pendulum.consistent_initial_state(dict(zip(("x", "y"), start)))
+    np.testing.assert_allclose(report.q, np.array(start) / np.hypot(*start), rtol=0,
+                               atol=1e-14)
+
+
+def test_the_sparse_full_newton_counts_any_gain_far_from_the_constraints(pendulum, monkeypatch):
+    from dalembert.solvers import projection
+
+    monkeypatch.setattr(projection, "project_positions", None)  # no dense fallback
+    q = projection.StepProjector(pendulum.numeric()).positions(0.0, np.array([0.0, -0.5]),
+                                                                refactor=True)
+    np.testing.assert_allclose(q, [0.0, -1.0], rtol=0, atol=1e-14)
+
+
 def test_velocities_by_projection(pendulum):
     report = pendulum.consistent_initial_state([0.8, 0.6], [1.0, 1.0])
     # Remove the radial part: qd - (qd . n) n with n = (0.8, 0.6).
