@@ -23,6 +23,7 @@ naming the input, which ends the run with the steps made before.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -34,7 +35,7 @@ import numpy as np
 from .errors import InputError
 
 #: One input's (or all inputs') value at ``(t, q, qd)``.
-Source = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+Source = Callable[[float, np.ndarray, np.ndarray], np.ndarray | float]
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,48 @@ class InputSignal:
                 continue
             out[list(where)] = self._values(value, where, what, t)
         return out
+
+    def holding(self, values: Mapping[str, float]) -> InputSignal:
+        """This signal with the inputs ``values`` names held at those numbers (a case
+        of an ensemble that gives them).
+
+        Parameters
+        ----------
+        values
+            ``input name -> number``; each of these inputs must have a source of its
+            own here (``inputs=`` a dict by input, or a single input).
+
+        Raises
+        ------
+        InputError
+            A name that is not an input, a value that is not a finite number, or an
+            input given together with others by one function or table.
+
+        Examples
+        --------
+        >>> signal = input_signal({"u": 2.0, "v": lambda t: 3 * t}, ["u", "v"], None, (0, 1))
+        >>> signal.holding({"u": -1.0})(0.5, np.zeros(1), np.zeros(1))
+        array([-1. ,  1.5])
+        """
+        held: dict[int, float] = {}
+        for name, value in values.items():
+            if name not in self.names:
+                raise InputError(f"{name!r} is not an input of this model (its inputs: "
+                                 f"{', '.join(self.names)})")
+            number = float(value)
+            if not math.isfinite(number):
+                raise InputError(f"the input {name!r} must be a finite number, got {number}")
+            held[self.names.index(name)] = number
+        sources = []
+        for source, where, what in self.sources:
+            together = [self.names[k] for k in where if k in held]
+            if together and len(where) > 1:
+                raise InputError(f"{what} gives {', '.join(together)} together with other "
+                                 "inputs; give the inputs as a dict by input to hold some")
+            if together:
+                source = _constant(held[where[0]])
+            sources.append((source, where, what))
+        return dataclasses.replace(self, sources=tuple(sources))
 
     def _values(self, value: object, where: tuple[int, ...], what: str,
                 t: float) -> np.ndarray:
@@ -167,6 +210,11 @@ def _source(value: object, size: int, what: str, t_span: tuple[float, float]) ->
     if number is None or number.shape not in ((), (size,)) or not np.all(np.isfinite(number)):
         raise InputError(f"{what} must be a finite number, a function u(t, q, qd) or u(t), "
                          f"or a table (times, values); got {value!r}")
+    return lambda t, q, qd: number
+
+
+def _constant(number: float) -> Source:
+    """A source that always gives ``number``."""
     return lambda t, q, qd: number
 
 

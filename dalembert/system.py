@@ -565,7 +565,8 @@ class System:
             ``(t0, tf)``, shared by every case.
         cases
             A DataFrame or list of dicts whose columns name parameters, coordinates
-            (``x``) and velocities (``x_dot``); :func:`dalembert.ensemble.grid` and
+            (``x``), velocities (``x_dot``) and inputs (held at the case's value);
+            :func:`dalembert.ensemble.grid` and
             :func:`dalembert.ensemble.sample` make them.
         options
             :func:`dalembert.ensemble.simulate_many`'s keywords and ``simulate``'s.

@@ -171,3 +171,19 @@ def test_sample_times_and_inputs_in_the_wrong_place_are_refused():
         warnings.simplefilter("error")
         with pytest.raises(InputError, match="the model declares no inputs"):
             pendulum(0).simulate((0, 1), {theta: 1.0}, inputs=1.0)
+
+
+def test_holding_replaces_the_sources_of_the_inputs_named():
+    from dalembert.inputs import input_signal
+
+    signal = input_signal({"u": pd, "v": lambda t: 2 * t}, ["u", "v"], None, (0.0, 1.0))
+    held = signal.holding({"u": 4.0})
+    assert held(0.5, np.array([1.0]), np.array([1.0])).tolist() == [4.0, 1.0]
+    assert signal(0.5, np.array([1.0]), np.array([1.0])).tolist() == [-24.0, 1.0]  # unchanged
+    with pytest.raises(InputError, match="'w' is not an input of this model"):
+        signal.holding({"w": 1.0})
+    with pytest.raises(InputError, match="must be a finite number, got nan"):
+        signal.holding({"v": float("nan")})
+    together = input_signal(lambda t: [t, t], ["u", "v"], None, (0.0, 1.0))
+    with pytest.raises(InputError, match="gives u together with other inputs"):
+        together.holding({"u": 1.0})

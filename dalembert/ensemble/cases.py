@@ -1,12 +1,12 @@
 """The cases of an ensemble: a table whose columns name what changes from run to run.
 
 A case is one row: values of parameters, of initial coordinates (``x``) and
-velocities (``x_dot``), and of any other variables an ``initial_state`` function
-turns into an initial state (an angle from which a mechanism's ``q0`` follows).
-:func:`grid` makes the rows of a full factorial sweep, :func:`sample` draws them
-for Monte Carlo from one seeded generator, so the same seed gives the same cases.
-:func:`read_cases` checks a table against a model once, before anything runs,
-and says which column is which.
+velocities (``x_dot``), of inputs (each held constant along the case's run), and
+of any other variables an ``initial_state`` function turns into an initial state
+(an angle from which a mechanism's ``q0`` follows). :func:`grid` makes the rows of a
+full factorial sweep, :func:`sample` draws them for Monte Carlo from one seeded
+generator, so the same seed gives the same cases. :func:`read_cases` checks a table
+against a model once, before anything runs, and says which column is which.
 """
 
 from __future__ import annotations
@@ -35,8 +35,8 @@ def grid(**axes: Sequence[float]) -> pd.DataFrame:
     Parameters
     ----------
     axes
-        ``name=values``: a parameter, a coordinate (``x``), a velocity (``x_dot``) or
-        a variable of ``initial_state``, each with a sequence of numbers.
+        ``name=values``: a parameter, a coordinate (``x``), a velocity (``x_dot``), an
+        input or a variable of ``initial_state``, each with a sequence of numbers.
 
     Returns
     -------
@@ -141,13 +141,15 @@ class CaseColumns:
 
     ``parameters``, ``positions`` and ``velocities`` hold column names (a velocity
     column ``x_dot`` sets coordinate ``x``'s velocity); ``other`` are the columns
-    only ``initial_state`` reads.
+    only ``initial_state`` reads; ``inputs`` name inputs of the model, each held at
+    the case's value along its run.
     """
 
     parameters: tuple[str, ...]
     positions: tuple[str, ...]
     velocities: tuple[str, ...]
     other: tuple[str, ...]
+    inputs: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -170,7 +172,7 @@ class Cases:
 
 
 def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequence[str],
-               initial_state: Callable | None) -> Cases:
+               initial_state: Callable | None, inputs: Sequence[str] = ()) -> Cases:
     """Check a case table against a model: every column must name something.
 
     Parameters
@@ -182,6 +184,8 @@ def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequenc
     initial_state
         The ``initial_state`` function, if any: only then may a column name
         something else (it reads those columns).
+    inputs
+        The model's input names (a column may hold an input's constant value).
 
     Raises
     ------
@@ -199,7 +203,7 @@ def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequenc
     table = _table(cases)
     params, coords = set(parameters), set(coordinates)
     velocities = {f"{c}_dot" for c in coordinates}
-    kinds: dict[str, list[str]] = {"p": [], "q": [], "qd": [], "other": []}
+    kinds: dict[str, list[str]] = {"p": [], "q": [], "qd": [], "other": [], "u": []}
     for name in table.columns:
         if not isinstance(name, str):
             raise EnsembleError(f"case column names must be strings, got {name!r}")
@@ -209,15 +213,18 @@ def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequenc
             kinds["q"].append(name)
         elif name in velocities:
             kinds["qd"].append(name)
+        elif name in inputs:
+            kinds["u"].append(name)
         elif initial_state is not None:
             kinds["other"].append(name)
         else:
+            among = f", an input ({_listing(inputs)})" if inputs else ""
             raise EnsembleError(
                 f"the case column {name!r} is not a parameter ({_listing(parameters)}), a "
-                f"coordinate ({_listing(coordinates)}) or a velocity (a coordinate name + "
-                "'_dot'); check the spelling, or pass initial_state=f(case) -> (q0, qd0) to "
-                "make an initial state from it")
-    return Cases(table, CaseColumns(*(tuple(kinds[k]) for k in ("p", "q", "qd", "other"))))
+                f"coordinate ({_listing(coordinates)}){among} or a velocity (a coordinate "
+                "name + '_dot'); check the spelling, or pass initial_state=f(case) -> (q0, "
+                "qd0) to make an initial state from it")
+    return Cases(table, CaseColumns(*(tuple(kinds[k]) for k in ("p", "q", "qd", "other", "u"))))
 
 
 def _table(cases: CaseTable) -> pd.DataFrame:

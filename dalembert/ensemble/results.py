@@ -34,7 +34,7 @@ class EnsembleResult:
     dataset
         The arrays (``xarray.Dataset``); variables ``q``, ``qd``, ``multipliers``,
         ``constraint_forces``, ``energy``, residuals and outputs over
-        ``(case, time[, coordinate | constraint])``, per-case ``status`` (codes, named
+        ``(case, time[, coordinate | constraint | input])``, per-case ``status`` (codes, named
         in its attributes), ``t_end``, ``energy_error``, ``seconds``, and the case
         table's columns as coordinates along ``case``.
     summary

@@ -104,7 +104,9 @@ def simulate_many(
     cases
         A pandas DataFrame, a list of dicts or a dict of columns (:func:`grid`,
         :func:`sample` make them). Its column names must be parameters,
-        coordinates or ``<coordinate>_dot``, or variables ``initial_state`` reads.
+        coordinates or ``<coordinate>_dot``, inputs (held at the case's value along
+        its run; ``inputs=`` then gives the other inputs, as a dict), or variables
+        ``initial_state`` reads.
     q0, qd0
         The initial state of every case (a dict by coordinate or a sequence), before
         the case's own columns replace entries of it.
@@ -124,7 +126,8 @@ def simulate_many(
         Trajectory quantities to keep per time: any of ``q``, ``qd``, ``qdd``,
         ``multipliers``, ``constraint_forces``, ``energy``, ``kinetic_energy``,
         ``potential_energy``, ``jacobi_integral``, ``position_residual``,
-        ``velocity_residual`` (default: the first six but ``qdd``, and the residuals).
+        ``velocity_residual``, ``inputs`` (the values applied, over an ``input``
+        dimension) (default: the first six but ``qdd``, and the residuals).
         Without ``qdd``, ``multipliers``, ``constraint_forces`` and ``outputs`` no KKT
         system is solved at the output times.
     scheduler
@@ -202,8 +205,10 @@ class _Run:
         self.store = None if store is None else Path(store)
         self.overwrite = overwrite
         a = dict(arguments)
+        self._input_names = tuple(u.name for u in system.inputs)
         self.cases = read_cases(cases, [p.name for p in system.parameters],
-                                system.coordinate_names, a.pop("initial_state"))
+                                system.coordinate_names, a.pop("initial_state"),
+                                self._input_names)
         self.settings = self._settings(a)
 
     def _settings(self, a: dict[str, Any]) -> CaseSettings:
@@ -222,12 +227,16 @@ class _Run:
             if name in a:
                 raise EnsembleError(f"simulate_many takes no {name}= per simulation; use "
                                     f"{instead}")
+        if self.cases.columns.inputs:
+            a["inputs"] = _with_case_inputs(a.get("inputs"), self.cases.columns.inputs)
         # simulate's own checks and messages, once for every case
         checked = self.system._options(self.t_span, {**a, "t_eval": t_eval})
         if checked.output.t_eval is None:
             checked = self.system._options(self.t_span, {
                 **a, "t_eval": np.linspace(*checked.t_span, DEFAULT_POINTS)})
         keep = _keep(keep)
+        if "inputs" in keep and not self._input_names:
+            raise EnsembleError("keep names 'inputs', but the model declares no inputs")
         outputs = _outputs(outputs, keep)
         return CaseSettings(
             checked.t_span, np.asarray(checked.output.t_eval, dtype=float), checked,
@@ -246,7 +255,7 @@ class _Run:
             scheduler, first = self._auto(indices)
         chunk = self.batch_size or _batch_size(len(indices), self._workers(scheduler))
         layout = Layout(self.cases.table, self.settings.t_eval, self.system.coordinate_names,
-                        self.system.constraint_names, self.settings.keep,
+                        self.system.constraint_names, self._input_names, self.settings.keep,
                         tuple(self.settings.outputs), chunk)
         out = sink(layout, self.store, indices, self.overwrite,
                    None if before is None else before.dataset)
@@ -414,6 +423,20 @@ def _positive(value: Any, name: str) -> int | None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise EnsembleError(f"{name} must be a positive whole number or None, got {value!r}")
     return int(value)
+
+
+def _with_case_inputs(inputs: object, columns: Sequence[str]) -> dict[str, object]:
+    """``simulate``'s ``inputs=`` completed with the inputs case ``columns`` give, as a
+    dict by input, for the checks at the door: those at 0 here, each case holding its
+    own value (:meth:`~dalembert.inputs.InputSignal.holding`, which checks it)."""
+    if inputs is None:
+        inputs = {}
+    if not isinstance(inputs, Mapping):
+        raise EnsembleError(
+            f"the case columns give the input(s) {', '.join(columns)}; inputs= must then "
+            f"be a dict by input for the model's other inputs, or left out, got "
+            f"{type(inputs).__name__}")
+    return {**inputs, **dict.fromkeys(columns, 0.0)}  # later keys win, named by symbol too
 
 
 def _keep(keep: Any) -> tuple[str, ...]:

@@ -1,7 +1,7 @@
 """Where an ensemble's arrays go as cases finish: memory, a Zarr store or a netCDF file.
 
 Every case reports the same quantities at the same output times, so the results
-are dense arrays over ``(case, time[, coordinate | constraint])``. The layout is
+are dense arrays over ``(case, time[, coordinate | constraint | input])``. The layout is
 fixed before the first case runs (:class:`Layout`). In memory, the arrays are
 filled in place. On disk, the file is created with every variable empty, each
 finished block of cases is written into it as it arrives and dropped, and the
@@ -40,7 +40,7 @@ class Layout:
         The case table (its columns become coordinates along ``case``).
     t_eval
         The output times.
-    coordinates, constraints
+    coordinates, constraints, inputs
         The model's names.
     keep
         Trajectory quantities (:data:`~dalembert.ensemble.worker.QUANTITIES`).
@@ -54,6 +54,7 @@ class Layout:
     t_eval: np.ndarray
     coordinates: tuple[str, ...]
     constraints: tuple[str, ...]
+    inputs: tuple[str, ...]
     keep: tuple[str, ...]
     outputs: tuple[str, ...]
     chunk: int
@@ -64,7 +65,8 @@ class Layout:
 
     def variables(self) -> dict[str, tuple[tuple[str, ...], tuple[int, ...]]]:
         """``name -> (dimensions, shape)`` of every per-time variable."""
-        sizes = {"coordinate": len(self.coordinates), "constraint": len(self.constraints)}
+        sizes = {"coordinate": len(self.coordinates), "constraint": len(self.constraints),
+                 "input": len(self.inputs)}
         found = {}
         for name in (*self.keep, *self.outputs):
             extra = QUANTITIES.get(name, ())
@@ -79,6 +81,8 @@ class Layout:
         coords: dict[str, Any] = {"case": np.arange(self.size), "time": self.t_eval,
                                   "coordinate": list(self.coordinates),
                                   "constraint": list(self.constraints)}
+        if "inputs" in self.keep:
+            coords["input"] = list(self.inputs)
         for name in self.cases.columns:
             coords[name] = ("case", self.cases[name].to_numpy(dtype=float))
         variables: dict[str, tuple] = {name: (dims, data[name])
@@ -91,7 +95,7 @@ class Layout:
     def check_names(self) -> None:
         """A case column must not take a variable's or a dimension's name."""
         taken = {*self.variables(), "status", *CASE_NUMBERS, "case", "time", "coordinate",
-                 "constraint"}
+                 "constraint", "input"}
         for name in self.cases.columns:
             if name in taken:
                 raise EnsembleError(f"the case column {name!r} has the name of a variable or "
@@ -206,6 +210,7 @@ class FileSink(Sink):
             before.close()  # HDF5 opens a file once: the earlier result reopens it to read
         if before is None:
             check_store(path, overwrite)
+            _remove(path)
             self._create()
         self.expected: dict[int, int] = {}
         for i in expected:
@@ -303,6 +308,24 @@ def check_store(path: Path, overwrite: bool) -> None:
     if path.exists() and not overwrite:
         raise EnsembleError(f"{path} exists; pass overwrite=True to replace it, or another "
                             "path")
+
+
+def _remove(path: Path) -> None:
+    """Remove a store that is overwritten: the new one is a new file or folder, not the
+    old one rewritten in place. A result still reading an old netCDF file keeps its
+    data (and HDF5 cannot truncate a file that is open). A Zarr store is read by path:
+    a result still reading the old one reads the new one's chunks."""
+    import shutil
+
+    try:
+        if path.is_dir():
+            shutil.rmtree(path)
+        elif path.exists():
+            path.unlink()
+    except OSError as exc:
+        raise EnsembleError(f"could not replace {path} ({exc}); close what holds it open "
+                            "(an earlier result's dataset: result.dataset.close()), or "
+                            "write to another path") from exc
 
 
 def _kind(path: Path) -> str:

@@ -9,6 +9,7 @@ answer wherever it runs.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import os
 import socket
@@ -31,12 +32,12 @@ from .cases import CaseColumns
 from .faults import BatchOutcome, CaseOutcome, error_outcome
 
 #: Quantities a trajectory has at every output time, and their dimensions beyond
-#: ``(case, time)`` (``coordinate`` or ``constraint``; none for a scalar).
+#: ``(case, time)`` (``coordinate``, ``constraint`` or ``input``; none for a scalar).
 QUANTITIES: dict[str, tuple[str, ...]] = {
     "q": ("coordinate",), "qd": ("coordinate",), "qdd": ("coordinate",),
     "multipliers": ("constraint",), "constraint_forces": ("coordinate",),
     "energy": (), "kinetic_energy": (), "potential_energy": (), "jacobi_integral": (),
-    "position_residual": (), "velocity_residual": (),
+    "position_residual": (), "velocity_residual": (), "inputs": ("input",),
 }
 #: The quantities that take a solve of the KKT system at each output time.
 DYNAMICS = frozenset(SOLVED)
@@ -228,7 +229,7 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
         try:
             q0, qd0, parameters = _inputs(system, settings, case)
             # simulate(...) with the options checked at the door
-            plan = system._plan(settings.options, q0, qd0, parameters, None)
+            plan = system._plan(_options(settings, case), q0, qd0, parameters, None)
             traj = system._run(plan, settings.dynamics)
             arrays = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
@@ -264,6 +265,15 @@ def _inputs(system: System, settings: CaseSettings,
     parameters = dict(settings.parameters)
     parameters.update({name: case[name] for name in cols.parameters})
     return q0, qd0, parameters
+
+
+def _options(settings: CaseSettings, case: dict[str, float]) -> SimulationOptions:
+    """The checked options, the inputs the case's columns give held at its values."""
+    named = settings.columns.inputs
+    if not named or settings.options.inputs is None:
+        return settings.options
+    held = settings.options.inputs.holding({name: case[name] for name in named})
+    return dataclasses.replace(settings.options, inputs=held)
 
 
 def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str, np.ndarray]:

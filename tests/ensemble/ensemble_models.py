@@ -102,3 +102,26 @@ def kill_always(case: dict[str, float]):
     if case.get("victim", 0.0) == 1.0:
         os._exit(1)
     return released(case)
+
+
+def pushed_bead() -> System:
+    """A bead of mass ``m`` on the line ``x = y``, pushed by the inputs ``u`` (along x)
+    and ``v`` (along y). With ``A = [1, -1]``: ``m x'' = u + lambda``, ``m y'' = v -
+    lambda``, ``x'' = y''``, so ``x'' = (u + v) / (2 m)`` and ``lambda = (v - u) / 2``."""
+    from dalembert import Holonomic
+
+    x, y = coordinates("x y")
+    u, v, m = sp.symbols("u v m")
+    return System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2),
+                  constraints=[Holonomic(x - y, name="line")],
+                  generalized_forces={x: u, y: v}, inputs=[u, v], parameters={m: 2.0})
+
+
+def ramp(t: float) -> float:
+    """The input ``v = t``."""
+    return t
+
+
+def brake(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+    """A feedback input ``v = -3 x' - x``."""
+    return -3.0 * qd[0] - q[0]

@@ -57,12 +57,13 @@ def test_sample_refuses_bad_arguments(args, match):
         sample(*args)
 
 
-def test_columns_are_sorted_into_parameters_positions_velocities():
-    cases = read_cases(pd.DataFrame({"l": [1.0], "x": [0.1], "x_dot": [0.0]}),
-                       ["g", "l", "m"], ["x", "y"], None)
+def test_columns_are_sorted_into_parameters_positions_velocities_inputs():
+    cases = read_cases(pd.DataFrame({"l": [1.0], "x": [0.1], "x_dot": [0.0], "u": [2.0]}),
+                       ["g", "l", "m"], ["x", "y"], None, ["u"])
     assert cases.columns.parameters == ("l",)
     assert cases.columns.positions == ("x",)
     assert cases.columns.velocities == ("x_dot",)
+    assert cases.columns.inputs == ("u",)
 
 
 def test_a_column_naming_nothing_is_refused_by_name():

@@ -19,9 +19,11 @@ import numpy as np
 import pytest
 from distributed import Client, LocalCluster
 from ensemble_models import (
+    brake,
     kill_always,
     kill_once,
     pendulum,
+    pushed_bead,
     released,
     released_slowly,
     small_chain,
@@ -83,6 +85,21 @@ def test_cases_on_processes_equal_the_cases_alone_and_the_serial_run(cluster):
     # each worker's empty cache holds exactly what was shipped: nothing compiled there
     shipped = {f"dalembert_{lib.key}.so" for lib in package(mb.system).libraries}
     assert {p.name for p in (cache / "c").glob("*.so")} == shipped
+
+
+def test_input_columns_and_a_shared_controller_on_processes_equal_the_serial_run(cluster):
+    client, _ = cluster
+    bead = pushed_bead()
+    options = dict(q0=[0.5, 0.5], qd0=[1.0, 1.0], inputs={"v": brake}, t_eval=T_EVAL,
+                   keep=("q", "multipliers", "inputs"), batch_size=2, progress=False)
+    cases = grid(u=[-1.0, 0.0, 2.0], m=[1.0, 3.0])
+    result = bead.simulate_many((0.0, 1.5), cases, client=client, **options)
+    serial = bead.simulate_many((0.0, 1.5), cases, scheduler="serial", **options)
+    assert result.failed == []
+    for name in ("q", "multipliers", "inputs"):
+        assert np.array_equal(result.dataset[name].values, serial.dataset[name].values), name
+    np.testing.assert_array_equal(result.dataset["inputs"].sel(input="u").values[:, 0],
+                                  cases["u"].to_numpy())
 
 
 def test_a_worker_dying_once_loses_no_case(cluster, tmp_path):

@@ -247,6 +247,21 @@ def test_a_stored_ensemble_reads_back_equal_and_reduces_lazily(pend, tmp_path, s
         pend.simulate_many((0.0, 2.0), cases, store=tmp_path / f"run{suffix}", **options)
 
 
+def test_overwriting_a_netcdf_store_an_earlier_result_reads(pend, tmp_path):
+    # HDF5 cannot truncate a file that is open: the store is replaced by a new file,
+    # and the earlier result keeps reading its own
+    path = tmp_path / "run.nc"
+    options = dict(initial_state=released, t_eval=T_EVAL, scheduler="serial",
+                   progress=False, keep=("q",), store=path, overwrite=True)
+    first = pend.simulate_many((0.0, 2.0), grid(l=[1.0, 2.0]), **options)
+    second = pend.simulate_many((0.0, 2.0), grid(l=[3.0, 4.0]), **options)
+    for result, lengths in ((first, [1.0, 2.0]), (second, [3.0, 4.0])):
+        q = result.dataset["q"].values
+        np.testing.assert_allclose(np.hypot(q[..., 0], q[..., 1]),
+                                   np.broadcast_to(np.array(lengths)[:, None], q.shape[:2]),
+                                   rtol=1e-12)
+
+
 def test_bad_arguments_are_refused_before_anything_runs(pend):
     cases = grid(l=[1.0])
     for kwargs, match in [
