@@ -40,8 +40,10 @@ class EnsembleResult:
     summary
         One row per case (pandas DataFrame indexed by case): the case table's columns,
         ``status``, ``message``, the case's numbers (``t_end``, ``energy_error``, its
-        largest residuals, ``nfev``, its final values), ``seconds`` it took, when it
-        ``started`` (UTC) and on which ``worker``, its ``warnings``.
+        largest residuals, ``nfev``, its final values, and for each event function
+        the time it first occurred, ``t_event_<name>``, NaN if it did not, and how
+        often, ``n_events_<name>``), ``seconds`` it took, when it ``started`` (UTC)
+        and on which ``worker``, its ``warnings``.
     scheduler
         What ran the cases (``"serial"``, ``"threads"``, ``"dask"``).
     interrupted

@@ -304,10 +304,33 @@ def _numbers(traj: Trajectory, arrays: dict[str, np.ndarray],
         values = getattr(traj, name)
         numbers[f"max_{name}"] = float(values.max()) if len(values) else np.nan
     numbers["nfev"] = float(traj.stats.get("nfev", np.nan))
+    for label, times in zip(event_labels(settings.options.output.events), traj.t_events):
+        numbers[f"t_event_{label}"] = float(times[0]) if len(times) else np.nan
+        numbers[f"n_events_{label}"] = float(len(times))
     if len(traj.t):
         numbers.update(zip(_final_names(traj.coordinate_names), traj.q[-1].tolist()))
         numbers.update({f"final_{name}": float(arrays[name][-1]) for name in settings.outputs})
     return numbers
+
+
+def event_labels(events: Sequence[Callable]) -> tuple[str, ...]:
+    """How the summary names each event function: by its name, or by its position
+    where it has none (a lambda) or shares it with another.
+
+    Parameters
+    ----------
+    events
+        ``simulate``'s event functions.
+
+    Examples
+    --------
+    >>> def impact(t, q, qd): return q[1]
+    >>> event_labels([impact, lambda t, q, qd: q[0]])
+    ('impact', '1')
+    """
+    names = [getattr(event, "__name__", "") for event in events]
+    return tuple(name if name.isidentifier() and names.count(name) == 1 else str(k)
+                 for k, name in enumerate(names))
 
 
 @functools.lru_cache(maxsize=8)

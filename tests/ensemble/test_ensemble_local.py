@@ -127,6 +127,44 @@ def test_a_length_sweep_follows_the_pendulums_period_law(pend):
         assert abs(period / law - 1) < 1e-8, (l, period, law)
 
 
+def going_back(t, q, qd):
+    """The bob crossing the bottom towards -x."""
+    return q[0]
+
+
+going_back.direction = -1  # type: ignore[attr-defined]
+
+
+def stop_going_back(t, q, qd):
+    return q[0]
+
+
+stop_going_back.direction, stop_going_back.terminal = -1, True  # type: ignore[attr-defined]
+
+
+def test_the_summary_gives_each_events_first_time_and_count(pend):
+    """Released through the bottom towards +x, the bob comes back through it at half
+    a period, T(l) = 2 pi sqrt(l / g) (1 + theta0^2 / 16), then once a period."""
+    lengths = [0.25, 1.0, 4.0]
+    result = pend.simulate_many((0.0, 4.2), grid(l=lengths), initial_state=through_bottom,
+                                events=[going_back, stop_going_back, lambda t, q, qd: 1.0],
+                                scheduler="serial", progress=False)
+    summary = result.summary
+    for i, l in enumerate(lengths):
+        law = 2 * np.pi * np.sqrt(l / 9.81) * (1 + THETA0**2 / 16)
+        assert abs(summary["t_event_going_back"][i] / (law / 2) - 1) < 1e-8
+        # the terminal one ends the run at the first, so the other counts one
+        assert summary["n_events_going_back"][i] == 1
+        assert summary["t_event_stop_going_back"][i] == summary["t_event_going_back"][i]
+        assert np.isnan(summary["t_event_2"][i]) and summary["n_events_2"][i] == 0
+        assert summary["status"][i] == "event"
+    free = pend.simulate_many((0.0, 4.2), grid(l=lengths), initial_state=through_bottom,
+                              events=[going_back], scheduler="serial", progress=False)
+    for i, l in enumerate(lengths):
+        law = 2 * np.pi * np.sqrt(l / 9.81) * (1 + THETA0**2 / 16)
+        assert free.summary["n_events_going_back"][i] == int(4.2 / law + 0.5)
+
+
 def _hermite_root(t0, t1, x0, x1, v0, v1):
     """The zero of the cubic Hermite interpolant of (x, x') on [t0, t1] (Newton)."""
     h = t1 - t0
