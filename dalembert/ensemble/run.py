@@ -106,7 +106,8 @@ def simulate_many(
         :func:`sample` make them). Its column names must be parameters,
         coordinates or ``<coordinate>_dot``, inputs (held at the case's value along
         its run; ``inputs=`` then gives the other inputs, as a dict), or variables
-        ``initial_state`` reads.
+        ``initial_state`` reads. Cases are numbered by their position, 0 to n - 1: a
+        DataFrame's own index is not kept.
     q0, qd0
         The initial state of every case (a dict by coordinate or a sequence), before
         the case's own columns replace entries of it.
