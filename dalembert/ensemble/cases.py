@@ -36,7 +36,8 @@ def grid(**axes: Sequence[float]) -> pd.DataFrame:
     ----------
     axes
         ``name=values``: a parameter, a coordinate (``x``), a velocity (``x_dot``), an
-        input or a variable of ``initial_state``, each with a sequence of numbers.
+        input or a variable of ``initial_state`` or ``case_inputs``, each with a sequence
+        of numbers.
 
     Returns
     -------
@@ -141,8 +142,8 @@ class CaseColumns:
 
     ``parameters``, ``positions`` and ``velocities`` hold column names (a velocity
     column ``x_dot`` sets coordinate ``x``'s velocity); ``other`` are the columns
-    only ``initial_state`` reads; ``inputs`` name inputs of the model, each held at
-    the case's value along its run.
+    only ``initial_state`` or ``case_inputs`` read; ``inputs`` name inputs of the
+    model, each held at the case's value along its run.
     """
 
     parameters: tuple[str, ...]
@@ -172,7 +173,7 @@ class Cases:
 
 
 def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequence[str],
-               initial_state: Callable | None, inputs: Sequence[str] = ()) -> Cases:
+               reader: Callable | None, inputs: Sequence[str] = ()) -> Cases:
     """Check a case table against a model: every column must name something.
 
     Parameters
@@ -181,9 +182,9 @@ def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequenc
         A pandas DataFrame, a list of dicts (one per case) or a dict of columns.
     parameters, coordinates
         The model's parameter and coordinate names.
-    initial_state
-        The ``initial_state`` function, if any: only then may a column name
-        something else (it reads those columns).
+    reader
+        A function that reads cases (``initial_state``, ``case_inputs``), if any:
+        only then may a column name something else (it reads those columns).
     inputs
         The model's input names (a column may hold an input's constant value).
 
@@ -191,7 +192,7 @@ def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequenc
     ------
     EnsembleError
         No cases, rows with different columns, non-numeric values, or a column that
-        names nothing (and no ``initial_state`` takes it); the message names it.
+        names nothing (and no function reads it); the message names it.
 
     Examples
     --------
@@ -215,7 +216,7 @@ def read_cases(cases: CaseTable, parameters: Sequence[str], coordinates: Sequenc
             kinds["qd"].append(name)
         elif name in inputs:
             kinds["u"].append(name)
-        elif initial_state is not None:
+        elif reader is not None:
             kinds["other"].append(name)
         else:
             among = f", an input ({_listing(inputs)})" if inputs else ""

@@ -75,6 +75,7 @@ def simulate_many(
     t_eval: Sequence[float] | np.ndarray | None = None,
     parameters: Mapping[Any, object] | None = None,
     initial_state: Callable[[dict[str, float]], Any] | None = None,
+    case_inputs: Callable[[dict[str, float]], Any] | None = None,
     outputs: Mapping[str, Output] | None = None,
     keep: Sequence[str] = DEFAULT_KEEP,
     scheduler: Scheduler = "auto",
@@ -89,11 +90,12 @@ def simulate_many(
     """Simulate ``system`` once per case and gather the results, labelled.
 
     Each case is a row of ``cases``: values of parameters, initial coordinates
-    (``x``) and velocities (``x_dot``), or variables of ``initial_state``. A case is
-    exactly ``system.simulate(t_span, q0, qd0, parameters=..., t_eval=t_eval,
-    **options)`` with its values, wherever it runs, so it gives the same answer
-    serially, on threads or on any Dask cluster. A case that fails is recorded with
-    its status and message and the others go on; Ctrl-C returns what finished.
+    (``x``) and velocities (``x_dot``), inputs, or variables of ``initial_state`` or
+    ``case_inputs``. A case is exactly ``system.simulate(t_span, q0, qd0,
+    parameters=..., t_eval=t_eval, **options)`` with its values, wherever it runs, so
+    it gives the same answer serially, on threads or on any Dask cluster. A case that
+    fails is recorded with its status and message and the others go on; Ctrl-C returns
+    what finished.
 
     Parameters
     ----------
@@ -106,8 +108,8 @@ def simulate_many(
         :func:`sample` make them). Its column names must be parameters,
         coordinates or ``<coordinate>_dot``, inputs (held at the case's value along
         its run; ``inputs=`` then gives the other inputs, as a dict), or variables
-        ``initial_state`` reads. Cases are numbered by their position, 0 to n - 1: a
-        DataFrame's own index is not kept.
+        ``initial_state`` or ``case_inputs`` read. Cases are numbered by their
+        position, 0 to n - 1: a DataFrame's own index is not kept.
     q0, qd0
         The initial state of every case (a dict by coordinate or a sequence), before
         the case's own columns replace entries of it.
@@ -120,6 +122,12 @@ def simulate_many(
         column), e.g. a mechanism's state from an angle. Runs where the case runs:
         for Dask, it must be picklable (a module-level function, or any function
         cloudpickle takes).
+    case_inputs
+        ``f(case) -> inputs``: the inputs of a case from its values, in any form
+        ``simulate``'s ``inputs=`` takes, e.g. a controller with the case's gains
+        (``lambda case: {"u": pd(case["kp"], case["kd"])}``); instead of ``inputs=``.
+        Its columns are case variables, as ``initial_state``'s; input columns are
+        then held on top of what it gives (a dict by input). Picklable for Dask.
     outputs
         Derived quantities to keep, ``name -> f(system, traj)`` giving one number
         per output time (a tip position...); ``system`` is the worker's copy.
@@ -189,7 +197,8 @@ def simulate_many(
             "simulate_many was called while a worker process was importing the script that "
             "started it: put the script's code under `if __name__ == '__main__':`")
     arguments = dict(q0=q0, qd0=qd0, t_eval=t_eval, parameters=parameters,
-                     initial_state=initial_state, outputs=outputs, keep=keep,
+                     initial_state=initial_state, case_inputs=case_inputs, outputs=outputs,
+                     keep=keep,
                      scheduler=scheduler, client=client, workers=workers,
                      batch_size=batch_size, progress=progress, **options)
     run = _Run(system, t_span, cases, arguments, store, overwrite)
@@ -207,8 +216,10 @@ class _Run:
         self.overwrite = overwrite
         a = dict(arguments)
         self._input_names = tuple(u.name for u in system.inputs)
+        reads = a.pop("initial_state")
         self.cases = read_cases(cases, [p.name for p in system.parameters],
-                                system.coordinate_names, a.pop("initial_state"),
+                                system.coordinate_names,
+                                reads if reads is not None else a.get("case_inputs"),
                                 self._input_names)
         self.settings = self._settings(a)
 
@@ -228,6 +239,9 @@ class _Run:
             if name in a:
                 raise EnsembleError(f"simulate_many takes no {name}= per simulation; use "
                                     f"{instead}")
+        case_inputs = a.pop("case_inputs")
+        if case_inputs is not None:
+            a["inputs"] = _inputs_of_cases(case_inputs, a.get("inputs"), self._input_names)
         if self.cases.columns.inputs:
             a["inputs"] = _with_case_inputs(a.get("inputs"), self.cases.columns.inputs)
         # simulate's own checks and messages, once for every case
@@ -243,7 +257,7 @@ class _Run:
             checked.t_span, np.asarray(checked.output.t_eval, dtype=float), checked,
             coordinate_values(q0, names, "q0"), coordinate_values(qd0, names, "qd0"),
             parameter_values(self.system.parameters, parameters), self.cases.columns,
-            initial_state, keep, outputs)
+            initial_state, keep, outputs, case_inputs)
 
     # -- running ---------------------------------------------------------------------
     def execute(self, indices: list[int], before: EnsembleResult | None) -> EnsembleResult:
@@ -424,6 +438,21 @@ def _positive(value: Any, name: str) -> int | None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise EnsembleError(f"{name} must be a positive whole number or None, got {value!r}")
     return int(value)
+
+
+def _inputs_of_cases(case_inputs: Any, inputs: object,
+                     names: Sequence[str]) -> dict[str, object]:
+    """``simulate``'s ``inputs=`` for the checks at the door when each case makes its
+    own (``case_inputs``, called where the case runs): every input at 0 here."""
+    if not callable(case_inputs):
+        raise EnsembleError(f"case_inputs must be a function f(case) -> inputs, got "
+                            f"{type(case_inputs).__name__}")
+    if inputs is not None:
+        raise EnsembleError("give the inputs once (inputs=) or per case (case_inputs=), "
+                            "not both")
+    if not names:
+        raise EnsembleError("case_inputs is given, but the model declares no inputs")
+    return dict.fromkeys(names, 0.0)
 
 
 def _with_case_inputs(inputs: object, columns: Sequence[str]) -> dict[str, object]:

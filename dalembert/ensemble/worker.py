@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ..inputs import input_signal
 from ..options import SimulationOptions
 from ..solvers.native.turns import python_turn
 from ..solvers.outputs import SOLVED
@@ -72,6 +73,9 @@ class CaseSettings:
         The trajectory quantities kept per time (names of :data:`QUANTITIES`).
     outputs
         Derived quantities to keep, ``name -> f(system, traj)``.
+    case_inputs
+        ``f(case) -> inputs`` (any form of ``simulate``'s ``inputs=``), or ``None``:
+        the options then hold placeholders for the inputs.
     """
 
     t_span: tuple[float, float]
@@ -84,6 +88,7 @@ class CaseSettings:
     initial_state: Callable[[dict[str, float]], Any] | None = None
     keep: tuple[str, ...] = DEFAULT_KEEP
     outputs: Mapping[str, Output] = field(default_factory=dict)
+    case_inputs: Callable[[dict[str, float]], Any] | None = None
 
     @property
     def dynamics(self) -> bool:
@@ -268,12 +273,21 @@ def _inputs(system: System, settings: CaseSettings,
 
 
 def _options(settings: CaseSettings, case: dict[str, float]) -> SimulationOptions:
-    """The checked options, the inputs the case's columns give held at its values."""
-    named = settings.columns.inputs
-    if not named or settings.options.inputs is None:
-        return settings.options
-    held = settings.options.inputs.holding({name: case[name] for name in named})
-    return dataclasses.replace(settings.options, inputs=held)
+    """The checked options with the case's inputs: those ``case_inputs`` makes of it,
+    and those its columns give held at its values."""
+    options, named = settings.options, settings.columns.inputs
+    signal = options.inputs
+    if signal is None or not (named or settings.case_inputs):
+        return options
+    if settings.case_inputs is not None:
+        made = settings.case_inputs(dict(case))
+        if named and isinstance(made, Mapping):  # the columns complete it
+            made, named = {**made, **{name: case[name] for name in named}}, ()
+        signal = input_signal(made, signal.names, signal.sample_time, settings.t_span)
+        assert signal is not None  # the model has inputs
+    if named:
+        signal = signal.holding({name: case[name] for name in named})
+    return dataclasses.replace(options, inputs=signal)
 
 
 def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str, np.ndarray]:

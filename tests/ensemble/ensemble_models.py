@@ -125,3 +125,9 @@ def ramp(t: float) -> float:
 def brake(t: float, q: np.ndarray, qd: np.ndarray) -> float:
     """A feedback input ``v = -3 x' - x``."""
     return -3.0 * qd[0] - q[0]
+
+
+def damper(case: dict[str, float]) -> dict:
+    """``case_inputs``: the bead braked along y by ``v = -c y'`` with the case's ``c``."""
+    c = case["c"]
+    return {"v": lambda t, q, qd: -c * qd[1]}

@@ -20,6 +20,7 @@ import pytest
 from distributed import Client, LocalCluster
 from ensemble_models import (
     brake,
+    damper,
     kill_always,
     kill_once,
     pendulum,
@@ -87,7 +88,7 @@ def test_cases_on_processes_equal_the_cases_alone_and_the_serial_run(cluster):
     assert {p.name for p in (cache / "c").glob("*.so")} == shipped
 
 
-def test_input_columns_and_a_shared_controller_on_processes_equal_the_serial_run(cluster):
+def test_inputs_on_processes_equal_the_serial_run(cluster):
     client, _ = cluster
     bead = pushed_bead()
     options = dict(q0=[0.5, 0.5], qd0=[1.0, 1.0], inputs={"v": brake}, t_eval=T_EVAL,
@@ -100,6 +101,14 @@ def test_input_columns_and_a_shared_controller_on_processes_equal_the_serial_run
         assert np.array_equal(result.dataset[name].values, serial.dataset[name].values), name
     np.testing.assert_array_equal(result.dataset["inputs"].sel(input="u").values[:, 0],
                                   cases["u"].to_numpy())
+    # each case's own controller, made where the case runs
+    options = {**options, "inputs": None}
+    cases = grid(u=[0.0, 1.0], c=[0.5, 2.0])
+    result = bead.simulate_many((0.0, 1.5), cases, client=client, case_inputs=damper, **options)
+    serial = bead.simulate_many((0.0, 1.5), cases, scheduler="serial", case_inputs=damper,
+                                **options)
+    assert result.failed == []
+    assert np.array_equal(result.dataset["inputs"].values, serial.dataset["inputs"].values)
 
 
 def test_a_worker_dying_once_loses_no_case(cluster, tmp_path):

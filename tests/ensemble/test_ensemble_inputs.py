@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ensemble_models import brake, pendulum, pushed_bead, ramp
+from ensemble_models import brake, damper, pendulum, pushed_bead, ramp
 
 from dalembert import EnsembleWarning, InputError
 from dalembert.ensemble import grid
@@ -89,3 +89,37 @@ def test_inputs_given_wrongly_are_refused_before_anything_runs(bead):
     with pytest.raises(EnsembleError, match="keep names 'inputs', but the model declares no"):
         pendulum().simulate_many((0.0, 1.0), grid(l=[1.0]), q0=[0.0, -1.0], keep=("inputs",),
                                  progress=False)
+
+
+@pytest.mark.parametrize("scheduler", ["serial", "threads"])
+def test_case_inputs_make_each_cases_controller(bead, scheduler):
+    # v = -c y' on the line x = y: 2 m x'' = u - c x', from x' = 1 at rest position:
+    # x' = u / c + (1 - u / c) exp(-c t / (2 m))
+    cases = grid(c=[0.5, 2.0, 8.0], u=[0.0, 1.0])
+    result = bead.simulate_many((0.0, 2.0), cases, q0=[0.0, 0.0], qd0=[1.0, 1.0],
+                                case_inputs=damper, t_eval=T_EVAL, keep=("qd", "inputs"),
+                                rtol=1e-10, atol=1e-12, scheduler=scheduler, progress=False)
+    c, u = cases["c"].to_numpy()[:, None], cases["u"].to_numpy()[:, None]
+    exact = u / c + (1 - u / c) * np.exp(-c * T_EVAL[None, :] / (2 * M))
+    assert np.abs(result.dataset["qd"].sel(coordinate="x").values - exact).max() < 1e-9
+    np.testing.assert_allclose(result.dataset["inputs"].sel(input="v").values,
+                               -c * result.dataset["qd"].sel(coordinate="y").values,
+                               rtol=1e-14, atol=1e-14)
+
+
+def test_case_inputs_given_wrongly_are_refused(bead):
+    cases = grid(c=[1.0])
+    with pytest.raises(EnsembleError, match="not both"):
+        bead.simulate_many((0.0, 1.0), cases, q0=[0.0, 0.0], case_inputs=damper,
+                           inputs={"u": 0.0, "v": 0.0}, progress=False)
+    with pytest.raises(EnsembleError, match="case_inputs must be a function"):
+        bead.simulate_many((0.0, 1.0), cases, q0=[0.0, 0.0], case_inputs={"v": 0.0},
+                           progress=False)
+    with pytest.raises(EnsembleError, match="the model declares no inputs"):
+        pendulum().simulate_many((0.0, 1.0), grid(l=[1.0]), q0=[0.0, -1.0],
+                                 case_inputs=damper, progress=False)
+    # an input left out fails each case, named
+    with pytest.warns(EnsembleWarning, match="1 of 1 cases"):
+        result = bead.simulate_many((0.0, 1.0), cases, q0=[0.0, 0.0], case_inputs=damper,
+                                    scheduler="serial", progress=False)
+    assert "the input(s) u have no values" in result.summary["message"][0]
