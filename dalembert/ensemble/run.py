@@ -125,7 +125,8 @@ def simulate_many(
     case_inputs
         ``f(case) -> inputs``: the inputs of a case from its values, in any form
         ``simulate``'s ``inputs=`` takes, e.g. a controller with the case's gains
-        (``lambda case: {"u": pd(case["kp"], case["kd"])}``); instead of ``inputs=``.
+        (``lambda case: {"u": controller(case["kp"], case["kd"])}``); instead of
+        ``inputs=``.
         Its columns are case variables, as ``initial_state``'s; input columns are
         then held on top of what it gives (a dict by input). Picklable for Dask.
     outputs
