@@ -22,6 +22,7 @@ Independent answers:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -66,11 +67,32 @@ def _omega(b: np.ndarray, bd: np.ndarray) -> np.ndarray:
     return 2 * np.einsum("kij,kj->ki", E, bd)
 
 
-def controller(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """The PD law: body torques from the attitude error and the body rates (coordinates
-    in the order of :func:`build`: ``x, y, z, b0, b1, b2, b3``)."""
-    b, bd = q[3:7], qd[3:7]
-    return -KP * np.sign(b[0]) * b[1:] - KD * _omega(b, bd)[0]
+def pd_controller(kp: float, kd: float) -> Callable[[float, np.ndarray, np.ndarray], np.ndarray]:
+    """The PD law with gains ``kp``, ``kd``: ``u(t, q, qd)``, the body torques from the
+    attitude error and the body rates (coordinates in the order of :func:`build`:
+    ``x, y, z, b0, b1, b2, b3``).
+
+    Parameters
+    ----------
+    kp, kd
+        The proportional and derivative gains.
+
+    Examples
+    --------
+    >>> u = pd_controller(2.0, 1.0)
+    >>> u(0.0, np.array([0, 0, 0, 0.6, 0.8, 0, 0]), np.zeros(7)).tolist()
+    [-1.6, -0.0, -0.0]
+    """
+
+    def controller(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        b, bd = q[3:7], qd[3:7]
+        return -kp * np.sign(b[0]) * b[1:] - kd * _omega(b, bd)[0]
+
+    return controller
+
+
+#: The PD law at the example's gains.
+controller = pd_controller(KP, KD)
 
 
 def _initial_rates() -> np.ndarray:
