@@ -12,6 +12,9 @@
  */
 #include "runtime.h"
 
+/* Blocks up to this size keep a vector of theirs in registers (BY_SIZE's sizes). */
+enum { DL_SMALL_BLOCK = 4 };
+
 void eval_state(const dl_function *F, double t, const double *q, const double *qd,
                 const double *p, double *out) {
   if (F->size == 0) return;
@@ -81,6 +84,11 @@ DL_INLINE void backward(const double *restrict L, int64_t n, double *restrict x)
   }
 }
 
+/* The widest band whose LDL^T rows keep their products in registers (BY_WIDTH's
+ * widths); wider rows read them back from memory, where they were stored an instant
+ * before, so each waits for the store as well as for the arithmetic. */
+enum { DL_BAND_WINDOW = 9 };
+
 /* Band LDL^T, row by row: S[i * (kd + 1) + (i - j)] holds S_ij for i - kd <= j <= i;
  * on return the unit lower L below the diagonal and 1 / D_i on it. No square roots:
  * a pivot waits only for the division of the one before (in L L^T also for its root),
@@ -107,12 +115,41 @@ DL_INLINE int ldl_row(double *restrict S, int64_t i, int64_t k0, int64_t w) {
   return DL_OK;
 }
 
+/* A full-width row of ldl_row (i >= kd), the products u kept in registers
+ * (DL_BAND_WINDOW) until they turn into L_ij; same operations in the same order. */
+DL_INLINE int ldl_row_window(double *restrict S, int64_t i, int64_t kd) {
+  const int64_t w = kd + 1;
+  double *Si = S + i * w;  /* Si[d] = S_{i, i - d} */
+  double u[DL_BAND_WINDOW];
+  for (int64_t a = 0; a < kd; ++a) {  /* column j = i - kd + a */
+    const double *Sj = S + (i - kd + a) * w;  /* Sj[e] = L_{j, j - e} */
+    double v = Si[kd - a];
+    for (int64_t b = 0; b < a; ++b) v -= u[b] * Sj[a - b];
+    u[a] = v;
+  }
+  double d = Si[0];
+  const double scale = fabs(d);
+  for (int64_t a = 0; a < kd; ++a) {
+    const double l = u[a] * S[(i - kd + a) * w];
+    d -= u[a] * l;
+    Si[kd - a] = l;
+  }
+  if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_CONSTRAINTS;
+  Si[0] = 1.0 / d;
+  return DL_OK;
+}
+
 /* The first kd rows (shorter), then the others, whose band is kd wide: with kd a
  * constant (BY_WIDTH) their loops unroll into straight code. */
 DL_INLINE int band_ldl_by_width(double *restrict S, int64_t m, int64_t kd) {
   const int64_t w = kd + 1, head = kd < m ? kd : m;
   for (int64_t i = 0; i < head; ++i)
     if (ldl_row(S, i, 0, w) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+  if (kd <= DL_BAND_WINDOW) {
+    for (int64_t i = head; i < m; ++i)
+      if (ldl_row_window(S, i, kd) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
+    return DL_OK;
+  }
   for (int64_t i = head; i < m; ++i)
     if (ldl_row(S, i, i - kd, w) != DL_OK) return DL_SINGULAR_CONSTRAINTS;
   return DL_OK;
@@ -300,6 +337,13 @@ DL_INLINE void gram_block(const dl_model *md, int64_t b, const double *z,
 DL_INLINE void block_residual(const dl_model *md, int64_t b, const double *z, const double *x,
                               double *rhs, int64_t nb) {
   const double *restrict xb = x + md->block_start[b];
+  if (nb <= DL_SMALL_BLOCK) {  /* x_b in registers: the stores to rhs could alias it */
+    double xs[DL_SMALL_BLOCK];
+    for (int64_t i = 0; i < nb; ++i) xs[i] = xb[i];
+    for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p)
+      rhs[md->pair_row[p]] -= dot(z + md->pair_vec[p], xs, nb);
+    return;
+  }
   for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p)
     rhs[md->pair_row[p]] -= dot(z + md->pair_vec[p], xb, nb);
 }
@@ -308,6 +352,16 @@ DL_INLINE void block_residual(const dl_model *md, int64_t b, const double *z, co
 DL_INLINE void block_update(const dl_model *md, int64_t b, const double *z, const double *lam,
                             double *x, int64_t nb) {
   double *restrict xb = x + md->block_start[b];
+  if (nb <= DL_SMALL_BLOCK) {  /* the sums in registers, x_b stored once */
+    double s[DL_SMALL_BLOCK] = {0.0};
+    for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p) {
+      const double l = lam[md->pair_row[p]];
+      const double *restrict zp = z + md->pair_vec[p];
+      for (int64_t i = 0; i < nb; ++i) s[i] += zp[i] * l;
+    }
+    for (int64_t i = 0; i < nb; ++i) xb[i] += s[i];
+    return;
+  }
   for (int64_t p = md->block_external[b]; p < md->block_pairs[b + 1]; ++p) {
     const double l = lam[md->pair_row[p]];
     const double *restrict zp = z + md->pair_vec[p];
