@@ -30,7 +30,7 @@ import sympy as sp
 from scipy.integrate import simpson
 
 from ..multibody import Multibody, RigidBody, Torque, angular_momentum, multibody_of
-from ..multibody.rotations import rotation_matrix
+from ..multibody.rotations import E_matrix, rotation_matrix
 from ..system import System
 from ..trajectory import Trajectory
 
@@ -61,10 +61,7 @@ def build() -> System:
 def _omega(b: np.ndarray, bd: np.ndarray) -> np.ndarray:
     """Body rates ``2 E(b) b_dot`` (rows of ``b``, ``bd``)."""
     b, bd = np.atleast_2d(b), np.atleast_2d(bd)
-    E = np.stack([np.stack([-b[:, 1], b[:, 0], b[:, 3], -b[:, 2]], -1),
-                  np.stack([-b[:, 2], -b[:, 3], b[:, 0], b[:, 1]], -1),
-                  np.stack([-b[:, 3], b[:, 2], -b[:, 1], b[:, 0]], -1)], 1)
-    return 2 * np.einsum("kij,kj->ki", E, bd)
+    return 2 * np.einsum("kij,kj->ki", E_matrix(b), bd)
 
 
 def pd_controller(kp: float, kd: float) -> Callable[[float, np.ndarray, np.ndarray], np.ndarray]:
