@@ -14,6 +14,8 @@ ran keep the code of ``"not-run"`` and NaN values.
 
 from __future__ import annotations
 
+import ctypes
+import functools
 import mmap
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -244,6 +246,8 @@ class FileSink(Sink):
                 if sum(len(i) for i, _ in got) >= self.expected.get(k, 0)]
         for k in full:
             self._flush(k)
+        if full:
+            release_free_memory()
 
     def _flush(self, k: int) -> None:
         got = self.pending.pop(k)
@@ -287,6 +291,32 @@ class FileSink(Sink):
         if self.kind == "zarr":
             return xr.open_zarr(self.path)
         return xr.open_dataset(self.path, engine="h5netcdf", chunks={})
+
+
+def release_free_memory() -> None:
+    """Give the memory the C allocator holds free back to the system (glibc's
+    ``malloc_trim``; elsewhere nothing is done).
+
+    A store's blocks arrive, are written and are freed one after the other. glibc
+    keeps freed memory for later, and past its adaptive ``mmap`` threshold serves the
+    next large arrays from a heap that fragments: without this, a client writing a
+    store grew with the cases it had written (bench/README.md, "Ensembles").
+
+    Examples
+    --------
+    >>> release_free_memory()
+    """
+    trim = _malloc_trim()
+    if trim is not None:
+        trim(0)
+
+
+@functools.cache
+def _malloc_trim() -> Any:
+    try:
+        return ctypes.CDLL(None).malloc_trim
+    except (AttributeError, OSError):  # not glibc
+        return None
 
 
 class _Closing:

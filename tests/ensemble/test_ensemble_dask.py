@@ -18,6 +18,7 @@ import dask
 import numpy as np
 import pytest
 from distributed import Client, LocalCluster
+from distributed.diagnostics.plugin import SchedulerPlugin
 from ensemble_models import (
     brake,
     damper,
@@ -159,6 +160,33 @@ def test_results_come_straight_from_the_workers_of_a_scheduler_on_this_machine(c
         relayed = pend.simulate_many((0.0, 1.5), cases, client=relaying, **options)
         assert _relayed(relaying) >= before + 2  # a gather for each batch
     assert np.array_equal(straight.dataset["q"].values, relayed.dataset["q"].values)
+
+
+class _Graphs(SchedulerPlugin):
+    """Counts the graphs the scheduler receives and the tasks in each."""
+
+    def __init__(self):
+        self.tasks = []
+
+    def update_graph(self, scheduler, *, tasks, **kwargs):
+        self.tasks.append(len(tasks))
+
+
+def test_the_batches_reach_the_scheduler_in_one_graph(cluster):
+    """The model's package is pickled once for all the batches of a call (one graph),
+    and the scheduler holds one copy of it: sent task by task, each batch's copy was
+    pickled and held apart (bench/README.md measures the client's memory)."""
+    client, _ = cluster
+    graphs = _Graphs()
+    client.cluster.scheduler.add_plugin(graphs, name="count-graphs")
+    try:
+        result = pendulum().simulate_many((0.0, 1.5), grid(l=np.linspace(0.5, 2.0, 12)),
+                                          initial_state=released, client=client,
+                                          t_eval=T_EVAL, batch_size=2, progress=False)
+    finally:
+        client.cluster.scheduler.remove_plugin("count-graphs")
+    assert (result.summary["status"] == "finished").all()
+    assert len(graphs.tasks) == 1 and graphs.tasks[0] >= 6  # 6 batches (the last split)
 
 
 class _CtrlCAfter:
