@@ -158,7 +158,10 @@ def simulate_many(
         A path ending in ``.zarr`` or ``.nc``: the arrays are written there as cases
         finish and read back lazily, so the client holds one block at a time.
     overwrite
-        Replace an existing ``store``.
+        Replace an existing ``store``. A netCDF file is replaced by a new file: a
+        result still reading the old one keeps its data. A Zarr store is read by
+        path: a result still reading the one replaced (an earlier ensemble's
+        ``dataset``) reads the new one's arrays from then on.
     progress
         A progress bar (tqdm; it appears once the ensemble has run two seconds).
     options
