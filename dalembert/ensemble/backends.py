@@ -229,7 +229,7 @@ class Dask(Backend):
             suspect = None
             if suspects:
                 single = suspects.pop(0)
-                suspect, = self._submit([single])
+                suspect = self._submit([single])[0]
                 pending[suspect] = single
                 found.add(suspect)
 
@@ -255,8 +255,8 @@ class Dask(Backend):
 
     def _submit(self, batches: Sequence[Batch]) -> list[Any]:
         """One task per batch, all in one graph: pickled once, it holds the package
-        once, and so does the scheduler. Submitted one by one, each task's copy was
-        pickled and held apart, in this client and the scheduler."""
+        once, and so does the scheduler (submitted one by one, each task's copy would
+        be pickled and held apart, in this client and in the scheduler)."""
         if not batches:
             return []
         k = len(batches)

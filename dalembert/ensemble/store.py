@@ -299,8 +299,9 @@ def release_free_memory() -> None:
 
     A store's blocks arrive, are written and are freed one after the other. glibc
     keeps freed memory for later, and past its adaptive ``mmap`` threshold serves the
-    next large arrays from a heap that fragments: without this, a client writing a
-    store grew with the cases it had written (bench/README.md, "Ensembles").
+    next large arrays from a heap that fragments: a client writing a store would grow
+    with the cases written; handed back after each block, its memory stays flat
+    (measured in bench/README.md, "Ensembles").
 
     Examples
     --------

@@ -174,8 +174,8 @@ class _Graphs(SchedulerPlugin):
 
 def test_the_batches_reach_the_scheduler_in_one_graph(cluster):
     """The model's package is pickled once for all the batches of a call (one graph),
-    and the scheduler holds one copy of it: sent task by task, each batch's copy was
-    pickled and held apart (bench/README.md measures the client's memory)."""
+    and the scheduler holds one copy of it: sent task by task, each batch's copy would
+    be pickled and held apart (bench/README.md measures the client's memory)."""
     client, _ = cluster
     graphs = _Graphs()
     client.cluster.scheduler.add_plugin(graphs, name="count-graphs")
