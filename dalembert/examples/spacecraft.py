@@ -94,10 +94,7 @@ controller = pd_controller(KP, KD)
 
 def _initial_rates() -> np.ndarray:
     """``b_dot = 1/2 E(b)^T omega`` for the initial body rates."""
-    b = _B0
-    E = np.array([[-b[1], b[0], b[3], -b[2]], [-b[2], -b[3], b[0], b[1]],
-                  [-b[3], b[2], -b[1], b[0]]])
-    return 0.5 * E.T @ _OMEGA0
+    return 0.5 * E_matrix(_B0).T @ _OMEGA0
 
 
 _EULER = ("craft_b0", "craft_b1", "craft_b2", "craft_b3")
