@@ -1,6 +1,7 @@
 # Two commands do all set-up on a fresh machine:
 #   make demo   simulate the gallery's demo systems, write plots and a report to out/demo
-#   make test   lint (ruff), type check (mypy) and the whole test suite (unit, doctests, validation)
+#   make test   lint (ruff), type check (mypy), the layers (import-linter) and the whole
+#               test suite (unit, doctests, validation)
 #   make bench  the benchmark suite against SymPy, MuJoCo and Exudyn (JSON + PNG in bench/results)
 #   make bench-quick  the same at small n with short caps (under 5 minutes)
 PYTHON ?= python3
@@ -22,6 +23,7 @@ demo: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy
+	$(BIN)/lint-imports --no-cache
 
 # the suite on every core (pytest-xdist): each test file's tests run in one worker
 test: lint

@@ -259,18 +259,3 @@ def _table(value: tuple[Any, Any], size: int, what: str,
     if size == 1:
         return lambda t, q, qd: np.interp(t, times, columns[0])
     return lambda t, q, qd: np.array([np.interp(t, times, c) for c in columns])
-
-
-def check_sample_time(sample_time: object) -> float | None:
-    """``None``, or a finite positive number.
-
-    >>> check_sample_time(0.01)
-    0.01
-    """
-    if sample_time is None:
-        return None
-    if isinstance(sample_time, bool) or not isinstance(sample_time, (int, float, np.number)) \
-            or not (math.isfinite(float(sample_time)) and float(sample_time) > 0):
-        raise ValueError(f"The 'sample_time' parameter of simulate must be a finite positive "
-                         f"number or None; got {sample_time!r}.")
-    return float(sample_time)

@@ -639,19 +639,3 @@ def check_bodies(bodies: Sequence[MovingBody]) -> None:
     for body in bodies:
         if id(body) not in done:
             body.check_values()
-
-
-def body_names(bodies: Sequence[Body]) -> list[str]:
-    """The names of ``bodies``, in order.
-
-    Parameters
-    ----------
-    bodies
-        Any bodies.
-
-    Examples
-    --------
-    >>> body_names([Ground(), Particle("bob", 1.0)])
-    ['ground', 'bob']
-    """
-    return [b.name for b in bodies]

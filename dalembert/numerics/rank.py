@@ -52,13 +52,6 @@ def dependent_rows(A: np.ndarray, rtol: float = RANK_RTOL) -> list[int]:
     return dependent
 
 
-def check_constraint_rank(A: np.ndarray, labels: Sequence[str], when: str) -> None:
-    """Raise if constraints are dependent at a state, naming each dependent one."""
-    dependent = dependent_rows(A)
-    if dependent:
-        raise dependent_error([labels[i] for i in dependent], when)
-
-
 def dependent_error(labels: Sequence[str], when: str) -> ConstraintError:
     """The error naming dependent constraints (``redundant_constraints="error"``)."""
     return ConstraintError(

@@ -72,11 +72,6 @@ def project_velocities(
     return qd
 
 
-def project_state(num: NumericModel, t: float, y: np.ndarray) -> np.ndarray:
-    """Project a state ``y = [q, qd]`` onto the position and velocity constraints."""
-    return StepProjector(num)(t, y)
-
-
 #: Simplified-Newton iterations of the fast position projection before falling back.
 FAST_NEWTON = 4
 

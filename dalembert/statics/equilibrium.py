@@ -28,7 +28,7 @@ import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -48,11 +48,7 @@ from ..numerics.rank import dependent_error, min_norm_multipliers, sparse_constr
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
 # acceptance) and its scipy.optimize.root fallback are shared with extremum().
 from .newton import Attempt, check_settings, newton_iterations, root_then_newton
-from .static_system import StaticSystem, static_system
-
-if TYPE_CHECKING:
-    from ..system import System
-
+from .static_system import StaticsModel, StaticSystem, static_system
 
 __all__ = [
     "STABILITIES",
@@ -212,7 +208,7 @@ class Equilibrium:
 
 
 def equilibrium(
-    system: System,
+    system: StaticsModel,
     guess: Mapping[object, float] | Sequence[float] | Array,
     *,
     parameters: Mapping[Any, object] | None = None,

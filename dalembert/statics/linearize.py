@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any, cast
 
 import numpy as np
 import scipy.linalg
@@ -40,11 +40,7 @@ from .equilibrium import (
     marginal_message,
     tangent_basis,
 )
-from .static_system import StaticSystem, static_system
-
-if TYPE_CHECKING:
-    from ..system import System
-
+from .static_system import StaticsModel, StaticSystem, static_system
 
 __all__ = [
     "Linearization",
@@ -166,7 +162,7 @@ class Linearization:
 
 
 def linearize(
-    system: System,
+    system: StaticsModel,
     q_eq: Equilibrium | Mapping[object, float] | Sequence[float] | Array,
     *,
     parameters: Mapping[Any, object] | None = None,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,10 +19,26 @@ from numpy.typing import NDArray
 from ..codegen.compiled import NumericModel
 from ..model.parameters import ParameterSet
 
-if TYPE_CHECKING:
-    from ..system import System
-
 Array = NDArray[np.float64]
+
+
+class StaticsModel(Protocol):
+    """What statics reads of a model: a :class:`~dalembert.System` (a multibody one
+    included) is one. Statics sits below the System in the layers (docs/design.md):
+    the System's ``equilibrium`` and ``linearize`` are thin aliases of its functions."""
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def constraint_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def parameters(self) -> tuple: ...
+
+    def describe_constraint(self, i: int) -> str: ...
+
+    def numeric(self, parameters: Mapping[Any, object] | None = None) -> NumericModel: ...
 
 
 @dataclass(frozen=True)
@@ -82,7 +98,7 @@ class StaticSystem:
         return M, self.num.static_derivatives(t, q).damping()
 
 
-def static_system(system: System, *parameters: Mapping[Any, object] | None) -> StaticSystem:
+def static_system(system: StaticsModel, *parameters: Mapping[Any, object] | None) -> StaticSystem:
     """``system`` bound to its parameter values, later ``parameters`` overriding earlier.
 
     Parameters
