@@ -20,7 +20,7 @@ array([-0.5, -0.5])
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import BDF, OdeSolver
+from scipy.integrate import BDF, DOP853, OdeSolver
 from scipy.integrate._ivp import dop853_coefficients
 from scipy.integrate._ivp.rk import (
     MAX_FACTOR,
@@ -29,8 +29,9 @@ from scipy.integrate._ivp.rk import (
     Dop853DenseOutput,
     RkDenseOutput,
     RungeKutta,
-    rk_step,
 )
+
+from .steppers.runge_kutta import Tableau
 
 __all__ = [
     "INTERPOLATOR_POWER",
@@ -43,15 +44,39 @@ __all__ = [
     "last_stages",
     "restart",
     "restart_second_order",
-    "rk_step",
     "roll_back",
     "snapshot",
     "step_inputs",
+    "tableau_of",
     "take_state",
 ]
 
 #: The number of rows of DOP853's dense-output polynomial.
 INTERPOLATOR_POWER: int = dop853_coefficients.INTERPOLATOR_POWER
+
+
+def tableau_of(cls: type[RungeKutta]) -> Tableau:
+    """The coefficients of one of SciPy's explicit Runge-Kutta methods (class
+    attributes SciPy does not document).
+
+    Parameters
+    ----------
+    cls
+        ``RK23``, ``RK45`` or ``DOP853`` (or a subclass).
+
+    Examples
+    --------
+    >>> tb = tableau_of(DOP853)
+    >>> tb.order, tb.n_stages, tb.D.shape[0] + 3 == INTERPOLATOR_POWER
+    (8, 12, True)
+    """
+    s = cls.n_stages
+    A = np.zeros((s, s))  # RK45 leaves out the last (zero) column
+    A[:, :cls.A.shape[1]] = cls.A[:s, :s]
+    if issubclass(cls, DOP853):
+        return Tableau(cls.order, cls.error_estimator_order, A, cls.B, cls.C, cls.E5,
+                       E3=cls.E3, A_extra=cls.A_EXTRA, C_extra=cls.C_EXTRA, D=cls.D)
+    return Tableau(cls.order, cls.error_estimator_order, A, cls.B, cls.C, cls.E, P=cls.P)
 
 
 def restart(solver: OdeSolver, y: np.ndarray) -> None:

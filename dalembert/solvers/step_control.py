@@ -1,22 +1,11 @@
-"""Step-size control of the explicit Runge-Kutta methods: SciPy's, or PI control.
+"""SciPy's explicit Runge-Kutta solvers stepping on our stepper contract.
 
-SciPy's :class:`~scipy.integrate.RungeKutta` solvers pick the next step from the
-current error estimate alone, ``h *= 0.9 err^(-1/k)`` (``k``: the order of the
-error estimator plus one). Where the step is limited by stability rather than
-accuracy, as in a long pendulum chain at a loose tolerance or any mechanism with a
-fast mode it does not need to resolve, that controller oscillates: a step past
-the stability boundary is rejected, the next is cut, the error collapses, the step
-grows past the boundary again. A third of the attempts can be wasted that way.
-
-The PI controller (Gustafsson 1991; "PI.3.4" in Söderlind 2002; Hairer & Wanner,
-*Solving ODEs II*, IV.2) also weighs the previous step's error,
-
-    h *= 0.9 err^(-alpha) err_old^beta,   alpha = 0.7 / k,  beta = 0.4 / k,
-
-which damps the oscillation. It is the default here (``step_control="PI"``);
-``step_control="scipy"`` keeps SciPy's controller and so SciPy's steps. Both use
-SciPy's safety factor and step limits, and never grow the step right after a
-rejection; rejected steps shrink by ``0.9 err^(-alpha)`` (Hairer's DOPRI codes).
+The loops drive SciPy ``OdeSolver`` objects (start-up, dense output, the restarts of
+:mod:`.scipy_ivp`); their steps are ours: :func:`~.steppers.runge_kutta.controlled_step`
+with the method's :class:`~.steppers.runge_kutta.ExplicitRungeKutta` and a
+:class:`~.steppers.controller.PIController`, PI control by default
+(``step_control="PI"``), SciPy's own under ``step_control="scipy"`` (the
+:mod:`.steppers.controller` module says why PI).
 
 Example:
 
@@ -31,80 +20,58 @@ True
 
 from __future__ import annotations
 
-import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
 from ..options import StepController
-from .scipy_ivp import MAX_FACTOR, MIN_FACTOR, SAFETY, RungeKutta, rk_step
-
-#: PI.3.4's gains times k: alpha = 0.7 / k, beta = 0.4 / k.
-PI_ALPHA, PI_BETA = 0.7, 0.4
-#: The previous error is never taken below this (Hairer's DOPRI codes): a step with a
-#: tiny error may not let the next one grow without bound.
-ERROR_FLOOR = 1e-4
-
-
-def controller_exponents(step_control: StepController,
-                         error_estimator_order: int) -> tuple[float, float]:
-    """``(alpha, beta)`` of the controller for a method with an error estimator of
-    that order (``k`` = order + 1); SciPy's own controller is ``(1 / k, 0)``.
-
-    >>> controller_exponents("PI", DOP853.error_estimator_order)
-    (0.0875, 0.05)
-    """
-    k = error_estimator_order + 1
-    if step_control == "scipy":
-        return 1 / k, 0.0
-    return PI_ALPHA / k, PI_BETA / k
+from .scipy_ivp import RungeKutta, tableau_of
+from .steppers.controller import ControllerState, PIController
+from .steppers.runge_kutta import ExplicitRungeKutta, controlled_step
 
 
 class ControlledSteps(RungeKutta):
-    """Mixin for a SciPy ``RungeKutta`` subclass: its steps under ``step_control``.
+    """Mixin for a SciPy ``RungeKutta`` subclass: its steps taken by our stepper under
+    ``step_control``.
 
-    The controller's state is ``err_old``, the error of the last accepted step
-    (kept across restarts from a projected state: the step-size history is the
-    integration's, not the state's).
+    ``controller`` is the controller's value (``step_control``'s unless one is given)
+    and ``controller_state`` its memory (the
+    error of the last accepted step), kept across restarts from a projected state: the
+    step-size history is the integration's, not the state's.
     """
 
     def __init__(self, fun, t0, y0, t_bound, *, step_control: StepController = "PI",
-                 **options) -> None:
+                 controller: PIController | None = None, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self.step_control = step_control
-        self.alpha, self.beta = controller_exponents(step_control, self.error_estimator_order)
-        self.err_old = ERROR_FLOOR
+        self.controller = controller if controller is not None else \
+            PIController.for_method(step_control, self.error_estimator_order)
+        self.controller_state: ControllerState = self.controller.initial_state()
+        self.stepper = ExplicitRungeKutta(tableau_of(type(self)))
 
-    def _accepted_factor(self, err: float, rejected: bool) -> float:
-        """The growth of the step after one accepted with error ``err``."""
-        factor = MAX_FACTOR if err == 0 else min(
-            MAX_FACTOR, SAFETY * err ** -self.alpha * self.err_old ** self.beta)
-        self.err_old = max(err, ERROR_FLOOR)
-        return min(1.0, factor) if rejected else factor
+    @property
+    def err_old(self) -> float:
+        """The controller's memory: the error of the last accepted step."""
+        return self.controller_state.err_old
+
+    @err_old.setter
+    def err_old(self, value: float) -> None:
+        self.controller_state = ControllerState(value)
 
     def _step_impl(self):
-        # SciPy's RungeKutta._step_impl with the controller's factors.
-        t, y = self.t, self.y
-        min_step = 10 * np.abs(np.nextafter(t, self.direction * np.inf) - t)
-        h_abs = self.max_step if self.h_abs > self.max_step else max(self.h_abs, min_step)
-        rejected = False
-        while True:
-            if h_abs < min_step:
-                return False, self.TOO_SMALL_STEP
-            t_new = t + h_abs * self.direction
-            if self.direction * (t_new - self.t_bound) > 0:
-                t_new = self.t_bound
-            h = t_new - t
-            h_abs = np.abs(h)
-            y_new, f_new = rk_step(self.fun, t, y, self.f, h, self.A, self.B, self.C, self.K)
-            scale = self.atol + np.maximum(np.abs(y), np.abs(y_new)) * self.rtol
-            err = self._estimate_error_norm(self.K, h, scale)
-            if err < 1:
-                h_abs *= self._accepted_factor(err, rejected)
-                break
-            h_abs *= max(MIN_FACTOR, SAFETY * err ** -self.alpha)
-            rejected = True
-        self.h_previous, self.y_old = h, y
-        self.t, self.y, self.h_abs, self.f = t_new, y_new, h_abs, f_new
+        out = controlled_step(self.stepper, self.controller, self.controller_state, self.fun,
+                              self.t, self.y, self.f, self.h_abs, direction=self.direction,
+                              t_bound=self.t_bound, rtol=self.rtol, atol=self.atol,
+                              max_step=self.max_step, K=self._stage_storage())
+        step = out.step
+        if step is None:
+            return False, self.TOO_SMALL_STEP
+        self.h_previous, self.y_old = step.h, step.y
+        self.t, self.y, self.h_abs, self.f = step.t_new, step.y_new, out.h_abs, step.f_new
+        self.controller_state = out.state
         return True, None
+
+    def _stage_storage(self):
+        """SciPy's own stage array (its dense output reads the stages from it)."""
+        return getattr(self, "K_extended", self.K)
 
 
 class ControlledDOP853(ControlledSteps, DOP853):

@@ -36,10 +36,18 @@ def test_runge_kutta_attributes(cls):
 def test_step_constants_and_functions():
     assert 0 < scipy_ivp.MIN_FACTOR < 1 < scipy_ivp.MAX_FACTOR
     assert 0 < scipy_ivp.SAFETY < 1
-    solver = RK45(decay, 0.0, np.ones(1), 1.0)
-    y, f = scipy_ivp.rk_step(decay, 0.0, solver.y, solver.f, 0.1, solver.A, solver.B,
-                             solver.C, solver.K)
-    assert abs(y[0] - np.exp(-0.1)) < 1e-6 and f[0] == -y[0]
+
+
+@pytest.mark.parametrize("cls", [RK23, RK45, DOP853])
+def test_tableau_of_reads_a_consistent_method(cls):
+    """The coefficients tableau_of reads satisfy the order conditions a tableau must:
+    rows of A summing to C, weights B summing to 1, error weights E summing to 0."""
+    tb = scipy_ivp.tableau_of(cls)
+    assert tb.order == cls.order and tb.n_stages == cls.n_stages
+    assert np.allclose(tb.A.sum(axis=1), tb.C, atol=1e-14)
+    assert abs(tb.B.sum() - 1) < 1e-14 and abs(tb.E.sum()) < 1e-14
+    assert abs(tb.B @ tb.C - 0.5) < 1e-14  # second order
+    assert (tb.P is None) == (cls is DOP853) == (tb.D is not None)
 
 
 @pytest.mark.parametrize("cls", [BDF, Radau, DOP853])

@@ -7,7 +7,7 @@ from scipy.integrate import DOP853, RK23, RK45, Radau
 
 from dalembert.options import STEP_CONTROLS, simulation_options
 from dalembert.solvers.integrate import integrate
-from dalembert.solvers.step_control import CONTROLLED, controlled_class, controller_exponents
+from dalembert.solvers.step_control import CONTROLLED, controlled_class
 
 METHODS = [DOP853, RK45, RK23]
 
@@ -75,12 +75,6 @@ def test_pi_control_saves_evaluations_at_the_stability_boundary(cls):
                                  20.0, step_control=control, **options)[3]
     # Measured: 0.84 (DOP853), 0.83 (RK45), 0.85 (RK23).
     assert nfev["PI"] < 0.9 * nfev["scipy"]
-
-
-def test_controller_exponents():
-    # PI.3.4 (Gustafsson; Soderlind): alpha = 0.7 / k, beta = 0.4 / k, k = estimator order + 1.
-    assert controller_exponents("PI", RK45.error_estimator_order) == pytest.approx((0.14, 0.08))
-    assert controller_exponents("scipy", RK23.error_estimator_order) == (1 / 3, 0.0)
 
 
 def test_unknown_step_control_names_the_choices():

@@ -49,6 +49,8 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_stepper, t_bound), FIELD(dl_stepper, direction), FIELD(dl_stepper, rtol),
   FIELD(dl_stepper, max_step), FIELD(dl_stepper, atol), FIELD(dl_stepper, nfev),
   FIELD(dl_stepper, alpha), FIELD(dl_stepper, beta), FIELD(dl_stepper, err_old),
+  FIELD(dl_stepper, safety), FIELD(dl_stepper, min_factor), FIELD(dl_stepper, max_factor),
+  FIELD(dl_stepper, error_floor),
   SIZE(dl_run),
   FIELD(dl_run, t_eval), FIELD(dl_run, n_eval), FIELD(dl_run, next_eval),
   FIELD(dl_run, holonomic), FIELD(dl_run, max_newton), FIELD(dl_run, max_full),

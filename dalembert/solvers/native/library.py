@@ -79,7 +79,8 @@ class Stepper(ctypes.Structure):
     _fields_ = [*((name, _f64) for name in ("t", "h_abs", "h_previous", "t_bound", "direction",
                                             "rtol", "max_step")),
                 ("atol", _ptr), ("nfev", _i64), ("alpha", _f64), ("beta", _f64),
-                ("err_old", _f64)]
+                ("err_old", _f64), ("safety", _f64), ("min_factor", _f64),
+                ("max_factor", _f64), ("error_floor", _f64)]
 
 
 class Run(ctypes.Structure):

@@ -96,16 +96,15 @@ static int all_finite(const double *x, int64_t n) {
   return 1;
 }
 
-/* Steps from st->t until one is accepted (ControlledSteps._step_impl, which is scipy's
- * RungeKutta._step_impl under PI control; scipy's own with beta = 0). K[0] must hold
+/* Steps from st->t until one is accepted (steppers/runge_kutta.py's controlled_step, under
+ * the controller whose values st holds; scipy's own steps with beta = 0). K[0] must hold
  * f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced.
  * DL_NOT_FINITE if t, the step size (NaN), y or f(t, y) is not: a NaN step never falls
  * below min_step and would be retried forever. Otherwise the retries end: each
- * rejection shrinks the step by 0.9 at least (MIN_FACTOR where the error is NaN, as a
+ * rejection shrinks the step by the safety factor at least (min_factor where the error is NaN, as a
  * stage that is not finite makes it) until it is accepted or below min_step. */
 int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
                double *y_new, double *stage) {
-  const double SAFETY = 0.9, MIN_FACTOR = 0.2, MAX_FACTOR = 10.0, ERROR_FLOOR = 1e-4;
   const int64_t n_state = 2 * md->n;
   const double t = st->t;
   if (!isfinite(t) || isnan(st->h_abs) || !all_finite(y, n_state) || !all_finite(K, n_state))
@@ -129,18 +128,18 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
     }
     const double err = error_norm(tb, K, n_state, h, stage, md->error_work);
     if (err < 1.0) {
-      double factor = err == 0.0 ? MAX_FACTOR
-                                 : SAFETY * pow(err, -st->alpha) * pow(st->err_old, st->beta);
-      if (factor > MAX_FACTOR) factor = MAX_FACTOR;
-      st->err_old = err > ERROR_FLOOR ? err : ERROR_FLOOR;
+      double factor = err == 0.0 ? st->max_factor
+                                 : st->safety * pow(err, -st->alpha) * pow(st->err_old, st->beta);
+      if (factor > st->max_factor) factor = st->max_factor;
+      st->err_old = err > st->error_floor ? err : st->error_floor;
       if (rejected && factor > 1.0) factor = 1.0;
       st->h_abs = h_abs * factor;
       st->h_previous = h;
       st->t = t_new;
       return DL_OK;
     }
-    const double shrink = SAFETY * pow(err, -st->alpha);
-    h_abs *= shrink > MIN_FACTOR ? shrink : MIN_FACTOR;
+    const double shrink = st->safety * pow(err, -st->alpha);
+    h_abs *= shrink > st->min_factor ? shrink : st->min_factor;
     rejected = 1;
   }
 }

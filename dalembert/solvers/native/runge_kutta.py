@@ -22,8 +22,9 @@ from typing import ClassVar
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
-from ..scipy_ivp import INTERPOLATOR_POWER, Dop853DenseOutput, RungeKutta
+from ..scipy_ivp import INTERPOLATOR_POWER, Dop853DenseOutput, RungeKutta, tableau_of
 from ..step_control import ControlledDOP853, ControlledRK23, ControlledRK45
+from ..steppers.runge_kutta import Tableau
 from . import library
 from .solver import NativeSolver
 
@@ -39,10 +40,13 @@ class _NativeSteps(RungeKutta):
         # the class keeps the arrays the tableau points to alive
         self._tableau, self._n_rows, _ = self._made_tableau()
         self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
+        pi = self.controller  # the one controller: C reads its values
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
                                         rtol=self.rtol, max_step=self.max_step,
-                                        atol=self._atol.ctypes.data, alpha=self.alpha,
-                                        beta=self.beta)
+                                        atol=self._atol.ctypes.data, alpha=pi.alpha,
+                                        beta=pi.beta, safety=pi.safety,
+                                        min_factor=pi.min_factor, max_factor=pi.max_factor,
+                                        error_floor=pi.error_floor)
         self._stage = np.empty(self.n)
         self._fixed = (ctypes.addressof(self._tableau), ctypes.addressof(self._stepper))
 
@@ -52,28 +56,20 @@ class _NativeSteps(RungeKutta):
         tableau points to, made once per class (C only reads them)."""
         made = cls.__dict__.get("_TABLEAU")
         if made is None:
+            tb = tableau_of(cls)
             keep = [None if a is None else np.ascontiguousarray(a, dtype=np.float64)
-                    for a in cls._coefficients()]
+                    for a in (tb.A, tb.B, tb.C, tb.E, tb.E3)]
             A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in keep)
-            tableau = library.Tableau(cls.n_stages, A, B, C, E, E3)
-            made = (tableau, cls._interpolant(tableau, keep), keep)
+            tableau = library.Tableau(tb.n_stages, A, B, C, E, E3)
+            made = (tableau, cls._interpolant(tb, tableau, keep), keep)
             cls._TABLEAU = made
         return made
 
     @classmethod
-    def _coefficients(cls) -> list:
-        s = cls.n_stages
-        A = np.zeros((s, s))  # SciPy's RK45 leaves out the last (zero) column
-        A[:, :cls.A.shape[1]] = cls.A[:s, :s]
-        if issubclass(cls, DOP853):
-            return [A, cls.B, cls.C, cls.E5, cls.E3]
-        return [A, cls.B, cls.C, cls.E, None]
-
-    @classmethod
-    def _interpolant(cls, tableau: library.Tableau, keep: list) -> int:
+    def _interpolant(cls, tb: Tableau, tableau: library.Tableau, keep: list) -> int:
         """The dense output's coefficients into ``tableau`` (their arrays into ``keep``);
         the rows of its interpolant."""
-        P = np.ascontiguousarray(cls.P, dtype=np.float64)
+        P = np.ascontiguousarray(tb.P, dtype=np.float64)
         keep.append(P)
         tableau.n_P, tableau.P = P.shape[1], P.ctypes.data
         return P.shape[1]
@@ -107,9 +103,9 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
     """:class:`scipy.integrate.DOP853` stepping in C (its interpolant's extra stages too)."""
 
     @classmethod
-    def _interpolant(cls, tableau: library.Tableau, keep: list) -> int:
-        A, C, D = (np.ascontiguousarray(a, dtype=np.float64) for a in (cls.A_EXTRA, cls.C_EXTRA,
-                                                                   cls.D))
+    def _interpolant(cls, tb: Tableau, tableau: library.Tableau, keep: list) -> int:
+        A, C, D = (np.ascontiguousarray(a, dtype=np.float64) for a in (tb.A_extra, tb.C_extra,
+                                                                   tb.D))
         keep.extend([A, C, D])
         tableau.n_extra, tableau.A_extra, tableau.C_extra = len(C), A.ctypes.data, C.ctypes.data
         tableau.n_D, tableau.D = len(D), D.ctypes.data

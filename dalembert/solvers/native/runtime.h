@@ -123,8 +123,11 @@ typedef struct {
   double t, h_abs, h_previous, t_bound, direction, rtol, max_step;
   const double *atol;         /* n_state */
   int64_t nfev;
-  double alpha, beta;         /* the controller, step_control.py: h *= 0.9 err^-alpha */
-  double err_old;             /* err_old^beta, err_old the last accepted step's error */
+  /* the controller (steppers/controller.py's PIController, whose values these are):
+   * h *= safety err^-alpha err_old^beta within [min_factor, max_factor] */
+  double alpha, beta;
+  double err_old;             /* its state: the last accepted step's error (>= error_floor) */
+  double safety, min_factor, max_factor, error_floor;
 } dl_stepper;
 
 /* One call of dl_rk_run: where the outputs go, how to project, when to return. */
