@@ -27,7 +27,7 @@ from ..trajectory import Trajectory
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies, check_inertias
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
-from .drivers import Actuator, JointSpring
+from .drivers import Actuator, Driver, JointSpring
 from .initial_state import bodies_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
@@ -302,6 +302,12 @@ class Multibody:
             self._check_members(j.bodies, f"joint {j.name!r}")
         for s in self.springs:
             self._check_members(s.bodies, f"spring {s.name!r}")
+        for d in self.joints:
+            if isinstance(d, Driver) and not any(d.driven is j for j in self.joints):
+                raise ModelError(
+                    f"driver {d.name!r} drives joint {d.driven.name!r}, which is not in this "
+                    f"system's joints ({', '.join(joint_names)}): a driver prescribes the "
+                    "joint's angle or travel only; add the joint to the joints list too")
         coordinate_loads: list[JointSpring | Actuator] = [*self.joint_springs, *self.actuators]
         for js in coordinate_loads:
             if not any(js.joint is j for j in self.joints):
