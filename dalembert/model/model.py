@@ -59,8 +59,9 @@ def build_model(
     coords = build_coordinates(coordinates, velocities)
     T, V, L = _energies(kinetic, potential, lagrangian, coords)
     Q = _generalized_forces(generalized_forces, forces, coords)
-    if V is not None:
-        warn_double_counting(Q, V, coords)
+    # given L only, its velocity-free part -L(q, 0, t) holds the potential energy
+    warn_double_counting(Q, V if V is not None
+                         else -L.xreplace(dict.fromkeys(coords.qd, sp.S.Zero)), coords)
     # m >= n is allowed: dependent constraints (closed loops) can still leave freedom.
     # Whether the independent ones leave any depends on the state, so it is judged
     # numerically at the initial state (dalembert.solvers.initialization).

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
 from sympy.physics.vector import ReferenceFrame
 
 from dalembert import Holonomic, Pfaffian, PointForce, System, coordinates, t
-from dalembert.errors import ModelError
+from dalembert.errors import DoubleCountingWarning, ModelError
 from dalembert.model.constraints import build_constraints
 from dalembert.model.coordinates import build_coordinates
 from dalembert.model.forces import generalized_forces
@@ -146,6 +148,51 @@ def test_generalized_forces_as_sequence_and_wrong_length():
     assert generalized_forces([x, 2], [], coords) == sp.Matrix([X, 2])
     with pytest.raises(ModelError, match="3 entries for 2 coordinates"):
         generalized_forces([1, 2, 3], [], coords)
+
+
+# -- gravity counted twice: -dV/dq against Q, both expanded ------------------------------
+C = sp.Symbol("c", positive=True)
+T_Y = m / 2 * y.diff() ** 2
+
+
+def double_counting(**model):
+    """The DoubleCountingWarning messages of building ``System([y], **model)``, each
+    checked to point at this file (the user's line), not into the library."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        System([y], **model)
+    found = [w for w in caught if issubclass(w.category, DoubleCountingWarning)]
+    assert all(w.filename == __file__ for w in found), [w.filename for w in found]
+    return [str(w.message) for w in found]
+
+
+@pytest.mark.parametrize("model", [
+    # a float coefficient: -1.0*g*m is the potential's -g*m
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: -1.0 * g * m}),
+    # the weight inside a product with a damper
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: -m * (g + C * y.diff())}),
+    # the potential given inside a Lagrangian
+    dict(lagrangian=T_Y - m * g * y, generalized_forces={y: -m * g}),
+    # both: a Lagrangian and the weight among damper terms
+    dict(lagrangian=T_Y - m * g * y, generalized_forces={y: -C * y.diff() - g * m}),
+], ids=["float", "product", "lagrangian", "lagrangian-damped"])
+def test_gravity_counted_twice_is_reported(model):
+    (message,) = double_counting(**model)
+    assert "force on 'y' contains -" in message and "g*m" in message
+    assert "counted twice" in message
+
+
+@pytest.mark.parametrize("model", [
+    # a damper alone: no force at rest, nothing conservative
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: -C * y.diff()}),
+    dict(lagrangian=T_Y - m * g * y, generalized_forces={y: -C * y.diff()}),
+    # forces that only partly resemble the weight: shaken in time, buoyancy
+    dict(kinetic=T_Y, potential=m * g * y,
+         generalized_forces={y: -m * g * sp.sin(w * t) - C * y.diff()}),
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: a * g}),
+], ids=["damper", "damper-lagrangian", "shaker", "buoyancy"])
+def test_non_conservative_forces_are_not_reported(model):
+    assert double_counting(**model) == []
 
 
 # -- parameters ------------------------------------------------------------------------
