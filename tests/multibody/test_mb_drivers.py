@@ -125,8 +125,8 @@ def test_a_driver_whose_joint_is_not_in_the_joints_is_refused():
     disk = PlanarBody("disk", 1.0, 0.1)
     pin = Revolute("pin", Ground(), disk)
     motor = Driver("motor", pin, 2 * time)
-    with pytest.raises(ModelError, match="driver 'motor' drives joint 'pin', which is not in "
-                       "this system's joints .*add the joint to the joints list"):
+    with pytest.raises(ModelError, match=r"driver 'motor' drives joint 'pin', which is not in "
+                       r"this system's joints .*add the joint to the joints list"):
         Multibody([disk], [motor], gravity=(0, -9.81, 0))
     # with the joint listed the disk stays on its pin and turns at 2 rad/s
     mb = Multibody([disk], [pin, motor], gravity=(0, -9.81, 0))
