@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import sys
+from types import FrameType
 
 # --------------------------------------------------------------------------- errors
 
@@ -216,7 +217,7 @@ def user_stacklevel() -> int:
     >>> user_stacklevel()
     1
     """
-    frame = sys._getframe(1)
+    frame: FrameType | None = sys._getframe(1)
     level = 1
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
         frame = frame.f_back
