@@ -29,6 +29,7 @@ from typing import Literal, Protocol
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
+from .errors import user_stacklevel
 from .inputs import InputSignal, input_signal
 
 #: SciPy's solvers by the names ``solve_ivp`` knows them by.
@@ -477,7 +478,7 @@ def _backend(backend: Backend, native: bool | None) -> Backend:
         return backend
     meant: Backend = "c" if native else "python"
     warnings.warn(f"simulate(native={native!r}) is deprecated; use backend={meant!r}",
-                  DeprecationWarning, stacklevel=4)
+                  DeprecationWarning, stacklevel=user_stacklevel())
     if backend != "auto":
         raise ValueError(f"native={native!r} and backend={backend!r} are both given; "
                          "give backend only")

@@ -101,7 +101,8 @@ def test_fixed_body_elsewhere_still_builds():
 
 
 def test_the_warnings_of_a_mechanism_point_at_the_callers_line():
-    """InitialConditionsAdjusted of Multibody.simulate and initial_state, the
+    """InitialConditionsAdjusted and DeprecationWarning (native=) of Multibody.simulate,
+    InitialConditionsAdjusted of initial_state, the
     RedundantConstraintsWarning of a ring, a JointPointWarning: at this file's lines."""
     rod = RigidBody("rod", 1.0, ROD)
     pin = Spherical("pin", Ground(), rod, (0.0, 0.0, 0.0), (0.0, 0.0, 0.17))
@@ -109,6 +110,7 @@ def test_the_warnings_of_a_mechanism_point_at_the_callers_line():
     q0, _ = mb.initial_state(positions={rod: (0.0, 0.0, -0.2)})  # 0.03 off the pin
     calls = {
         "InitialConditionsAdjusted": lambda: mb.simulate((0.0, 0.01), q0),
+        "DeprecationWarning": lambda: mb.simulate((0.0, 0.01), q0, native=False),
         "RedundantConstraintsWarning": lambda: ring_run(),
         "quaternion": lambda: mb.initial_state(orientations={rod: (2.0, 0.0, 0.0, 0.0)}),
         "JointPointWarning": lambda: Multibody(
