@@ -235,6 +235,13 @@ class System:
         return any(time_symbol in sp.sympify(e).free_symbols
                    for e in self.model.constraints.exprs)
 
+    @property
+    def conserves_energy(self) -> bool:
+        """Whether ``T + V`` is constant along every motion (no applied force, input or
+        moving constraint: see :attr:`dalembert.model.model.Model.conserves_energy`); a
+        trajectory's summary calls a change of it an error only then."""
+        return self.model.conserves_energy
+
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` for a message: its name, kind and equation."""
         return self.model.constraints.describe(i)
@@ -790,6 +797,7 @@ class System:
             inputs=np.zeros((len(result.t), 0)) if applied is None else applied,
             input_names=tuple(u.name for u in self.inputs),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
+            energy_conserved=self.conserves_energy,
         )
 
 

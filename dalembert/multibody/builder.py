@@ -341,6 +341,25 @@ class Multibody:
 
     # -- the System ------------------------------------------------------------------
     @property
+    def conserves_energy(self) -> bool:
+        """Whether ``T + V`` stays constant along every motion: no force, torque,
+        actuator or input, no damping in a spring or a joint spring (a damping given as
+        a parameter counts as damping), no driver; gravity, springs and workless joints
+        (rolling among them) conserve it.
+
+        Examples
+        --------
+        >>> chain(2, 1.0, 1.0, 0.1).conserves_energy
+        True
+        """
+        if self.forces or self.torques or self.actuators or self.inputs:
+            return False
+        dampers = [*(s.damping for s in self.springs), *(s.damping for s in self.joint_springs)]
+        if any(not (isinstance(c, float) and c == 0.0) for c in dampers):
+            return False
+        return not any(getattr(j, "rheonomic", False) for j in self.joints)
+
+    @property
     def coordinates(self) -> list[sp.Function]:
         """Every body's coordinates, in the order of ``bodies``."""
         return [c for b in self.bodies for c in b.coordinates]
