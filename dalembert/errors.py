@@ -9,6 +9,10 @@ numerical failure), so generic ``except`` clauses keep working; warnings subclas
 
 from __future__ import annotations
 
+import os
+import sys
+from types import FrameType
+
 # --------------------------------------------------------------------------- errors
 
 
@@ -190,3 +194,32 @@ __all__ = [
     "TrajectoryFileError",
     "UnsafeCacheError",
 ]
+
+
+# ------------------------------------------------------------------- where warnings point
+
+#: The package's folder: frames of files under it are dalembert's own.
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` that makes a warning point at the user's line: the first frame,
+    going out from the function that warns, whose file is outside the dalembert package.
+
+    Call it in the ``warnings.warn`` call itself, so that it counts from the function
+    that warns (``stacklevel=1``); a warning raised where no frame is the user's (all
+    dalembert's, e.g. a worker thread's) points at the function that warns.
+
+    Examples
+    --------
+    Called from outside the package, level 1 is the caller itself:
+
+    >>> user_stacklevel()
+    1
+    """
+    frame: FrameType | None = sys._getframe(1)
+    level = 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        frame = frame.f_back
+        level += 1
+    return level if frame is not None else 1

@@ -219,17 +219,24 @@ def _constant(number: float) -> Source:
 
 
 def _function(f: Callable[..., Any], what: str) -> Source:
-    """``f(t, q, qd)`` or ``f(t)``, by what it accepts."""
+    """``f(t, q, qd)`` or ``f(t)``, by what it accepts; a function that takes neither
+    is refused here, naming the input (else its first call would fail the run)."""
     try:
-        parameters = inspect.signature(f).parameters.values()
-        # three required positional parameters: u(t, q, qd); else u(t) (an interpolator's
-        # further parameters have defaults: CubicSpline(t, nu=0, extrapolate=None))
-        required = [p for p in parameters if p.default is p.empty and p.kind in (
-            p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
-        takes_state = len(required) >= 3 or any(p.kind == p.VAR_POSITIONAL
-                                                for p in parameters)
+        signature = inspect.signature(f)
     except (TypeError, ValueError):  # a builtin or a C function: assume u(t)
-        takes_state = False
+        return lambda t, q, qd: f(t)
+    parameters = signature.parameters.values()
+    # three required positional parameters: u(t, q, qd); else u(t) (an interpolator's
+    # further parameters have defaults: CubicSpline(t, nu=0, extrapolate=None))
+    required = [p for p in parameters if p.default is p.empty and p.kind in (
+        p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    takes_state = len(required) >= 3 or any(p.kind == p.VAR_POSITIONAL for p in parameters)
+    try:
+        signature.bind(*range(3 if takes_state else 1))
+    except TypeError:
+        raise InputError(f"{what}: the function given takes {signature}, so it cannot be "
+                         "called as u(t, q, qd) (a controller of the state) or u(t) (of "
+                         "the time); give it one of these signatures") from None
     if takes_state:
         return lambda t, q, qd: f(t, q, qd)
     return lambda t, q, qd: f(t)

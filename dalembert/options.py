@@ -19,6 +19,7 @@ ValueError: The 'rtol' parameter of simulate must be a finite positive number ..
 
 from __future__ import annotations
 
+import inspect
 import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -28,6 +29,7 @@ from typing import Literal, Protocol
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
+from .errors import user_stacklevel
 from .inputs import InputSignal, input_signal
 
 #: SciPy's solvers by the names ``solve_ivp`` knows them by.
@@ -363,6 +365,7 @@ def simulation_options(
         "sample_time": sample_time,
     }
     check_parameters(given, SIMULATE_PARAMETERS, "simulate")
+    check_events(events)
     if state_size is not None:
         _check_tolerance_sizes({"rtol": rtol, "atol": atol}, state_size)
     span = _time_span(t_span)
@@ -388,6 +391,50 @@ def simulation_options(
         inputs=input_signal(inputs, input_names,
                             None if sample_time is None else float(sample_time), span),
     )
+
+
+def check_events(events: Sequence[Callable]) -> None:
+    """Raise a ``ValueError`` naming the first event function that cannot be called as
+    ``event(t, q, qd)`` or ``event(t, q, qd, lam)`` (at the door: else it fails at the
+    run's first step, a one-point failed run).
+
+    A function whose signature cannot be read (some builtins) is accepted; a
+    ``functools.partial``, a callable object and ``*args`` are read as Python calls them.
+
+    Parameters
+    ----------
+    events
+        The event functions (callables, checked before).
+
+    Examples
+    --------
+    >>> check_events([lambda t, q, qd: q[0], lambda t, q, qd, lam: lam[0]])
+    >>> check_events([lambda t: t - 1.0])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'events' parameter of simulate: event 0 ('<lambda>') takes (t), so ...
+    """
+    for k, event in enumerate(events):
+        try:
+            signature = inspect.signature(event)
+        except (TypeError, ValueError):  # a builtin without a signature: accepted
+            continue
+        if any(_binds(signature, size) for size in (3, 4)):
+            continue
+        name = getattr(event, "__name__", type(event).__name__)
+        raise ValueError(
+            f"The 'events' parameter of simulate: event {k} ({name!r}) takes {signature}, "
+            "so it cannot be called as event(t, q, qd) or event(t, q, qd, lam); give it "
+            "the parameters t, q, qd (and lam for the multipliers)")
+
+
+def _binds(signature: inspect.Signature, size: int) -> bool:
+    """Whether ``size`` positional arguments fit ``signature``."""
+    try:
+        signature.bind(*range(size))
+    except TypeError:
+        return False
+    return True
 
 
 def _check_tolerance_sizes(tolerances: Mapping[str, object], size: int) -> None:
@@ -431,7 +478,7 @@ def _backend(backend: Backend, native: bool | None) -> Backend:
         return backend
     meant: Backend = "c" if native else "python"
     warnings.warn(f"simulate(native={native!r}) is deprecated; use backend={meant!r}",
-                  DeprecationWarning, stacklevel=4)
+                  DeprecationWarning, stacklevel=user_stacklevel())
     if backend != "auto":
         raise ValueError(f"native={native!r} and backend={backend!r} are both given; "
                          "give backend only")

@@ -27,6 +27,7 @@ from .errors import (
     ModelError,
     RedundantConstraintsWarning,
     SingularConfigurationWarning,
+    user_stacklevel,
 )
 from .inputs import InputSignal
 from .model.coordinates import t as time_symbol
@@ -233,6 +234,13 @@ class System:
         it may leave no degree of freedom)."""
         return any(time_symbol in sp.sympify(e).free_symbols
                    for e in self.model.constraints.exprs)
+
+    @property
+    def conserves_energy(self) -> bool:
+        """Whether ``T + V`` is constant along every motion (no applied force, input or
+        moving constraint: see :attr:`dalembert.model.model.Model.conserves_energy`); a
+        trajectory's summary calls a change of it an error only then."""
+        return self.model.conserves_energy
 
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` for a message: its name, kind and equation."""
@@ -642,11 +650,13 @@ class System:
         report = self._initial_state(num, q0, qd0, options.t_span[0], fixed,
                                      options.redundant_constraints,
                                      options.velocity_projection)
-        # stacklevel 3: the user's call of simulate or plan
+        # user_stacklevel: the user's line (a call of simulate, plan, Multibody.simulate...)
         if report.changed:
-            warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=3)
+            warnings.warn(report.describe_changes(), InitialConditionsAdjusted,
+                          stacklevel=user_stacklevel())
         if report.dependent_constraints or (report.rank is not None and report.rank.near):
-            warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=3)
+            warnings.warn(str(report.rank), RedundantConstraintsWarning,
+                          stacklevel=user_stacklevel())
         return plan_simulation(num, report, options)
 
     def run(self, plan: SimulationPlan) -> Trajectory:
@@ -678,13 +688,13 @@ class System:
             result = plan.run()
         passed = plan.careful.model.warning() if plan.careful is not None else ""
         if passed:
-            warnings.warn(passed, SingularConfigurationWarning, stacklevel=3)
+            warnings.warn(passed, SingularConfigurationWarning, stacklevel=user_stacklevel())
         if not result.success:
             reached = result.t[-1] if len(result.t) else plan.options.t_span[0]
             warning = IntegrationWarning(f"{result.message}; returning the trajectory up to "
                                          f"t={reached:.6g}")
             warning.__cause__ = result.error  # an event function's exception, chained
-            warnings.warn(warning, stacklevel=3)  # 3: the user's call of simulate or run
+            warnings.warn(warning, stacklevel=user_stacklevel())  # the user's call
         return self._trajectory(result, plan, derived, applied, dynamics)
 
     def _segment(self, plan: SimulationPlan, a: float, b: float, y: np.ndarray,
@@ -787,6 +797,7 @@ class System:
             inputs=np.zeros((len(result.t), 0)) if applied is None else applied,
             input_names=tuple(u.name for u in self.inputs),
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
+            energy_conserved=self.conserves_energy,
         )
 
 

@@ -67,6 +67,10 @@ class Trajectory:
         ``(k,)``.
     sol
         Dense output ``sol(t)`` (with ``dense_output=True``), else ``None``.
+    energy_conserved
+        Whether the model conserves ``T + V`` (no applied force, input or moving
+        constraint; ``None``: not known), set by the System: :meth:`summary` calls a
+        change of ``T + V`` an error only where it is conserved.
 
     Examples
     --------
@@ -103,6 +107,7 @@ class Trajectory:
     y_events: list[np.ndarray] = field(default_factory=list)
     near_singular: np.ndarray | None = None
     sol: Any = None
+    energy_conserved: bool | None = None
 
     @property
     def success(self) -> bool:
@@ -165,17 +170,35 @@ class Trajectory:
                 f"coordinates={list(self.coordinate_names)})")
 
     def summary(self) -> str:
-        """A few lines with the measured drift and energy error."""
+        """A few lines with the measured drift and the change of energy ``T + V``: an
+        error where the model conserves it, else the work of its applied forces, inputs
+        and drivers (:attr:`energy_conserved`).
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> traj = load("pendulum").build().simulate((0, 1), {"x": 1.0, "y": 0.0})
+        >>> print(traj.summary().splitlines()[-1])  # doctest: +ELLIPSIS
+          relative change of T + V ...e-1... (an error where energy is conserved)
+        """
         lines = [repr(self), f"  {self.message}"]
         if len(self.t):
             lines.append(f"  max position residual {self.position_residual.max():.2e}, "
                          f"max velocity residual {self.velocity_residual.max():.2e}")
             e = self.energy
             if np.all(np.isfinite(e)):
-                rel = np.abs(e - e[0]).max() / max(abs(e[0]), 1e-300)
-                lines.append(
-                    f"  relative change of T + V {rel:.2e} (an error where energy is conserved)"
-                )
+                # against the energy exchanged, not T + V alone (zero for a pendulum
+                # released level with its pivot)
+                scale = max(abs(e[0]), np.abs(self.kinetic_energy).max(),
+                            np.abs(self.potential_energy).max(), 1e-300)
+                rel = np.abs(e - e[0]).max() / scale
+                if self.energy_conserved is False:
+                    lines.append(
+                        f"  change of T + V {e[-1] - e[0]:.6g} (relative {rel:.2e}): the work "
+                        "of the applied forces, inputs and drivers, not an error")
+                else:
+                    lines.append(f"  relative change of T + V {rel:.2e} (an error where "
+                                 "energy is conserved)")
         return "\n".join(lines)
 
     def save(self, path: str | os.PathLike) -> Path:
@@ -214,12 +237,13 @@ class Trajectory:
         (True, ('rod',))
         """
         path = Path(path)
-        meta = {"coordinate_names": list(self.coordinate_names),
-                "constraint_names": list(self.constraint_names), "status": self.status,
-                "message": self.message, "stats": self.stats,
-                "initialization": self.initialization,
-                "parameters": {k: float(v) for k, v in self.parameters.items()},
-                "input_names": list(self.input_names)}
+        meta: dict[str, Any] = {"coordinate_names": list(self.coordinate_names),
+            "constraint_names": list(self.constraint_names), "status": self.status,
+            "message": self.message, "stats": self.stats, "initialization": self.initialization,
+            "parameters": {k: float(v) for k, v in self.parameters.items()},
+            "input_names": list(self.input_names)}
+        if self.energy_conserved is not None:
+            meta["energy_conserved"] = bool(self.energy_conserved)
         arrays = {name: getattr(self, name) for name in trajectory_file.ARRAYS}
         if self.input_names:
             arrays["inputs"] = self.inputs

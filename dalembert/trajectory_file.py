@@ -52,9 +52,12 @@ STATUSES = ("finished", "event", "failed", "interrupted")
 #: The metadata fields and their JSON types.
 METADATA: dict[str, type] = {"coordinate_names": list, "constraint_names": list,
                              "status": str, "message": str, "stats": dict,
-                             "initialization": str, "parameters": dict, "input_names": list}
+                             "initialization": str, "parameters": dict, "input_names": list,
+                             "energy_conserved": bool}
 #: Fields a file of an earlier version may lack, and their value then.
 OPTIONAL = {"parameters": dict, "input_names": list}
+#: Fields that are absent where not known (``None`` then).
+UNKNOWN_IF_ABSENT = ("energy_conserved",)
 #: By default a file may read to at most this many times its size ...
 MAX_EXPANSION = 16
 #: ... or this many bytes, whichever is more.
@@ -308,6 +311,9 @@ def _metadata(meta: np.ndarray, path: Path) -> dict[str, Any]:
     for name, make in OPTIONAL.items():
         fields.setdefault(name, make())
     for name, kind in METADATA.items():
+        if name not in fields and name in UNKNOWN_IF_ABSENT:
+            fields[name] = None
+            continue
         if name not in fields:
             raise bad(f"the field {name!r}", "is missing")
         if not isinstance(fields[name], kind):

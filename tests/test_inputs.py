@@ -187,3 +187,47 @@ def test_holding_replaces_the_sources_of_the_inputs_named():
     together = input_signal(lambda t: [t, t], ["u", "v"], None, (0.0, 1.0))
     with pytest.raises(InputError, match="gives u together with other inputs"):
         together.holding({"u": 1.0})
+
+
+class _Gain:
+    """A callable controller object: u = -k theta."""
+
+    def __init__(self, k: float) -> None:
+        self.k = k
+
+    def __call__(self, t, q, qd):
+        return -self.k * q[0]
+
+
+@pytest.mark.parametrize("function", [lambda t, q: 1.0, lambda t, q, qd, extra: 1.0,
+                                      lambda *, t: 1.0, lambda: 1.0])
+def test_a_function_of_a_wrong_signature_is_refused_at_the_door(function):
+    """Before any step: it would fail at its first call, a run of one point."""
+    with pytest.raises(InputError, match=r"the input 'u': the function given takes \(.*\), so "
+                       r"it cannot be called as u\(t, q, qd\) .* or u\(t\)"):
+        pendulum().plan((0, 1), {theta: 1.0}, inputs=function)
+    with pytest.raises(InputError, match=r"the input 'v': the function given takes"):
+        System([theta], kinetic=theta.diff() ** 2 / 2, generalized_forces={theta: u + v},
+               inputs=[u, v]).simulate((0, 1), {theta: 1.0}, inputs={"u": 0.0, "v": function})
+
+
+v = sp.Symbol("v")
+
+
+def test_every_valid_form_of_a_function_still_runs():
+    """partial, callable objects, *args, defaults, builtins without a signature: each gives
+    the torque its law says (the pendulum's closed-loop run against the law in SymPy)."""
+    from functools import partial
+
+    times = np.linspace(0.0, 1.0, 5)
+    reference = pendulum(-3.0 * theta).simulate((0, 1), {theta: 1.0}, t_eval=times)
+    laws = [partial(lambda k, t, q, qd: -k * q[0], 3.0), _Gain(3.0),
+            lambda t, *state: -3.0 * state[0][0], lambda t, q, qd, scale=3.0: -scale * q[0]]
+    for law in laws:
+        traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=law, t_eval=times)
+        assert np.abs(traj.q - reference.q).max() < 1e-10, law
+    # of the time: a partial, a ufunc, a builtin whose signature cannot be read (u(t))
+    for law, values in [(partial(lambda k, t: k * t, 0.5), 0.5 * times), (np.sin, np.sin(times)),
+                        (partial(max, 0.25), np.maximum(0.25, times))]:
+        traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=law, t_eval=times)
+        assert traj.success and np.allclose(traj.input("u"), values, rtol=0, atol=1e-15), law

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -99,3 +101,40 @@ def test_all_stabilizations_record_residuals(stabilization):
     traj = pendulum().simulate((0, 0.5), q0=[1.0, 0.0], stabilization=stabilization)
     assert traj.position_residual.shape == traj.t.shape
     assert traj.position_residual.max() < 1e-9
+
+
+# -- warnings point at the user's line, not into the library ----------------------------
+def recorded(call):
+    """The warnings ``call()`` gives, each as ``(category name, file)``."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        call()
+    return [(w.category.__name__, w.filename) for w in caught]
+
+
+def test_the_warnings_of_simulate_plan_and_run_point_at_the_callers_line():
+    system = pendulum()
+    off = {"x": 1.1, "y": 0.0}  # off the rod: projected, InitialConditionsAdjusted
+    twice = System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2),
+                   potential=m * g * y, parameters={m: 1.0, g: 9.81, l: 1.0},
+                   constraints=[Holonomic(x**2 + y**2 - l**2, name="rod"),
+                                Holonomic(2 * (x**2 + y**2 - l**2), name="again")])
+
+    def failing(t, q, qd):
+        return 1.0 / 0.0 if t > 0.1 else 1.0
+
+    calls = {
+        "InitialConditionsAdjusted": lambda: system.simulate((0, 0.1), off),
+        "RedundantConstraintsWarning": lambda: twice.simulate((0, 0.1), {"x": 1.0, "y": 0.0}),
+        "IntegrationWarning": lambda: system.simulate((0, 0.5), {"x": 1.0, "y": 0.0},
+                                                      events=[failing]),
+        "plan": lambda: system.plan((0, 0.1), off),
+        "run": lambda: system.run(system.plan((0, 0.5), {"x": 1.0, "y": 0.0},
+                                              events=[failing])),
+    }
+    for what, call in calls.items():
+        found = recorded(call)
+        assert found, what
+        kind = {"plan": "InitialConditionsAdjusted", "run": "IntegrationWarning"}.get(what, what)
+        assert kind in [name for name, _ in found], (what, found)
+        assert all(file == __file__ for _, file in found), (what, found)

@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 import time
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -16,7 +17,15 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from dalembert import Holonomic, System, Trajectory, TrajectoryFileError, coordinates, t
+from dalembert import (
+    Holonomic,
+    InitialConditionsAdjusted,
+    System,
+    Trajectory,
+    TrajectoryFileError,
+    coordinates,
+    t,
+)
 
 x, y = coordinates("x y")
 m, g, l = sp.symbols("m g l", positive=True)
@@ -402,3 +411,79 @@ def test_a_damaged_file_loads_or_raises_the_one_error(traj, tmp_path):
         except TrajectoryFileError:
             outcomes["refused"] += 1
     assert outcomes["refused"] > 150  # the damage was mostly seen
+
+
+def test_a_forced_or_driven_change_of_energy_is_not_called_an_error(traj, tmp_path):
+    """Conservative (the pendulum): the change of T + V is an error, measured against the
+    energy exchanged. Damped (c x_dot, c y_dot): T + V falls by the damper's work, the
+    integral of -c |v|^2 (trapezoid on a fine grid), and the summary says so; the flag
+    is kept by save and load, and a file without it reads as not known."""
+    assert traj.energy_conserved is True
+    text = traj.summary()
+    e = traj.energy
+    scale = max(np.abs(traj.kinetic_energy).max(), np.abs(traj.potential_energy).max())
+    assert f"relative change of T + V {np.abs(e - e[0]).max() / scale:.2e} (an error" in text
+    c = sp.Symbol("c")
+    damped = System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2), potential=m * g * y,
+                    constraints=[Holonomic(x**2 + y**2 - l**2, name="rod")],
+                    generalized_forces={x: -c * x.diff(), y: -c * y.diff()},
+                    parameters={m: 1.0, g: 9.81, l: 1.0, c: 0.3})
+    run = damped.simulate((0, 2), q0=[1.0, 0.0], t_eval=np.linspace(0, 2, 4001))
+    assert run.energy_conserved is False
+    work = np.trapezoid(-0.3 * (run.qd ** 2).sum(axis=1), run.t)
+    change = run.energy[-1] - run.energy[0]
+    assert change < -0.1 and abs(change - work) < 1e-5 * abs(work)
+    summary = run.summary()
+    assert f"change of T + V {change:.6g} (relative" in summary
+    assert "the work of the applied forces, inputs and drivers, not an error" in summary
+    assert "an error where" not in summary
+    assert Trajectory.load(run.save(tmp_path / "damped.npz")).energy_conserved is False
+    assert Trajectory.load(traj.save(tmp_path / "free.npz")).energy_conserved is True
+    old = crafted(traj, tmp_path, drop=("energy_conserved",))  # a file of an earlier version
+    assert Trajectory.load(old).energy_conserved is None
+
+
+def test_which_models_conserve_energy():
+    """T + V is constant only without applied forces, inputs or moving constraints, and
+    with T quadratic in the velocities (measured on each: the drift of T + V along a run
+    is at rounding level exactly where the flag says so)."""
+    from dalembert.multibody import Driver, Ground, Multibody, PlanarBody, Revolute, chain
+
+    u, w = sp.Symbol("u"), sp.Symbol("w")
+    kinetic = m / 2 * (x.diff() ** 2 + y.diff() ** 2)
+    rod = Holonomic(x**2 + y**2 - l**2, name="rod")
+    p = {m: 1.0, g: 9.81, l: 1.0}
+    cases = {
+        "free": (System([x, y], kinetic=kinetic, potential=m * g * y, constraints=[rod],
+                        parameters=p), {}, True),
+        "input": (System([x, y], kinetic=kinetic, potential=m * g * y, constraints=[rod],
+                         generalized_forces={x: u}, inputs=[u], parameters=p),
+                  {"inputs": 1.0}, False),
+        # the rod's length grows: the constraint moves
+        "moving": (System([x, y], kinetic=kinetic, potential=m * g * y,
+                          constraints=[Holonomic(x**2 + y**2 - (l + t / 2) ** 2)],
+                          parameters=p), {}, False),
+        # a frame turning at w: T has a part linear in the velocities
+        "turning": (System([x, y], kinetic=m / 2 * ((x.diff() - w * y) ** 2
+                                                    + (y.diff() + w * x) ** 2),
+                           potential=m * g * y, constraints=[rod], parameters={**p, w: 2.0}),
+                    {}, False),
+    }
+    for name, (system, options, expected) in cases.items():
+        assert system.conserves_energy is expected, name
+        with warnings.catch_warnings():  # the moving rod's start is projected
+            warnings.simplefilter("ignore", InitialConditionsAdjusted)
+            run = system.simulate((0, 1), q0=[1.0, 0.0], qd0=[0.0, 0.3], **options)
+        drift = np.abs(run.energy - run.energy[0]).max()
+        assert bool(drift < 1e-9) is expected, (name, drift)
+        assert run.energy_conserved is expected
+    disk = PlanarBody("disk", 1.0, 0.5)
+    pin = Revolute("pin", Ground(), disk)
+    assert chain(2, 1.0, 1.0, 0.1).conserves_energy is True
+    assert chain(2, 1.0, 1.0, 0.1).system.conserves_energy is True
+    driven = Multibody([disk], [pin, Driver("motor", pin, 2 * t**2)], gravity=(0, 0, 0))
+    assert driven.system.conserves_energy is False
+    run = driven.simulate((0, 1), {}, t_eval=[0.0, 1.0])
+    # the motor brings the disk from rest to 4 rad/s: T = 1/2 0.5 4^2 = 4, its work
+    assert run.energy_conserved is False and abs(run.energy[-1] - 4.0) < 1e-9
+    assert "change of T + V 4 (relative" in run.summary()

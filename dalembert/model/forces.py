@@ -17,7 +17,7 @@ from typing import Any, cast
 
 import sympy as sp
 
-from ..errors import DoubleCountingWarning, ModelError
+from ..errors import DoubleCountingWarning, ModelError, user_stacklevel
 from .coordinates import Coordinates
 from .expressions import listed
 
@@ -117,27 +117,74 @@ def vector_components(vec: object, frame: object | None, what: str) -> list[obje
 
 
 def warn_double_counting(Q: sp.Matrix, V: sp.Expr, coords: Coordinates) -> None:
-    """Warn when a term of ``Q_j`` equals a term of ``-dV/dq_j``.
+    """Warn when ``Q_j`` holds a term of ``-dV/dq_j``, both expanded.
 
     That is the classic mistake of putting gravity (or a spring) both in the
-    potential energy and again among the applied forces.
+    potential energy and again among the applied forces. A conservative force does
+    not depend on the velocities, so the part of ``Q_j`` that remains at zero
+    velocities is compared, expanded: a weight hidden in a product with a damper
+    (``-m (g + c y')``) or written with a float (``-1.0 g m``) is found, and a damper
+    alone (zero at rest) never is. Terms agree when their symbolic factors are equal
+    and their numeric coefficients agree to rounding.
+
+    Parameters
+    ----------
+    Q
+        The generalized forces (n x 1), in plain symbols.
+    V
+        The potential energy (for a model given by its Lagrangian ``L``, ``-L`` at
+        zero velocities).
+    coords
+        The model's coordinates.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from dalembert.model.coordinates import build_coordinates, coordinates
+    >>> coords = build_coordinates(coordinates("y"))
+    >>> y, yd = coords.q[0], coords.qd[0]
+    >>> m, g, c = sp.symbols("m g c")
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     warn_double_counting(sp.Matrix([-m * (g + c * yd)]), m * g * y, coords)
+    >>> [type(w.message).__name__ for w in caught]
+    ['DoubleCountingWarning']
     """
-    state = (*coords.q, *coords.qd)
+    rest = dict.fromkeys(coords.qd, sp.S.Zero)
     for j, q in enumerate(coords.q):
         if Q[j] == 0 or not V.has(q):
             continue
-        conservative = set(sp.Add.make_args(sp.expand(-V.diff(q)))) - {sp.S.Zero}
-        # Q's own terms, and its state-independent part expanded (a constant weight m*g
-        # hidden in a product); expanding all of Q can take long for damper forces.
-        constant = Q[j].as_independent(*state, as_Add=True)[0]
-        applied = set(sp.Add.make_args(Q[j])) | set(sp.Add.make_args(sp.expand(constant)))
-        repeated = conservative & applied
-        for term in repeated:
+        # a damper's force vanishes at rest before anything is expanded (expanding all
+        # of a damper's force can take long)
+        static = Q[j].xreplace(rest)
+        if static == 0:
+            continue
+        conservative = _terms(-V.diff(q))
+        repeated = [term for key, (coeff, term) in _terms(static).items()
+                    if key in conservative and _same_number(coeff, conservative[key][0])]
+        if repeated:
+            listing = ", ".join(str(term) for term in repeated)
             warnings.warn(
-                f"the generalized force on {coords.names[j]!r} contains {term}, which is "
-                f"already -dV/d{coords.names[j]} from the potential energy: a conservative "
+                f"the generalized force on {coords.names[j]!r} contains {listing}, which "
+                f"{'is' if len(repeated) == 1 else 'are'} already in "
+                f"-dV/d{coords.names[j]} from the potential energy: a conservative "
                 "force (gravity?) counted twice. Keep it in V only; Q holds "
                 "non-conservative forces.",
                 DoubleCountingWarning,
-                stacklevel=4,
+                stacklevel=user_stacklevel(),
             )
+
+
+def _terms(expr: sp.Expr) -> dict[sp.Expr, tuple[sp.Expr, sp.Expr]]:
+    """The terms of ``expr`` expanded, by their symbolic factor: ``(coefficient, term)``."""
+    out: dict[sp.Expr, tuple[sp.Expr, sp.Expr]] = {}
+    for term in sp.Add.make_args(sp.expand(expr)):
+        coeff, factor = term.as_coeff_Mul()
+        out[factor] = (coeff, term)  # a constant (factor 1): a weight given as a number
+    return out
+
+
+def _same_number(a: sp.Expr, b: sp.Expr) -> bool:
+    """Numeric coefficients equal to rounding (``-1.0`` and ``-1``)."""
+    x, y = float(a), float(b)
+    return abs(x - y) <= 1e-12 * max(abs(x), abs(y))

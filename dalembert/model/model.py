@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, cast
 
 import sympy as sp
@@ -38,6 +39,39 @@ class Model:
     def has_energy(self) -> bool:
         return self.kinetic is not None and self.potential is not None
 
+    @cached_property  # asked at every run's end (an ensemble's cases)
+    def conserves_energy(self) -> bool:
+        """Whether ``T + V`` stays constant along every motion, so that a change of it
+        is an integration error: the energies given (not a Lagrangian alone), no applied
+        generalized force, point force or input, no time in ``T``, ``V`` or the
+        constraints, every velocity constraint homogeneous (``A qd = 0``: its forces do
+        no work), and ``T`` quadratic in the velocities (a part linear in them or free
+        of them, as in a rotating frame, makes the Jacobi integral, not ``T + V``, the
+        constant).
+
+        Examples
+        --------
+        >>> from dalembert.model.coordinates import coordinates
+        >>> (x,) = coordinates("x")
+        >>> spring = build_model([x], kinetic=x.diff() ** 2 / 2, potential=x**2 / 2)
+        >>> damped = build_model([x], kinetic=x.diff() ** 2 / 2, potential=x**2 / 2,
+        ...                      generalized_forces=[-x.diff()])
+        >>> spring.conserves_energy, damped.conserves_energy
+        (True, False)
+        """
+        if self.kinetic is None or self.potential is None or self.inputs:
+            return False
+        if not self.Q.is_zero_matrix or t in self.lagrangian.free_symbols:
+            return False
+        cons = self.constraints
+        if any(t in sp.sympify(e).free_symbols for e in cons.exprs) or \
+                not cons.b.is_zero_matrix:
+            return False
+        rest = dict.fromkeys(self.coords.qd, sp.S.Zero)
+        T = self.kinetic
+        return T.xreplace(rest) == 0 and all(T.diff(v).xreplace(rest) == 0
+                                            for v in self.coords.qd)
+
 
 def build_model(
     coordinates: Iterable[object],
@@ -59,8 +93,9 @@ def build_model(
     coords = build_coordinates(coordinates, velocities)
     T, V, L = _energies(kinetic, potential, lagrangian, coords)
     Q = _generalized_forces(generalized_forces, forces, coords)
-    if V is not None:
-        warn_double_counting(Q, V, coords)
+    # given L only, its velocity-free part -L(q, 0, t) holds the potential energy
+    warn_double_counting(Q, V if V is not None
+                         else -L.xreplace(dict.fromkeys(coords.qd, sp.S.Zero)), coords)
     # m >= n is allowed: dependent constraints (closed loops) can still leave freedom.
     # Whether the independent ones leave any depends on the state, so it is judged
     # numerically at the initial state (dalembert.solvers.initialization).

@@ -93,7 +93,10 @@ def parameter_values(
             known = ", ".join(sorted(names)) or "none"
             time = " ('t' is time, dalembert.t, never a parameter)" if name == "t" else ""
             raise ParameterError(
-                f"{name!r} is not a parameter of this model (its parameters: {known}){time}"
+                f"{name!r} is not a parameter of this model (its parameters: {known}){time}; "
+                "check the spelling, or, to share one dict among models that use different "
+                "names, pass dalembert.ParameterSet(values, strict=False), which skips "
+                "the names a model lacks"
             )
         values[name] = _finite_float(name, value)
     return values

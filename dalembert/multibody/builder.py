@@ -27,7 +27,7 @@ from ..trajectory import Trajectory
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies, check_inertias
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
-from .drivers import Actuator, JointSpring
+from .drivers import Actuator, Driver, JointSpring
 from .initial_state import bodies_state
 from .joints import Joint, Revolute, Spherical
 from .loads import Force, SpringDamper, Torque
@@ -302,6 +302,12 @@ class Multibody:
             self._check_members(j.bodies, f"joint {j.name!r}")
         for s in self.springs:
             self._check_members(s.bodies, f"spring {s.name!r}")
+        for d in self.joints:
+            if isinstance(d, Driver) and not any(d.driven is j for j in self.joints):
+                raise ModelError(
+                    f"driver {d.name!r} drives joint {d.driven.name!r}, which is not in this "
+                    f"system's joints ({', '.join(joint_names)}): a driver prescribes the "
+                    "joint's angle or travel only; add the joint to the joints list too")
         coordinate_loads: list[JointSpring | Actuator] = [*self.joint_springs, *self.actuators]
         for js in coordinate_loads:
             if not any(js.joint is j for j in self.joints):
@@ -334,6 +340,25 @@ class Multibody:
                 )
 
     # -- the System ------------------------------------------------------------------
+    @property
+    def conserves_energy(self) -> bool:
+        """Whether ``T + V`` stays constant along every motion: no force, torque,
+        actuator or input, no damping in a spring or a joint spring (a damping given as
+        a parameter counts as damping), no driver; gravity, springs and workless joints
+        (rolling among them) conserve it.
+
+        Examples
+        --------
+        >>> chain(2, 1.0, 1.0, 0.1).conserves_energy
+        True
+        """
+        if self.forces or self.torques or self.actuators or self.inputs:
+            return False
+        dampers = [*(s.damping for s in self.springs), *(s.damping for s in self.joint_springs)]
+        if any(not (isinstance(c, float) and c == 0.0) for c in dampers):
+            return False
+        return not any(getattr(j, "rheonomic", False) for j in self.joints)
+
     @property
     def coordinates(self) -> list[sp.Function]:
         """Every body's coordinates, in the order of ``bodies``."""

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import ConstraintError, JointPointWarning
+from ..errors import ConstraintError, JointPointWarning, user_stacklevel
 from ..model.values import CoordinateValues, coordinate_values
 from ..numerics.rank import constraint_rank
 from .bodies import Body, TurningBody
@@ -100,7 +100,7 @@ def check_joint_points(joint: Joint) -> None:
                 f"gyration {size:.3g}. Joint points are in the body frame, relative to the mass "
                 "center: convert a world point p with R^T (p - x). (A point mass on a long "
                 "massless rod is better a Particle.)",
-                JointPointWarning, stacklevel=4,
+                JointPointWarning, stacklevel=user_stacklevel(),
             )
 
 
@@ -189,7 +189,7 @@ def check_initial_joint_points(mb: Multibody, q: FloatArray) -> None:
                 f"but point_{side} {tuple(point.tolist())} is where the joint is in world "
                 f"coordinates; joint points are in the body frame of {body.name!r}: use "
                 f"point_{side}={tuple(np.round(fixed, 12).tolist())}",
-                JointPointWarning, stacklevel=3,
+                JointPointWarning, stacklevel=user_stacklevel(),
             )
 
 

@@ -115,6 +115,9 @@ class Driver(Joint):
         vars(self).update({k: v for k, v in vars(joint).items()
                            if k not in ("name", "n_equations")})
         self.name, self.joint_kind, self.motion = name, type(joint).__name__, expr
+        #: the driven joint itself: its own rows must be in the mechanism too (a driver
+        #: fixes one coordinate of the joint, not the joint)
+        self.driven = joint
         self.uses_orientation = isinstance(joint, Revolute)
         self.n_equations = 1
 

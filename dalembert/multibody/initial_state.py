@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..errors import InitialConditionError, InitialConditionsAdjusted
+from ..errors import InitialConditionError, InitialConditionsAdjusted, user_stacklevel
 from .bodies import MovingBody, PlanarBody, RigidBody
 from .rotations import E_matrix, check_rotations, quaternion_from_matrix, rotation_matrix
 from .types import FloatArray, Frame, Orientation, Vector
@@ -183,7 +183,7 @@ def _quaternion(value: Orientation, name: str) -> FloatArray:
         warnings.warn(
             f"the quaternion of {name!r} had norm {norm:.12g}; normalized to "
             f"{np.array2string(arr / norm, precision=12)}",
-            InitialConditionsAdjusted, stacklevel=5,  # the call of Multibody.initial_state
+            InitialConditionsAdjusted, stacklevel=user_stacklevel(),
         )
     return arr / norm
 

@@ -84,6 +84,13 @@ class MultibodySystem(System):
         """Whether a joint prescribes a motion in time (a driver)."""
         return any(getattr(j, "rheonomic", False) for j in self._multibody.joints)
 
+    @property
+    def conserves_energy(self) -> bool:
+        """Whether ``T + V`` is constant along every motion (read from the pieces, no
+        symbolic model built): no force, torque, actuator or input, no damping in a
+        spring, no driver."""
+        return self._multibody.conserves_energy
+
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` by name and the joint or body it belongs to (no symbolic
         model is built for a message: for a large mechanism that takes long).

@@ -55,8 +55,10 @@ class InitializationReport:
     #: impulse ``A^T mu`` of the plastic impact onto the constraints (``None`` if the
     #: velocities were not changed that way).
     impulse: np.ndarray | None = field(default=None, compare=False)
-    #: The kinetic energy the velocity projection removed (``T(qd_given) - T(qd)`` for
-    #: the kinetic-energy projection: the energy an impact dissipates).
+    #: The energy of the velocity change, ``(qd - qd_given)^T M (qd - qd_given) / 2``,
+    #: for the kinetic-energy projection: what a plastic impact dissipates, which is
+    #: ``T(qd_given) - T(qd)`` where the constraints do not move (a driver's may add
+    #: energy: see :attr:`kinetic_energy_change`).
     kinetic_energy_lost: float = 0.0
 
     @property
@@ -68,6 +70,29 @@ class InitializationReport:
     def dependent_constraints(self) -> list[str]:
         """Names of the constraints that are combinations of those listed before them."""
         return [] if self.rank is None else self.rank.dependent_names
+
+    @property
+    def kinetic_energy_change(self) -> float:
+        """``T(qd) - T(qd_given)`` with the kinetic-energy projection (0 without its
+        impulse): negative where an impact dissipates energy, positive where a driver
+        or another moving constraint sets the mechanism in motion.
+
+        With the impulse ``p = M (qd - qd_given)`` (``M`` symmetric) it is
+        ``p . (qd + qd_given) / 2``.
+
+        Examples
+        --------
+        A unit mass at rest whose constraint ``x = 2 t`` moves it at 2: it gains 2.
+
+        >>> import numpy as np
+        >>> report = InitializationReport(("x",), np.zeros(1), np.zeros(1), np.zeros(1),
+        ...                               np.array([2.0]), impulse=np.array([2.0]))
+        >>> report.kinetic_energy_change
+        2.0
+        """
+        if self.impulse is None:
+            return 0.0
+        return 0.5 * float(self.impulse @ (self.qd + self.qd_given))
 
     @property
     def changed(self) -> bool:
@@ -114,13 +139,14 @@ class InitializationReport:
         if self.velocity_projection == "least-change" or self.impulse is None:
             return ("velocities: the nearest consistent ones (least change, "
                     "velocity_projection='least-change')")
+        change = self.kinetic_energy_change
         moved = [f"{n}: {v:.6g}" for n, v in zip(self.names, self.impulse)
                  if abs(v) > REPORT_TOL * max(1.0, float(np.abs(self.impulse).max()))]
         return ("velocities: those after a perfectly plastic impact onto the constraints "
                 "(the projection in the kinetic-energy metric, independent of units; "
                 "velocity_projection='least-change' gives the nearest ones instead); "
                 f"generalized impulse M (qd - qd0) = A^T mu: {', '.join(moved)}; "
-                f"kinetic energy lost {self.kinetic_energy_lost:.6g}")
+                f"kinetic energy {'gained' if change > 0 else 'lost'} {abs(change):.6g}")
 
 
 def _changed(names: Sequence[str], given: np.ndarray, new: np.ndarray) -> list[str]:

@@ -130,6 +130,18 @@ def test_every_option_of_the_table_is_exercised_here():
 
 
 # -- rules that tie an option to another, or to the model ----------------------------------
+def _bottom(t, q, qd, lam, tau):
+    """An event of five required parameters: no call the run makes fits it."""
+    return q[0]
+
+
+class _Crossing:
+    """A callable object event: ``x`` crossing zero."""
+
+    def __call__(self, t, q, qd):
+        return q[0]
+
+
 @pytest.fixture(scope="module")
 def pend() -> System:
     return pendulum()
@@ -155,6 +167,11 @@ def pend() -> System:
      "The 'baumgarte_gain' parameter of simulate must be a finite positive number or None; "
      "got -5.0."),
     ({"events": "ev"}, "The 'events' parameter of simulate must be a sequence of callables"),
+    ({"events": [lambda t: t - 0.5]}, "The 'events' parameter of simulate: event 0 "
+     "('<lambda>') takes (t), so it cannot be called as event(t, q, qd) or "
+     "event(t, q, qd, lam)"),
+    ({"events": [lambda t, q, qd: q[0], _bottom]}, "event 1 ('_bottom') takes (t, q, qd, lam, "
+     "tau), so it cannot be called"),
 ])
 def test_simulate_refuses_at_the_door(pend, monkeypatch, options, culprit):
     # nothing past the door runs: no initial state, no plan
@@ -176,3 +193,22 @@ def test_bad_t_span_is_named(pend, t_span):
 def test_tolerances_one_per_state_entry_are_accepted(pend):
     traj = pend.simulate((0, 0.1), q0=[1.0, 0.0], atol=[1e-12] * 4, backend="python")
     assert traj.success
+
+
+def test_every_callable_form_of_an_event_is_accepted(pend):
+    """A partial, a callable object, ``*args``, the multipliers' form and a builtin without
+    a signature pass the door; the first four find the pendulum's first passage through
+    the bottom, a quarter of the period of the exact pendulum released horizontally
+    (K(1/sqrt(2)) * sqrt(l/g) * 4 / 4 = 1.8541 * sqrt(1/9.81))."""
+    from functools import partial
+
+    from scipy.special import ellipk
+
+    quarter = ellipk(0.5) / np.sqrt(9.81)
+    forms = [partial(lambda k, t, q, qd: k * q[0], 2.0), _Crossing(),
+             lambda t, *state: state[0][0], lambda t, q, qd, lam: q[0]]
+    for form in forms:
+        traj = pend.simulate((0, 1), q0=[1.0, 0.0], events=[form], backend="python")
+        assert abs(traj.t_events[0][0] - quarter) < 1e-8, form
+    # signatures that cannot be read are accepted (the call decides)
+    simulation_options((0.0, 1.0), events=[max, partial(max, 0.0)])

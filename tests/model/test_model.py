@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
 from sympy.physics.vector import ReferenceFrame
 
 from dalembert import Holonomic, Pfaffian, PointForce, System, coordinates, t
-from dalembert.errors import ModelError
+from dalembert.errors import DoubleCountingWarning, ModelError
 from dalembert.model.constraints import build_constraints
 from dalembert.model.coordinates import build_coordinates
 from dalembert.model.forces import generalized_forces
@@ -148,6 +150,51 @@ def test_generalized_forces_as_sequence_and_wrong_length():
         generalized_forces([1, 2, 3], [], coords)
 
 
+# -- gravity counted twice: -dV/dq against Q, both expanded ------------------------------
+C = sp.Symbol("c", positive=True)
+T_Y = m / 2 * y.diff() ** 2
+
+
+def double_counting(**model):
+    """The DoubleCountingWarning messages of building ``System([y], **model)``, each
+    checked to point at this file (the user's line), not into the library."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        System([y], **model)
+    found = [w for w in caught if issubclass(w.category, DoubleCountingWarning)]
+    assert all(w.filename == __file__ for w in found), [w.filename for w in found]
+    return [str(w.message) for w in found]
+
+
+@pytest.mark.parametrize("model", [
+    # a float coefficient: -1.0*g*m is the potential's -g*m
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: -1.0 * g * m}),
+    # the weight inside a product with a damper
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: -m * (g + C * y.diff())}),
+    # the potential given inside a Lagrangian
+    dict(lagrangian=T_Y - m * g * y, generalized_forces={y: -m * g}),
+    # both: a Lagrangian and the weight among damper terms
+    dict(lagrangian=T_Y - m * g * y, generalized_forces={y: -C * y.diff() - g * m}),
+], ids=["float", "product", "lagrangian", "lagrangian-damped"])
+def test_gravity_counted_twice_is_reported(model):
+    (message,) = double_counting(**model)
+    assert "force on 'y' contains -" in message and "g*m" in message
+    assert "counted twice" in message
+
+
+@pytest.mark.parametrize("model", [
+    # a damper alone: no force at rest, nothing conservative
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: -C * y.diff()}),
+    dict(lagrangian=T_Y - m * g * y, generalized_forces={y: -C * y.diff()}),
+    # forces that only partly resemble the weight: shaken in time, buoyancy
+    dict(kinetic=T_Y, potential=m * g * y,
+         generalized_forces={y: -m * g * sp.sin(w * t) - C * y.diff()}),
+    dict(kinetic=T_Y, potential=m * g * y, generalized_forces={y: a * g}),
+], ids=["damper", "damper-lagrangian", "shaker", "buoyancy"])
+def test_non_conservative_forces_are_not_reported(model):
+    assert double_counting(**model) == []
+
+
 # -- parameters ------------------------------------------------------------------------
 def test_parameters_sorted_and_overridden():
     system = System([x], kinetic=m * x.diff() ** 2 / 2, potential=m * g * x,
@@ -180,7 +227,9 @@ def test_one_parameter_set_serves_several_models():
     assert bounce["bob_x"][0] == pytest.approx(0.1 * np.cos(2 * np.pi / 2), abs=1e-10)
     rest = pendulum.equilibrium({"x": 0.1, "y": -0.9}, parameters=shared)
     assert -2 * rest.multiplier("rod") == pytest.approx(2.0 * 9.81, rel=1e-12)
-    with pytest.raises(ParameterError, match="'k' is not a parameter of this model"):
+    # a plain dict is strict: the error names the key and the way to pass extra ones
+    with pytest.raises(ParameterError, match=r"'k' is not a parameter of this model "
+                       r"\(its parameters: g, l, m\).*ParameterSet\(values, strict=False\)"):
         pendulum.simulate((0, 1), {"x": 1.0, "y": 0.0}, parameters=dict(shared))
     with pytest.raises(ParameterError, match="strict must be True or False"):
         ParameterSet({}, strict="no")

@@ -98,3 +98,35 @@ def test_fixed_body_elsewhere_still_builds():
     mb = Multibody([a, b], [Fixed("weld", Ground(), a)])
     q0, _ = mb.initial_state()
     assert check_mobility(mb, q0) == 6
+
+
+def test_the_warnings_of_a_mechanism_point_at_the_callers_line():
+    """InitialConditionsAdjusted and DeprecationWarning (native=) of Multibody.simulate,
+    InitialConditionsAdjusted of initial_state, the
+    RedundantConstraintsWarning of a ring, a JointPointWarning: at this file's lines."""
+    rod = RigidBody("rod", 1.0, ROD)
+    pin = Spherical("pin", Ground(), rod, (0.0, 0.0, 0.0), (0.0, 0.0, 0.17))
+    mb = Multibody([rod], [pin])
+    q0, _ = mb.initial_state(positions={rod: (0.0, 0.0, -0.2)})  # 0.03 off the pin
+    calls = {
+        "InitialConditionsAdjusted": lambda: mb.simulate((0.0, 0.01), q0),
+        "DeprecationWarning": lambda: mb.simulate((0.0, 0.01), q0, native=False),
+        "RedundantConstraintsWarning": lambda: ring_run(),
+        "quaternion": lambda: mb.initial_state(orientations={rod: (2.0, 0.0, 0.0, 0.0)}),
+        "JointPointWarning": lambda: Multibody(
+            [rod], [Spherical("far", Ground(), rod, point_b=(0.0, 0.0, 5.0))]),
+    }
+    for what, call in calls.items():
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            call()
+        kind = "InitialConditionsAdjusted" if what == "quaternion" else what
+        assert kind in [w.category.__name__ for w in caught], (what, caught)
+        assert all(w.filename == __file__ for w in caught), \
+            (what, [(w.category.__name__, w.filename, w.lineno) for w in caught])
+
+
+def ring_run():
+    from dalembert.multibody import ring, ring_state
+    mb = ring(4, 0.5, 1.0, 0.02)
+    return mb.simulate((0.0, 0.01), *ring_state(mb, 4, 0.5))

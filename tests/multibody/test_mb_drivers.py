@@ -119,6 +119,22 @@ def test_a_driver_on_a_joint_without_a_coordinate_is_refused():
         Driver("d", pin, pin.body_b.coordinates[0])
 
 
+def test_a_driver_whose_joint_is_not_in_the_joints_is_refused():
+    """Without its joint's own rows the driver fixes only the angle: the body would fall
+    freely while turning. The error names the driver and the joint, and says what to do."""
+    disk = PlanarBody("disk", 1.0, 0.1)
+    pin = Revolute("pin", Ground(), disk)
+    motor = Driver("motor", pin, 2 * time)
+    with pytest.raises(ModelError, match=r"driver 'motor' drives joint 'pin', which is not in "
+                       r"this system's joints .*add the joint to the joints list"):
+        Multibody([disk], [motor], gravity=(0, -9.81, 0))
+    # with the joint listed the disk stays on its pin and turns at 2 rad/s
+    mb = Multibody([disk], [pin, motor], gravity=(0, -9.81, 0))
+    traj = mb.simulate((0.0, 1.0), {}, {"disk_theta": 2.0}, t_eval=[1.0])
+    assert traj["disk_theta"][0] == pytest.approx(2.0, abs=1e-9)
+    assert abs(traj["disk_y"][0]) < 1e-9
+
+
 def damped(t, x0, k, c, m):
     """x(t) of m x'' + c x' + k x = 0 from rest at x0 (underdamped)."""
     w0, zeta = np.sqrt(k / m), c / (2 * np.sqrt(k * m))

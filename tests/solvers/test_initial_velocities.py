@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from dalembert import Holonomic, InitialConditionsAdjusted, System, coordinates
+from dalembert import Holonomic, InitialConditionsAdjusted, System, coordinates, t
 from dalembert.multibody import Multibody, RigidBody, Rolling, angular_velocities, chain
 from dalembert.solvers.kkt import solve_kkt
 
@@ -99,3 +99,20 @@ def test_large_chain_uses_the_same_metric():
     ref, _ = solve_kkt(M, M @ qd, A, -b)
     assert np.abs(report.qd - ref).max() < 1e-12
     assert np.abs(A @ report.qd + b).max() < 1e-12
+
+
+@pytest.mark.parametrize(("vx0", "word"), [(0.0, "gained"), (5.0, "lost")])
+def test_a_moving_constraint_reports_the_energy_gained_or_lost(vx0, word):
+    """A particle (mass 3) whose constraint x = 2 t drives it at 2 along x: started at
+    ``vx0`` (and 1 along y, kept), its kinetic energy changes by 3/2 (2^2 - vx0^2): gained
+    from rest, lost from 5 (the energy of the velocity change alone, 3/2 (2 - vx0)^2, has
+    no sign and is not the change where the constraint moves)."""
+    x, y = coordinates("x y")
+    driven = System([x, y], kinetic=sp.Rational(3, 2) * (x.diff() ** 2 + y.diff() ** 2),
+                    constraints=[Holonomic(x - 2 * t, name="drive")])
+    report = driven.consistent_initial_state({x: 0.0, y: 0.0}, {x: vx0, y: 1.0})
+    expected = 1.5 * (2.0**2 - vx0**2)
+    assert abs(report.kinetic_energy_change - expected) < 1e-12
+    assert f"kinetic energy {word} {abs(expected):.6g}" in report.describe_changes()
+    with pytest.warns(InitialConditionsAdjusted, match=f"kinetic energy {word} "):
+        driven.simulate((0.0, 0.1), {x: 0.0, y: 0.0}, {x: vx0, y: 1.0})
