@@ -49,7 +49,8 @@ from .solvers.initialization import InitializationReport, consistent_state
 from .solvers.integrate import IntegrationResult
 from .solvers.native.library import prepare_runtime
 from .solvers.plan import SimulationPlan, plan_simulation
-from .solvers.sampled import run_sampled
+from .solvers.sampled import sampled_schedule
+from .solvers.segments import Schedule, SegmentState, run_segments
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
@@ -667,15 +668,18 @@ class System:
     def _run(self, plan: SimulationPlan, dynamics: bool = True) -> Trajectory:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
         constraint forces may be left uncomputed (NaN), for a caller that keeps none of
-        them (a run with sampled inputs computes them anyway)."""
-        signal, num = plan.options.inputs, plan.num
-        derived, applied = None, None
-        if signal is not None and signal.sample_time is not None and num is not None:
-            sampled = run_sampled(signal, num, plan.options.t_span, plan.y0,
-                                  plan.options.output.t_eval, partial(self._segment, plan))
-            result, derived, applied = sampled.result, sampled.derived, sampled.inputs
-        else:
-            result = plan.run()
+        them."""
+        signal, options = plan.options.inputs, plan.options
+        schedule = Schedule.none()
+        if signal is not None and signal.sample_time is not None:
+            schedule = sampled_schedule(signal, options.t_span, len(self.coordinate_names))
+        joined = run_segments(partial(self._segment, plan),
+                              partial(_segment_outputs, dynamics=dynamics), schedule,
+                              options.t_span, plan.y0, options.output.t_eval,
+                              options.output.progress)
+        result = joined.result
+        if signal is not None and signal.sample_time is not None:
+            result.stats["n_samples"] = result.stats["n_segments"]
         passed = plan.careful.model.warning() if plan.careful is not None else ""
         if passed:
             warnings.warn(passed, SingularConfigurationWarning, stacklevel=3)
@@ -685,20 +689,32 @@ class System:
                                          f"t={reached:.6g}")
             warning.__cause__ = result.error  # an event function's exception, chained
             warnings.warn(warning, stacklevel=3)  # 3: the user's call of simulate or run
-        return self._trajectory(result, plan, derived, applied, dynamics)
+        return self._trajectory(result, plan, joined.derived, joined.inputs)
 
-    def _segment(self, plan: SimulationPlan, a: float, b: float, y: np.ndarray,
-                 t_eval: np.ndarray | None) -> SimulationPlan:
-        """The plan of one sample interval ``[a, b]`` of a sampled run, from ``y``: the
-        run's own plan (its solver functions, its C loop) from the state the interval
-        before ended in, which is consistent (projected after every step)."""
+    def _segment(self, plan: SimulationPlan, a: float, b: float, start: SegmentState,
+                 t_eval: np.ndarray | None, progress: bool) -> SimulationPlan:
+        """The plan of one segment ``[a, b]`` of a run (:mod:`~dalembert.solvers.segments`)
+        from ``start``: the run's own plan (its solver functions, its C loop) from that
+        state, which is consistent (projected after every step), with the inputs held
+        at ``start.inputs`` (set in the model now: the driver runs the segment and takes
+        its outputs before it makes the next)."""
+        if start.active is not None:
+            raise NotImplementedError("a reset of the active constraint rows is not "
+                                      "supported by System's runs yet")
         options = plan.options
+        if start.inputs is not None and plan.num is not None:
+            plan.num.set_inputs(start.inputs)
+        y = start.y
+        if (a, b) == options.t_span and np.array_equal(y, plan.y0) \
+                and progress == options.output.progress \
+                and _same_times(t_eval, options.output.t_eval):
+            return plan  # the run is one segment: its own plan as it is
         n = len(self.coordinate_names)
-        start = dataclasses.replace(plan.initial, q=y[:n].copy(), qd=y[n:].copy(),
-                                    q_given=y[:n].copy(), qd_given=y[n:].copy())
-        return dataclasses.replace(plan, initial=start, options=dataclasses.replace(
+        initial = dataclasses.replace(plan.initial, q=y[:n].copy(), qd=y[n:].copy(),
+                                      q_given=y[:n].copy(), qd_given=y[n:].copy())
+        return dataclasses.replace(plan, initial=initial, options=dataclasses.replace(
             options, t_span=(a, b),
-            output=dataclasses.replace(options.output, t_eval=t_eval, progress=False)))
+            output=dataclasses.replace(options.output, t_eval=t_eval, progress=progress)))
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:
@@ -765,12 +781,10 @@ class System:
         return linearize(self, q_eq, **options)
 
     def _trajectory(self, result: IntegrationResult, plan: SimulationPlan,
-                    derived: dict[str, np.ndarray] | None = None,
-                    applied: np.ndarray | None = None, dynamics: bool = True) -> Trajectory:
+                    derived: dict[str, np.ndarray],
+                    applied: np.ndarray | None = None) -> Trajectory:
         n = len(self.coordinate_names)
         signal = plan.options.inputs
-        if derived is None:
-            derived = _outputs(plan, result, dynamics)
         derived = dict(derived)
         energies = derived.pop("energies")
         if applied is None and signal is not None:  # the inputs at the points recorded
@@ -795,23 +809,27 @@ def _missing(like: np.ndarray) -> np.ndarray:
     return np.zeros_like(like) if like.dtype == bool else np.full_like(like, np.nan)
 
 
-def _outputs(plan: SimulationPlan, result: IntegrationResult,
-             dynamics: bool = True) -> dict[str, np.ndarray]:
-    """The derived arrays at the points recorded (see :meth:`System._run` for
+def _same_times(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    return a is b or (a is not None and b is not None and np.array_equal(a, b))
+
+
+def _segment_outputs(plan: Any, times: np.ndarray, states: np.ndarray,
+                     dynamics: bool = True) -> dict[str, np.ndarray]:
+    """The derived arrays at points of a segment (a plan; see :meth:`System._run` for
     ``dynamics``). A run that failed because its inputs could not be computed has
     points where they still cannot: those rows are NaN."""
     try:
-        return plan.outputs(result.t, result.y, dynamics=dynamics)
+        return plan.outputs(times, states, dynamics=dynamics)
     except InputError:
         rows: list[dict[str, np.ndarray] | None] = []
-        for t, y in zip(result.t, result.y):
+        for t, y in zip(times, states):
             try:
                 rows.append(plan.outputs(np.array([t]), y[None], dynamics=dynamics))
             except InputError:
                 rows.append(None)
         template = next((r for r in rows if r is not None), None)
         if template is None:
-            empty = plan.outputs(np.zeros(0), np.zeros((0, len(result.y[0]))),
+            empty = plan.outputs(np.zeros(0), np.zeros((0, states.shape[1])),
                                  dynamics=dynamics)
             return {name: np.full((len(rows), *v.shape[1:]), np.nan)
                     for name, v in empty.items()}
