@@ -547,13 +547,13 @@ class System:
         >>> traj.t.tolist(), bool(traj.position_residual.max() < 1e-12)
         ([0.5, 1.0], True)
         """
-        options = self._options(t_span, dict(
-            t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
+        options = self.check_options(
+            t_span, t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
             max_step=max_step, step_control=step_control, stabilization=stabilization,
             baumgarte_gain=baumgarte_gain, backend=backend, native=native,
             redundant_constraints=redundant_constraints,
             velocity_projection=velocity_projection, events=events, dense_output=dense_output,
-            progress=progress, inputs=inputs, sample_time=sample_time))
+            progress=progress, inputs=inputs, sample_time=sample_time)
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def simulate_many(self, t_span: Sequence[float], cases: Any, **options: Any) -> Any:
@@ -626,15 +626,78 @@ class System:
         >>> traj.status
         'finished'
         """
-        return self._plan(self._options(t_span, options), q0, qd0, parameters, fixed)
+        return self._plan(self.check_options(t_span, **options), q0, qd0, parameters, fixed)
 
-    def _options(self, t_span: Sequence[float], options: Mapping[str, Any]) -> SimulationOptions:
-        """:meth:`simulate`'s keywords checked as :meth:`simulate` checks them (for
-        :meth:`plan`, and for an ensemble, which checks them once for all its runs)."""
+    def check_options(self, t_span: Sequence[float], **options: Any) -> SimulationOptions:
+        """:meth:`simulate`'s keywords checked as :meth:`simulate` checks them, once for
+        many runs (an ensemble's): :meth:`plan_checked` makes a run's plan from them.
+
+        Parameters
+        ----------
+        t_span
+            ``(t0, tf)``.
+        options
+            :meth:`simulate`'s other keywords, but ``q0``, ``qd0``, ``parameters`` and
+            ``fixed`` (they belong to each run).
+
+        Returns
+        -------
+        SimulationOptions
+            The checked options (:func:`dalembert.options.simulation_options`).
+
+        Raises
+        ------
+        ValueError
+            A keyword's value is not allowed (the message names it).
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> options = pendulum.check_options((0, 1), t_eval=[0.5, 1.0], backend="python")
+        >>> options.t_span, options.output.t_eval.tolist()
+        ((0.0, 1.0), [0.5, 1.0])
+        """
         if options.get("redundant_constraints") is None:  # None: the System's option
             options = {**options, "redundant_constraints": self.redundant_constraints}
         return simulation_options(t_span, state_size=2 * len(self.coordinate_names),
                                   input_names=[u.name for u in self.inputs], **options)
+
+    def plan_checked(
+        self,
+        options: SimulationOptions,
+        q0: CoordinateValues,
+        qd0: CoordinateValues | None = None,
+        *,
+        parameters: Mapping[Any, object] | None = None,
+        fixed: Sequence[object] | None = None,
+    ) -> SimulationPlan:
+        """:meth:`plan` with options already checked by :meth:`check_options` (or
+        ``dataclasses.replace`` of them): what an ensemble does for each of its runs.
+
+        Parameters
+        ----------
+        options
+            From :meth:`check_options` of this System.
+        q0, qd0, parameters, fixed
+            As in :meth:`simulate`.
+
+        Returns
+        -------
+        SimulationPlan
+            As :meth:`plan` returns it; :meth:`run` executes it.
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> options = pendulum.check_options((0, 1), t_eval=[1.0])
+        >>> left, right = (pendulum.run(pendulum.plan_checked(options, {"x": x, "y": -0.8}))
+        ...                for x in (0.6, -0.6))
+        >>> bool(abs(left.q[-1, 0] + right.q[-1, 0]) < 1e-12)  # mirror images
+        True
+        """
+        return self._plan(options, q0, qd0, parameters, fixed)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,
               qd0: CoordinateValues | None, parameters: Mapping[Any, object] | None,
@@ -643,27 +706,31 @@ class System:
         report = self._initial_state(num, q0, qd0, options.t_span[0], fixed,
                                      options.redundant_constraints,
                                      options.velocity_projection)
-        # stacklevel 3: the user's call of simulate or plan
+        # stacklevel 3: the user's call of simulate, plan or plan_checked
         if report.changed:
             warnings.warn(report.describe_changes(), InitialConditionsAdjusted, stacklevel=3)
         if report.dependent_constraints or (report.rank is not None and report.rank.near):
             warnings.warn(str(report.rank), RedundantConstraintsWarning, stacklevel=3)
         return plan_simulation(num, report, options)
 
-    def run(self, plan: SimulationPlan) -> Trajectory:
+    def run(self, plan: SimulationPlan, *, dynamics: bool = True) -> Trajectory:
         """Execute a plan made by :meth:`plan` (see there for an example).
 
         Parameters
         ----------
         plan
             From :meth:`plan` of this System (or ``dataclasses.replace`` of one).
+        dynamics
+            ``False``: the trajectory's ``qdd``, multipliers and constraint forces may
+            be left uncomputed (NaN), for a caller that keeps none of them (an
+            ensemble keeping positions only saves the KKT solves at its output times).
 
         Returns
         -------
         Trajectory
             As :meth:`simulate` returns it.
         """
-        return self._run(plan)
+        return self._run(plan, dynamics)
 
     def _run(self, plan: SimulationPlan, dynamics: bool = True) -> Trajectory:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
