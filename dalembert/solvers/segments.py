@@ -31,8 +31,9 @@ every segment explicitly. :func:`run_segments` guarantees
   progress bar covers the span, and with dense output ``sol`` answers each time from
   the segment holding it (at an instant, the segment that starts there).
 
-An event whose function changes sign exactly at an instant is found by the segment
-that ends there, not again by the next.
+Each segment locates its own events: one whose function changes sign exactly at an
+instant is found by the segment that ends there, not again by the next, and an event's
+``terminal`` count (``terminal=k``) counts within a segment.
 """
 
 from __future__ import annotations
@@ -237,7 +238,7 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
             else:
                 record.add(segment, shown, last.y[keep], state, outputs)
             if bar is not None:
-                bar.update(abs(b - a))
+                bar.update(abs(_reached(last, a, b, ended) - a))
             if ended:
                 break
             state = SegmentState(last.y[-1], state.inputs, state.active)
@@ -248,6 +249,18 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
             bar.close()
     assert last is not None
     return record.joined(len(y0), t0)
+
+
+def _reached(result: IntegrationResult, a: float, b: float, ended: bool) -> float:
+    """How far a segment ran (for the progress bar): to its end, to the terminal event,
+    or to its last point."""
+    if not ended:
+        return b
+    if result.status == "event":
+        last = [te[-1] for te in result.t_events if len(te)]
+        if last:
+            return float(max(last, key=lambda t: abs(t - a)))
+    return float(result.t[-1]) if len(result.t) else a
 
 
 def _inside(asked: np.ndarray, a: float, b: float, direction: float) -> np.ndarray:

@@ -104,3 +104,11 @@ def test_a_sampled_run_counting_down():
     np.testing.assert_array_equal(down.t, times)
     law = [pd(t, q, qd) for t, q, qd in zip(down.t, down.q, down.qd)]
     np.testing.assert_allclose(down.input("u"), law, rtol=1e-12, atol=1e-12)
+
+
+def test_one_progress_bar_across_the_samples(capsys):
+    traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=pd, sample_time=0.1,
+                               progress=True)
+    assert traj.success and traj.stats["n_samples"] == 10
+    err = capsys.readouterr().err
+    assert err.count("simulating:   0%") == 1 and "100%" in err
