@@ -50,7 +50,8 @@ from .solvers.initialization import InitializationReport, consistent_state
 from .solvers.integrate import IntegrationResult
 from .solvers.native.library import prepare_runtime
 from .solvers.plan import SimulationPlan, plan_simulation
-from .solvers.sampled import run_sampled
+from .solvers.sampled import sampled_schedule
+from .solvers.segments import Schedule, SegmentState, run_segments
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
@@ -554,13 +555,13 @@ class System:
         >>> traj.t.tolist(), bool(traj.position_residual.max() < 1e-12)
         ([0.5, 1.0], True)
         """
-        options = self._options(t_span, dict(
-            t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
+        options = self.check_options(
+            t_span, t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
             max_step=max_step, step_control=step_control, stabilization=stabilization,
             baumgarte_gain=baumgarte_gain, backend=backend, native=native,
             redundant_constraints=redundant_constraints,
             velocity_projection=velocity_projection, events=events, dense_output=dense_output,
-            progress=progress, inputs=inputs, sample_time=sample_time))
+            progress=progress, inputs=inputs, sample_time=sample_time)
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def simulate_many(self, t_span: Sequence[float], cases: Any, **options: Any) -> Any:
@@ -633,15 +634,78 @@ class System:
         >>> traj.status
         'finished'
         """
-        return self._plan(self._options(t_span, options), q0, qd0, parameters, fixed)
+        return self._plan(self.check_options(t_span, **options), q0, qd0, parameters, fixed)
 
-    def _options(self, t_span: Sequence[float], options: Mapping[str, Any]) -> SimulationOptions:
-        """:meth:`simulate`'s keywords checked as :meth:`simulate` checks them (for
-        :meth:`plan`, and for an ensemble, which checks them once for all its runs)."""
+    def check_options(self, t_span: Sequence[float], **options: Any) -> SimulationOptions:
+        """:meth:`simulate`'s keywords checked as :meth:`simulate` checks them, once for
+        many runs (an ensemble's): :meth:`plan_checked` makes a run's plan from them.
+
+        Parameters
+        ----------
+        t_span
+            ``(t0, tf)``.
+        options
+            :meth:`simulate`'s other keywords, but ``q0``, ``qd0``, ``parameters`` and
+            ``fixed`` (they belong to each run).
+
+        Returns
+        -------
+        SimulationOptions
+            The checked options (:func:`dalembert.options.simulation_options`).
+
+        Raises
+        ------
+        ValueError
+            A keyword's value is not allowed (the message names it).
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> options = pendulum.check_options((0, 1), t_eval=[0.5, 1.0], backend="python")
+        >>> options.t_span, options.output.t_eval.tolist()
+        ((0.0, 1.0), [0.5, 1.0])
+        """
         if options.get("redundant_constraints") is None:  # None: the System's option
             options = {**options, "redundant_constraints": self.redundant_constraints}
         return simulation_options(t_span, state_size=2 * len(self.coordinate_names),
                                   input_names=[u.name for u in self.inputs], **options)
+
+    def plan_checked(
+        self,
+        options: SimulationOptions,
+        q0: CoordinateValues,
+        qd0: CoordinateValues | None = None,
+        *,
+        parameters: Mapping[Any, object] | None = None,
+        fixed: Sequence[object] | None = None,
+    ) -> SimulationPlan:
+        """:meth:`plan` with options already checked by :meth:`check_options` (or
+        ``dataclasses.replace`` of them): what an ensemble does for each of its runs.
+
+        Parameters
+        ----------
+        options
+            From :meth:`check_options` of this System.
+        q0, qd0, parameters, fixed
+            As in :meth:`simulate`.
+
+        Returns
+        -------
+        SimulationPlan
+            As :meth:`plan` returns it; :meth:`run` executes it.
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> pendulum = load("pendulum").build()
+        >>> options = pendulum.check_options((0, 1), t_eval=[1.0])
+        >>> left, right = (pendulum.run(pendulum.plan_checked(options, {"x": x, "y": -0.8}))
+        ...                for x in (0.6, -0.6))
+        >>> bool(abs(left.q[-1, 0] + right.q[-1, 0]) < 1e-12)  # mirror images
+        True
+        """
+        return self._plan(options, q0, qd0, parameters, fixed)
 
     def _plan(self, options: SimulationOptions, q0: CoordinateValues,
               qd0: CoordinateValues | None, parameters: Mapping[Any, object] | None,
@@ -650,7 +714,8 @@ class System:
         report = self._initial_state(num, q0, qd0, options.t_span[0], fixed,
                                      options.redundant_constraints,
                                      options.velocity_projection)
-        # user_stacklevel: the user's line (a call of simulate, plan, Multibody.simulate...)
+        # user_stacklevel: the user's line (a call of simulate, plan, plan_checked,
+        # Multibody.simulate...)
         if report.changed:
             warnings.warn(report.describe_changes(), InitialConditionsAdjusted,
                           stacklevel=user_stacklevel())
@@ -659,33 +724,40 @@ class System:
                           stacklevel=user_stacklevel())
         return plan_simulation(num, report, options)
 
-    def run(self, plan: SimulationPlan) -> Trajectory:
+    def run(self, plan: SimulationPlan, *, dynamics: bool = True) -> Trajectory:
         """Execute a plan made by :meth:`plan` (see there for an example).
 
         Parameters
         ----------
         plan
             From :meth:`plan` of this System (or ``dataclasses.replace`` of one).
+        dynamics
+            ``False``: the trajectory's ``qdd``, multipliers and constraint forces may
+            be left uncomputed (NaN), for a caller that keeps none of them (an
+            ensemble keeping positions only saves the KKT solves at its output times).
 
         Returns
         -------
         Trajectory
             As :meth:`simulate` returns it.
         """
-        return self._run(plan)
+        return self._run(plan, dynamics)
 
     def _run(self, plan: SimulationPlan, dynamics: bool = True) -> Trajectory:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
         constraint forces may be left uncomputed (NaN), for a caller that keeps none of
-        them (a run with sampled inputs computes them anyway)."""
-        signal, num = plan.options.inputs, plan.num
-        derived, applied = None, None
-        if signal is not None and signal.sample_time is not None and num is not None:
-            sampled = run_sampled(signal, num, plan.options.t_span, plan.y0,
-                                  plan.options.output.t_eval, partial(self._segment, plan))
-            result, derived, applied = sampled.result, sampled.derived, sampled.inputs
-        else:
-            result = plan.run()
+        them."""
+        signal, options = plan.options.inputs, plan.options
+        schedule = Schedule.none()
+        if signal is not None and signal.sample_time is not None:
+            schedule = sampled_schedule(signal, options.t_span, len(self.coordinate_names))
+        joined = run_segments(partial(self._segment, plan),
+                              partial(_segment_outputs, dynamics=dynamics), schedule,
+                              options.t_span, plan.y0, options.output.t_eval,
+                              options.output.progress)
+        result = joined.result
+        if signal is not None and signal.sample_time is not None:
+            result.stats["n_samples"] = result.stats["n_segments"]
         passed = plan.careful.model.warning() if plan.careful is not None else ""
         if passed:
             warnings.warn(passed, SingularConfigurationWarning, stacklevel=user_stacklevel())
@@ -695,20 +767,32 @@ class System:
                                          f"t={reached:.6g}")
             warning.__cause__ = result.error  # an event function's exception, chained
             warnings.warn(warning, stacklevel=user_stacklevel())  # the user's call
-        return self._trajectory(result, plan, derived, applied, dynamics)
+        return self._trajectory(result, plan, joined.derived, joined.inputs)
 
-    def _segment(self, plan: SimulationPlan, a: float, b: float, y: np.ndarray,
-                 t_eval: np.ndarray | None) -> SimulationPlan:
-        """The plan of one sample interval ``[a, b]`` of a sampled run, from ``y``: the
-        run's own plan (its solver functions, its C loop) from the state the interval
-        before ended in, which is consistent (projected after every step)."""
+    def _segment(self, plan: SimulationPlan, a: float, b: float, start: SegmentState,
+                 t_eval: np.ndarray | None, progress: bool) -> SimulationPlan:
+        """The plan of one segment ``[a, b]`` of a run (:mod:`~dalembert.solvers.segments`)
+        from ``start``: the run's own plan (its solver functions, its C loop) from that
+        state, which is consistent (projected after every step), with the inputs held
+        at ``start.inputs`` (set in the model now: the driver runs the segment and takes
+        its outputs before it makes the next)."""
+        if start.active is not None:
+            raise NotImplementedError("a reset of the active constraint rows is not "
+                                      "supported by System's runs yet")
         options = plan.options
+        if start.inputs is not None and plan.num is not None:
+            plan.num.set_inputs(start.inputs)
+        y = start.y
+        if (a, b) == options.t_span and np.array_equal(y, plan.y0) \
+                and progress == options.output.progress \
+                and _same_times(t_eval, options.output.t_eval):
+            return plan  # the run is one segment: its own plan as it is
         n = len(self.coordinate_names)
-        start = dataclasses.replace(plan.initial, q=y[:n].copy(), qd=y[n:].copy(),
-                                    q_given=y[:n].copy(), qd_given=y[n:].copy())
-        return dataclasses.replace(plan, initial=start, options=dataclasses.replace(
+        initial = dataclasses.replace(plan.initial, q=y[:n].copy(), qd=y[n:].copy(),
+                                      q_given=y[:n].copy(), qd_given=y[n:].copy())
+        return dataclasses.replace(plan, initial=initial, options=dataclasses.replace(
             options, t_span=(a, b),
-            output=dataclasses.replace(options.output, t_eval=t_eval, progress=False)))
+            output=dataclasses.replace(options.output, t_eval=t_eval, progress=progress)))
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:
@@ -775,12 +859,10 @@ class System:
         return linearize(self, q_eq, **options)
 
     def _trajectory(self, result: IntegrationResult, plan: SimulationPlan,
-                    derived: dict[str, np.ndarray] | None = None,
-                    applied: np.ndarray | None = None, dynamics: bool = True) -> Trajectory:
+                    derived: dict[str, np.ndarray],
+                    applied: np.ndarray | None = None) -> Trajectory:
         n = len(self.coordinate_names)
         signal = plan.options.inputs
-        if derived is None:
-            derived = _outputs(plan, result, dynamics)
         derived = dict(derived)
         energies = derived.pop("energies")
         if applied is None and signal is not None:  # the inputs at the points recorded
@@ -806,23 +888,27 @@ def _missing(like: np.ndarray) -> np.ndarray:
     return np.zeros_like(like) if like.dtype == bool else np.full_like(like, np.nan)
 
 
-def _outputs(plan: SimulationPlan, result: IntegrationResult,
-             dynamics: bool = True) -> dict[str, np.ndarray]:
-    """The derived arrays at the points recorded (see :meth:`System._run` for
+def _same_times(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    return a is b or (a is not None and b is not None and np.array_equal(a, b))
+
+
+def _segment_outputs(plan: Any, times: np.ndarray, states: np.ndarray,
+                     dynamics: bool = True) -> dict[str, np.ndarray]:
+    """The derived arrays at points of a segment (a plan; see :meth:`System._run` for
     ``dynamics``). A run that failed because its inputs could not be computed has
     points where they still cannot: those rows are NaN."""
     try:
-        return plan.outputs(result.t, result.y, dynamics=dynamics)
+        return plan.outputs(times, states, dynamics=dynamics)
     except InputError:
         rows: list[dict[str, np.ndarray] | None] = []
-        for t, y in zip(result.t, result.y):
+        for t, y in zip(times, states):
             try:
                 rows.append(plan.outputs(np.array([t]), y[None], dynamics=dynamics))
             except InputError:
                 rows.append(None)
         template = next((r for r in rows if r is not None), None)
         if template is None:
-            empty = plan.outputs(np.zeros(0), np.zeros((0, len(result.y[0]))),
+            empty = plan.outputs(np.zeros(0), np.zeros((0, states.shape[1])),
                                  dynamics=dynamics)
             return {name: np.full((len(rows), *v.shape[1:]), np.nan)
                     for name, v in empty.items()}

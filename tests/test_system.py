@@ -138,3 +138,34 @@ def test_the_warnings_of_simulate_plan_and_run_point_at_the_callers_line():
         kind = {"plan": "InitialConditionsAdjusted", "run": "IntegrationWarning"}.get(what, what)
         assert kind in [name for name, _ in found], (what, found)
         assert all(file == __file__ for _, file in found), (what, found)
+
+
+def test_options_checked_once_plan_each_run():
+    """check_options once, plan_checked per run (what an ensemble does): each run's own
+    parameters used, against the small-oscillation period 2 pi sqrt(l/g) (1 + th0^2/16)
+    to 1e-8; run(dynamics=False) gives the same motion without the KKT outputs."""
+    system, th0 = pendulum(), 0.01
+
+    def upward(t_, q, qd):
+        return q[0]
+
+    upward.direction = 1
+    options = system.check_options((0, 3), events=[upward])
+    for gravity in (4.0, 9.81):
+        plan = system.plan_checked(options, [np.sin(th0), -np.cos(th0)],
+                                   parameters={"g": gravity})
+        traj = system.run(plan)
+        period = 2 * np.pi * np.sqrt(1 / gravity) * (1 + th0**2 / 16)
+        assert abs(traj.t_events[0][0] - 0.75 * period) < 1e-8
+    light = system.run(plan, dynamics=False)
+    np.testing.assert_array_equal(light.q, traj.q)
+    assert np.isnan(light.multipliers).all() and not np.isnan(traj.multipliers).any()
+
+
+def test_check_options_refuses_what_simulate_refuses():
+    system = pendulum()
+    with pytest.raises(ValueError, match="rtol"):
+        system.check_options((0, 1), rtol=-1.0)
+    with pytest.warns(UserWarning) as caught:  # the adjusted start, said at the caller's line
+        system.plan_checked(system.check_options((0, 1)), [2.0, 0.0])
+    assert caught[0].filename == __file__

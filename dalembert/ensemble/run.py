@@ -249,9 +249,9 @@ class _Run:
         if self.cases.columns.inputs:
             a["inputs"] = _with_case_inputs(a.get("inputs"), self.cases.columns.inputs)
         # simulate's own checks and messages, once for every case
-        checked = self.system._options(self.t_span, {**a, "t_eval": t_eval})
+        checked = self.system.check_options(self.t_span, **{**a, "t_eval": t_eval})
         if checked.output.t_eval is None:
-            checked = self.system._options(self.t_span, {
+            checked = self.system.check_options(self.t_span, **{
                 **a, "t_eval": np.linspace(*checked.t_span, DEFAULT_POINTS)})
         keep = _keep(keep)
         if "inputs" in keep and not self._input_names:

@@ -234,8 +234,9 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
         try:
             q0, qd0, parameters = _inputs(system, settings, case)
             # simulate(...) with the options checked at the door
-            plan = system._plan(_options(settings, case), q0, qd0, parameters, None)
-            traj = system._run(plan, settings.dynamics)
+            plan = system.plan_checked(_options(settings, case), q0, qd0,
+                                       parameters=parameters)
+            traj = system.run(plan, dynamics=settings.dynamics)
             arrays = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
             return error_outcome(index, exc, time.perf_counter() - start, worker, started)

@@ -409,12 +409,22 @@ class CarefulModel:
         step would leave combinations of rows out, the accelerations, multipliers and
         constraint forces of that truncated solve (the minimum-norm multipliers), and
         ``near_singular`` marking those times. Only a run that passed near one
-        (:attr:`passages`) is measured at its output times: the others pay nothing."""
+        (:attr:`passages`) is measured at its output times: the others pay nothing.
+
+        At a time exactly at a singular configuration (a run started there) the full
+        KKT system is singular: its solve fails there, and the truncated one alone
+        gives the outputs (:func:`_solved_where_regular`)."""
         num, pattern = self.num, self.num.pattern
 
         def truncated(t: np.ndarray, y: np.ndarray, dynamics: bool = True
                       ) -> dict[str, np.ndarray]:
-            out = outputs(t, y, dynamics=dynamics)
+            failed = np.zeros(len(t), dtype=bool)
+            try:
+                out = outputs(t, y, dynamics=dynamics)
+            except SingularSystemError:
+                if not self.passages:  # not a singular configuration the run met
+                    raise
+                out, failed = _solved_where_regular(outputs, t, y)
             near = np.zeros(len(t), dtype=bool)
             out["near_singular"] = near
             if not (self.passages and dynamics):
@@ -425,6 +435,11 @@ class CarefulModel:
                     continue
                 cut = measure(self._gram, num.velocity_sparse(ti, q)[0]).truncation
                 if cut is None or not cut.V.shape[1]:
+                    if failed[i]:  # singular, yet no combination of rows to leave out
+                        raise SingularSystemError(
+                            f"the KKT matrix is singular at t={ti:.6g}, where no "
+                            "combination of constraint rows is nearly dependent (a "
+                            "coordinate without inertia?)")
                     continue
                 if inputs is not None:
                     num.set_inputs(inputs(ti, q, qd))
@@ -440,6 +455,24 @@ class CarefulModel:
             return out
 
         return truncated
+
+
+def _solved_where_regular(outputs: Outputs, t: np.ndarray, y: np.ndarray
+                          ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """``outputs`` at every time, those of the KKT solve (``qdd``, the multipliers, the
+    constraint forces) left NaN at the times where it is singular; and those times
+    (a mask), for the truncated solve to fill."""
+    out = outputs(t, y, dynamics=False)
+    failed = np.zeros(len(t), dtype=bool)
+    for i in range(len(t)):
+        try:
+            row = outputs(t[i:i + 1], y[i:i + 1])
+        except SingularSystemError:
+            failed[i] = True
+            continue
+        for name in ("qdd", "multipliers", "constraint_forces"):
+            out[name][i] = row[name][0]
+    return out, failed
 
 
 def passages_message(passages: list[Passage], names: list[str]) -> str:

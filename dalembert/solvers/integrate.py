@@ -23,7 +23,7 @@ from .nonfinite import Diagnosis
 from .singular_watch import Singularity
 from .step_control import CONTROLLED, ControlledSteps
 
-__all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate"]
+__all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate", "progress_bar"]
 
 
 def integrate(
@@ -98,7 +98,7 @@ def integrate(
             else:
                 loop = PythonLoop(solver, times, events, project, dense_output, diagnose,
                                   singular, careful)
-            bar = _progress_bar(t0, tf) if progress else None
+            bar = progress_bar(t0, tf) if progress else None
             while loop.status is None:
                 loop.advance()
                 if bar is not None:
@@ -184,7 +184,8 @@ def finite_difference_jacobian(fun: Callable) -> Callable:
     return jac
 
 
-def _progress_bar(t0: float, tf: float):
+def progress_bar(t0: float, tf: float):
+    """A progress bar over ``[t0, tf]`` (tqdm's), advanced by ``bar.update(dt)``."""
     from tqdm.auto import tqdm
 
     bar = tqdm(total=abs(tf - t0), unit="s", desc="simulating", bar_format=(

@@ -123,3 +123,26 @@ def test_case_inputs_given_wrongly_are_refused(bead):
         result = bead.simulate_many((0.0, 1.0), cases, q0=[0.0, 0.0], case_inputs=damper,
                                     scheduler="serial", progress=False)
     assert "the input(s) u have no values" in result.summary["message"][0]
+
+
+def test_sampled_inputs_in_an_ensemble_equal_each_case_alone(bead):
+    """``sample_time`` in an ensemble: the output times (ending at ``tf``, every one a
+    sample instant) each recorded once, each case as simulated alone, and the inputs
+    kept the samples taken at the kept states (the brake law on them)."""
+    cases = grid(u=[0.3, 2.0])
+    result = bead.simulate_many((0.0, 2.0), cases, q0=[0.1, 0.1], qd0=[1.0, 1.0],
+                                inputs={"v": brake}, sample_time=0.1, t_eval=T_EVAL,
+                                scheduler="serial", keep=("q", "qd", "inputs"),
+                                progress=False)
+    assert result.failed == []
+    ds = result.dataset
+    for case, row in enumerate(cases.to_dict("records")):
+        alone = bead.simulate((0.0, 2.0), [0.1, 0.1], [1.0, 1.0],
+                              inputs={"u": row["u"], "v": brake}, sample_time=0.1,
+                              t_eval=T_EVAL)
+        np.testing.assert_array_equal(alone.t, T_EVAL)
+        assert np.abs(ds["q"].values[case] - alone.q).max() < 1e-12
+        law = [brake(t, q, qd) for t, q, qd in zip(T_EVAL, ds["q"].values[case],
+                                                    ds["qd"].values[case])]
+        np.testing.assert_allclose(ds["inputs"].sel(input="v").values[case], law,
+                                   rtol=1e-13, atol=1e-13)

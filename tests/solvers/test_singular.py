@@ -186,6 +186,37 @@ def test_the_multipliers_at_a_flat_position_are_bounded_and_marked():
     assert np.abs(M @ traj.qdd[3] - f - traj.constraint_forces[3]).max() < 1e-9
 
 
+
+@pytest.mark.parametrize("backend", ["auto", "python"])
+def test_a_run_started_exactly_flat_keeps_its_trajectory(backend):
+    """A parallelogram four-bar started lying flat, its cranks turning: the KKT matrix is
+    singular at t = 0. The run goes through and returns its trajectory (the multipliers
+    at t = 0 used to raise), t = 0 marked near_singular with the minimum-norm
+    multipliers there: the accelerations from the null-space method and the multipliers
+    from a least-squares solve of A^T lambda = M qdd - f (dense, by SVD) agree to 1e-12."""
+    from scipy.linalg import null_space
+
+    mb = four_bars(1)
+    q0, qd0 = parallel_state(mb, 1, 0.0, -1.0)
+    with pytest.warns(RedundantConstraintsWarning), \
+            pytest.warns(SingularConfigurationWarning, match=r"t=0\.\."):
+        traj = mb.system.simulate((0, 1.0), q0, qd0, backend=backend,
+                                  t_eval=np.linspace(0, 1.0, 11))
+    assert traj.success, traj.message
+    assert traj.t.tolist() == np.linspace(0, 1.0, 11).tolist()
+    assert traj.near_singular[0] and not traj.near_singular[1:].any()
+    M, f, A, c = mb.system.numeric().kkt_blocks(0.0, traj.q[0], traj.qd[0])
+    assert np.linalg.matrix_rank(A) == A.shape[0] - 1  # exactly singular there
+    N = null_space(A, rcond=1e-10)
+    particular = np.linalg.pinv(A, rcond=1e-10) @ c
+    qdd = particular + N @ np.linalg.solve(N.T @ M @ N, N.T @ (f - M @ particular))
+    lam = np.linalg.lstsq(A.T, M @ qdd - f, rcond=1e-10)[0]
+    assert np.abs(traj.qdd[0] - qdd).max() < 1e-12
+    assert np.abs(traj.multipliers[0] - lam).max() < 1e-12
+    assert np.abs(traj.constraint_forces[0] - A.T @ lam).max() < 1e-12
+    assert np.all(np.isfinite(traj.multipliers))
+    assert np.abs(traj.energy - traj.energy[0]).max() < 1e-8 * np.abs(traj.energy).max()
+
 def four_bar_1313(backend: str):
     """A planar four-bar of links 1, 3, 1 on a ground of 3 (a parallelogram), whose
     crank turns all the way round: it lies flat twice a turn, where the
