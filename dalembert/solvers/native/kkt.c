@@ -217,6 +217,11 @@ void add_A_times(const dl_model *md, const double *x, double w, double *out) {
   }
 }
 
+/* The weight of a folded row a: w |a|^2 is the block's mean diagonal (1 without one). */
+DL_INLINE double fold_weight(double trace, double norm2, int64_t nb) {
+  return trace > 0.0 ? trace / (nb * norm2) : 1.0 / norm2;
+}
+
 /* Block b of M (scattered) with its internal rows folded in, factored (Mt = L L^T). */
 DL_INLINE int fold_factor_block(dl_model *md, int64_t b, const double *c, int64_t nb) {
   double *restrict B = md->blocks + md->block_mat[b];
@@ -227,7 +232,7 @@ DL_INLINE int fold_factor_block(dl_model *md, int64_t b, const double *c, int64_
     const double *restrict a = md->a + md->pair_vec[p];
     const double norm2 = dot(a, a, nb);
     if (norm2 == 0.0) continue;
-    const double w = trace > 0.0 ? trace / (nb * norm2) : 1.0 / norm2;
+    const double w = fold_weight(trace, norm2, nb);
     const double wc = w * c[md->pair_row[p]];
     for (int64_t i = 0; i < nb; ++i) {
       u[i] += wc * a[i];
@@ -591,3 +596,135 @@ int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda
   return dl_solve(md, ydot + n, lambda);
 }
 
+
+/* ---- One factorization, many right-hand sides ----
+ * dl_kkt_factor factors [[M, A^T], [A, 0]] for the values [M values, A values] (pattern
+ * order) and the active rows (NULL: all) as dl_solve does, without a right-hand side:
+ * each block with its active internal rows folded in (their weights kept for the
+ * right-hand sides), Z = L^-1 A^T, the active internal rows eliminated, S over the
+ * active band rows (the others get a unit diagonal and no coupling), band LDL^T. Its
+ * factors live in the model's work arrays (blocks, y, elim, S), the rest in fa.
+ * dl_kkt_solve then takes k right-hand sides [f; c] (f by coordinate, c by row, the
+ * inactive rows' entries ignored) to [qdd; lambda] with M qdd = f + A^T lambda,
+ * A qdd = c on the active rows and lambda = 0 on the others. Another set of active rows
+ * is only another dl_kkt_factor: nothing structural changes. */
+
+/* Block b: M_b with its active internal rows folded in, factored; z = L^-1 a for its
+ * pairs; its active internal rows eliminated (eliminate_internal). */
+DL_INLINE int factor_block_rows(dl_model *md, dl_factor *fa, int64_t b, int64_t nb) {
+  double *restrict B = md->blocks + md->block_mat[b];
+  double trace = 0.0;
+  for (int64_t i = 0; i < nb; ++i) trace += B[i * nb + i];
+  for (int64_t p = md->block_pairs[b]; p < md->block_external[b]; ++p) {
+    const double *restrict a = md->a + md->pair_vec[p];
+    const double norm2 = dot(a, a, nb);
+    fa->fold[p] = 0.0;
+    if (!fa->active[md->pair_row[p]] || norm2 == 0.0) continue;
+    const double w = fold_weight(trace, norm2, nb);
+    fa->fold[p] = w;
+    for (int64_t i = 0; i < nb; ++i)
+      for (int64_t j = 0; j <= i; ++j) B[i * nb + j] += w * a[i] * a[j];
+  }
+  if (cholesky(B, nb) != DL_OK) return DL_SINGULAR_MASS;
+  const int64_t p0 = md->block_pairs[b], p1 = md->block_pairs[b + 1];
+  for (int64_t k = 0; k < p1 - p0; ++k) {
+    const int64_t v = md->pair_vec[p0] + k * nb;
+    forward_into(B, nb, md->a + v, md->y + v);
+  }
+  if (md->block_external[b] > p0 && eliminate_internal(md, b, md->y, fa->active, nb) != DL_OK)
+    return DL_SINGULAR_CONSTRAINTS;
+  return DL_OK;
+}
+
+int dl_kkt_factor(dl_model *md, dl_factor *fa, const double *values,
+                  const unsigned char *active) {
+  fa->factored = 0;
+  for (int64_t r = 0; r < md->m; ++r) fa->active[r] = !active || active[r];
+  for (int64_t k = 0; k < md->n_dropped; ++k) fa->active[md->dropped_rows[k]] = 0;
+  memset(md->blocks, 0, (size_t)md->block_mat[md->n_blocks] * sizeof(double));
+  for (int64_t e = 0; e < md->nM; ++e) md->blocks[md->M_at[e]] += values[e];
+  load_pairs(md, values + md->nM);
+  int status;
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    if ((status = BY_SIZE(block_size(md, b), factor_block_rows, md, fa, b)) != DL_OK)
+      return status;
+  clear_band(md);
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    BY_SIZE(block_size(md, b), gram_block, md, b, md->y, fa->active, md->S);
+  if ((status = factor_band(md, fa->active)) != DL_OK) return status;
+  fa->factored = 1;
+  return DL_OK;
+}
+
+/* Block b's part of a right-hand side before the band solve: u_b (f by slot) with the
+ * folded rows' w c_r a_r added, through L^-1, through the internal pivots
+ * (eliminate_rhs), and c - Z^T u over its external pairs. */
+DL_INLINE void solve_block_down(dl_model *md, const dl_factor *fa, int64_t b, double *c,
+                                int64_t nb) {
+  double *restrict ub = md->u + md->block_start[b];
+  for (int64_t p = md->block_pairs[b]; p < md->block_external[b]; ++p) {
+    if (fa->fold[p] == 0.0) continue;
+    const double wc = fa->fold[p] * c[md->pair_row[p]];
+    const double *restrict a = md->a + md->pair_vec[p];
+    for (int64_t i = 0; i < nb; ++i) ub[i] += wc * a[i];
+  }
+  forward(md->blocks + md->block_mat[b], nb, ub);
+  if (md->block_external[b] > md->block_pairs[b])
+    eliminate_rhs(md, b, md->y, fa->active, c, md->u, nb);
+  block_residual(md, b, md->y, md->u, c, nb);
+}
+
+/* Block b after the band solve: x_b = L^-T (u_b + Z_b lam). */
+DL_INLINE void solve_block_up(dl_model *md, int64_t b, const double *lam, int64_t nb) {
+  block_update(md, b, md->y, lam, md->u, nb);
+  block_backward(md, b, md->u, nb);
+}
+
+/* The multipliers of block b's active internal rows (recover_internal over the active
+ * rows only). */
+static void recover_active(const dl_model *md, const unsigned char *active, int64_t b,
+                           double *lam) {
+  const int64_t p0 = md->block_pairs[b], pe = md->block_external[b], p1 = md->block_pairs[b + 1];
+  for (int64_t i = pe - 1; i >= p0; --i) {
+    if (!active[md->pair_row[i]]) continue;
+    const double *e = md->elim + md->elim_at[i];
+    double l = lam[md->pair_row[i]];
+    for (int64_t p = i + 1; p < p1; ++p)
+      if (active[md->pair_row[p]]) l -= e[p - i] * lam[md->pair_row[p]];
+    lam[md->pair_row[i]] = l;
+  }
+}
+
+/* One right-hand side [f; c] to [x; lam] (x by coordinate, lam by row). */
+static void kkt_solve_one(dl_model *md, dl_factor *fa, const double *f, const double *c_in,
+                          double *x, double *lam) {
+  double *c = fa->rows, *u = md->u;
+  memcpy(c, c_in, (size_t)md->m * sizeof(double));
+  for (int64_t s = 0; s < md->n; ++s) u[s] = f[md->slot_coord[s]];
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    BY_SIZE(block_size(md, b), solve_block_down, md, fa, b, c);
+  /* the inactive rows' entries are ignored: their multipliers come out 0 (unit
+   * diagonal, no coupling in S), so they add nothing to x */
+  for (int64_t r = 0; r < md->m; ++r)
+    if (!fa->active[r]) c[r] = 0.0;
+  for (int64_t k = 0; k < md->m_band; ++k) md->r[k] = c[md->band_row[k]];
+  if (md->m_band) band_solve(md->S, md->m_band, md->kd, md->r);
+  for (int64_t k = 0; k < md->m_band; ++k) c[md->band_row[k]] = md->r[k];
+  for (int64_t b = 0; b < md->n_blocks; ++b)
+    BY_SIZE(block_size(md, b), solve_block_up, md, b, c);
+  for (int64_t s = 0; s < md->n; ++s) x[md->slot_coord[s]] = u[s];
+  for (int64_t k = 0; k < md->n_elim_blocks; ++k)
+    recover_active(md, fa->active, md->elim_blocks[k], c);
+  for (int64_t r = 0; r < md->m; ++r) lam[r] = fa->active[r] ? c[r] : 0.0;
+}
+
+/* k right-hand sides [f; c], ldr apart in rhs, to [qdd; lambda], ldr apart in out (rhs
+ * and out may be the same); DL_SINGULAR_CONSTRAINTS without a factorization. */
+int dl_kkt_solve(dl_model *md, dl_factor *fa, int64_t k, const double *rhs, int64_t ldr,
+                 double *out) {
+  if (!fa->factored) return DL_SINGULAR_CONSTRAINTS;
+  for (int64_t j = 0; j < k; ++j)
+    kkt_solve_one(md, fa, rhs + j * ldr, rhs + j * ldr + md->n, out + j * ldr,
+                  out + j * ldr + md->n);
+  return DL_OK;
+}

@@ -69,6 +69,12 @@ class Model(ctypes.Structure):
     ]
 
 
+class Factor(ctypes.Structure):
+    """``dl_factor``: the work of one KKT factorization (``dl_kkt_factor``)."""
+
+    _fields_ = [("active", _ptr), ("fold", _ptr), ("rows", _ptr), ("factored", _i64)]
+
+
 class Tableau(ctypes.Structure):
     _fields_ = [("n_stages", _i64), *((name, _ptr) for name in ("A", "B", "C", "E", "E3")),
                 ("n_P", _i64), ("P", _ptr), ("n_extra", _i64),
@@ -94,7 +100,7 @@ class Run(ctypes.Structure):
 
 #: The C struct each mirror stands for.
 MIRRORS: dict[str, type[ctypes.Structure]] = {
-    "dl_function": Function, "dl_model": Model, "dl_tableau": Tableau,
+    "dl_function": Function, "dl_model": Model, "dl_factor": Factor, "dl_tableau": Tableau,
     "dl_stepper": Stepper, "dl_run": Run}
 
 
@@ -206,6 +212,8 @@ def _runtime() -> ctypes.CDLL:
     signatures = {
         "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
         "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
+        "dl_kkt_factor": [_ptr] * 4,
+        "dl_kkt_solve": [_ptr, _ptr, _i64, _ptr, _i64, _ptr],
         "dl_rk_step": [_ptr] * 7,
         "dl_rk_run": [_ptr] * 7,
         "dl_outputs": [_ptr, _i64, *[_ptr] * 8],

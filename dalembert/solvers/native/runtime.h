@@ -4,7 +4,8 @@
  * constraint) are called through pointers; everything else here is hand-written
  * and model independent. See native/__init__.py for the method and the tables.
  * The sources, compiled together into one library (library.py):
- *   kkt.c          the KKT solve (block Cholesky, Schur complement in band LDL^T form)
+ *   kkt.c          the KKT solve (block Cholesky, Schur complement in band LDL^T form),
+ *                  also as a factorization with many right-hand sides (dl_kkt_factor)
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
@@ -101,6 +102,16 @@ typedef struct {
   /* n_unit: the 1 x 1 masses of the last solve and 1 / sqrt of them (unit_pass) */
   double *unit_mass, *unit_root;
 } dl_model;
+
+/* The work of one KKT factorization (dl_kkt_factor, dl_kkt_solve), apart from the
+ * model's constant tables: the rows it was made with and what its solves need besides
+ * the factors the model's work arrays hold (blocks, y, elim, S). */
+typedef struct {
+  unsigned char *active;      /* m: 1 for a row of the factorization (its own copy) */
+  double *fold;               /* n_pairs: weight of each folded internal pair (0: not) */
+  double *rows;               /* m: a right-hand side's rows, then its multipliers */
+  int64_t factored;           /* 1 after a successful dl_kkt_factor */
+} dl_factor;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
 typedef struct {
@@ -199,6 +210,10 @@ DL_INTERNAL int dl_solve(dl_model *md, double *qdd, double *lambda);
 DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active);
 DL_INTERNAL void solve_schur(dl_model *md, double *rhs, double *x);
 int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda);
+int dl_kkt_factor(dl_model *md, dl_factor *fa, const double *values,
+                  const unsigned char *active);
+int dl_kkt_solve(dl_model *md, dl_factor *fa, int64_t k, const double *rhs, int64_t ldr,
+                 double *out);
 
 /* outputs.c */
 int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, double *qdd,

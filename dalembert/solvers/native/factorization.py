@@ -1,0 +1,128 @@
+"""The C runtime's KKT solve as a :class:`~dalembert.solvers.factorization.KKTFactorization`.
+
+``dl_kkt_factor`` factors the KKT matrix the way the C loop's right-hand side solves it
+(:mod:`dalembert.solvers.native`: block Cholesky of ``M`` with the rows inside a block
+folded in, band ``LDL^T`` of the Schur complement ``A Mt^-1 A^T``) for the values on
+the pattern and a set of active rows; ``dl_kkt_solve`` solves it for many right-hand
+sides. Its tables are the C loop's (:mod:`.structure`, all rows); its work arrays
+belong to the object.
+
+>>> import numpy as np
+>>> from dalembert.codegen.compiled import SparsePattern
+>>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
+...                         np.array([0, 0]), np.array([0, 1]))
+>>> kkt = SchurFactorization(pattern)
+>>> kkt.factor(np.ones(4))
+>>> kkt.solve(np.array([0.0, -2.0, 0.0]))
+(array([ 1., -1.]), array([1.]))
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from ...codegen.c_backend import CompileError
+from ...codegen.compiled import SparsePattern
+from ...errors import SingularSystemError
+from ..factorization import SINGULAR_MESSAGE, Backend, KKTFactorization
+from . import library
+from .structure import NotApplicable, SchurStructure, schur_structure
+
+_MESSAGES = {
+    library.SINGULAR_MASS: "a block of the mass matrix is singular even with the active "
+                           "constraints inside it folded in: " + SINGULAR_MESSAGE,
+    library.SINGULAR_CONSTRAINTS: SINGULAR_MESSAGE,
+}
+
+
+def schur_applies(pattern: SparsePattern) -> bool:
+    """Whether :class:`SchurFactorization` serves ``pattern``: the runtime compiles and
+    the blocks and band are narrow enough (:func:`.structure.schur_structure`).
+
+    >>> import numpy as np
+    >>> from dalembert.codegen.compiled import SparsePattern
+    >>> pattern = SparsePattern(1, 0, np.zeros(1, int), np.zeros(1, int),
+    ...                         np.zeros(0, int), np.zeros(0, int))
+    >>> schur_applies(pattern)
+    True
+    """
+    try:
+        library.runtime()
+        schur_structure(pattern)
+    except (CompileError, NotApplicable):
+        return False
+    return True
+
+
+class _Tables:
+    """The structure's tables as ``int64`` arrays C reads (made once per pattern)."""
+
+    def __init__(self, structure: SchurStructure) -> None:
+        self._arrays = {name: np.ascontiguousarray(a, dtype=np.int64)
+                        for name, a in structure.arrays().items()}
+        self.address = {name: a.ctypes.data for name, a in self._arrays.items()}
+
+
+class SchurFactorization(KKTFactorization):
+    """The C block/Schur factorization (module docstring).
+
+    Raises :class:`~dalembert.solvers.native.structure.NotApplicable` (saying why) for
+    a pattern it does not serve and :class:`~dalembert.codegen.c_backend.CompileError`
+    without the runtime; :func:`schur_applies` asks first.
+
+    Parameters
+    ----------
+    pattern
+        The sparsity pattern of ``M`` and ``A``.
+    """
+
+    backend = Backend.SCHUR
+
+    def __init__(self, pattern: SparsePattern) -> None:
+        super().__init__(pattern)
+        self.lib = library.runtime()
+        s = self.structure = schur_structure(pattern)
+        tables = pattern.remember("native kkt factorization tables", lambda: _Tables(s))
+        self._tables = tables  # kept alive: the struct points into it
+        n, m = self.n, self.m
+        sizes = {"blocks": int(s.block_mat[-1]), "a": int(s.pair_vec[-1]),
+                 "y": int(s.pair_vec[-1]), "u": n, "S": len(s.band_row) * (s.kd + 1),
+                 "r": len(s.band_row), "elim": int(s.elim_at[-1])}
+        # zeroed: the pair vectors' slots no value of A lands in stay zero (load_pairs)
+        self._work = {name: np.zeros(max(size, 1)) for name, size in sizes.items()}
+        model = library.Model(n=n, m=m, nM=len(pattern.M_rows), nA=len(pattern.A_rows),
+                              n_blocks=s.n_blocks, n_pairs=s.n_pairs, kd=s.kd,
+                              n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
+                              n_dropped_pairs=s.n_dropped_pairs, n_dropped=0)
+        for name in s.arrays():
+            setattr(model, name, tables.address[name])
+        for name, array in self._work.items():
+            setattr(model, name, array.ctypes.data)
+        self._model = model
+        self._active_work = np.zeros(max(m, 1), dtype=np.uint8)
+        self._fold = np.zeros(max(s.n_pairs, 1))
+        self._rows = np.zeros(max(m, 1))
+        self._factor_state = library.Factor(active=self._active_work.ctypes.data,
+                                            fold=self._fold.ctypes.data,
+                                            rows=self._rows.ctypes.data, factored=0)
+        self._at = (ctypes.addressof(self._model), ctypes.addressof(self._factor_state))
+
+    def _factor(self, values: np.ndarray, active: np.ndarray) -> None:
+        values = np.ascontiguousarray(values, dtype=float)
+        mask = np.ascontiguousarray(active, dtype=np.uint8)
+        status = self.lib.dl_kkt_factor(*self._at, values.ctypes.data, mask.ctypes.data)
+        if status != library.OK:
+            raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
+
+    def _solve(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        size = self.n + self.m
+        columns = np.ascontiguousarray(rhs.reshape(size, -1).T)  # one right-hand side a row
+        out = np.empty_like(columns)
+        status = self.lib.dl_kkt_solve(*self._at, columns.shape[0], columns.ctypes.data,
+                                       size, out.ctypes.data)
+        if status != library.OK:
+            raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
+        z = out.T if rhs.ndim == 2 else out[0]
+        return z[:self.n], z[self.n:]
