@@ -43,6 +43,7 @@ import enum
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 import scipy.sparse as sps
@@ -62,6 +63,7 @@ BAND_MAX = 40
 #: threshold pivoting relaxed so that the order is mostly kept (zero (2,2) block).
 PERMC = "MMD_AT_PLUS_A"
 DIAG_PIVOT_THRESH = 0.1
+T = TypeVar("T")
 SINGULAR_MESSAGE = (
     "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are not "
     "determined (a singular configuration of the constraints, or a coordinate without "
@@ -132,7 +134,8 @@ class KKTFactorization(ABC):
         self.n_values = len(pattern.M_rows) + len(pattern.A_rows)
         self.active: np.ndarray | None = None  # the rows of the last factorization
         self._all_active = True
-        self._every_row = np.ones(self.m, dtype=bool)
+        self._every_row = _derived(pattern, "kkt every row",
+                                   lambda: _read_only(np.ones(self.m, dtype=bool)))
 
     def factor(self, values: np.ndarray, active: np.ndarray | None = None) -> None:
         """Factor the KKT matrix of ``values`` with the rows ``active`` (default all).
@@ -237,7 +240,19 @@ class _Entries:
 
 
 def _entries(pattern: SparsePattern) -> _Entries:
-    return pattern.remember("kkt entries", lambda: _Entries(pattern))
+    return _derived(pattern, "kkt entries", lambda: _Entries(pattern))
+
+
+def _derived(pattern: SparsePattern, key: str, make: Callable[[], T]) -> T:
+    """``pattern.remember(key, make)``, without its call once made (objects are made
+    per factorization, so this is on the path of every solve)."""
+    found = pattern.derived.get(key)
+    return pattern.remember(key, make) if found is None else found
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
 
 
 def restricted_pattern(pattern: SparsePattern, rows: np.ndarray
@@ -316,7 +331,7 @@ def band_lu(pattern: SparsePattern) -> BandLU:
     def make() -> BandLU:
         e = _entries(pattern)
         return BandLU(e.rows, e.cols, e.src, e.size, ordered=e.n_ordered)
-    return pattern.remember("kkt band lu", make)
+    return _derived(pattern, "kkt band lu", make)
 
 
 def band_condition(pattern: SparsePattern, values: np.ndarray) -> float:
