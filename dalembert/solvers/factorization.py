@@ -43,6 +43,7 @@ import enum
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 import scipy.sparse as sps
@@ -62,6 +63,7 @@ BAND_MAX = 40
 #: threshold pivoting relaxed so that the order is mostly kept (zero (2,2) block).
 PERMC = "MMD_AT_PLUS_A"
 DIAG_PIVOT_THRESH = 0.1
+T = TypeVar("T")
 SINGULAR_MESSAGE = (
     "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are not "
     "determined (a singular configuration of the constraints, or a coordinate without "
@@ -131,6 +133,9 @@ class KKTFactorization(ABC):
         self.n, self.m = pattern.n, pattern.m
         self.n_values = len(pattern.M_rows) + len(pattern.A_rows)
         self.active: np.ndarray | None = None  # the rows of the last factorization
+        self._all_active = True
+        self._every_row = _derived(pattern, "kkt every row",
+                                   lambda: _read_only(np.ones(self.m, dtype=bool)))
 
     def factor(self, values: np.ndarray, active: np.ndarray | None = None) -> None:
         """Factor the KKT matrix of ``values`` with the rows ``active`` (default all).
@@ -152,8 +157,9 @@ class KKTFactorization(ABC):
         if values.shape != (self.n_values,):
             raise ValueError(f"the KKT values have shape {values.shape}; give the "
                              f"{self.n_values} values of M and A in the pattern's order")
-        mask = active_rows(active, self.m)
+        mask = self._every_row if active is None else active_rows(active, self.m)
         self.active = None
+        self._all_active = active is None or bool(mask.all())
         self._factor(values, mask)
         self.active = mask
 
@@ -173,25 +179,35 @@ class KKTFactorization(ABC):
             ``(n,)`` and ``(m,)`` (or ``(n, k)`` and ``(m, k)``): ``M x = f + A^T lambda``,
             ``A x = c`` on the active rows, ``lambda = 0`` on the others.
         """
+        z = self.solve_stacked(rhs)
+        x, lam = z[:self.n], -z[self.n:]
+        if self.active is not None and not self._all_active:
+            lam[~self.active] = 0.0
+        return x, lam
+
+    def solve_stacked(self, rhs: np.ndarray) -> np.ndarray:
+        """The KKT matrix's own unknowns ``[x; -lambda]`` stacked, for the right-hand sides
+        ``[f; c]`` (as :meth:`solve`)."""
         if self.active is None:
             raise RuntimeError("solve() needs a successful factor() first")
         rhs = np.asarray(rhs, dtype=float)
         if rhs.shape[:1] != (self.n + self.m,) or rhs.ndim > 2:
             raise ValueError(f"the right-hand side has shape {rhs.shape}; give n + m = "
                              f"{self.n + self.m} rows (one column per right-hand side)")
+        if self._all_active:
+            return self._stacked(rhs)
         inactive = ~self.active
-        if inactive.any():
-            rhs = rhs.copy()
-            rhs[self.n:][inactive] = 0.0
-        x, lam = self._solve(rhs)
-        lam[inactive] = 0.0
-        return x, lam
+        rhs = rhs.copy()  # the caller's right-hand side left as it is
+        rhs[self.n:][inactive] = 0.0
+        z = self._stacked(rhs)
+        z[self.n:][inactive] = 0.0
+        return z
 
     @abstractmethod
     def _factor(self, values: np.ndarray, active: np.ndarray) -> None: ...
 
     @abstractmethod
-    def _solve(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+    def _stacked(self, rhs: np.ndarray) -> np.ndarray: ...
 
 
 class _Entries:
@@ -224,7 +240,51 @@ class _Entries:
 
 
 def _entries(pattern: SparsePattern) -> _Entries:
-    return pattern.remember("kkt entries", lambda: _Entries(pattern))
+    return _derived(pattern, "kkt entries", lambda: _Entries(pattern))
+
+
+def _derived(pattern: SparsePattern, key: str, make: Callable[[], T]) -> T:
+    """``pattern.remember(key, make)``, without its call once made (objects are made
+    per factorization, so this is on the path of every solve)."""
+    found = pattern.derived.get(key)
+    return pattern.remember(key, make) if found is None else found
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
+
+
+def restricted_pattern(pattern: SparsePattern, rows: np.ndarray
+                       ) -> tuple[SparsePattern, np.ndarray]:
+    """The pattern of ``M`` and the rows ``rows`` of ``A`` (renumbered ``0..len(rows)-1``
+    in that order) and which of ``A``'s values it takes; made once per set of rows.
+
+    Parameters
+    ----------
+    pattern
+        The sparsity pattern of ``M`` and ``A``.
+    rows
+        The constraint rows kept.
+
+    Examples
+    --------
+    >>> pattern = SparsePattern(2, 2, np.array([0, 1]), np.array([0, 1]),
+    ...                         np.array([0, 1, 1]), np.array([0, 0, 1]))
+    >>> kept, taken = restricted_pattern(pattern, np.array([1]))
+    >>> kept.m, kept.A_rows.tolist(), kept.A_cols.tolist(), taken.tolist()
+    (1, [0, 0], [0, 1], [1, 2])
+    """
+    rows = np.asarray(rows, dtype=np.intp)
+
+    def make() -> tuple[SparsePattern, np.ndarray]:
+        position = np.full(pattern.m, -1)
+        position[rows] = np.arange(len(rows))
+        taken = np.flatnonzero(position[pattern.A_rows] >= 0)
+        return SparsePattern(pattern.n, len(rows), pattern.M_rows, pattern.M_cols,
+                             position[pattern.A_rows[taken]], pattern.A_cols[taken]), taken
+
+    return pattern.remember(("restricted pattern", rows.tobytes()), make)
 
 
 class DenseFactorization(KKTFactorization):
@@ -241,9 +301,8 @@ class DenseFactorization(KKTFactorization):
         self._K = kkt_matrix(p.dense_M(values[:n_m]), p.dense_A(Av))
         self._K[self.n:, self.n:][np.diag_indices(self.m)] = ~active
 
-    def _solve(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        z = _dense_solve(self._K, rhs)
-        return z[:self.n], -z[self.n:]
+    def _stacked(self, rhs: np.ndarray) -> np.ndarray:
+        return _dense_solve(self._K, rhs)
 
 
 class BandFactorization(KKTFactorization):
@@ -257,11 +316,13 @@ class BandFactorization(KKTFactorization):
         self.band = band_lu(pattern)
 
     def _factor(self, values: np.ndarray, active: np.ndarray) -> None:
-        self._apply = self.band.factor(self._entries.values(values, active))
+        if self._all_active:  # the (2,2) block's zeros need no scatter
+            self._apply = self.band.factor(values, ordered_only=True)
+        else:
+            self._apply = self.band.factor(self._entries.values(values, active))
 
-    def _solve(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        z = self._apply(rhs)
-        return z[:self.n], -z[self.n:]
+    def _stacked(self, rhs: np.ndarray) -> np.ndarray:
+        return self._apply(rhs)
 
 
 def band_lu(pattern: SparsePattern) -> BandLU:
@@ -270,7 +331,20 @@ def band_lu(pattern: SparsePattern) -> BandLU:
     def make() -> BandLU:
         e = _entries(pattern)
         return BandLU(e.rows, e.cols, e.src, e.size, ordered=e.n_ordered)
-    return pattern.remember("kkt band lu", make)
+    return _derived(pattern, "kkt band lu", make)
+
+
+def band_condition(pattern: SparsePattern, values: np.ndarray) -> float:
+    """Estimated 1-norm condition number of the KKT matrix of ``values`` (every row
+    active) from its band LU (:meth:`BandLU.condition`; the next band factorization of
+    the same values reuses that LU).
+
+    >>> pattern = SparsePattern(2, 1, np.array([0, 1]), np.array([0, 1]),
+    ...                         np.array([0, 0]), np.array([0, 1]))
+    >>> bool(band_condition(pattern, np.ones(4)) < 10)
+    True
+    """
+    return band_lu(pattern).condition(np.asarray(values, dtype=float), ordered_only=True)
 
 
 class SpluFactorization(KKTFactorization):
@@ -281,15 +355,19 @@ class SpluFactorization(KKTFactorization):
     def __init__(self, pattern: SparsePattern) -> None:
         super().__init__(pattern)
         self._entries = e = _entries(pattern)
-        order, self._indices, self._indptr = pattern.remember(
-            "kkt csc", lambda: csc_map(e.rows, e.cols, e.size))
-        self._src = e.src[order]
+        # Two structures: with the (2,2) diagonal for inactive rows, and without it when
+        # every row is active (SuperLU's order and pivots then see the KKT pattern alone)
+        self._maps = pattern.remember("kkt csc", lambda: tuple(
+            (e.src[:k][order], indices, indptr)
+            for k in (e.n_ordered, len(e.rows))
+            for order, indices, indptr in [csc_map(e.rows[:k], e.cols[:k], e.size)]))
 
     def matrix(self, values: np.ndarray, active: np.ndarray | None = None) -> sps.csc_matrix:
         """The KKT matrix of ``values`` (``[M values, A values]``) and rows ``active``."""
-        full = self._entries.values(values, active_rows(active, self.m))
-        return sps.csc_matrix((full[self._src], self._indices, self._indptr),
-                              shape=(self._entries.size,) * 2)
+        mask = active_rows(active, self.m)
+        src, indices, indptr = self._maps[0 if mask.all() else 1]
+        full = self._entries.values(values, mask)
+        return sps.csc_matrix((full[src], indices, indptr), shape=(self._entries.size,) * 2)
 
     def _factor(self, values: np.ndarray, active: np.ndarray) -> None:
         try:
@@ -300,9 +378,8 @@ class SpluFactorization(KKTFactorization):
         except (RuntimeError, spla.MatrixRankWarning) as exc:
             raise SingularSystemError(SINGULAR_MESSAGE) from exc
 
-    def _solve(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        z = self._lu.solve(rhs)
-        return z[:self.n], -z[self.n:]
+    def _stacked(self, rhs: np.ndarray) -> np.ndarray:
+        return self._lu.solve(rhs)
 
 
 _PYTHON: dict[Backend, Callable[[SparsePattern], KKTFactorization]] = {
@@ -369,7 +446,8 @@ def kkt_factorization(pattern: SparsePattern, backend: Backend | None = None
     (array([[ 0.,  1.],
            [-2.,  1.]]), array([[0., 0.]]))
     """
-    backend = choose_backend(pattern) if backend is None else Backend(backend)
+    if backend is None:
+        backend = choose_backend(pattern)
     if backend is Backend.SCHUR:
         from .native.factorization import SchurFactorization
         return SchurFactorization(pattern)
@@ -402,6 +480,9 @@ class BandLU:
                  size: int, ordered: int | None = None) -> None:
         self.perm, self.kl, self.ku, self.flat = band_layout(rows, cols, size, ordered)
         self.size, self.src, self.cols = size, src, cols
+        #: the scatter of all entries, and of the ordered ones alone (the others zero)
+        self._scatter = {False: (self.flat, src, cols),
+                         True: (self.flat[:ordered], src[:ordered], cols[:ordered])}
         self.width = self.kl + self.ku + 1
         self.ldab = 2 * self.kl + self.ku + 1
         #: the factorization :meth:`condition` made and the values it is of, for the
@@ -409,34 +490,39 @@ class BandLU:
         #: matrix its impact solve then factors); one tuple, replaced whole, so threads
         #: sharing the solver read a consistent pair. Loops that only factor never
         #: make it, and pay no comparison of values.
-        self._conditioned: tuple[bytes, tuple[np.ndarray, np.ndarray, int]] | None = None
+        self._conditioned: tuple[bytes, bool, tuple[np.ndarray, np.ndarray, int]] | None = None
 
-    def _lu(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    def _lu(self, values: np.ndarray, ordered_only: bool
+            ) -> tuple[np.ndarray, np.ndarray, int]:
+        flat, src, _ = self._scatter[ordered_only]
         ab = np.zeros(self.ldab * self.size)
-        ab[self.flat] = values[self.src]
+        ab[flat] = values[src]
         return lapack.dgbtrf(ab.reshape(self.size, self.ldab).T, self.kl, self.ku,
                              overwrite_ab=1)
 
-    def condition(self, values: np.ndarray) -> float:
+    def condition(self, values: np.ndarray, ordered_only: bool = False) -> float:
         """Estimated 1-norm condition number (LAPACK ``gbcon`` on the band LU), ``inf``
-        if the matrix is singular."""
-        lu, piv, info = self._lu(values)
-        self._conditioned = (values.tobytes(), (lu, piv, info))
+        if the matrix is singular (``ordered_only``: as :meth:`factor`)."""
+        lu, piv, info = self._lu(values, ordered_only)
+        self._conditioned = (values.tobytes(), ordered_only, (lu, piv, info))
         if info != 0:
             return np.inf
-        norm = np.bincount(self.cols, weights=np.abs(values[self.src]), minlength=self.size)
+        _, src, cols = self._scatter[ordered_only]
+        norm = np.bincount(cols, weights=np.abs(values[src]), minlength=self.size)
         rcond, info = lapack.dgbcon(self.kl, self.ku, lu, piv, norm.max())
         return 1.0 / rcond if info == 0 and rcond > 0.0 else np.inf
 
-    def factor(self, values: np.ndarray):
+    def factor(self, values: np.ndarray, ordered_only: bool = False):
         """A function ``rhs -> K^-1 rhs`` (``rhs`` a vector or a matrix of columns);
-        ``values`` indexed by the ``src`` given."""
+        ``values`` indexed by the ``src`` given (``ordered_only``: the ordered entries'
+        values alone, the others zero)."""
         kl, ku, perm = self.kl, self.ku, self.perm
         conditioned, self._conditioned = self._conditioned, None
-        if conditioned is not None and conditioned[0] == values.tobytes():
-            lu, piv, info = conditioned[1]
+        if conditioned is not None and conditioned[1] == ordered_only \
+                and conditioned[0] == values.tobytes():
+            lu, piv, info = conditioned[2]
         else:
-            lu, piv, info = self._lu(values)
+            lu, piv, info = self._lu(values, ordered_only)
         if info != 0:
             raise SingularSystemError(SINGULAR_MESSAGE)
 

@@ -15,7 +15,7 @@ with the left-out combinations' own unknowns ``s``, it is the bordered system
     [ 0   V^T   0 ] [  s      ]   [ 0 ]
 
 whose matrix is regular where the KKT matrix alone is nearly singular. It is solved
-by block elimination on the band LU (:class:`~.sparse_kkt.BandLU`, linear in the
+by block elimination on the band LU (:class:`~.factorization.BandLU`, linear in the
 mechanism) of the *regularized* KKT matrix ``[[M, A^T], [A, -eps I]]``, which stays
 regular however the rows depend on each other, and refined on the bordered system
 itself (its residual computed without the shift): each iteration removes the shift's
@@ -36,7 +36,8 @@ import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
 from ..codegen.compiled import SparsePattern
-from .sparse_kkt import BandLU, matvec
+from .factorization import BandLU
+from .sparse_kkt import matvec
 
 #: The regularization of the KKT matrix, relative to the largest eigenvalue of
 #: ``A M^-1 A^T`` (rows scaled to unit length; ``M`` by its mean diagonal).

@@ -116,7 +116,7 @@ class SchurFactorization(KKTFactorization):
         if status != library.OK:
             raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
 
-    def _solve(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _stacked(self, rhs: np.ndarray) -> np.ndarray:
         size = self.n + self.m
         columns = np.ascontiguousarray(rhs.reshape(size, -1).T)  # one right-hand side a row
         out = np.empty_like(columns)
@@ -125,4 +125,5 @@ class SchurFactorization(KKTFactorization):
         if status != library.OK:
             raise SingularSystemError(_MESSAGES.get(status, f"native runtime error {status}"))
         z = out.T if rhs.ndim == 2 else out[0]
-        return z[:self.n], z[self.n:]
+        z[self.n:] *= -1.0  # [x; -lambda], as the other backends
+        return z
