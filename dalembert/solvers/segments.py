@@ -221,7 +221,9 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
             last = segment.run()
             record.segments.append(last)
             ended = not last.success or last.status == "event" or not len(last.t)
-            if asked is None:  # every step; an inner segment's end is the next one's start
+            if count == 1 and not at_end:  # the whole run: every point as recorded
+                keep, shown = np.arange(len(last.t)), last.t
+            elif asked is None:  # every step; an inner segment's end is the next one's start
                 keep = np.arange(len(last.t)) if final or ended else \
                     np.flatnonzero(last.t != b)
                 shown = last.t[keep]
