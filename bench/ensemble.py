@@ -7,9 +7,10 @@ uniform in [20, 40] degrees and turning at 0.2 rad/s about x (the suite's start)
 10 s simulated, output at 101 times. The cases are drawn with
 ``dalembert.ensemble.sample(..., seed=17)``. The solver is dalembert's cheapest that
 meets the suite's energy target (``|E(10) - E(0)| / (E(0) - E_rest) <= 1e-6``) on every
-case of a sample of 40: for each method of ``METHODS`` the loosest rtol of the suite's
-ladder that meets it, and of these the one whose cases took the least time (as MuJoCo
-gets its largest step that meets it); the energy error of every case run is reported.
+case of a sample of 40: for each method of ``METHODS`` the coarsest rtol that meets it,
+bracketed by ``RTOLS`` and bisected to within 5% (``peers/ladder.py``), and of these the
+one whose cases took the least CPU time (as MuJoCo gets its largest step that meets it,
+bisected alike); the energy error of every case run is reported.
 
 Parts (``--part``):
 
@@ -21,8 +22,10 @@ Parts (``--part``):
   ``rollout`` (one ``MjModel`` per case with its link masses and inertias, the
   initial state of each case, both made within its time as dalembert's ensemble binds
   each case's masses and runs its ``initial_state`` within its own; 2 threads; the
-  largest RK4 step of the suite's ladder, 2e-2 down by factors of 2^(1/3), at which
-  every case of a sample meets the target). Runs per second, the speed-up over the plain
+  largest RK4 step at which every case of the sample meets the target, bracketed by the
+  suite's ladder, 2e-2 down by factors of 2^(1/3), and bisected to within 5%). Wall and
+  CPU seconds (CPU: this process's threads, and a Dask cluster's worker processes; the
+  figure to trust on a loaded machine). Runs per second, the speed-up over the plain
   loop, the parallel efficiency (speed-up / workers) and the overhead per case of
   the ensemble machinery. The ways run in rounds (``--rounds``, 5): each round runs
   its share of the cases every way, in an order turned by one each round, so a
@@ -49,6 +52,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import math
 import os
 import platform
 import subprocess
@@ -161,38 +165,49 @@ def peak_memory_mb() -> float:
 
 # -- dalembert --------------------------------------------------------------------------
 def choose_solver(mb, initial, cases) -> tuple[dict, list[dict]]:
-    """``simulate``'s method, rtol and atol: for each method the loosest rtol at which
-    every case of ``cases`` meets the energy target, and of these the one whose cases
-    took the least time; every setting tried is listed."""
+    """``simulate``'s method, rtol and atol: for each method the coarsest rtol (within
+    5%: ``peers.ladder.bisect``, bracketed by ``RTOLS``) at which every case of ``cases``
+    meets the energy target, and of these the one whose cases took the least CPU time;
+    every setting tried is listed."""
+    from peers.ladder import Prepared, bisect
+
     tried, passed = [], []
     mb.system.simulate_many((0.0, T_END), cases.iloc[:2], initial_state=initial,
                             scheduler="serial", progress=False)  # untimed: loads the code
     for method in METHODS:
-        for rtol in RTOLS:
+        def attempt(rtol: float, method: str = method) -> dict:
             solver = {"method": method, "rtol": rtol, "atol": rtol / 100}
+            start = time.process_time()
             result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
                                              keep=("energy",), scheduler="serial",
                                              progress=False, **solver)
+            cpu = time.process_time() - start
             errors = energy_errors(result.dataset["energy"].values, masses(cases))
-            tried.append({**solver, "worst_energy_error": float(errors.max()),
-                          "median_energy_error": float(np.median(errors)),
-                          "nfev_mean": float(result.summary["nfev"].mean()),
-                          "case_seconds": case_seconds(result)})
-            if errors.max() <= ENERGY_TARGET:
-                passed.append(tried[-1])
-                break
+            row = {**solver, "worst_energy_error": float(errors.max()),
+                   "median_energy_error": float(np.median(errors)),
+                   "nfev_mean": float(result.summary["nfev"].mean()),
+                   "case_seconds": case_seconds(result), "cpu_s": cpu}
+            tried.append(row)
+            return {"setting": solver, "energy_error": row["worst_energy_error"],
+                    "simulate_s": row["case_seconds"], "cpu_s": cpu, "row": row}
+
+        found = bisect(Prepared({}, attempt, RTOLS,
+                                lambda r: r["energy_error"] <= ENERGY_TARGET))
+        if found["accepted"]:
+            found["row"].update(kept=True, bracket=found["bracket"])  # marked in ``tried``
+            passed.append(found["row"])
     if not passed:
-        raise RuntimeError(f"no method in {METHODS} and rtol in {RTOLS} met the energy "
-                           f"target: {tried}")
-    best = min(passed, key=lambda row: row["case_seconds"])
+        raise RuntimeError(f"no method in {METHODS} met the energy target: {tried}")
+    best = min(passed, key=lambda row: row["cpu_s"])  # CPU: the work, whatever the load
     return {k: best[k] for k in ("method", "rtol", "atol")}, tried
 
 
-def plain_loop(mb, initial, cases, solver: dict) -> tuple[float, np.ndarray]:
-    """The reference: ``simulate`` in a loop, each trajectory kept."""
+def plain_loop(mb, initial, cases, solver: dict) -> tuple[float, float, np.ndarray]:
+    """The reference: ``simulate`` in a loop, each trajectory kept (wall and CPU
+    seconds, energies)."""
     t_eval = np.linspace(0.0, T_END, 101)
     kept = []
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # rounding-level projection of q0
         for row in cases.to_dict("records"):
@@ -200,18 +215,29 @@ def plain_loop(mb, initial, cases, solver: dict) -> tuple[float, np.ndarray]:
             kept.append(mb.system.simulate(
                 (0.0, T_END), q0, qd0, parameters={k: v for k, v in row.items() if k != "angle"},
                 t_eval=t_eval, **solver))
-    seconds = time.perf_counter() - start
-    return seconds, np.array([traj.energy for traj in kept])
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+    return seconds, cpu, np.array([traj.energy for traj in kept])
+
+
+def cpu_seconds(client=None) -> float:
+    """CPU seconds of this process so far (all its threads), plus those of ``client``'s
+    worker processes when given."""
+    own = time.process_time()
+    return own if client is None else own + sum(client.run(time.process_time).values())
 
 
 def ensemble_run(mb, initial, cases, solver: dict, **how) -> tuple[float, object]:
     """Seconds of one ``simulate_many`` call and its result; ``result.call`` holds the
-    call's start and end on the clock of the cases' ``started`` (for :func:`timeline`)."""
+    call's start and end on the clock of the cases' ``started`` (for :func:`timeline`),
+    ``result.cpu_s`` the CPU seconds it took (this process and any Dask workers)."""
+    cpu = cpu_seconds(how.get("client"))
     start, clock = time.perf_counter(), time.time()
     result = mb.system.simulate_many((0.0, T_END), cases, initial_state=initial,
                                      progress=False, **solver, **how)
     result.call = (clock, time.time())
-    return time.perf_counter() - start, result
+    seconds = time.perf_counter() - start
+    result.cpu_s = cpu_seconds(how.get("client")) - cpu
+    return seconds, result
 
 
 def timeline(result) -> dict:
@@ -290,15 +316,15 @@ def throughput(n: int, rounds: int) -> dict:
     mujoco_record = {"version": mujoco.version, "ladder": mujoco_ladder, "dt": dt}
 
     def loop(part):
-        seconds, energies = plain_loop(mb, initial, part, solver)
-        return (seconds, energy_errors(energies, masses(part))), {}
+        seconds, cpu, energies = plain_loop(mb, initial, part, solver)
+        return (seconds, cpu, energy_errors(energies, masses(part))), {}
 
     def many(**how):
         def run(part):
             seconds, result = ensemble_run(mb, initial, part, solver, **how)
             errors = energy_errors(result.dataset["energy"].values, masses(part))
-            return (seconds, errors), {"case_seconds": case_seconds(result),
-                                       **timeline(result)}
+            return (seconds, result.cpu_s, errors), {"case_seconds": case_seconds(result),
+                                                     **timeline(result)}
         return run
 
     def on_cluster(workers: int):
@@ -313,8 +339,10 @@ def throughput(n: int, rounds: int) -> dict:
         return run
 
     def rollout(part):
+        cpu = time.process_time()  # the rollout's threads are this process's
         seconds, prepare, errors = mujoco.rollout(part.index.to_numpy())
-        return (seconds, errors), {"prepare_s": prepare}
+        # the energies measured after the rollout are in the CPU time: ~1% of it
+        return (seconds, time.process_time() - cpu, errors), {"prepare_s": prepare}
 
     ways = {"loop": (loop, 1), "serial": (many(scheduler="serial"), 1),
             "threads-2": (many(scheduler="threads", workers=2), 2),
@@ -323,28 +351,34 @@ def throughput(n: int, rounds: int) -> dict:
             "mujoco-2": (rollout, 2)}
     names = list(ways)
     seconds = {k: np.zeros(rounds) for k in names}
+    cpu = {k: np.zeros(rounds) for k in names}
     errors = {k: np.zeros(n) for k in names}
     extras: dict[str, dict] = {k: {} for k in names}
     for r, share in enumerate(shares):
         part = cases.iloc[share]
         for name in names[r % len(names):] + names[: r % len(names)]:
-            (seconds[name][r], errors[name][share]), extra = ways[name][0](part)
+            (seconds[name][r], cpu[name][r], errors[name][share]), extra = \
+                ways[name][0](part)
             for key, value in extra.items():
                 extras[name][key] = extras[name].get(key, 0.0) + value
         print(f"round {r + 1}/{rounds}: " + ", ".join(
-            f"{k} {len(share) / seconds[k][r]:.1f}" for k in names) + " runs/s", flush=True)
+            f"{k} {len(share) / seconds[k][r]:.1f} ({len(share) / cpu[k][r]:.1f} per CPU s)"
+            for k in names) + " runs/s", flush=True)
     for name in names:
         total = float(seconds[name].sum())
         record["runs"][name] = {
             "seconds": total, "runs_per_s": n / total, "workers": ways[name][1],
             "round_seconds": seconds[name].tolist(),
+            "cpu_seconds": float(cpu[name].sum()), "runs_per_cpu_s": n / cpu[name].sum(),
+            "round_cpu_seconds": cpu[name].tolist(),
             "speedup": float(seconds["loop"].sum() / total),
             "speedup_median_of_rounds": float(np.median(seconds["loop"] / seconds[name])),
             "worst_energy_error": float(errors[name].max()),
             "median_energy_error": float(np.median(errors[name])), **extras[name]}
         run = record["runs"][name]
         run["efficiency"] = run["speedup"] / run["workers"]
-        print(f"{name}: {total:.1f} s, {n / total:.1f} runs/s", flush=True)
+        print(f"{name}: {total:.1f} s, {n / total:.1f} runs/s; CPU {cpu[name].sum():.1f} s",
+              flush=True)
     record["against_mujoco"] = {
         "dask-2": float(seconds["mujoco-2"].sum() / seconds["dask-2"].sum()),
         "dask-2_median_of_rounds": float(np.median(seconds["mujoco-2"] / seconds["dask-2"])),
@@ -360,6 +394,14 @@ def throughput(n: int, rounds: int) -> dict:
         "threads-2_rollout_only": float((seconds["mujoco-2"].sum()
                                          - extras["mujoco-2"]["prepare_s"])
                                         / seconds["threads-2"].sum())}
+    # CPU seconds: the work done, whatever the machine's load (the figure to trust on
+    # shared cores); Dask's include its workers' processes
+    record["against_mujoco_cpu"] = {
+        name: float(cpu["mujoco-2"].sum() / cpu[name].sum())
+        for name in ("loop", "serial", "threads-2", "threads-2-states", "dask-1", "dask-2")}
+    record["against_mujoco_cpu"].update({
+        f"{name}_median_of_rounds": float(np.median(cpu["mujoco-2"] / cpu[name]))
+        for name in ("threads-2", "threads-2-states", "dask-2")})
     mujoco_record["run"] = {**record["runs"].pop("mujoco-2"), "dt": dt,
                             "steps": round(T_END / dt), "threads": 2}
     # The ensemble's own time per case (wall x workers - the cases' own time), against a
@@ -380,9 +422,10 @@ def throughput(n: int, rounds: int) -> dict:
     # `rounds` calls, each paying a call's own head and tail; an ensemble pays them once.
     record["whole"] = {}
     for name in ("serial", "threads-2", "dask-1", "dask-2"):
-        (seconds_, errors_), extra = ways[name][0](cases)
+        (seconds_, cpu_, errors_), extra = ways[name][0](cases)
         own = seconds_ * ways[name][1] - extra["case_seconds"]
         record["whole"][name] = {"seconds": seconds_, "runs_per_s": n / seconds_,
+                                 "cpu_seconds": cpu_,
                                  "speedup": record["runs"]["loop"]["seconds"] / seconds_,
                                  "own_s": own, "own_of_case": own / extra["case_seconds"],
                                  "gaps_of_case": extra["gaps_s"] / extra["case_seconds"],
@@ -478,8 +521,8 @@ class MujocoCases:
         import mujoco
 
         self.version = mujoco.__version__
-        self.cases, self.dt, self.threads = cases, dt, threads
-        self.steps = round(T_END / dt)
+        self.steps = math.ceil(T_END / dt - 1e-9)  # the span exactly, at a step <= dt
+        self.cases, self.dt, self.threads = cases, T_END / self.steps, threads
 
     def rollout(self, rows: np.ndarray, chunk: int = 100) -> tuple[float, float, np.ndarray]:
         """Seconds of running the cases at positions ``rows``: making their models and
@@ -509,19 +552,29 @@ class MujocoCases:
 
 
 def mujoco_step() -> tuple[float, list[dict]]:
-    """The largest RK4 step of the suite's ladder (peers/mujoco.py) at which every case
-    of a sample of 40 meets the energy target."""
+    """The largest RK4 step at which every case of a sample of 40 meets the energy
+    target, within 5% (``peers.ladder.bisect``, bracketed by the suite's ladder,
+    peers/mujoco.py); every step tried is listed."""
+    from peers.ladder import Prepared, bisect
     from peers.mujoco import STEPS
 
     sample = draw_cases(40)
     ladder = []
-    for dt in STEPS:
-        _, _, errors = MujocoCases(sample, dt).rollout(np.arange(len(sample)))
-        ladder.append({"dt": dt, "worst_energy_error": float(np.max(errors)),
-                       "median_energy_error": float(np.median(errors))})
-        if np.max(errors) <= ENERGY_TARGET:
-            return dt, ladder
-    raise RuntimeError(f"no MuJoCo step in {STEPS} met the energy target: {ladder}")
+
+    def attempt(dt: float) -> dict:
+        cases = MujocoCases(sample, dt)
+        start = time.process_time()
+        _, _, errors = cases.rollout(np.arange(len(sample)))
+        cpu = time.process_time() - start
+        worst = float(np.max(errors)) if np.all(np.isfinite(errors)) else float("inf")
+        ladder.append({"dt": cases.dt, "worst_energy_error": worst,
+                       "median_energy_error": float(np.median(errors)), "cpu_s": cpu})
+        return {"setting": {"dt": cases.dt}, "energy_error": worst, "cpu_s": cpu}
+
+    found = bisect(Prepared({}, attempt, STEPS, lambda r: r["energy_error"] <= ENERGY_TARGET))
+    if not found["accepted"]:
+        raise RuntimeError(f"no MuJoCo step met the energy target: {ladder}")
+    return found["setting"]["dt"], ladder
 
 
 # -- scaling ----------------------------------------------------------------------------
@@ -622,6 +675,8 @@ def main() -> None:
                         choices=["all", "throughput", "scaling"])
     parser.add_argument("--rounds", type=int, default=5,
                         help="throughput: rounds over the ways of running (default 5)")
+    parser.add_argument("--cases", type=int,
+                        help="throughput: this many cases (default 1000; quick 60)")
     parser.add_argument("--plot", action="store_true", help="only redraw the plot")
     parser.add_argument("--sizes", type=int, nargs="+", help="scaling: these case counts")
     parser.add_argument("--scaling-one", nargs=2, help=argparse.SUPPRESS)
@@ -632,7 +687,7 @@ def main() -> None:
     out = HERE / "results" / ("ensemble_quick.json" if args.quick else "ensemble.json")
     record = json.loads(out.read_text()) if out.exists() else {}
     if not args.plot:
-        n = 60 if args.quick else 1000
+        n = args.cases or (60 if args.quick else 1000)
         record.setdefault("machine", {}).update(cpus=os.cpu_count(),
                                                 python=platform.python_version())
         if args.part in ("all", "throughput"):

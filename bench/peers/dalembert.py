@@ -14,7 +14,7 @@ once per machine, as an extension module would be at installation: it is timed f
 apart, as ``runtime_build_s``. The simulation is ``Multibody.simulate`` with its defaults
 (DOP853 under PI step-size control, projection; the loop in C, see
 ``dalembert.solvers.native``), tolerances tightened from loose until the target is
-met (from 1e-1; MuJoCo's step from 2e-2). One evaluation = one right-hand
+met and then bisected to within 5% (``ladder.bisect``). One evaluation = one right-hand
 side ``[qd, qdd]`` at the initial state (KKT blocks and their solve), from Python,
 with the solver set up once as in a simulation.
 """
@@ -28,12 +28,22 @@ import warnings
 
 import numpy as np
 
-from .common import ANGLE, T_END, centers, energy_error, omega, tilt, time_call, warm_allowed
-from .ladder import climb
+from .common import (
+    ANGLE,
+    T_END,
+    centers,
+    energy_error,
+    meets,
+    omega,
+    tilt,
+    time_call,
+    warm_allowed,
+)
+from .ladder import Prepared, bisect
 
 TOOL = "dalembert"
-#: DOP853 relative tolerances tried in turn (atol = rtol / 100): half decades, as
-#: MuJoCo's step is halved (a factor 2 in step is ~6 in tolerance for an 8th-order method).
+#: DOP853 relative tolerances tried in turn (atol = rtol / 100) to bracket the coarsest
+#: one meeting the target, which ``ladder.bisect`` then narrows to 5%.
 RTOLS = (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 1e-7, 1e-8, 1e-10,
          1e-12)
 
@@ -81,12 +91,16 @@ def initial_state(mb, workload: str, n: int):
 
 
 def run(workload: str, n: int) -> dict:
+    """The measured record: :func:`prepare`, then the bisection of the rtol."""
     with tempfile.TemporaryDirectory(prefix="dalembert-bench-") as cache:
         os.environ["DALEMBERT_CACHE_DIR"] = cache  # the first build is cold
-        return _measure(workload, n)
+        prepared = prepare(workload, n)
+        return {**bisect(prepared), **prepared.info}
 
 
-def _measure(workload: str, n: int) -> dict:
+def prepare(workload: str, n: int) -> Prepared:
+    """The model built (cold, then warm) and ``attempt(rtol)``; the code cache is
+    ``DALEMBERT_CACHE_DIR`` (:func:`run` and the suite make it a fresh one)."""
     runtime_s = build_runtime()
     mb, cold = build(workload, n)
     warm = build(workload, n)[1] if warm_allowed(cold) else None
@@ -98,17 +112,17 @@ def _measure(workload: str, n: int) -> dict:
     eval_s = time_call(lambda: plan.rhs(0.0, y))
 
     def attempt(rtol: float) -> dict:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # rounding-level projection of q0
             traj = mb.simulate((0.0, T_END), q0, qd0, rtol=rtol, atol=rtol / 100,
                                t_eval=np.linspace(0.0, T_END, 101))
-        simulate_s = time.perf_counter() - start
+        simulate_s, cpu_s = time.perf_counter() - start, time.process_time() - cpu
         return {
             "setting": {"method": "DOP853", "rtol": rtol, "atol": rtol / 100,
                         "step_control": "PI", "stabilization": "projection",
                         "loop": "C" if plan.loop == "c" else "Python"},
-            "simulate_s": simulate_s, "evaluations": int(traj.stats["nfev"]),
+            "simulate_s": simulate_s, "cpu_s": cpu_s, "evaluations": int(traj.stats["nfev"]),
             "energy_error": energy_error(traj.energy[0], traj.energy[-1], n),
             "initial_energy": float(traj.energy[0]),
             "residual": float(traj.position_residual.max()),
@@ -117,12 +131,11 @@ def _measure(workload: str, n: int) -> dict:
             else bool(traj.status == 0),
         }
 
-    record = climb(attempt, RTOLS)
     coords = len(mb.system.coordinate_names)
-    record.update(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=coords,
+    info = dict(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=coords,
                   constraints=len(mb.system.constraint_names), runtime_build_s=runtime_s,
                   build_note="cold: the model's code not cached (the C loop, which does "
                              "not depend on the model, compiled before: runtime_build_s, once "
                              "per machine); warm: rebuilt in the same process, the compiled "
                              "library loaded from the disk cache")
-    return record
+    return Prepared(info, attempt, RTOLS, meets)

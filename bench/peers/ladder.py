@@ -1,79 +1,164 @@
-"""Tighten a tool's tolerance or step until the accuracy target is met.
+"""Find a tool's coarsest setting that meets the accuracy target, by bisection.
 
-The kept setting's run is timed again when it is short: single timings under about
-a second move by up to 2x on a shared machine, so it is repeated to ``REPEATS`` runs
-in all and the fastest is reported (as ``timeit`` takes the minimum of its repeats),
-for every tool alike. Each ``attempt`` builds its own state, so a repeat is the same
-run: only its time is taken, the first run's accuracy and counts are kept.
+A setting is one positive number, larger = coarser (an rtol, a time step). The
+ladder (``settings``, coarse to fine) only brackets the answer: it is climbed until
+a setting meets the target, the rung before it (which missed) closing the bracket;
+if the ladder's first rung already meets it, settings coarser by the ladder's first
+ratio are tried until one misses (at most ``COARSER`` of them). The bracket
+``(miss, meet)`` is then bisected on a log scale (the geometric mean tried) until
+``miss / meet <= RATIO`` (5%), and the coarsest setting found meeting the target is
+kept: every tool is timed within 5% of its cheapest setting, whatever its ladder's
+spacing.
+
+Accuracy need not be monotonic in the setting (the chains are chaotic: a coarser
+setting can land on a smaller final energy error by chance). The bisection does
+not look for that: it keeps the meeting end of its last bracket, which has a
+setting that missed within 5% coarser; a coarser setting that meets the target
+again beyond a miss is neither sought nor excluded. Every attempt is recorded
+(``attempts``, in the order tried, each with ``meets``), so the JSON shows where
+accuracy was not monotonic.
+
+The kept setting is timed again by the caller (the suite interleaves the tools'
+timing rounds): the attempts' times are the bisection's, each one run.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 from .common import meets
 
-#: Runs of the kept setting in all when its first run is shorter than ``SHORT_S``.
-REPEATS = 5
-SHORT_S = 1.0
+#: The bisection stops when the bracket's ends are within this ratio (5%).
+RATIO = 1.05
+#: Settings coarser than the ladder's first rung tried when that rung meets the target.
+COARSER = 6
 #: Fields a repeat of a deterministic tool reproduces exactly.
 SAME_IN_REPEATS = ("energy_error", "residual", "evaluations")
+#: What each attempt keeps in the record's ``attempts``.
+KEPT = ("setting", "simulate_s", "cpu_s", "energy_error", "residual", "evaluations",
+        "finished", "error")
 
 
-def climb(attempt: Callable[[object], dict], settings: Sequence[object],
-          budget: float | None = None, accept: Callable[[dict], bool] = meets) -> dict:
-    """Run ``attempt(setting)`` for each setting in turn until one meets the target.
+class Prepared(NamedTuple):
+    """A tool's model built for one workload and ``n``: what to record about it
+    (``info``), ``attempt(setting) -> record`` (one run, each from a fresh state),
+    the ladder that brackets the setting (coarse to fine) and which records are good
+    enough (``accept``)."""
 
-    ``accept`` says which records are good enough (default: energy and residual
-    targets both met). Returns the first accepted record (or the last one tried, with
-    ``met_target`` False) and the list of every attempt under ``"attempts"``.
-    Stops early when ``budget`` seconds are spent. The returned setting is timed
-    ``REPEATS`` times if its run took under ``SHORT_S``: ``simulate_s`` is the
-    fastest, ``simulate_runs`` every run's seconds (see :func:`repeat`).
+    info: dict
+    attempt: Callable[[float], dict]
+    settings: Sequence[float]
+    accept: Callable[[dict], bool]
+    #: What is kept when no setting meets ``accept``: the ladder's first (coarsest)
+    #: record that passes ``fallback`` (Exudyn: the residual target alone).
+    fallback: Callable[[dict], bool] | None = None
+
+
+def value(record: dict, key: str) -> float:
+    """The number a record's ``setting`` dict was made from (``key``: rtol, step...)."""
+    return float(record["setting"][key])
+
+
+def bisect(prepared: Prepared, budget: float | None = None) -> dict:
+    """The coarsest setting meeting ``prepared.accept`` within ``RATIO``, its record.
+
+    If no setting meets it, the first one tried that passes ``prepared.fallback`` is
+    kept (when given). Returns the kept setting's record with ``met_target`` (energy and residual
+    targets), ``accepted`` (``accept``), ``bracket`` (the last miss and meet),
+    ``setting_value`` and ``attempts`` (every run, in order). If nothing meets the
+    target, the last setting tried is returned (``accepted`` False). Stops early
+    when ``budget`` seconds are spent (``bisection`` says so).
     """
+    attempt, accept = prepared.attempt, prepared.accept
     start = time.perf_counter()
-    tried = []
-    record: dict = {}
-    setting = None
-    for setting in settings:
-        record = attempt(setting)
-        tried.append({k: record[k] for k in ("setting", "simulate_s", "energy_error",
-                                             "residual", "evaluations") if k in record})
-        if accept(record):
+    tried: list[dict] = []
+    records: list[dict] = []
+
+    def run(setting: float) -> tuple[dict, bool]:
+        try:
+            record = attempt(setting)
+        except Exception as exc:  # a diverged or refused run: a miss, recorded
+            record = {"setting": setting, "energy_error": math.nan, "finished": False,
+                      "error": f"{type(exc).__name__}: {exc}"[:300]}
+        ok = bool(accept(record)) if "error" not in record else False
+        records.append(record)
+        tried.append({**{k: record[k] for k in KEPT if k in record},
+                      "setting_value": setting, "meets": ok})
+        return record, ok
+
+    def spent() -> bool:
+        return budget is not None and time.perf_counter() - start > budget
+
+    settings = list(prepared.settings)
+    miss: float | None = None
+    meet: tuple[float, dict] | None = None
+    last: dict = {}
+    for k, setting in enumerate(settings):
+        last, ok = run(setting)
+        if ok:
+            meet = (setting, last)
+            miss = settings[k - 1] if k else None
             break
-        if budget is not None and time.perf_counter() - start > budget:
+        if spent():
             break
-    if tried:
-        repeat(attempt, setting, record)
-        tried[-1].update(simulate_s=record["simulate_s"], simulate_runs=record["simulate_runs"])
-    record["met_target"] = meets(record)
-    record["accepted"] = accept(record)
+    note = "bisected to within 5%"
+    if meet is not None and miss is None:  # the first rung meets it: look coarser
+        factor = settings[0] / settings[1]
+        setting = settings[0]
+        for _ in range(COARSER):
+            setting *= factor
+            record, ok = run(setting)
+            if not ok:
+                miss = setting
+                break
+            meet = (setting, record)
+        else:
+            note = f"the coarsest setting tried ({COARSER} beyond the ladder) met the target"
+    if meet is not None and miss is not None:
+        while miss / meet[0] > RATIO and not spent():
+            mid = math.sqrt(miss * meet[0])
+            record, ok = run(mid)
+            if ok:
+                meet = (mid, record)
+            else:
+                miss = mid
+        if miss / meet[0] > RATIO:
+            note = "budget spent before the bracket closed to 5%"
+    fallback = prepared.fallback
+    kept = [(t, r) for t, r in zip(tried, records)
+            if fallback is not None and "error" not in r and fallback(r)]
+    if meet is None and kept:
+        record, chosen = kept[0][1], kept[0][0]["setting_value"]
+        note = ("no setting met the target: the ladder's first setting meeting the "
+                "fallback (residual) target kept")
+    elif meet is None:
+        record, chosen, note = last, tried[-1]["setting_value"], "no setting met the target"
+    else:
+        chosen, record = meet
+    record = dict(record)
+    record["met_target"] = "error" not in record and meets(record)
+    record["accepted"] = meet is not None or bool(kept)
+    record["setting_value"] = chosen
+    record["bracket"] = {"miss": miss, "meet": chosen if meet is not None else None}
+    record["bisection"] = note
     record["attempts"] = tried
     return record
 
 
-def repeat(attempt: Callable[[object], dict], setting: object, record: dict) -> None:
-    """Time ``setting`` again if ``record`` (its first run) was short; update ``record``.
-
-    Sets ``simulate_runs`` (seconds of every run, the first one first) and
-    ``simulate_s`` (their minimum). A repeat whose accuracy or counts differ from
-    the first run's is named in ``repeat_differs`` (a tool that is not deterministic).
-    """
-    runs = [record["simulate_s"]]
-    differs: set[str] = set()
-    if runs[0] < SHORT_S:
-        for _ in range(REPEATS - 1):
-            again = attempt(setting)
-            runs.append(again["simulate_s"])
-            differs.update(k for k in SAME_IN_REPEATS
-                           if k in record and not _same(again.get(k), record[k]))
-    record["simulate_runs"] = runs
-    record["simulate_s"] = min(runs)
-    if differs:
-        record["repeat_differs"] = sorted(differs)
+def timed(prepared: Prepared, record: dict) -> dict:
+    """One more run of the kept setting: its wall and CPU seconds, and the fields of
+    ``SAME_IN_REPEATS`` that differ from the kept record's (a tool that is not
+    deterministic)."""
+    again = prepared.attempt(record["setting_value"])
+    differs = [k for k in SAME_IN_REPEATS
+               if k in record and not _same(again.get(k), record[k])]
+    return {"simulate_s": again["simulate_s"], "cpu_s": again["cpu_s"], "differs": differs}
 
 
 def _same(a: object, b: object) -> bool:
     """Equal, counting two NaNs (a failed run's error) as equal."""
     return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
+

@@ -5,28 +5,29 @@ inertial (the solid cylinder's mass and principal inertia at the center, ``L/2``
 below) and a cylinder geom that does not collide; the model is built with the
 ``MjSpec`` API. Contacts, joint damping and armature are off, so the model is the
 same conservative chain. The time step starts at 2e-2 and shrinks by 2^(1/3) until
-the energy target is met. Joint coordinates are minimal, so the constraint residual is
-zero by construction. One evaluation = ``mj_forward`` (accelerations; the joint
-reaction forces would need ``mj_rnePostConstraint`` in addition). The energy flag is
-off while MuJoCo steps (with it on, every stage of every step computes the energy:
-about 25% of a 16-link rollout) and on only where the energy is measured
-(:func:`energy`), as dalembert computes it only at its output times.
+the energy target is met, then is bisected to within 5% (``ladder.bisect``). Joint
+coordinates are minimal, so the constraint residual is zero by construction. One
+evaluation = ``mj_forward`` (accelerations; the joint reaction forces would need
+``mj_rnePostConstraint`` in addition). The energy flag is off while MuJoCo steps (with it
+on, every stage of every step computes the energy: about 25% of a 16-link rollout)
+and on only where the energy is measured (:func:`energy`), as dalembert computes it
+only at its output times.
 """
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
 
-from .common import I_A, I_T, T_END, G, L, M, R, energy_error, omega, tilt, time_call
-from .ladder import climb
+from .common import I_A, I_T, T_END, G, L, M, R, energy_error, meets, omega, tilt, time_call
+from .ladder import Prepared, bisect
 
 TOOL = "mujoco"
 #: From 2e-2 (which misses the energy target at every size measured) down by a factor
-#: 2^(1/3) a rung, as fine as dalembert's ladder in step size (DOP853's steps change by
-#: about 15% a rung of its rtol ladder): a ladder starting at a step that already meets
-#: the target, or halving, would time MuJoCo at up to twice its cheapest step.
+#: 2^(1/3) a rung: it brackets the largest step meeting the target, which
+#: ``ladder.bisect`` then narrows to 5%.
 STEPS = tuple(2e-2 / 2 ** (k / 3) for k in range(37))
 
 
@@ -118,6 +119,13 @@ def energy(model, data) -> float:
 
 
 def run(workload: str, n: int) -> dict:
+    """The measured record: :func:`prepare`, then the bisection of the step."""
+    prepared = prepare(workload, n)
+    return {**bisect(prepared), **prepared.info}
+
+
+def prepare(workload: str, n: int) -> Prepared:
+    """The model built twice (cold, warm) and ``attempt(step)``."""
     import mujoco
 
     _, cold = build(workload, n)
@@ -127,19 +135,20 @@ def run(workload: str, n: int) -> dict:
     eval_s = time_call(lambda: mujoco.mj_forward(model, data))
 
     def attempt(dt: float) -> dict:
-        model.opt.timestep = dt
+        steps = math.ceil(T_END / dt - 1e-9)  # the span exactly, at a step <= dt
+        model.opt.timestep = T_END / steps
         state = initial_data(model, workload)
-        steps = round(T_END / dt)
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         mujoco.mj_step(model, state, nstep=steps)
-        simulate_s = time.perf_counter() - start
-        return {"setting": {"integrator": "RK4", "timestep": dt}, "simulate_s": simulate_s,
+        simulate_s, cpu_s = time.perf_counter() - start, time.process_time() - cpu
+        return {"setting": {"integrator": "RK4", "timestep": T_END / steps},
+                "simulate_s": simulate_s,
+                "cpu_s": cpu_s,
                 "evaluations": 4 * steps, "steps": steps, "initial_energy": e0,
                 "energy_error": energy_error(e0, energy(model, state), n),
                 "residual": 0.0, "finished": bool(np.all(np.isfinite(state.qpos)))}
 
-    record = climb(attempt, STEPS)
-    record.update(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=model.nq,
-                  constraints=0, residual_note="minimal coordinates: no constraints",
-                  build_note="MjSpec built and compiled twice in one process")
-    return record
+    info = dict(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=model.nq,
+                constraints=0, residual_note="minimal coordinates: no constraints",
+                build_note="MjSpec built and compiled twice in one process")
+    return Prepared(info, attempt, STEPS, meets)

@@ -6,7 +6,8 @@
 
 Build = derivation + ``lambdify`` (with ``cse``) of the mass matrix, the forcing
 and the energy. The right-hand side solves ``M x' = F`` with ``numpy.linalg.solve``
-(DOP853, tolerances tightened until the energy target is met). Minimal
+(DOP853, rtol bracketed from the same ladder as dalembert's and bisected to within 5%
+of the coarsest meeting the energy target, ``ladder.bisect``). Minimal
 coordinates: the constraint residual is zero by construction.
 """
 
@@ -16,11 +17,24 @@ import time
 
 import numpy as np
 
-from .common import ANGLE, I_A, I_T, T_END, G, L, M, energy_error, omega, time_call, warm_allowed
-from .ladder import climb
+from .common import (
+    ANGLE,
+    I_A,
+    I_T,
+    T_END,
+    G,
+    L,
+    M,
+    energy_error,
+    meets,
+    omega,
+    time_call,
+    warm_allowed,
+)
+from .dalembert import RTOLS
+from .ladder import Prepared, bisect
 
 TOOL = "sympy"
-RTOLS = (1e-6, 1e-8, 1e-10, 1e-12)
 
 
 def versions() -> dict:
@@ -111,6 +125,13 @@ def build(workload: str, n: int):
 
 
 def run(workload: str, n: int) -> dict:
+    """The measured record: :func:`prepare`, then the bisection of the rtol."""
+    prepared = prepare(workload, n)
+    return {**bisect(prepared), **prepared.info}
+
+
+def prepare(workload: str, n: int) -> Prepared:
+    """The model derived and lambdified twice (cold, warm) and ``attempt(rtol)``."""
     from scipy.integrate import solve_ivp
 
     (fns, x0, full), cold = build(workload, n)
@@ -127,19 +148,19 @@ def run(workload: str, n: int) -> dict:
     eval_s = time_call(lambda: rhs(0.0, x0))
 
     def attempt(rtol: float) -> dict:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         sol = solve_ivp(rhs, (0.0, T_END), x0, method="DOP853", rtol=rtol, atol=rtol / 100)
-        simulate_s = time.perf_counter() - start
+        simulate_s, cpu_s = time.perf_counter() - start, time.process_time() - cpu
         end = sol.y[:, -1]
         return {"setting": {"method": "DOP853", "rtol": rtol, "atol": rtol / 100},
-                "simulate_s": simulate_s, "evaluations": int(sol.nfev), "initial_energy": e0,
+                "simulate_s": simulate_s, "cpu_s": cpu_s, "evaluations": int(sol.nfev),
+                "initial_energy": e0,
                 "energy_error": energy_error(e0, float(energy(end[:nq], end[nq:])), n),
                 "residual": 0.0, "finished": bool(sol.success)}
 
-    record = climb(attempt, RTOLS)
-    record.update(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=nq,
+    info = dict(build_s=cold, build_warm_s=warm, eval_s=eval_s, coordinates=nq,
                   constraints=0, residual_note="minimal coordinates: no constraints",
                   build_note="derive + lambdify twice in one process (SymPy caches warm)",
                   formulation="KanesMethod, absolute angles" if workload == "revolute"
                   else "System + SphericalJoint (XYZ body angles)")
-    return record
+    return Prepared(info, attempt, RTOLS, meets)
