@@ -28,12 +28,21 @@ import numpy as np
 import sympy as sp
 
 from ..equations.lagrange import Equations
-from ..equations.sparse import nonzero_entries
 from ..equations.static import static_entries
-from ..model.coordinates import t
 from . import c_backend
-from .compiled import CompiledEquations, SparsePattern, _energy_vector
+from .compiled import CompiledEquations, SparsePattern
 from .numpy_printer import expression_values
+from .registry import (
+    ARGUMENTS,
+    REGISTRY,
+    BlockPattern,
+    Declaration,
+    FunctionLayout,
+    Generated,
+    GeneratedFunctions,
+    argument_symbols,
+    block_shape,
+)
 from .static import StaticFunctions, StaticPattern
 
 
@@ -139,29 +148,132 @@ def compile_parts(
     the parts' parameter values are written (:class:`Part`); the compiled functions
     take the vector :meth:`ParameterLayout.expand` makes of their values (``bind``
     does it). ``inputs`` are the model's input symbols, whose values follow the
-    parameters'. The static function (:mod:`.static`) is generated from the same parts
-    when statics first asks for it.
+    parameters'. The registry's eager functions (:mod:`.registry`) are generated now,
+    the others, and the static function (:mod:`.static`), from the same parts when
+    first asked for.
     """
     _check_rows(parts, m)
     holonomic = _holonomic_rows(parts)
-    pattern = _pattern(parts, n, m)
-    layout = _Layout(pattern, holonomic)
+    for part in parts:
+        _check_coordinates(part.coordinates, n)
+    places = _Places(n, m, holonomic)
     values = ParameterLayout.of(parts, [*parameters, *inputs])
-    kinds: dict[str, tuple[list, list]] = {kind: ([], []) for kind in _KINDS}
-    for g, part in enumerate(parts):
-        for kind, exprs, target in _outputs(part, layout):
-            kinds[kind][0].append((f"{kind}_{g}", _arguments(part, kind), exprs))
-            kinds[kind][1].append(target)
-    sizes = layout.sizes(n, m)
     use = c_backend.backend() if backend is None else backend
-    functions = _evaluators([(k, *kinds[k], sizes[k], k in _STATE) for k in _KINDS], parts,
-                            values, n, use)
-    used = "numpy" if isinstance(functions[0], _NumpyEvaluator) else "c"
-    kkt, velocity, position, energy = functions
-    return CompiledEquations(kkt, velocity, position, energy, pattern, tuple(holonomic), used,
+    made = generate_parts(parts, places, values, use,
+                          [d for d in REGISTRY.values() if d.eager])
+    used = "numpy" if isinstance(made["kkt"].call, _NumpyEvaluator) else "c"
+    kkt = made["kkt"].layout
+    M, A = kkt.block("M"), kkt.block("A")
+    pattern = SparsePattern(n, m, *M.index, *A.index)
+    return CompiledEquations(GeneratedFunctions(made, partial(generate_parts, parts, places,
+                                                              values, used)),
+                             pattern, tuple(holonomic), used,
                              partial(compile_static_parts, parts, n, m,
                                      [*parameters, *inputs], used),
                              values.expand, tuple(u.name for u in inputs), len(parameters))
+
+
+@dataclass(frozen=True)
+class _Places:
+    """The sizes of the index spaces (:data:`~.registry.SPACES`) and where a part's local
+    indices of each sit in the whole model, instance by instance."""
+
+    n: int
+    m: int
+    holonomic: list[int]
+
+    @cached_property
+    def sizes(self) -> dict[str, int]:
+        return {"q": self.n, "row": self.m, "holonomic": len(self.holonomic)}
+
+    @cached_property
+    def _holonomic_at(self) -> np.ndarray:
+        at = np.full(self.m, -1, dtype=np.intp)
+        at[self.holonomic] = np.arange(len(self.holonomic))
+        return at
+
+    def of(self, part: Part, space: str | int) -> np.ndarray:
+        """``(K, local size)``: the global index of each local index of ``space``."""
+        if space == "q":
+            return part.coordinates
+        if space == "row":
+            return part.rows
+        if space == "holonomic":
+            local = list(part.equations.model.constraints.holonomic_rows)
+            return self._holonomic_at[part.rows[:, local]]
+        return np.broadcast_to(np.arange(int(space)), (part.instances, int(space)))
+
+
+def generate_parts(parts: Sequence[Part], places: _Places, values: ParameterLayout, use: str,
+                   declarations: Sequence[Declaration]) -> dict[str, Generated]:
+    """The functions of ``declarations`` for the model made of ``parts``, in one library:
+    per function, one kernel per part (its ``derive`` applied to the part's equations)
+    and a driver adding every instance's values into place.
+
+    Parameters
+    ----------
+    parts
+        The model's parts.
+    places
+        The index spaces' sizes and maps.
+    values
+        Where each instance finds its parameter values.
+    use
+        ``"c"`` or ``"numpy"``.
+    declarations
+        The functions to generate.
+    """
+    kinds, layouts = [], []
+    for decl in declarations:
+        specs, targets, layout = _part_outputs(decl, parts, places)
+        kinds.append(_Kind(decl.name, decl.arguments, specs, targets, layout.size))
+        layouts.append(layout)
+    functions = _evaluators(kinds, parts, values, places.sizes, use)
+    return {d.name: Generated(d, layout, fn)
+            for d, layout, fn in zip(declarations, layouts, functions)}
+
+
+def _part_outputs(decl: Declaration, parts: Sequence[Part],
+                  places: _Places) -> tuple[list, list[np.ndarray], FunctionLayout]:
+    """Per part, the kernel's spec and, per instance, the place of each of its values in
+    the function's output; and the output's layout. A dense block's values sit at their
+    global indices; a sparse block's pattern is the union of the parts' entries, sorted."""
+    local = [decl.derive(part.equations) for part in parts]
+    shapes = [block_shape(block, places.sizes) for block in decl.blocks]
+    # per block, per part: the flat global index of each entry, (K, entries)
+    keys = [[_flat_keys(part, block.spaces, found[block.name], places, shape)
+             for part, found in zip(parts, local)]
+            for block, shape in zip(decl.blocks, shapes)]
+    patterns, positions, start = [], [], 0
+    for block, shape, block_keys in zip(decl.blocks, shapes, keys):
+        if block.dense:
+            flat = np.arange(int(np.prod(shape)), dtype=np.intp)
+            positions.append(block_keys)
+        else:
+            flat = np.unique(np.concatenate([k.reshape(-1) for k in block_keys] or [_NO_INDEX]))
+            positions.append([np.searchsorted(flat, k) for k in block_keys])
+        index = np.unravel_index(flat, shape) if shape else ()
+        patterns.append(BlockPattern(block.name, shape,
+                                     tuple(np.asarray(i, dtype=np.intp) for i in index), start))
+        start += len(flat)
+    specs, targets = [], []
+    for g, (part, found) in enumerate(zip(parts, local)):
+        exprs = [e for block in decl.blocks for e in found[block.name].values()]
+        specs.append((f"{decl.name}_{g}", _arguments(part, decl.arguments), exprs))
+        at = [pattern.start + place[g] for pattern, place in zip(patterns, positions)]
+        targets.append(np.concatenate(at, axis=1).reshape(-1).astype(np.intp))
+    return specs, targets, FunctionLayout(decl.name, tuple(patterns))
+
+
+def _flat_keys(part: Part, spaces: tuple[str | int, ...], entries: dict, places: _Places,
+               shape: tuple[int, ...]) -> np.ndarray:
+    """Per instance, the flat (row-major) global index of each of a part's entries."""
+    maps = [places.of(part, space) for space in spaces]
+    flat = np.zeros((part.instances, len(entries)), dtype=np.intp)
+    for e, key in enumerate(entries):
+        for d, (local, size) in enumerate(zip(key, shape)):
+            flat[:, e] = flat[:, e] * size + maps[d][:, local]
+    return flat
 
 
 def compile_static_parts(parts: Sequence[Part], n: int, m: int,
@@ -194,10 +306,11 @@ def compile_static_parts(parts: Sequence[Part], n: int, m: int,
         groups = (entries.stiffness, entries.curvature, entries.damping, entries.rest)
         exprs = [e for group in groups for e in group.values()]
         at = [offsets[c] + np.searchsorted(unique[c], keys[c][g]) for c in range(4)]
-        specs.append((f"static_{g}", _arguments(part, "static"), exprs))
+        specs.append((f"static_{g}", _arguments(part, _STATIC), exprs))
         targets.append(np.concatenate(at, axis=1).reshape(-1))
-    (values,) = _evaluators([("static_values", specs, targets, int(offsets[-1]), False)],
-                            parts, ParameterLayout.of(parts, parameters), n, use)
+    (values,) = _evaluators([_Kind("static_values", _STATIC, specs, targets, int(offsets[-1]))],
+                            parts, ParameterLayout.of(parts, parameters), {"q": n, "row": m},
+                            use)
     rest_rows = sorted(int(r) for part, entries in zip(parts, local)
                        for k in entries.rest_rows for r in part.rows[:, k])
     pattern = StaticPattern(
@@ -217,105 +330,65 @@ def _keys(columns: list[np.ndarray], K: int) -> np.ndarray:
     return np.stack(columns, axis=1).astype(np.intp)
 
 
-def _evaluators(kinds: Sequence[tuple[str, list, list, int, bool]], parts: Sequence[Part],
-                values: ParameterLayout, n: int, use: str) -> list[Callable]:
-    """One evaluator per kind ``(name, specs, targets, size, takes_qd)``: a driver of one
-    compiled library when ``use`` is ``"c"`` (NumPy, with a warning, if that fails).
-    Each instance's index row holds its coordinates' places, then its parameters'."""
-    indices = [np.hstack([part.coordinates, at]) for part, at in zip(parts, values.index)]
+@dataclass(frozen=True)
+class _Kind:
+    """One function of the part route: its driver's name, its arguments, the parts'
+    kernels (specs) and, per part, the place of each kernel value; ``size`` outputs."""
+
+    name: str
+    arguments: tuple[str, ...]
+    specs: list
+    targets: list[np.ndarray]
+    size: int
+
+
+_STATIC = ("t", "q", "p")
+
+
+def _evaluators(kinds: Sequence[_Kind], parts: Sequence[Part], values: ParameterLayout,
+                sizes: dict[str, int], use: str) -> list[Callable]:
+    """One evaluator per kind: a driver of one compiled library when ``use`` is ``"c"``
+    (NumPy, with a warning, if that fails). An instance's index row holds the places of
+    the arguments it gathers, group by group (:func:`_gathered`)."""
+    groups = _gathered({a for kind in kinds for a in kind.arguments})
     if use == "c":
         try:
-            lib = c_backend.scatter_library([(k, specs) for k, specs, *_ in kinds],
-                                            [("q", "qd"), ("p",)])
-            return [_CEvaluator(getattr(lib, k), (n, values.size, size), indices, targets,
-                                takes_qd, lib) for k, _, targets, size, takes_qd in kinds]
+            lib = c_backend.scatter_library([(k.name, k.specs) for k in kinds], groups)
+            return [_CEvaluator(getattr(lib, k.name), k.arguments, sizes, values.size,
+                                _index_rows(parts, values, groups, k.arguments), k.targets,
+                                k.size, lib) for k in kinds]
         except c_backend.CompileError as exc:
             c_backend.warn_unavailable(c_backend.MODEL_CODE, exc)
-    return [_numpy_evaluator(specs, parts, values.index, targets, size)
-            for _, specs, targets, size, _ in kinds]
+    return [_numpy_evaluator(k, parts, values.index) for k in kinds]
 
 
-_KINDS = ("kkt", "velocity", "position", "energy")
-_STATE = ("kkt", "energy")
+def _gathered(names: set[str]) -> list[tuple[str, ...]]:
+    """The groups of gathered arguments (:func:`~.c_backend.scatter_library`): those
+    indexed by coordinates, by constraint rows, then the parameters."""
+    coordinates = ("q", "qd", *(a for a in ("qdd",) if a in names))
+    return [coordinates, *((("lam",),) if "lam" in names else ()), ("p",)]
 
 
-@dataclass(frozen=True)
-class _Layout:
-    """Where each global quantity sits in the flat output vectors."""
-
-    pattern: SparsePattern
-    holonomic: list[int]
-
-    def sizes(self, n: int, m: int) -> dict[str, int]:
-        nM, nA = len(self.pattern.M_rows), len(self.pattern.A_rows)
-        return {"kkt": nM + n + nA + m, "velocity": nA + m,
-                "position": len(self.holonomic), "energy": 3}
-
-    @cached_property
-    def _M_keys(self) -> np.ndarray:
-        return self.pattern.M_rows * self.pattern.n + self.pattern.M_cols
-
-    @cached_property
-    def _A_keys(self) -> np.ndarray:
-        return self.pattern.A_rows * self.pattern.n + self.pattern.A_cols
-
-    def M_position(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """Where the ``M`` entries ``(rows, cols)`` sit among the pattern's values."""
-        return np.searchsorted(self._M_keys, rows * self.pattern.n + cols)
-
-    def A_position(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        return np.searchsorted(self._A_keys, rows * self.pattern.n + cols)
+def _index_rows(parts: Sequence[Part], values: ParameterLayout,
+                groups: list[tuple[str, ...]], arguments: tuple[str, ...]) -> list[np.ndarray]:
+    """Per part, each instance's index row: the columns of the groups ``arguments`` uses."""
+    rows = []
+    for part, at in zip(parts, values.index):
+        columns = {"q": part.coordinates, "lam": part.rows, "p": at}
+        rows.append(np.hstack([columns[group[0]] for group in groups
+                               if any(a in arguments for a in group)]))
+    return rows
 
 
-def _outputs(part: Part, layout: _Layout) -> list[tuple[str, list[sp.Expr], np.ndarray]]:
-    """Per kind: the part's output expressions and, per instance, their global targets."""
-    eqs, idx, rows = part.equations, part.coordinates, part.rows
-    pat = layout.pattern
-    nM, n, nA = len(pat.M_rows), pat.n, len(pat.A_rows)
-    M, A = nonzero_entries(eqs.M), nonzero_entries(eqs.A)
-    f, c, b = _nonzero(eqs.f), _nonzero(eqs.c), _nonzero(eqs.b)
-    M_at = [layout.M_position(idx[:, i], idx[:, j]) for i, j in M]
-    A_at = [layout.A_position(rows[:, r], idx[:, j]) for r, j in A]
-    f_at = [nM + idx[:, i] for i in f]
-    c_at = [nM + n + nA + rows[:, r] for r in c]
-    b_at = [nA + rows[:, r] for r in b]
-    hol = {row: k for k, row in enumerate(layout.holonomic)}
-    local_hol = eqs.model.constraints.holonomic_rows
-    psi_at = [np.array([hol[r] for r in rows[:, i]], dtype=np.intp) for i in local_hol]
-    K = part.instances
-    energy_at = [np.full(K, k, dtype=np.intp) for k in range(3)]
-    return [
-        ("kkt", [*M.values(), *f.values(), *A.values(), *c.values()],
-         _columns([*M_at, *f_at, *[nM + n + a for a in A_at], *c_at], K)),
-        ("velocity", [*A.values(), *b.values()], _columns([*A_at, *b_at], K)),
-        ("position", list(eqs.model.constraints.psi), _columns(psi_at, K)),
-        ("energy", list(_energy_vector(eqs)), _columns(energy_at, K)),
-    ]
-
-
-def _nonzero(vector: sp.Matrix) -> dict[int, sp.Expr]:
-    return {i: e for i, e in enumerate(vector) if e != 0}
-
-
-def _columns(targets: list[np.ndarray], K: int) -> np.ndarray:
-    """Targets ``(K, outputs)`` flattened in the kernels' row-major output order."""
-    if not targets:
-        return np.zeros(0, dtype=np.intp)
-    return np.stack(targets, axis=1).reshape(-1)
-
-
-def _arguments(part: Part, kind: str) -> list:
-    """The kernel's arguments: ``(t, q, [qd,] p)``, ``qd`` for the kinds of the state,
-    ``p`` the part's own parameters."""
-    coords = part.equations.model.coords
-    state = [("t", [t]), ("q", coords.q)]
-    if kind in _STATE:
-        state.append(("qd", coords.qd))
-    return [*state, ("p", list(part.parameters or ()))]
+def _arguments(part: Part, names: tuple[str, ...]) -> list:
+    """The kernel's arguments ``names`` as the part's equations spell them, ``p`` the
+    part's own parameters."""
+    return [(a, argument_symbols(part.equations, a, list(part.parameters or ())))
+            for a in names]
 
 
 class _CEvaluator:
-    """``fn(t, q, [qd,] p)``: one call of a generated driver that sums every part.
+    """``fn(*arguments)``: one call of a generated driver that sums every part.
 
     The index and target tables are fixed, so they are handed to C once; the
     arguments are copied into buffers whose addresses are fixed too (getting an
@@ -323,9 +396,9 @@ class _CEvaluator:
     from sharing the buffers, since the call releases the GIL.
     """
 
-    def __init__(self, cfun, shape: tuple[int, int, int], indices: list[np.ndarray],
-                 targets: list[np.ndarray], velocities: bool, library) -> None:
-        n, n_parameters, size = shape
+    def __init__(self, cfun, arguments: tuple[str, ...], sizes: dict[str, int],
+                 n_parameters: int, indices: list[np.ndarray], targets: list[np.ndarray],
+                 size: int, library) -> None:
         self._library = library  # keeps the code loaded while this lives
         self._K = np.array([len(i) for i in indices], dtype=np.int64)
         self._tables = [np.ascontiguousarray(a, dtype=np.int64) for a in (*indices, *targets)]
@@ -333,11 +406,12 @@ class _CEvaluator:
         pointers = [a.ctypes.data for a in self._tables]
         self._index = (ctypes.c_void_p * max(G, 1))(*pointers[:G])
         self._target = (ctypes.c_void_p * max(G, 1))(*pointers[G:])
-        self._time, self._q, self._qd = np.zeros(1), np.zeros(n), np.zeros(n)
-        self._p, self._out = np.zeros(n_parameters), np.zeros(size)
-        arrays = (self._time, self._q, *([self._qd] if velocities else []), self._p, self._out)
+        self._buffers = [np.zeros(1 if a == "t" else n_parameters if a == "p"
+                                  else sizes[str(ARGUMENTS[a])]) for a in arguments]
+        self._out = np.zeros(size)
         self._args = (self._K.ctypes.data, ctypes.addressof(self._index),
-                      ctypes.addressof(self._target), *(a.ctypes.data for a in arrays))
+                      ctypes.addressof(self._target),
+                      *(a.ctypes.data for a in (*self._buffers, self._out)))
         cfun.restype = None
         cfun.argtypes = [ctypes.c_void_p] * len(self._args)
         self._cfun = cfun
@@ -347,13 +421,10 @@ class _CEvaluator:
         self.native = c_backend.NativeHandle(c_backend.function_address(cfun), K, index,
                                              target, size, tuple(self._tables[G:]))
 
-    def __call__(self, time, q, *rest):
+    def __call__(self, *arguments):
         with self._lock:
-            self._time[0] = time
-            self._q[:] = q
-            if len(rest) == 2:
-                self._qd[:] = rest[0]
-            self._p[:] = rest[-1]
+            for buffer, value in zip(self._buffers, arguments):
+                buffer[:] = value
             self._out[:] = 0.0
             self._cfun(*self._args)
             return self._out.copy()
@@ -362,41 +433,31 @@ class _CEvaluator:
 class _NumpyEvaluator:
     """The same sums with NumPy kernels called instance by instance (no C compiler)."""
 
-    def __init__(self, kernels: list, coordinates: list[np.ndarray],
-                 parameters: Sequence[np.ndarray], targets: list[np.ndarray],
+    def __init__(self, kernels: list, gathers: list[list[tuple]], targets: list[np.ndarray],
                  size: int) -> None:
-        self._kernels, self._size = kernels, size
-        self._rows = list(zip(coordinates, parameters))
+        self._kernels, self._gathers, self._size = kernels, gathers, size
         self._where = np.concatenate(targets) if targets else np.zeros(0, dtype=np.intp)
 
-    def __call__(self, time, q, *rest):
-        *qd, p = rest
+    def __call__(self, *arguments):
         outputs = []
-        for kernel, (idx, at) in zip(self._kernels, self._rows):
-            for row, where in zip(idx, at):
-                outputs.append(kernel(time, q[row], *(v[row] for v in qd), p[where]))
+        for kernel, instances in zip(self._kernels, self._gathers):
+            for gather in instances:
+                outputs.append(kernel(*(a if g is None else np.asarray(a)[g]
+                                        for a, g in zip(arguments, gather))))
         weights = np.concatenate(outputs) if outputs else np.zeros(0)
         return np.bincount(self._where, weights=weights, minlength=self._size)
 
 
-def _numpy_evaluator(specs: list, parts: Sequence[Part], parameters: Sequence[np.ndarray],
-                     targets: list[np.ndarray], size: int) -> _NumpyEvaluator:
-    kernels = c_backend.build_flat_functions(specs, use="numpy")
-    return _NumpyEvaluator(kernels, [part.coordinates for part in parts], parameters,
-                           targets, size)
-
-
-def _pattern(parts: Sequence[Part], n: int, m: int) -> SparsePattern:
-    """The union of the parts' ``M`` and ``A`` entries, sorted by row then column."""
-    M_keys, A_keys = [np.zeros(0, dtype=np.intp)], [np.zeros(0, dtype=np.intp)]
-    for part in parts:
-        idx, rows = part.coordinates, part.rows
-        _check_coordinates(idx, n)
-        M_keys += [idx[:, i] * n + idx[:, j] for i, j in nonzero_entries(part.equations.M)]
-        A_keys += [rows[:, r] * n + idx[:, j] for r, j in nonzero_entries(part.equations.A)]
-    M_unique = np.unique(np.concatenate(M_keys))
-    A_unique = np.unique(np.concatenate(A_keys))
-    return SparsePattern(n, m, M_unique // n, M_unique % n, A_unique // n, A_unique % n)
+def _numpy_evaluator(kind: _Kind, parts: Sequence[Part],
+                     parameters: Sequence[np.ndarray]) -> _NumpyEvaluator:
+    kernels = c_backend.build_flat_functions(kind.specs, use="numpy")
+    gathers = []
+    for part, at in zip(parts, parameters):
+        columns = {"q": part.coordinates, "row": part.rows}
+        gathers.append([tuple(k_at if a == "p" else None if a == "t"
+                              else columns[str(ARGUMENTS[a])][k] for a in kind.arguments)
+                        for k, k_at in enumerate(at)])
+    return _NumpyEvaluator(kernels, gathers, kind.targets, kind.size)
 
 
 def _check_coordinates(idx: np.ndarray, n: int) -> None:

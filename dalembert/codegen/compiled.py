@@ -1,7 +1,8 @@
 """Numeric functions of a model, generated once and bound to parameter values.
 
-:func:`compile_equations` turns the symbolic equations into four flat functions
-(KKT blocks, velocity-level constraint, position-level constraint, energies),
+:func:`compile_equations` turns the symbolic equations into the flat functions of
+the registry (:mod:`.registry`: KKT blocks, velocity-level constraint,
+position-level constraint, energies; the residuals' Jacobians on first use),
 compiled C when a compiler exists, else NumPy (:mod:`.c_backend` says why, with
 numbers). ``M`` and ``A`` come out as the values of a fixed sparsity pattern
 (:class:`SparsePattern`, computed once), so an evaluation costs time in
@@ -12,18 +13,23 @@ once per System and re-bound to new values at no cost.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 from typing import TypeVar
 
 import numpy as np
-import sympy as sp
 
 from ..equations.lagrange import Equations
-from ..equations.sparse import gradient, nonzero_entries
-from ..model.coordinates import t
 from . import c_backend
+from .registry import (
+    REGISTRY,
+    Declaration,
+    Generated,
+    GeneratedFunctions,
+    argument_symbols,
+    global_outputs,
+)
 from .static import StaticFunctions, StaticValues, compile_static
 
 T = TypeVar("T")
@@ -73,17 +79,17 @@ class SparsePattern:
 
 @dataclass(frozen=True)
 class CompiledEquations:
-    """Generated functions of ``(t, q, qd, p)``; see :class:`NumericModel`.
+    """Generated functions of a model; see :class:`NumericModel`.
 
-    ``kkt_values(t, q, qd, p)`` returns ``[M values, f, A values, c]`` and
-    ``velocity_values(t, q, p)`` ``[A values, b]`` (values in ``pattern`` order);
-    ``backend`` is ``"c"`` or ``"numpy"`` (see :mod:`dalembert.codegen.c_backend`).
+    ``functions[name]`` is the compiled function ``name`` of the registry
+    (:mod:`.registry`) with its layout, generated on first lookup unless the model made
+    it: ``kkt`` returns ``[M values, f, A values, c]`` from ``(t, q, qd, p)`` and
+    ``velocity`` ``[A values, b]`` from ``(t, q, p)`` (values in ``pattern`` order);
+    ``kkt_values`` and the like are these functions' calls. ``backend`` is ``"c"`` or
+    ``"numpy"`` (see :mod:`dalembert.codegen.c_backend`).
     """
 
-    kkt_values: Callable
-    velocity_values: Callable
-    position_values: Callable
-    energy_values: Callable
+    functions: GeneratedFunctions
     pattern: SparsePattern
     holonomic_rows: tuple[int, ...]
     backend: str = "numpy"
@@ -97,6 +103,22 @@ class CompiledEquations:
     #: the parameter vector right after the parameters', from ``input_offset`` on.
     input_names: tuple[str, ...] = ()
     input_offset: int = 0
+
+    @property
+    def kkt_values(self) -> Callable[..., np.ndarray]:
+        return self.functions["kkt"].call
+
+    @property
+    def velocity_values(self) -> Callable[..., np.ndarray]:
+        return self.functions["velocity"].call
+
+    @property
+    def position_values(self) -> Callable[..., np.ndarray]:
+        return self.functions["position"].call
+
+    @property
+    def energy_values(self) -> Callable[..., np.ndarray]:
+        return self.functions["energy"].call
 
     @cached_property
     def static(self) -> StaticFunctions:
@@ -140,6 +162,44 @@ class CompiledEquations:
 
 
 @dataclass(frozen=True)
+class SparseBlock:
+    """One block of a generated function at one state: ``values`` at ``(rows, cols)`` of
+    a ``shape`` matrix (each position once)."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    values: np.ndarray
+    shape: tuple[int, int]
+
+    def dense(self) -> np.ndarray:
+        """The block as a dense array.
+
+        >>> SparseBlock(np.array([1]), np.array([0]), np.array([2.5]), (2, 2)).dense()
+        array([[0. , 0. ],
+               [2.5, 0. ]])
+        """
+        out = np.zeros(self.shape)
+        out[self.rows, self.cols] = self.values
+        return out
+
+
+@dataclass(frozen=True)
+class ResidualJacobians:
+    """``d r1/dq``, ``d r1/dqd`` (``n x n``), ``d r2/dq``, ``d r2/dqd`` (``m x n``) of the
+    KKT residuals ``r1 = M qdd - f - A^T lambda`` and ``r2 = A qdd - c`` at one state
+    (:mod:`dalembert.equations.residual`)."""
+
+    r1_q: SparseBlock
+    r1_qd: SparseBlock
+    r2_q: SparseBlock
+    r2_qd: SparseBlock
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The four blocks as dense arrays, in the order of the fields."""
+        return self.r1_q.dense(), self.r1_qd.dense(), self.r2_q.dense(), self.r2_qd.dense()
+
+
+@dataclass(frozen=True)
 class NumericModel:
     """The compiled equations with numeric parameter values.
 
@@ -150,6 +210,8 @@ class NumericModel:
     - ``position_constraint(t, q) -> psi`` (holonomic rows only)
     - ``energies(t, q, qd) -> [T, V, h]`` with ``h = qd . dL/dqd - L`` (Jacobi)
     - ``forces_at_rest(t, q) -> f(q, 0, t)`` and ``static_derivatives(t, q)`` (statics)
+    - ``residual_jacobians(t, q, qd, qdd, lam)``: the KKT residuals' Jacobians
+    - ``evaluate(name, *arguments)``: any function of the registry (:mod:`.registry`)
     """
 
     compiled: CompiledEquations
@@ -171,6 +233,26 @@ class NumericModel:
     def holonomic_rows(self) -> tuple[int, ...]:
         return self.compiled.holonomic_rows
 
+    def evaluate(self, name: str, *arguments: object) -> np.ndarray:
+        """The values of the registry's function ``name`` (generated on first use) at
+        ``arguments``: those of its declaration but the parameter vector, in order.
+
+        Parameters
+        ----------
+        name
+            The function's name in :data:`~.registry.REGISTRY`.
+        *arguments
+            ``t``, ``q``, ... as the declaration lists them, ``p`` excepted.
+
+        Examples
+        --------
+        >>> from dalembert.examples import cartesian_pendulum
+        >>> num = cartesian_pendulum.build().numeric()
+        >>> num.evaluate("position", 0.0, np.array([0.0, -2.0]))  # x^2 + y^2 - l^2, l = 1
+        array([3.])
+        """
+        return self.compiled.functions[name].call(*arguments, self.p)
+
     def kkt_blocks(self, t: float, q: np.ndarray, qd: np.ndarray):
         return self.compiled.kkt_blocks(t, q, qd, self.p)
 
@@ -190,6 +272,38 @@ class NumericModel:
 
     def energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         return self.compiled.energy_values(t, q, qd, self.p)
+
+    def residual_jacobians(self, t: float, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                           lam: np.ndarray) -> ResidualJacobians:
+        """The Jacobians by ``q`` and ``qd`` of ``r1 = M qdd - f - A^T lam`` and
+        ``r2 = A qdd - c`` at one state, as sparse blocks (generated, exactly, on the
+        first call).
+
+        Parameters
+        ----------
+        t, q, qd
+            The state.
+        qdd, lam
+            The accelerations and multipliers the residuals are taken at (any values:
+            the residuals need not vanish).
+
+        Examples
+        --------
+        A particle on a circle, ``r1 = m qdd - 2 lam q - f``: ``d r1/dq = -2 lam I``.
+
+        >>> from dalembert.examples import cartesian_pendulum
+        >>> num = cartesian_pendulum.build().numeric()
+        >>> J = num.residual_jacobians(0.0, np.array([0.6, -0.8]), np.zeros(2),
+        ...                            np.zeros(2), np.array([3.0]))
+        >>> J.r1_q.dense()
+        array([[-6.,  0.],
+               [ 0., -6.]])
+        """
+        found = self.compiled.functions["residual_jacobians"]
+        values = found.call(t, q, qd, qdd, lam, self.p)
+        blocks = [SparseBlock(b.index[0], b.index[1], v, (b.shape[0], b.shape[1]))
+                  for b, v in zip(found.layout.blocks, found.layout.split(values))]
+        return ResidualJacobians(*blocks)
 
     @property
     def inputs(self) -> np.ndarray:
@@ -212,47 +326,49 @@ class NumericModel:
 
 
 def compile_equations(eqs: Equations, backend: str | None = None) -> CompiledEquations:
-    """Generate the numeric functions of ``eqs`` (C when a compiler exists, else NumPy).
+    """Generate the numeric functions of ``eqs`` (C when a compiler exists, else NumPy):
+    the registry's eager ones now, the others on first use.
 
     ``backend`` (``"c"`` or ``"numpy"``) overrides :func:`~.c_backend.backend`.
     """
     model = eqs.model
-    coords = model.coords
-    time = [("t", [t]), ("q", coords.q)]
-    values = [*model.parameters, *model.inputs]  # the parameter vector: inputs last
-    state = [*time, ("qd", coords.qd), ("p", values)]
-    static = [*time, ("p", values)]
     cons = model.constraints
-    M_entries, A_entries = nonzero_entries(eqs.M), nonzero_entries(eqs.A)
-    pattern = SparsePattern(coords.n, cons.m, *_indices(M_entries), *_indices(A_entries))
-    M_vals, A_vals = list(M_entries.values()), list(A_entries.values())
-    specs = [
-        ("kkt_values", state, [*M_vals, *eqs.f, *A_vals, *eqs.c]),
-        ("velocity_values", static, [*A_vals, *eqs.b]),
-        ("position_values", static, list(cons.psi)),
-        ("energy_values", state, list(_energy_vector(eqs))),
-    ]
     use = c_backend.backend() if backend is None else backend
-    functions = c_backend.build_flat_functions(specs, use=use)
-    used = "c" if hasattr(functions[0], "library") else "numpy"
-    kkt, velocity, position, energy = functions
-    return CompiledEquations(kkt, velocity, position, energy, pattern, cons.holonomic_rows,
-                             used, partial(compile_static, eqs, used),
+    made = generate_global(eqs, use, [d for d in REGISTRY.values() if d.eager])
+    used = "c" if hasattr(made["kkt"].call, "library") else "numpy"
+    kkt = made["kkt"].layout
+    M, A = kkt.block("M"), kkt.block("A")
+    pattern = SparsePattern(model.coords.n, cons.m, *M.index, *A.index)
+    return CompiledEquations(GeneratedFunctions(made, partial(generate_global, eqs, used)),
+                             pattern, cons.holonomic_rows, used,
+                             partial(compile_static, eqs, used),
                              input_names=tuple(u.name for u in model.inputs),
                              input_offset=len(model.parameters))
 
 
-def _indices(entries: dict) -> tuple[np.ndarray, np.ndarray]:
-    ij = np.array(list(entries), dtype=np.intp).reshape(-1, 2)
-    return ij[:, 0].copy(), ij[:, 1].copy()
+def generate_global(eqs: Equations, use: str,
+                    declarations: Sequence[Declaration]) -> dict[str, Generated]:
+    """The functions of ``declarations`` for the whole model's ``eqs``, in one library.
 
-
-def _energy_vector(eqs: Equations) -> sp.Matrix:
-    """``[T, V, h]``; ``T`` and ``V`` are NaN when only a Lagrangian was given."""
+    Parameters
+    ----------
+    eqs
+        The model's equations.
+    use
+        ``"c"`` or ``"numpy"``.
+    declarations
+        The functions to generate.
+    """
     model = eqs.model
-    L = model.lagrangian
-    qd = model.coords.qd
-    jacobi = sp.Add(*(qd[k] * p for k, p in gradient(L, qd).items())) - L
-    T = model.kinetic if model.kinetic is not None else sp.nan
-    V = model.potential if model.potential is not None else sp.nan
-    return sp.Matrix([T, V, jacobi])
+    sizes = {"q": model.coords.n, "row": model.constraints.m,
+             "holonomic": len(model.constraints.holonomic_rows)}
+    values = [*model.parameters, *model.inputs]  # the parameter vector: inputs last
+    specs, layouts = [], []
+    for decl in declarations:
+        exprs, layout = global_outputs(decl, eqs, sizes)
+        arguments = [(a, argument_symbols(eqs, a, values)) for a in decl.arguments]
+        specs.append((decl.symbol, arguments, exprs))
+        layouts.append(layout)
+    functions = c_backend.build_flat_functions(specs, use=use)
+    return {d.name: Generated(d, layout, fn)
+            for d, layout, fn in zip(declarations, layouts, functions)}

@@ -518,7 +518,7 @@ int load_inputs(dl_model *md, double t, const double *q, const double *qd) {
 int eval_kkt(dl_model *md, double t, const double *q, const double *qd) {
   const int status = load_inputs(md, t, q, qd);
   if (status != DL_OK) return status;
-  eval_state(&md->kkt, t, q, qd, md->p, md->values);
+  eval_state(&md->fn[DL_FN_KKT], t, q, qd, md->p, md->values);
   if (!md->kkt_in_layout) load_kkt(md);
   return DL_OK;
 }
@@ -578,11 +578,11 @@ int dl_solve(dl_model *md, double *qdd, double *lambda) {
 /* The Baumgarte terms: c -= 2 w (A qd + b) + w^2 psi (psi on holonomic rows). */
 static void baumgarte(dl_model *md, double t, const double *q, const double *qd, double *c) {
   const double g = md->baumgarte;
-  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  eval_static(&md->fn[DL_FN_VELOCITY], t, q, md->p, md->vel_values);
   const double *b = md->vel_values + md->nA;
   for (int64_t r = 0; r < md->m; ++r) c[r] -= 2.0 * g * b[r];
   add_A_times(md, qd, -2.0 * g, c);
-  eval_static(&md->position, t, q, md->p, md->psi);
+  eval_static(&md->fn[DL_FN_POSITION], t, q, md->p, md->psi);
   for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * md->psi[k];
 }
 

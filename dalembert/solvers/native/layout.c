@@ -1,4 +1,4 @@
-/* Sizes, field offsets and return codes, for library.py to check its ctypes mirrors
+/* Sizes, field offsets, return codes and the generated functions' places, for library.py to check its ctypes mirrors
  * against when it loads the library: a field added on one side only, or moved, is
  * reported by name instead of corrupting memory. Every field of every mirrored struct
  * is listed; the sizes catch one missing here. */
@@ -11,11 +11,10 @@
 static const dl_layout_entry entries[] = {
   SIZE(dl_function),
   FIELD(dl_function, fn), FIELD(dl_function, K), FIELD(dl_function, index),
-  FIELD(dl_function, target), FIELD(dl_function, size),
+  FIELD(dl_function, target), FIELD(dl_function, size), FIELD(dl_function, n_args),
   SIZE(dl_model),
   FIELD(dl_model, n), FIELD(dl_model, m), FIELD(dl_model, nM), FIELD(dl_model, nA),
-  FIELD(dl_model, n_hol), FIELD(dl_model, p), FIELD(dl_model, kkt),
-  FIELD(dl_model, velocity), FIELD(dl_model, position), FIELD(dl_model, energy),
+  FIELD(dl_model, n_hol), FIELD(dl_model, p), FIELD(dl_model, fn),
   FIELD(dl_model, holonomic), FIELD(dl_model, baumgarte), FIELD(dl_model, n_blocks),
   FIELD(dl_model, block_start), FIELD(dl_model, slot_coord), FIELD(dl_model, block_mat),
   FIELD(dl_model, M_at), FIELD(dl_model, n_pairs), FIELD(dl_model, pair_row),
@@ -64,6 +63,8 @@ static const dl_layout_entry entries[] = {
   CODE(DL_OK), CODE(DL_SINGULAR_MASS), CODE(DL_SINGULAR_CONSTRAINTS), CODE(DL_STEP_TOO_SMALL),
   CODE(DL_PROJECTION), CODE(DL_OUTPUTS), CODE(DL_RANK_CHANGED), CODE(DL_NOT_FINITE), CODE(DL_INPUT),
   CODE(DL_NEAR_SINGULAR),
+  CODE(DL_FN_KKT), CODE(DL_FN_VELOCITY), CODE(DL_FN_POSITION), CODE(DL_FN_ENERGY),
+  CODE(DL_FN_RESIDUAL_JACOBIANS), CODE(DL_FN_COUNT), CODE(DL_MAX_ARGS),
 };
 
 /* The table above: *entries points to it, the count is returned. */

@@ -17,6 +17,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from ...codegen import c_backend
+from ...codegen.registry import REGISTRY
 
 _i64, _ptr, _f64 = ctypes.c_int64, ctypes.c_void_p, ctypes.c_double
 #: ``int inputs(double t)``, the state in ``input_state`` (see ``runtime.h``).
@@ -33,20 +34,27 @@ CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
          "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
          "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT, "DL_NEAR_SINGULAR": NEAR_SINGULAR}
+#: The places of the generated functions in ``dl_model.fn`` (``DL_FN_<NAME>``): the
+#: registry's ``native`` numbers; ``DL_FN_COUNT`` places in all, functions of at most
+#: ``DL_MAX_ARGS`` arguments for ``dl_call``.
+FUNCTIONS = {d.name: d.native for d in REGISTRY.values() if d.native is not None}
+FN_COUNT, MAX_ARGS = 5, 8
+FUNCTION_CODES = {**{f"DL_FN_{name.upper()}": k for name, k in FUNCTIONS.items()},
+                  "DL_FN_COUNT": FN_COUNT, "DL_MAX_ARGS": MAX_ARGS}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
-SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "layout.c")
+SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "functions.c", "layout.c")
 HEADER = "runtime.h"
 
 
 class Function(ctypes.Structure):
-    _fields_ = [("fn", _ptr), ("K", _ptr), ("index", _ptr), ("target", _ptr), ("size", _i64)]
+    _fields_ = [("fn", _ptr), ("K", _ptr), ("index", _ptr), ("target", _ptr), ("size", _i64),
+                ("n_args", _i64)]
 
 
 class Model(ctypes.Structure):
     _fields_ = [
         *((name, _i64) for name in ("n", "m", "nM", "nA", "n_hol")),
-        ("p", _ptr), ("kkt", Function), ("velocity", Function), ("position", Function),
-        ("energy", Function),
+        ("p", _ptr), ("fn", Function * FN_COUNT),
         ("holonomic", _ptr), ("baumgarte", _f64), ("n_blocks", _i64),
         *((name, _ptr) for name in ("block_start", "slot_coord", "block_mat", "M_at")),
         ("n_pairs", _i64),
@@ -140,10 +148,11 @@ def check_layout(reported: dict[str, int],
     mirrors
         C struct name -> its ctypes mirror (default :data:`MIRRORS`).
     codes
-        C return code name -> its value here (default :data:`CODES`).
+        C return code name -> its value here (default :data:`CODES` and
+        :data:`FUNCTION_CODES`).
     """
     mirrors = MIRRORS if mirrors is None else mirrors
-    codes = CODES if codes is None else codes
+    codes = {**CODES, **FUNCTION_CODES} if codes is None else codes
     for struct, mirror in mirrors.items():
         names = [f[0] for f in mirror._fields_]
         in_c = [key.split(".", 1)[1] for key in reported if key.startswith(struct + ".")]
@@ -219,6 +228,7 @@ def _runtime() -> ctypes.CDLL:
         "dl_outputs": [_ptr, _i64, *[_ptr] * 8],
         "dl_stages": [_ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr, _ptr,
                       _ptr],
+        "dl_call": [_ptr, _i64, _ptr, _ptr],
     }
     for name, argtypes in signatures.items():
         fn = getattr(lib, name)

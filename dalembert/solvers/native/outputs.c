@@ -14,7 +14,7 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
     int status = qdd ? eval_kkt(md, t, q, qd) : load_inputs(md, t, q, qd);
     if (status == DL_OK && qdd) status = dl_solve(md, qdd + i * n, lambda + i * m);
     if (status != DL_OK) return status;
-    eval_static(&md->velocity, t, q, md->p, md->vel_values);
+    eval_static(&md->fn[DL_FN_VELOCITY], t, q, md->p, md->vel_values);
     double *vres = md->lambda;  /* A qd + b by row */
     for (int64_t r = 0; r < m; ++r) vres[r] = md->vel_values[md->nA + r];
     if (!qdd) load_pairs(md, md->vel_values);  /* A, else loaded by eval_kkt */
@@ -30,9 +30,9 @@ int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, do
       }
     }
     velocity_residual[i] = max_abs(vres, m);
-    eval_static(&md->position, t, q, md->p, md->psi);
+    eval_static(&md->fn[DL_FN_POSITION], t, q, md->p, md->psi);
     position_residual[i] = max_abs(md->psi, md->n_hol);
-    eval_state(&md->energy, t, q, qd, md->p, energies + 3 * i);
+    eval_state(&md->fn[DL_FN_ENERGY], t, q, qd, md->p, energies + 3 * i);
   }
   return DL_OK;
 }

@@ -14,7 +14,7 @@ static void position_step(dl_model *md, const double *psi, double *dq) {
 /* J J^T at q factored (holonomic rows). */
 static int factor_positions(dl_model *md, double t, const double *q,
                             const unsigned char *holonomic) {
-  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  eval_static(&md->fn[DL_FN_VELOCITY], t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
   return factor_schur(md, holonomic) == DL_OK ? DL_OK : DL_PROJECTION;
 }
@@ -29,20 +29,20 @@ static int project_positions(dl_model *md, double t, double *q, const unsigned c
   const int64_t n = md->n;
   double *psi = md->psi, *trial = md->q_trial, *dq = md->qdd;
   *moved = 0.0;
-  eval_static(&md->position, t, q, md->p, psi);
+  eval_static(&md->fn[DL_FN_POSITION], t, q, md->p, psi);
   double residual = max_abs(psi, md->n_hol);
   if (residual <= position_tol) return DL_OK;
   if (factor_positions(md, t, q, holonomic) != DL_OK) return DL_PROJECTION;
   for (int64_t it = 0; it < max_newton + max_full; ++it) {
     if (it >= max_newton) {  /* full Newton: psi at q again, J at q */
-      eval_static(&md->position, t, q, md->p, psi);
+      eval_static(&md->fn[DL_FN_POSITION], t, q, md->p, psi);
       if (factor_positions(md, t, q, holonomic) != DL_OK) return DL_PROJECTION;
     }
     position_step(md, psi, dq);
     const double step = max_abs(dq, n);
     *moved = step > *moved ? step : *moved;
     for (int64_t i = 0; i < n; ++i) trial[i] = q[i] + dq[i];
-    eval_static(&md->position, t, trial, md->p, psi);
+    eval_static(&md->fn[DL_FN_POSITION], t, trial, md->p, psi);
     const double new_residual = max_abs(psi, md->n_hol);
     if (!(new_residual < 0.5 * residual)) {
       if (it >= max_newton) break;  /* rounding floor, or divergence: judged below */
@@ -62,7 +62,7 @@ static int project_positions(dl_model *md, double t, double *q, const unsigned c
  * the result is drift squared). */
 static int project_velocities(dl_model *md, double t, const double *q, double *qd,
                               int refactor) {
-  eval_static(&md->velocity, t, q, md->p, md->vel_values);
+  eval_static(&md->fn[DL_FN_VELOCITY], t, q, md->p, md->vel_values);
   load_pairs(md, md->vel_values);
   if (refactor && factor_schur(md, NULL) != DL_OK) return DL_PROJECTION;
   const double *b = md->vel_values + md->nA;

@@ -1,7 +1,7 @@
 /* The simulation loop of dalembert in C: declarations shared by its sources.
  *
  * The model's generated functions (KKT blocks, velocity constraint, position
- * constraint) are called through pointers; everything else here is hand-written
+ * constraint, ...: dl_model.fn, by the registry's places) are called through pointers; everything else here is hand-written
  * and model independent. See native/__init__.py for the method and the tables.
  * The sources, compiled together into one library (library.py):
  *   kkt.c          the KKT solve (block Cholesky, Schur complement in band LDL^T form),
@@ -9,6 +9,7 @@
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
+ *   functions.c    any generated function of the model's array, called by its place
  *   layout.c       sizes, offsets and codes, checked against library.py's mirrors
  * The structs below are mirrored field by field in library.py (ctypes), which
  * checks them against dl_layout when it loads the library.
@@ -39,19 +40,30 @@ typedef void (*flat_state)(const double *, const double *, const double *, const
                            double *);
 typedef void (*flat_static)(const double *, const double *, const double *, double *);
 
-/* One generated function: a scatter driver (K != NULL, adds into out) or a flat one. */
+/* One generated function: a scatter driver (K != NULL, adds into out) or a flat one
+ * (fn NULL: not generated). Its n_args arguments are arrays, the parameter vector last
+ * (dl_call passes md->p there); see codegen/registry.py. */
 typedef struct {
   void *fn;
   const int64_t *K;
   const void *index;
   const void *target;
   int64_t size;
+  int64_t n_args;
 } dl_function;
+
+/* The generated functions the runtime calls, by their place in dl_model.fn: the
+ * registry's `native` numbers (codegen/registry.py; library.py checks them). */
+enum { DL_FN_KKT = 0, DL_FN_VELOCITY = 1, DL_FN_POSITION = 2, DL_FN_ENERGY = 3,
+       DL_FN_RESIDUAL_JACOBIANS = 4, DL_FN_COUNT = 5 };
+
+/* The most arguments dl_call passes a generated function. */
+enum { DL_MAX_ARGS = 8 };
 
 typedef struct {
   int64_t n, m, nM, nA, n_hol;
   const double *p;
-  dl_function kkt, velocity, position, energy;
+  dl_function fn[DL_FN_COUNT];
   const int64_t *holonomic;   /* n_hol: constraint row of each psi entry */
   double baumgarte;
   /* blocks of M: slots [block_start[b], block_start[b+1]) hold global coordinates */
@@ -233,8 +245,12 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
 int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
               double *K, double *stage);
 
-/* layout.c: one entry per struct size ("dl_model"), field offset ("dl_model.n") and
- * return code ("DL_OK"), for library.py to compare with its mirrors */
+/* functions.c */
+int dl_call(const dl_model *md, int64_t which, const double *const *args, double *out);
+
+/* layout.c: one entry per struct size ("dl_model"), field offset ("dl_model.n"), return
+ * code ("DL_OK") and function place ("DL_FN_KKT"), for library.py to compare with its
+ * mirrors */
 typedef struct {
   const char *name;
   int64_t value;

@@ -9,6 +9,7 @@ import numpy as np
 
 from ...codegen.c_backend import NativeHandle
 from ...codegen.compiled import NumericModel
+from ...codegen.registry import REGISTRY
 from ...errors import SingularSystemError
 from ...numerics.rank import min_norm_multipliers
 from ..kkt import DROPPED_ROW_RTOL
@@ -56,13 +57,15 @@ class NativeSolver:
 
     def __init__(self, num: NumericModel, baumgarte: float = 0.0,
                  kept: np.ndarray | None = None) -> None:
-        compiled = num.compiled
-        handles = [getattr(f, "native", None) for f in (
-            compiled.kkt_values, compiled.velocity_values, compiled.position_values,
-            compiled.energy_values)]
-        kkt = handles[0]
-        if kkt is None or any(h is None for h in handles):
+        functions = num.compiled.functions
+        # the registry's functions the runtime has a place for, as far as generated (the
+        # eager ones always: the loop calls them)
+        handles = {name: functions[name].native for name in library.FUNCTIONS
+                   if REGISTRY[name].eager or name in functions}
+        if any(handles[name] is None for name in handles if REGISTRY[name].eager):
             raise NotApplicable("the model's functions were not generated in C")
+        kkt = handles["kkt"]
+        assert isinstance(kkt, NativeHandle)
         self.num, self.n, self.m = num, num.n, num.m
         self.lib = library.runtime()
         self.kept = None if kept is None else np.asarray(kept, dtype=np.int64)
@@ -105,8 +108,9 @@ class NativeSolver:
                               n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
                               n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
                               n_unit_gram=len(s.unit_gram_target), conditioning=np.inf)
-        for name, h in zip(("velocity", "position", "energy"), handles[1:]):
-            setattr(model, name, self._function(h))
+        for name, h in handles.items():
+            if name != "kkt" and h is not None:
+                model.fn[library.FUNCTIONS[name]] = self._function(name, h)
         for name in s.arrays():
             setattr(model, name, tables[name])
         vectors = int(s.pair_vec[-1])
@@ -117,12 +121,14 @@ class NativeSolver:
                  "unit_root": len(s.unit_slot)}
         for name, size in sizes.items():
             setattr(model, name, self._buffer(size))
-        self._kkt(model, handles[0])
+        self._kkt(model, handles["kkt"])
         return model
 
-    def _function(self, h, target: int | None = None, size: int | None = None):
+    def _function(self, name: str, h, target: int | None = None, size: int | None = None):
+        """The generated function ``name`` as ``dl_model.fn`` holds it."""
         return library.Function(h.address or None, h.K or None, h.index or None,
-                                target or h.target or None, size or h.size)
+                                target or h.target or None, size or h.size,
+                                len(REGISTRY[name].arguments))
 
     def _kkt(self, model: library.Model, h) -> None:
         """The KKT values' buffer: in the solve's layout ``[blocks, u, a, c]`` when the
@@ -131,14 +137,15 @@ class NativeSolver:
         m, parts, start = self.m, self._tables.parts, self._tables.start
         model.kkt_in_layout = bool(h.K and h.targets)
         if not model.kkt_in_layout:
-            model.kkt = self._function(h)
+            model.fn[library.FUNCTIONS["kkt"]] = self._function("kkt", h)
             for name, size in parts.items():
                 setattr(model, name, self._buffer(size))
             values = self._buffer(h.size)
             model.values, model.c = values, values + DOUBLE * (h.size - m)
             return
         c_at = start["a"] + parts["a"]
-        model.kkt = self._function(h, self._tables.address["kkt_targets"], c_at + m)
+        model.fn[library.FUNCTIONS["kkt"]] = self._function(
+            "kkt", h, self._tables.address["kkt_targets"], c_at + m)
         values = self._buffer(c_at + m)
         model.values, model.c = values, values + DOUBLE * c_at
         for name in parts:
