@@ -76,7 +76,7 @@ class Child:
         self.process.start()
         sending.close()
 
-    def result(self, timeout: float = 60.0):
+    def result(self, timeout: float = 300.0):  # a guard against a hang, not a timing
         """The child's ``("returned", value)`` or ``("raised", text)``; a crash fails."""
         ready = self.pipe.poll(timeout)
         outcome = self.pipe.recv() if ready else None

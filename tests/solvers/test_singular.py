@@ -13,7 +13,6 @@ separately. Each time the cranks lie flat the constraint Jacobian loses N ranks.
 from __future__ import annotations
 
 import re
-import time
 import warnings
 
 import numpy as np
@@ -243,10 +242,9 @@ def four_bar_1313(backend: str):
 def test_a_parallelogram_four_bar_passes_its_dead_centres(backend):
     """Links 1, 3, 1, 3: through its flat positions (about 25 in 10 s) on the
     parallelogram branch (crank and rocker parallel), energy conserved."""
-    start = time.perf_counter()
     with pytest.warns(SingularConfigurationWarning, match=r"\d+ times"):
         traj = four_bar_1313(backend)
-    assert time.perf_counter() - start < 30.0
+    assert traj.stats["n_steps"] < 20_000  # about 1,500: no crawl at the dead centres
     assert traj.success, traj.message
     assert np.abs(np.angle(np.exp(1j * (traj["crank_theta"] - traj["rocker_theta"])))
                   ).max() < 1e-6
@@ -264,10 +262,9 @@ def test_a_rod_shrinking_to_zero_stops_within_seconds_naming_it(backend):
     x, y = coordinates("x y")
     rod = System([x, y], kinetic=(x.diff() ** 2 + y.diff() ** 2) / 2, potential=G * y,
                  constraints=[Holonomic(x**2 + y**2 - (1 - time_symbol / 2) ** 2, name="rod")])
-    start = time.perf_counter()
     with pytest.warns(IntegrationWarning) as caught:
         traj = rod.simulate((0, 3.0), {x: 1.0, y: 0.0}, {x: -0.5}, backend=backend)
-    assert time.perf_counter() - start < 30.0
+    assert traj.stats["n_steps"] < 100_000  # about 22,000 (millions before)
     assert not traj.success and 1.99 < traj.t[-1] < 2.0
     message = str(caught[-1].message)
     assert "the norm of rod fell" in message and "singular configuration" in message
@@ -297,11 +294,10 @@ def test_a_nearly_straight_closed_chain_swings_down_within_seconds():
     staying nearly folded, careful all the while (it took 12 million steps and 134 s
     before careful steps existed); energy kept to 1e-5 of the swing."""
     mb, q0, qd0 = folded_ring(1e-4)
-    start = time.perf_counter()
     with pytest.warns(RedundantConstraintsWarning, match="ambiguous"), \
             pytest.warns(SingularConfigurationWarning):
         traj = mb.system.simulate((0, 3.0), q0, qd0, t_eval=np.linspace(0, 3, 301))
-    assert time.perf_counter() - start < 60.0
+    assert traj.stats["n_steps"] < 5_000  # about 260 (12 million before)
     assert traj.success, traj.message
     swing = np.ptp(traj.potential_energy)
     assert swing > 10.0
@@ -318,11 +314,10 @@ def test_a_closed_chain_stretched_straight_at_the_start():
     report = mb.system.consistent_initial_state(q0, qd0)
     assert report.degrees_of_freedom == 3 and report.rank.rank_nearby == 10
     assert "this configuration only" in str(report.rank)
-    start = time.perf_counter()
     with pytest.warns(RedundantConstraintsWarning, match="this configuration only"), \
             pytest.warns(SingularConfigurationWarning, match=r"t=0\.\.") as caught:
         traj = mb.system.simulate((0, 2.0), q0, qd0, t_eval=np.linspace(0, 2, 201))
-    assert time.perf_counter() - start < 30.0
+    assert traj.stats["n_steps"] < 5_000  # about 270
     assert traj.success, traj.message
     assert "hinge" in str(caught[-1].message)
     assert traj.position_residual[-1] < 1e-12 and traj.velocity_residual[-1] < 1e-12
