@@ -21,7 +21,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import EnsembleError, EnsembleWarning
+from ..errors import EnsembleError, EnsembleWarning, user_stacklevel
 from ..model.parameters import parameter_values
 from ..model.values import CoordinateValues, coordinate_values
 from ..system import System
@@ -394,7 +394,7 @@ def _warn(summary: Any, interrupted: bool) -> None:
             if interrupted else f"{len(bad)} of {len(summary)} cases did not succeed ({counts})")
     warnings.warn(f"{head}; the first, case {bad.index[0]}: {first['message']}. "
                   "result.failed lists them, result.summary says why, result.retry() runs "
-                  "them again", EnsembleWarning, stacklevel=4)
+                  "them again", EnsembleWarning, stacklevel=user_stacklevel())
 
 
 def _batches(indices: list[int], chunk: int, values: np.ndarray, workers: int) -> list[Batch]:

@@ -39,6 +39,7 @@ from ..errors import (
     InconsistentConstraintsError,
     MarginalStabilityError,
     RedundantConstraintsWarning,
+    user_stacklevel,
 )
 from ..model.coordinates import key_name
 from ..model.values import coordinate_values, free_mask
@@ -538,7 +539,8 @@ def _make_equilibrium(problem: _Newton, attempt: Attempt, on_marginal: str,
             # vanish on the tangent space).
             lam = min_norm_multipliers(A, forces)
             dependent = tuple(rank.dependent_names)
-            warnings.warn(str(rank), RedundantConstraintsWarning, stacklevel=4)
+            warnings.warn(str(rank), RedundantConstraintsWarning,
+                          stacklevel=user_stacklevel())  # the user's call
     stability, eigenvalues = _stability(sm, A, -G, free, on_marginal)
     holding = np.where(free, 0.0, -(f0 + forces))
     return Equilibrium(

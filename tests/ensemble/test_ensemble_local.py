@@ -180,6 +180,14 @@ def _hermite_root(t0, t1, x0, x1, v0, v1):
     return t0 + s * h
 
 
+def test_the_warning_of_failed_cases_points_at_the_users_call(pend):
+    cases = [{"l": 1.0, "m": 1.0}, {"l": 1.0, "m": np.nan}]
+    with pytest.warns(EnsembleWarning) as caught:
+        pend.simulate_many((0.0, 1.0), cases, initial_state=released, t_eval=T_EVAL[:3],
+                           scheduler="serial", progress=False)
+    assert [w.filename for w in caught if w.category is EnsembleWarning] == [__file__]
+
+
 def test_failing_cases_are_recorded_and_the_others_complete(pend):
     cases = [{"l": 1.0, "m": 1.0}, {"l": 1.0, "m": 0.0},  # no inertia: KKT singular
              {"l": 1.5, "m": 1.0}, {"l": 1.0, "m": np.nan}, {"l": 0.5, "m": 2.0}]
