@@ -24,13 +24,28 @@ import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
 from .errors import user_stacklevel
 from .inputs import InputSignal, input_signal
+from .rules import (
+    NONE,
+    Boolean,
+    Callables,
+    CheckedWhereUsed,
+    Items,
+    OneOf,
+    PositiveInteger,
+    PositiveNumber,
+    Rule,
+    SolverClass,
+    Times,
+    Tolerance,
+    checked_keywords,
+)
 
 #: SciPy's solvers by the names ``solve_ivp`` knows them by.
 METHODS: dict[str, type[OdeSolver]] = {
@@ -122,125 +137,20 @@ class SimulationOptions:
 
 # --------------------------------------------------------------------------- the table
 
+#: ``redundant_constraints`` of a System, a run, an equilibrium.
+REDUNDANT_CONSTRAINTS: list[Rule] = [OneOf(REDUNDANT_MODES)]
+#: Parameter values overriding a model's: checked as they are read, against the model's
+#: names (a ParameterError naming the key).
+PARAMETER_VALUES: list[Rule] = [CheckedWhereUsed("a dict {parameter: value} or None")]
+#: Coordinates held fixed: checked as they are read, against the model's coordinates (an
+#: InitialConditionError naming the entry).
+FIXED: list[Rule] = [CheckedWhereUsed("a sequence of coordinates or None")]
+#: The values of a model's inputs (:func:`dalembert.inputs.input_signal` checks them
+#: against the model's inputs).
+INPUT_VALUES: list[Rule] = [CheckedWhereUsed("input values (see dalembert.inputs)")]
 
-class Rule(Protocol):
-    """One accepted form of a value: ``accepts(value)`` and how to say it."""
-
-    @property
-    def description(self) -> str: ...
-
-    def accepts(self, value: object) -> bool: ...
-
-
-@dataclass(frozen=True)
-class OneOf:
-    choices: tuple
-
-    @property
-    def description(self) -> str:
-        return "one of " + ", ".join(repr(c) for c in self.choices)
-
-    def accepts(self, value: object) -> bool:
-        return any(value is c or (c is not None and _same(value, c)) for c in self.choices)
-
-
-def _same(value: object, choice: object) -> bool:
-    try:
-        return bool(value == choice) and type(value) is type(choice)
-    except (TypeError, ValueError):
-        return False
-
-
-@dataclass(frozen=True)
-class PositiveNumber:
-    """A positive real number: finite, or also ``inf`` (a step limit)."""
-
-    infinite: bool = False
-
-    @property
-    def description(self) -> str:
-        return "a positive number (inf allowed)" if self.infinite else \
-            "a finite positive number"
-
-    def accepts(self, value: object) -> bool:
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
-            return False
-        v = float(value)
-        return v > 0 and (math.isfinite(v) or (self.infinite and v == math.inf))
-
-
-@dataclass(frozen=True)
-class Tolerance:
-    """A finite positive number, or an array of them (one per state component)."""
-
-    description: str = "a finite positive number or an array of them"
-
-    def accepts(self, value: object) -> bool:
-        if isinstance(value, bool):
-            return False
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError):
-            return False
-        if array.dtype.kind not in "iuf":  # strings, objects, booleans, complex
-            return False
-        return array.size > 0 and array.ndim <= 1 and bool(np.all(np.isfinite(array))
-                                                           & np.all(array > 0))
-
-
-@dataclass(frozen=True)
-class Times:
-    """A 1-D array of numbers (times; whether they are finite, ordered and inside
-    ``t_span`` is checked with ``t_span``, which says where they are not)."""
-
-    description: str = "a 1-D array of times"
-
-    def accepts(self, value: object) -> bool:
-        if isinstance(value, (str, bytes)):
-            return False
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError):
-            return False
-        return array.ndim == 1 and (array.size == 0 or array.dtype.kind in "iuf")
-
-
-@dataclass(frozen=True)
-class Boolean:
-    description: str = "True or False"
-
-    def accepts(self, value: object) -> bool:
-        return isinstance(value, (bool, np.bool_))
-
-
-@dataclass(frozen=True)
-class SolverClass:
-    description: str = "a scipy.integrate.OdeSolver subclass"
-
-    def accepts(self, value: object) -> bool:
-        return isinstance(value, type) and issubclass(value, OdeSolver)
-
-
-@dataclass(frozen=True)
-class Callables:
-    description: str = "a sequence of callables event(t, q, qd)"
-
-    def accepts(self, value: object) -> bool:
-        return (isinstance(value, Sequence) and not isinstance(value, (str, bytes))
-                and all(callable(e) for e in value))
-
-
-@dataclass(frozen=True)
-class IsNone:
-    description: str = "None"
-
-    def accepts(self, value: object) -> bool:
-        return value is None
-
-
-NONE = IsNone()
-
-#: Every option of ``simulate`` and the forms it may take.
+#: Every option of ``simulate`` that makes its :class:`SimulationOptions` (but the
+#: inputs, whose form depends on the model) and the forms it may take.
 SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "method": [OneOf(tuple(METHODS)), SolverClass()],
     "rtol": [Tolerance()],
@@ -252,7 +162,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "baumgarte_gain": [PositiveNumber(), NONE],
     "backend": [OneOf(BACKENDS)],
     "native": [Boolean(), NONE],
-    "redundant_constraints": [OneOf(REDUNDANT_MODES)],
+    "redundant_constraints": REDUNDANT_CONSTRAINTS,
     "velocity_projection": [OneOf(VELOCITY_PROJECTIONS)],
     "dense_output": [Boolean()],
     "progress": [Boolean()],
@@ -261,36 +171,39 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "sample_time": [PositiveNumber(), NONE],
 }
 
+#: The keywords of :func:`simulation_options`: ``simulate``'s run options and what the
+#: System tells of its model.
+OPTIONS_PARAMETERS: dict[str, list[Rule]] = {
+    **SIMULATE_PARAMETERS,
+    "inputs": INPUT_VALUES,
+    "state_size": [PositiveInteger(), NONE],
+    "input_names": [Items()],
+}
 
-def check_parameters(values: Mapping[str, object], table: Mapping[str, list[Rule]],
-                     caller: str) -> None:
-    """Raise one uniform ``ValueError`` for the first value no rule of its entry accepts.
+
+def run_options(arguments: Mapping[str, object]) -> dict[str, object]:
+    """The run options (:func:`simulation_options`'s keywords that ``simulate`` takes)
+    among a call's ``arguments``: what a function taking them as parameters of its own
+    passes on, so that an option added to the table reaches the run with no other edit.
 
     Parameters
     ----------
-    values
-        The keyword arguments to check, by name (every name must be in ``table``).
-    table
-        The accepted forms of each keyword.
-    caller
-        The function's name, for the message.
+    arguments
+        A call's arguments by name.
 
-    >>> check_parameters({"backend": "gpu"}, SIMULATE_PARAMETERS, "simulate")
-    Traceback (most recent call last):
-    ...
-    ValueError: The 'backend' parameter of simulate must be one of 'auto', 'c', 'python'; got 'gpu'.
+    Examples
+    --------
+    >>> run_options({"self": None, "q0": [1.0], "rtol": 1e-9, "inputs": None})
+    {'rtol': 1e-09, 'inputs': None}
     """
-    for name, value in values.items():
-        rules = table[name]
-        if not any(rule.accepts(value) for rule in rules):
-            forms = " or ".join(rule.description for rule in rules)
-            raise ValueError(f"The {name!r} parameter of {caller} must be {forms}; "
-                             f"got {value!r}.")
+    return {name: value for name, value in arguments.items()
+            if name in OPTIONS_PARAMETERS and name not in ("state_size", "input_names")}
 
 
 # --------------------------------------------------------------------------- the door
 
 
+@checked_keywords(OPTIONS_PARAMETERS, caller="simulate")
 def simulation_options(
     t_span: Sequence[float],
     *,
@@ -355,16 +268,7 @@ def simulation_options(
     ...
     ValueError: The 'atol' parameter of simulate must be ... or an array of 4 of them ...
     """
-    given = {
-        "method": method, "rtol": rtol, "atol": atol, "step_control": step_control,
-        "first_step": first_step, "max_step": max_step, "stabilization": stabilization,
-        "baumgarte_gain": baumgarte_gain, "backend": backend, "native": native,
-        "redundant_constraints": redundant_constraints,
-        "velocity_projection": velocity_projection, "events": events,
-        "dense_output": dense_output, "progress": progress, "t_eval": t_eval,
-        "sample_time": sample_time,
-    }
-    check_parameters(given, SIMULATE_PARAMETERS, "simulate")
+    # each keyword has been checked against its row of OPTIONS_PARAMETERS at the door
     check_events(events)
     if state_size is not None:
         _check_tolerance_sizes({"rtol": rtol, "atol": atol}, state_size)
