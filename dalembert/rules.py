@@ -181,6 +181,14 @@ class Items:
 
 
 @dataclass(frozen=True)
+class Function:
+    description: str = "a function"
+
+    def accepts(self, value: object) -> bool:
+        return callable(value)
+
+
+@dataclass(frozen=True)
 class CheckedWhereUsed:
     """Any value here: its form depends on the model or on other arguments, and the
     function that reads it says what is wrong (``description`` names that place)."""

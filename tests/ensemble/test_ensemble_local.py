@@ -311,7 +311,8 @@ def test_overwriting_a_netcdf_store_an_earlier_result_reads(pend, tmp_path):
 def test_bad_arguments_are_refused_before_anything_runs(pend):
     cases = grid(l=[1.0])
     for kwargs, match in [
-        ({"scheduler": "mpi"}, "scheduler must be one of"),
+        ({"scheduler": "mpi"}, "The 'scheduler' parameter of simulate_many must be one of "
+                               "'auto', 'serial', 'threads', 'processes', 'dask'; got 'mpi'"),
         ({"scheduler": "dask"}, "needs client="),
         ({"client": "serial"}, "client must be a dask.distributed.Client, got str 'serial'; "
                                "for scheduler='serial' write scheduler='serial'"),
@@ -320,7 +321,8 @@ def test_bad_arguments_are_refused_before_anything_runs(pend):
         ({"outputs": {"q": tip_z}}, "name of a trajectory quantity"),
         ({"store": "run.csv"}, "must end in .zarr"),
         ({"dense_output": True}, "dense_output"),
-        ({"workers": 0}, "workers must be a positive whole number"),
+        ({"workers": 0}, "The 'workers' parameter of simulate_many must be a positive whole "
+                         "number or None; got 0"),
     ]:
         with pytest.raises(EnsembleError, match=match):
             pend.simulate_many((0.0, 1.0), cases, initial_state=released, progress=False,
