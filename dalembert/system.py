@@ -75,6 +75,30 @@ SIMULATE: dict[str, list[Rule]] = {
 }
 
 
+#: What runs :meth:`System.simulate_many`: :func:`dalembert.ensemble.simulate_many`, a
+#: later layer, which the System does not import (docs/design.md): the package's root
+#: installs it (:func:`install_ensemble`), as it imports both.
+_ENSEMBLE: Callable[..., Any] | None = None
+
+
+def install_ensemble(runner: Callable[..., Any]) -> None:
+    """Make ``runner(system, t_span, cases, **options)`` what
+    :meth:`System.simulate_many` calls.
+
+    Parameters
+    ----------
+    runner
+        The ensemble's entry point, :func:`dalembert.ensemble.simulate_many`.
+
+    Examples
+    --------
+    >>> import dalembert.ensemble
+    >>> install_ensemble(dalembert.ensemble.simulate_many)  # as dalembert does
+    """
+    global _ENSEMBLE
+    _ENSEMBLE = runner
+
+
 class System:
     """A mechanical system in (possibly redundant) coordinates with constraints.
 
@@ -656,9 +680,10 @@ class System:
         >>> result.summary["status"].tolist()
         ['finished', 'finished']
         """
-        from .ensemble import simulate_many  # Dask, xarray and pandas only when asked
-
-        return simulate_many(self, t_span, cases, **options)
+        if _ENSEMBLE is None:
+            raise RuntimeError("no ensemble runner is installed (dalembert/__init__.py "
+                               "installs dalembert.ensemble.simulate_many)")
+        return _ENSEMBLE(self, t_span, cases, **options)
 
     @checked_keywords({"parameters": PARAMETER_VALUES, "fixed": FIXED})
     def plan(
