@@ -1,12 +1,15 @@
 """The options of a simulation: one declared table, checked once, turned into typed values.
 
-:func:`simulation_options` is the only place where the keywords of
-:meth:`System.simulate <dalembert.System.simulate>` are checked: each against
-the constraints declared for it in :data:`SIMULATE_PARAMETERS` (one uniform
-message, "The 'rtol' parameter of simulate must be ...; got ..."), then the rules
-that tie two options together. What comes out is a :class:`SimulationOptions`
-made of typed values (a :class:`Baumgarte` stabilization holding its gain, a
-:class:`StepControl` holding its tolerances), which the layers below trust.
+:data:`SIMULATE_PARAMETERS` declares the forms each run option of
+:meth:`System.simulate <dalembert.System.simulate>` may take. Its rows are bound to
+``simulate``'s signature and to :func:`simulation_options`'s
+(:func:`dalembert.rules.checked_keywords`: a keyword without its row, or a row without
+its keyword, fails the import) and checked once, at whichever of them is called (one
+uniform message, "The 'rtol' parameter of simulate must be ...; got ...").
+:func:`simulation_options` then applies the rules that tie two options together. What
+comes out is a :class:`SimulationOptions` made of typed values (a :class:`Baumgarte`
+stabilization holding its gain, a :class:`StepControl` holding its tolerances), which
+the layers below trust.
 
 >>> options = simulation_options((0, 1), stabilization="baumgarte", baumgarte_gain=20.0)
 >>> options.stabilization
