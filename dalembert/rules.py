@@ -32,6 +32,7 @@ from scipy.integrate import OdeSolver
 #: The accepted forms of each keyword of one function.
 Table = Mapping[str, Sequence["Rule"]]
 
+
 class Rule(Protocol):
     """One accepted form of a value: ``accepts(value)`` and how to say it."""
 
@@ -171,7 +172,7 @@ class FiniteNumber:
 
 @dataclass(frozen=True)
 class Items:
-    """A sequence (coordinates to hold, names...; each item is checked where read)."""
+    """A sequence, not a string (names...; each item is checked where it is read)."""
 
     description: str = "a sequence"
 
