@@ -294,7 +294,8 @@ class _Run:
         return CaseSettings(
             checked.t_span, np.asarray(checked.output.t_eval, dtype=float), checked,
             coordinate_values(q0, names, "q0"), coordinate_values(qd0, names, "qd0"),
-            parameter_values(self.system.parameters, parameters), self.cases.columns,
+            parameter_values(self.system.parameters, parameters, coordinates=names,
+                             inputs=self._input_names), self.cases.columns,
             initial_state, keep, outputs, case_inputs)
 
     # -- running ---------------------------------------------------------------------

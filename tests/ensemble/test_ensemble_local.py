@@ -20,7 +20,7 @@ from ensemble_models import (
 )
 from scipy import stats
 
-from dalembert import EnsembleError, EnsembleWarning
+from dalembert import EnsembleError, EnsembleWarning, ParameterError
 from dalembert.ensemble import grid, sample
 
 T_EVAL = np.linspace(0.0, 2.0, 41)
@@ -329,6 +329,9 @@ def test_bad_arguments_are_refused_before_anything_runs(pend):
                                **kwargs)
     with pytest.raises(ValueError, match="The 'rtol' parameter of simulate"):
         pend.simulate_many((0.0, 1.0), cases, initial_state=released, rtol=-1.0)
+    with pytest.raises(ParameterError, match="'x' is a coordinate of this model, not a "
+                                             "parameter: give its initial value in q0"):
+        pend.simulate_many((0.0, 1.0), cases, initial_state=released, parameters={"x": 0.1})
 
 
 def test_auto_runs_short_ensembles_here_and_long_ones_in_parallel(pend, monkeypatch):
