@@ -304,7 +304,7 @@ def _interrupting(rhs):
 def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch, native):
     # The C loop returns to Python after every stretch of steps (one step here), so
     # Ctrl-C lands between stretches too.
-    from dalembert.solvers import plan
+    from dalembert.solvers.running import plan
     from dalembert.solvers.native import NativeSolver, run
 
     real = plan.first_order_rhs

@@ -1,11 +1,11 @@
 """SciPy's explicit Runge-Kutta solvers stepping on our stepper contract.
 
 The loops drive SciPy ``OdeSolver`` objects (start-up, dense output, the restarts of
-:mod:`.scipy_ivp`); their steps are ours: :func:`~.steppers.runge_kutta.controlled_step`
-with the method's :class:`~.steppers.runge_kutta.ExplicitRungeKutta` and a
-:class:`~.steppers.controller.PIController`, PI control by default
+:mod:`.scipy_ivp`); their steps are ours: :func:`~.runge_kutta.controlled_step`
+with the method's :class:`~.runge_kutta.ExplicitRungeKutta` and a
+:class:`~.controller.PIController`, PI control by default
 (``step_control="PI"``), SciPy's own under ``step_control="scipy"`` (the
-:mod:`.steppers.controller` module says why PI).
+:mod:`.controller` module says why PI).
 
 Example:
 
@@ -22,10 +22,10 @@ from __future__ import annotations
 
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
-from ..options import StepController
+from ...options import StepController
+from .controller import ControllerState, PIController
+from .runge_kutta import ExplicitRungeKutta, controlled_step
 from .scipy_ivp import RungeKutta, tableau_of
-from .steppers.controller import ControllerState, PIController
-from .steppers.runge_kutta import ExplicitRungeKutta, controlled_step
 
 
 class ControlledSteps(RungeKutta):

@@ -6,7 +6,7 @@ and hands a solver back the state a stretch of steps run in C reached. All of
 that reads or writes attributes SciPy does not document (``h_abs``, ``f``, ``K``,
 ``D``...) or imports names from its private modules. They are gathered here, so
 that a SciPy release that renames one breaks one module, and
-``tests/solvers/test_scipy_ivp.py`` says which name moved. ``pyproject.toml``
+``tests/solvers/steppers/test_scipy_ivp.py`` says which name moved. ``pyproject.toml``
 bounds SciPy to the releases tested against these names.
 
 >>> from scipy.integrate import DOP853
@@ -31,7 +31,7 @@ from scipy.integrate._ivp.rk import (
     RungeKutta,
 )
 
-from .steppers.runge_kutta import Tableau
+from .runge_kutta import Tableau
 
 __all__ = [
     "INTERPOLATOR_POWER",

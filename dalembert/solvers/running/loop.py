@@ -8,7 +8,7 @@ interpolant. The contract, documented on :class:`SimulationLoop` the way SciPy's
 ``OdeSolver`` documents its own, is small: :meth:`~SimulationLoop.advance` until
 :attr:`~SimulationLoop.status` is set, :meth:`~SimulationLoop.interrupt` on
 Ctrl-C, then :meth:`~SimulationLoop.result`. Which loop runs is decided once, by
-the simulation plan (:mod:`dalembert.solvers.plan`).
+the simulation plan (:mod:`dalembert.solvers.running.plan`).
 """
 
 from __future__ import annotations
@@ -19,13 +19,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ..errors import DalembertError
-from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
-from .careful import CarefulSteps, RetakeStep
-from .dense_output import DenseRecorder
-from .native.run import StretchRunner
-from .nonfinite import Diagnosis
-from .scipy_ivp import (
+from ...errors import DalembertError
+from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
+from ..native.run import StretchRunner
+from ..singular.careful import CarefulSteps, RetakeStep
+from ..singular.watch import Singularity, StepCollapse
+from ..steppers.dense_output import DenseRecorder
+from ..steppers.scipy_ivp import (
     last_stages,
     restart,
     restart_second_order,
@@ -34,7 +34,7 @@ from .scipy_ivp import (
     step_inputs,
     take_state,
 )
-from .singular_watch import Singularity, StepCollapse
+from .nonfinite import Diagnosis
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
 
@@ -114,12 +114,12 @@ class PythonLoop(SimulationLoop):
     Before each step the solver's state, derivative and step size are checked: one
     that is not finite ends the run (a NaN step size would be retried forever, a NaN
     state spreads to every later one), with ``diagnose(t, y)`` saying which quantity
-    of the model is not finite there (:mod:`~dalembert.solvers.nonfinite`). An event
+    of the model is not finite there (:mod:`~dalembert.solvers.running.nonfinite`). An event
     function that raises or returns a value that is not finite ends the run too,
     keeping the steps before. Steps that collapse near a singular configuration of the
     constraints (``singular(t, y)`` says so, naming the rows) end the run with that
-    diagnosis (:mod:`~dalembert.solvers.singular_watch`). A step the careful model
-    rejects (:class:`~dalembert.solvers.careful.RetakeStep`: its projection jumped onto
+    diagnosis (:mod:`~dalembert.solvers.singular.watch`). A step the careful model
+    rejects (:class:`~dalembert.solvers.singular.careful.RetakeStep`: its projection jumped onto
     another branch of the constraints, or it ran too far without the nearly dependent
     ones) is taken again a quarter as long, up to ``JUMP_RETRIES`` times before the
     run stops saying so.
@@ -490,14 +490,14 @@ class _StepState:
 
 class StretchLoop(PythonLoop):
     """The loop in C: whole stretches of steps (step, projection, outputs at
-    ``t_eval``, restart) run by a :class:`~.native.run.StretchRunner`, returning to
+    ``t_eval``, restart) run by a :class:`~dalembert.solvers.native.run.StretchRunner`, returning to
     Python every fraction of a second; a step C cannot finish is taken the Python
     way (a step from values that are not finite among them: the Python loop then
     stops with its diagnosis). Only for a native Runge-Kutta solver with its native
     projection, no events and no dense output (the plan checks). Same steps and
     states as :class:`PythonLoop` (tested). Near a singular configuration (measured
     after every stretch) the steps are taken the Python way, carefully (``careful``,
-    :mod:`~dalembert.solvers.careful`), until the state is clear of it.
+    :mod:`~dalembert.solvers.singular.careful`), until the state is clear of it.
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
