@@ -227,7 +227,11 @@ def _unwritable(path: Path, exc: OSError) -> CompileError:
 
 
 class _Untrusted(Exception):
-    """A file of an entry that must not be read as part of it (the message says why)."""
+    """A file of an entry that must not be read as part of it (the message says why).
+
+    Internal control flow, never seen by a user: the entry's check
+    (:meth:`_Entry.problem`) turns it into what is wrong with the entry, which is then
+    not loaded but rebuilt."""
 
 
 #: What :meth:`_Entry.problem` says of an entry that is not there (not warned about).
