@@ -460,9 +460,9 @@ class PythonLoop(SimulationLoop):
 class _EventFailed(Exception):
     """An event function failed while its root was sought (the run is stopped).
 
-    Internal control flow, never seen by a user: raised inside the root search and
-    caught in :meth:`PythonLoop.advance`, which stops the run with a warning naming
-    the event (the exception is the warning's ``__cause__``)."""
+    Internal control flow, never seen by a user: the event's value has already
+    stopped the run, saying why; this leaves SciPy's root search (``brentq``), and is
+    caught right around it."""
 
 
 def _event_name(event: Callable, k: int) -> str:
