@@ -497,7 +497,7 @@ class System:
         step_control
             The explicit Runge-Kutta methods' step-size controller: ``"PI"``
             (default; fewer rejected steps where stability limits the step, see
-            :mod:`dalembert.solvers.steppers.step_control`) or ``"scipy"`` (``solve_ivp``'s).
+            :mod:`dalembert.solvers.steppers.scipy_ivp`) or ``"scipy"`` (``solve_ivp``'s).
         stabilization
             ``"projection"`` (positions and velocities projected after every step:
             no tuning, residuals at rounding level), ``"baumgarte"`` (see

@@ -19,7 +19,7 @@ from scipy.integrate import OdeSolver
 from ...errors import DalembertError, InputError
 from ..singular.careful import CarefulSteps
 from ..singular.watch import Singularity
-from ..steppers.step_control import CONTROLLED, ControlledSteps
+from ..steppers.scipy_ivp import CONTROLLED, ControlledSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
 

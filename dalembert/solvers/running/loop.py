@@ -26,13 +26,15 @@ from ..singular.careful import CarefulSteps, RetakeStep
 from ..singular.watch import Singularity, StepCollapse
 from ..steppers.dense_output import DenseRecorder
 from ..steppers.scipy_ivp import (
+    hand_over,
     last_stages,
+    last_step_size,
     restart,
     restart_second_order,
     roll_back,
     snapshot,
     step_inputs,
-    take_state,
+    step_size,
 )
 from .nonfinite import Diagnosis
 
@@ -215,7 +217,7 @@ class PythonLoop(SimulationLoop):
                 self.solver is not self.native or not self.careful.model.careful:
             return False
         solver = self.solver
-        self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+        self.solver = self.careful.solver(solver.t, solver.y, step_size(solver))
         self.project = self.careful.model.project
         return True
 
@@ -223,9 +225,7 @@ class PythonLoop(SimulationLoop):
         """Hand the run back to its own solver after careful steps."""
         careful, native = self.solver, self.native
         self._careful_nfev += careful.nfev
-        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
-                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
-                   h_previous=careful.h_previous)
+        hand_over(careful, native, native.fun(careful.t, careful.y))
         self.solver, self.project = native, self.native_project
 
     def _step(self) -> None:
@@ -302,7 +302,7 @@ class PythonLoop(SimulationLoop):
             return self.collapse.quiet(self.n_steps)
         self.stop("failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
                   f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
-                  f"step before, the last {solver.h_previous if solver.h_previous else 0:.1e}) "
+                  f"step before, the last {last_step_size(solver) or 0:.1e}) "
                   f"{found}. The trajectory up to there is returned; a looser rtol or "
                   "another method may get through, or the mechanism may lock here")
 

@@ -7,7 +7,7 @@ bound numeric model and the consistent initial state, and decides once
   and the projection in C) where it applies and ``backend`` allows, else in Python,
   with the reason the C loop does not apply;
 - the solver class: SciPy's method, under the chosen step-size controller
-  (:mod:`~dalembert.solvers.steppers.step_control`), stepping in C where the loop is;
+  (:mod:`~dalembert.solvers.steppers.scipy_ivp`), stepping in C where the loop is;
 - whether whole stretches of steps run in C (:class:`~.loop.StretchLoop`): with
   the C loop's projection and neither events nor dense output;
 - the right-hand side, the projection after each step and the trajectory's outputs.
@@ -41,7 +41,7 @@ from ..projection import StepProjector
 from ..singular.careful import CarefulModel, CarefulSteps, Outputs
 from ..singular.watch import Singularity, singular_diagnosis
 from ..state import accelerations_at
-from ..steppers.step_control import ControlledSteps, controlled_class
+from ..steppers.scipy_ivp import ControlledSteps, controlled_class
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
 
