@@ -429,6 +429,27 @@ _LOADED: dict[tuple[int, int], tuple[int, ctypes.CDLL]] = {}
 _LOADING = threading.Lock()
 
 
+def cached_library(library: ctypes.CDLL) -> tuple[str, bytes] | None:
+    """The key and the bytes of a library :func:`load_library` loaded (the file it
+    checked and loaded), or ``None`` for another library.
+
+    Parameters
+    ----------
+    library
+        A loaded library.
+
+    Examples
+    --------
+    >>> import ctypes
+    >>> cached_library(ctypes.CDLL(None)) is None
+    True
+    """
+    key = getattr(library, "_dalembert_key", None)
+    if not isinstance(key, str):
+        return None
+    return key, Path(library._name).read_bytes()
+
+
 def _load_verified(entry: _Entry) -> ctypes.CDLL:
     """Load the file ``entry``'s check verified, not whatever its path names now.
 
@@ -446,16 +467,18 @@ def _load_verified(entry: _Entry) -> ctypes.CDLL:
     try:
         if not _FD_FOLDER.is_dir():
             os.close(fd)
-            return ctypes.CDLL(str(entry.library))
-        info = os.fstat(fd)
-        identity = (info.st_dev, info.st_ino)
-        with _LOADING:
-            if identity in _LOADED:
-                os.close(fd)
-                return _LOADED[identity][1]
-            library = ctypes.CDLL(str(_FD_FOLDER / str(fd)))
-            _LOADED[identity] = (fd, library)
-            return library
+            library = ctypes.CDLL(str(entry.library))
+        else:
+            info = os.fstat(fd)
+            identity = (info.st_dev, info.st_ino)
+            with _LOADING:
+                if identity in _LOADED:
+                    os.close(fd)
+                    return _LOADED[identity][1]
+                library = ctypes.CDLL(str(_FD_FOLDER / str(fd)))
+                _LOADED[identity] = (fd, library)
+        library._dalembert_key = entry.key  # type: ignore[attr-defined]
+        return library
     except OSError as exc:
         with suppress(OSError):
             os.close(fd)
