@@ -243,27 +243,6 @@ def _function(f: Callable[..., Any], what: str) -> Source:
         return lambda t, q, qd: f(t, q.copy(), qd.copy())
     return lambda t, q, qd: f(t)
 
-def read_only(values: np.ndarray) -> np.ndarray:
-    """A view of ``values`` that cannot be written: what a user's function is given of
-    the run's state (writing into it would change the run behind the integrator's back).
-
-    Parameters
-    ----------
-    values
-        The array.
-
-    Examples
-    --------
-    >>> view = read_only(np.zeros(2))
-    >>> view[0] = 1.0
-    Traceback (most recent call last):
-    ...
-    ValueError: assignment destination is read-only
-    """
-    view = values.view()
-    view.flags.writeable = False
-    return view
-
 
 def _table(value: tuple[Any, Any], size: int, what: str,
            t_span: tuple[float, float]) -> Source:
