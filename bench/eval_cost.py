@@ -92,9 +92,9 @@ def measure(n: int, t_end: float, rtol: float, atol: float) -> dict:
 
     from dalembert.codegen import c_backend
     from dalembert.solvers.dynamics import first_order_rhs
+    from dalembert.solvers.kkt.sparse import KKTSolver
     from dalembert.solvers.native import native_solver
     from dalembert.solvers.projection import StepProjector
-    from dalembert.solvers.sparse_kkt import KKTSolver
 
     warnings.simplefilter("ignore")
     system, q0, qd0 = workload(n)

@@ -239,7 +239,7 @@ def simulation_options(
         As in :func:`scipy.integrate.solve_ivp`.
     step_control
         The explicit Runge-Kutta methods' step-size controller, ``"PI"`` or
-        ``"scipy"`` (:mod:`dalembert.solvers.step_control`).
+        ``"scipy"`` (:mod:`dalembert.solvers.steppers.scipy_ivp`).
     stabilization, baumgarte_gain
         ``"projection"``, ``"baumgarte"`` (with a finite positive gain, default 10) or
         ``None``; a gain with another stabilization is an error.

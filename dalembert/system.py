@@ -51,11 +51,11 @@ from .options import (
 )
 from .rules import NONE, CheckedWhereUsed, FiniteNumber, Rule, checked_keywords, unchecked
 from .solvers.initialization import InitializationReport, consistent_state
-from .solvers.integrate import IntegrationResult
 from .solvers.native.library import prepare_runtime
-from .solvers.plan import SimulationPlan, plan_simulation
-from .solvers.sampled import sampled_schedule
-from .solvers.segments import Schedule, SegmentState, run_segments
+from .solvers.running.integrate import IntegrationResult
+from .solvers.running.plan import SimulationPlan, plan_simulation
+from .solvers.running.sampled import sampled_schedule
+from .solvers.running.segments import Schedule, SegmentState, run_segments
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
@@ -587,7 +587,7 @@ class System:
         step_control
             The explicit Runge-Kutta methods' step-size controller: ``"PI"``
             (default; fewer rejected steps where stability limits the step, see
-            :mod:`dalembert.solvers.step_control`) or ``"scipy"`` (``solve_ivp``'s).
+            :mod:`dalembert.solvers.steppers.scipy_ivp`) or ``"scipy"`` (``solve_ivp``'s).
         stabilization
             ``"projection"`` (positions and velocities projected after every step:
             no tuning, residuals at rounding level), ``"baumgarte"`` (see
@@ -865,7 +865,7 @@ class System:
 
     def _segment(self, plan: SimulationPlan, a: float, b: float, start: SegmentState,
                  t_eval: np.ndarray | None, progress: bool) -> SimulationPlan:
-        """The plan of one segment ``[a, b]`` of a run (:mod:`~dalembert.solvers.segments`)
+        """The plan of one segment ``[a, b]`` of a run (:mod:`~dalembert.solvers.running.segments`)
         from ``start``: the run's own plan (its solver functions, its C loop) from that
         state, which is consistent (projected after every step), with the inputs held
         at ``start.inputs`` (set in the model now: the driver runs the segment and takes

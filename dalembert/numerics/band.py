@@ -1,7 +1,7 @@
 """A bandwidth-reducing order of a symmetric sparsity pattern (reverse Cuthill-McKee).
 
 One ordering for both banded solves: the Python loop's band LU of the KKT matrix
-(:mod:`dalembert.solvers.sparse_kkt`) and the C loop's band Cholesky of the Schur
+(:mod:`dalembert.solvers.kkt.sparse`) and the C loop's band Cholesky of the Schur
 complement (:mod:`dalembert.solvers.native.structure`). Two candidates are
 compared and the narrower band is kept: SciPy's reverse Cuthill-McKee (each
 component started at a node of least degree) and one whose components start at a

@@ -5,12 +5,12 @@ four-bar folding flat, a closed chain stretched straight, a rod whose length goe
 zero). The multipliers grow without bound (like ``1 / distance``), and the step-size
 controller may creep towards the rank drop with ever smaller steps. Both simulation
 loops, in C and in Python, watch the steps with the same thresholds, here, and take
-the same decision from them (:class:`~dalembert.solvers.singular_watch.StepCollapse`):
+the same decision from them (:class:`~dalembert.solvers.singular.watch.StepCollapse`):
 
 - a state is *near a singular configuration* when the smallest singular value of the
   kept rows of ``A`` (scaled to unit length) is below :data:`NEAR` times the largest;
   after every step a band Cholesky screen (:data:`SCREEN`) decides whether to measure
-  it, and near one the steps are careful (:mod:`~dalembert.solvers.careful`: what
+  it, and near one the steps are careful (:mod:`~dalembert.solvers.singular.careful`: what
   they leave out, :data:`TRUNCATE` and :data:`GAP`; when they are retaken,
   :data:`JUMP` and :data:`JUMP_RETRIES`);
 - the steps have *collapsed* when the last :data:`COLLAPSE_STEPS` (or more) of them

@@ -14,7 +14,7 @@ multipliers are computed, since the integrator needs ``qdd`` only.
 
 Each evaluation is linear in the size of the mechanism: the generated code returns
 ``M`` and ``A`` on their fixed sparsity pattern and
-:class:`~dalembert.solvers.sparse_kkt.KKTSolver` factors the sparse KKT matrix
+:class:`~dalembert.solvers.kkt.sparse.KKTSolver` factors the sparse KKT matrix
 (dense below a measured size, where that is faster).
 """
 
@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from .sparse_kkt import kkt_solver, matvec
+from .kkt.sparse import kkt_solver, matvec
 
 
 def accelerations(

@@ -22,9 +22,9 @@ from ..numerics.rank import (
 from ..numerics.singular import DENSE_ROWS, NEAR
 from ..options import RedundantConstraints, VelocityProjection
 from .initial_checks import check_finite, check_kinetic_energy, check_resolvable
-from .kkt import SINGULAR_COND, check_kkt, solve_kkt
+from .kkt.dense import SINGULAR_COND, check_kkt, solve_kkt
+from .kkt.sparse import DENSE_MAX, kkt_condition, kkt_solver, matvec
 from .projection import StepProjector, project_positions, project_velocities
-from .sparse_kkt import DENSE_MAX, kkt_condition, kkt_solver, matvec
 
 #: Changes smaller than this (relative) are rounding, not worth reporting.
 REPORT_TOL = 1e-10

@@ -18,7 +18,7 @@ from functools import partial
 import numpy as np
 
 from ..codegen.compiled import NumericModel
-from .sparse_kkt import kkt_solver, matvec
+from .kkt.sparse import kkt_solver, matvec
 
 #: The outputs that take a solve of the KKT system (NaN when it is left out).
 SOLVED = ("qdd", "multipliers", "constraint_forces")

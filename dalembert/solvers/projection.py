@@ -8,7 +8,7 @@ Used for consistent initial values and, after every step, to remove drift.
 After every step :class:`StepProjector` does the same in time linear in the size
 of the mechanism: the minimum-norm step is the solution of the KKT system
 ``[[I, J^T], [J, 0]] [dq; nu] = [0; -psi]``, factored once per projection with
-the sparse solver of the dynamics (:class:`~.sparse_kkt.KKTSolver`) and reused
+the sparse solver of the dynamics (:class:`~dalembert.solvers.kkt.sparse.KKTSolver`) and reused
 for every Newton iteration (simplified Newton: the drift after one step is at
 tolerance level, so each iteration gains ~10 digits and one or two reach the
 rounding floor). Velocities are projected with ``A`` at the new positions. With
@@ -34,7 +34,7 @@ from ..numerics.gauss_newton import (
     newton_progress,
 )
 from ..numerics.rank import RANK_RTOL
-from .sparse_kkt import kkt_solver, matvec
+from .kkt.sparse import kkt_solver, matvec
 
 
 def project_positions(

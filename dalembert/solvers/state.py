@@ -20,7 +20,7 @@ import numpy as np
 
 from ..codegen.compiled import NumericModel
 from ..numerics.rank import min_norm_multipliers, sparse_constraint_rank
-from .sparse_kkt import kkt_solver, matvec
+from .kkt.sparse import kkt_solver, matvec
 
 #: The given accelerations may miss ``A qdd = c`` by this much, relative to its terms.
 CONSTRAINT_RTOL = 1e-8

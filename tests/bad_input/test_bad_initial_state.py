@@ -31,7 +31,7 @@ from dalembert import (
 )
 from dalembert.examples import spherical_chain
 from dalembert.multibody import chain
-from dalembert.solvers.kkt import check_kkt
+from dalembert.solvers.kkt.dense import check_kkt
 
 
 @pytest.fixture(scope="module")

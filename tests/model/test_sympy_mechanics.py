@@ -26,7 +26,7 @@ from sympy.physics.mechanics import (
 from dalembert import Holonomic, ModelError, System, coordinates
 from dalembert.examples import knife_edge
 from dalembert.model.sympy_mechanics import PRIVATE_NAMES
-from dalembert.solvers.kkt import solve_kkt
+from dalembert.solvers.kkt.dense import solve_kkt
 
 M, G, L, C = 1.3, 9.81, 0.8, 0.4
 Q0 = {"x": L * np.sin(1.0), "y": -L * np.cos(1.0)}

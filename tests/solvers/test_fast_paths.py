@@ -1,6 +1,6 @@
 """The fast (sparse/band, compiled) paths against the simple dense reference path.
 
-The reference is the dense KKT solve of :func:`dalembert.solvers.kkt.solve_kkt` on
+The reference is the dense KKT solve of :func:`dalembert.solvers.kkt.dense.solve_kkt` on
 dense blocks and the dense least-squares projection; the fast paths must give the
 same ``qdd`` and ``lambda`` to 1e-12 (relative) at random states, whatever
 solver method (dense, band, SuperLU) is forced.
@@ -17,9 +17,9 @@ from scipy.linalg import null_space
 
 from dalembert.examples import cartesian_pendulum, coin, four_bar, spherical_chain
 from dalembert.solvers.dynamics import first_order_rhs
-from dalembert.solvers.kkt import kkt_matrix, solve_kkt
+from dalembert.solvers.kkt.dense import kkt_matrix, solve_kkt
+from dalembert.solvers.kkt.sparse import KKTSolver
 from dalembert.solvers.projection import StepProjector, project_positions, project_velocities
-from dalembert.solvers.sparse_kkt import KKTSolver
 
 EXAMPLES = {"pendulum": cartesian_pendulum, "four_bar": four_bar, "chain4": spherical_chain,
             "coin": coin}
@@ -116,7 +116,7 @@ def test_band_path_is_chosen_for_a_chain_and_stays_narrow():
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     from dalembert.multibody import chain
-    from dalembert.solvers.sparse_kkt import DENSE_MAX, _bandwidth
+    from dalembert.solvers.kkt.sparse import DENSE_MAX, _bandwidth
 
     widths = []
     for n in (4, 8):
@@ -135,7 +135,7 @@ def test_band_path_is_chosen_for_a_chain_and_stays_narrow():
 
 def test_peripheral_order_finds_the_band_of_a_shuffled_path():
     """A path numbered at random has bandwidth 1 in the order from one of its ends."""
-    from dalembert.solvers.sparse_kkt import band_layout
+    from dalembert.solvers.kkt.sparse import band_layout
 
     size = 100
     label = np.random.default_rng(4).permutation(size)

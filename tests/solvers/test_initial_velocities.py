@@ -17,7 +17,7 @@ import sympy as sp
 
 from dalembert import Holonomic, InitialConditionsAdjusted, System, coordinates, t
 from dalembert.multibody import Multibody, RigidBody, Rolling, angular_velocities, chain
-from dalembert.solvers.kkt import solve_kkt
+from dalembert.solvers.kkt.dense import solve_kkt
 
 MASS, V0 = 2.0, 1.0
 

@@ -10,7 +10,7 @@ import sympy as sp
 
 from dalembert import Holonomic, InitialConditionsAdjusted, System, coordinates, t
 from dalembert.numerics.rank import dependent_rows
-from dalembert.solvers.kkt import check_kkt, solve_kkt
+from dalembert.solvers.kkt.dense import check_kkt, solve_kkt
 
 
 def test_singular_mass_nonsingular_kkt():

@@ -15,9 +15,9 @@ from dalembert import Holonomic, SingularSystemError, System, coordinates
 from dalembert.multibody import chain
 from dalembert.numerics.conditioning import _dense_spd_condition
 from dalembert.solvers import initialization
-from dalembert.solvers.kkt import kkt_matrix
+from dalembert.solvers.kkt.dense import kkt_matrix
+from dalembert.solvers.kkt.sparse import kkt_condition, kkt_solver
 from dalembert.solvers.projection import project_positions, project_velocities
-from dalembert.solvers.sparse_kkt import kkt_condition, kkt_solver
 
 
 def test_sparse_initial_projection_matches_the_dense_one():

@@ -1,6 +1,6 @@
 """The C loop (:mod:`dalembert.solvers.native`) against the Python path and SciPy.
 
-References: the dense KKT solve (:func:`~dalembert.solvers.kkt.solve_kkt`), the
+References: the dense KKT solve (:func:`~dalembert.solvers.kkt.dense.solve_kkt`), the
 Python right-hand side with its Baumgarte terms, the Python step projector, and
 SciPy's own Runge-Kutta solvers, which must take the same steps.
 """
@@ -20,13 +20,13 @@ from dalembert.examples import EXAMPLES, load
 from dalembert.multibody import chain
 from dalembert.options import STEP_CONTROLS
 from dalembert.solvers.dynamics import first_order_rhs
-from dalembert.solvers.integrate import integrate
-from dalembert.solvers.kkt import solve_kkt
+from dalembert.solvers.kkt.dense import solve_kkt
 from dalembert.solvers.native import NATIVE_METHODS, NativeSolver, NotApplicable, native_solver
 from dalembert.solvers.native.structure import BLOCK_MAX, schur_structure
 from dalembert.solvers.outputs import evaluate_outputs
 from dalembert.solvers.projection import StepProjector
-from dalembert.solvers.step_control import CONTROLLED
+from dalembert.solvers.running.integrate import integrate
+from dalembert.solvers.steppers.scipy_ivp import CONTROLLED
 
 
 def initial(name: str):

@@ -8,7 +8,7 @@ import pytest
 from factorization_cases import MODELS, case, dense_reference, relative, right_hand_sides
 
 from dalembert import SingularSystemError
-from dalembert.solvers.factorization import Backend, kkt_factorization
+from dalembert.solvers.kkt.factorization import Backend, kkt_factorization
 from dalembert.solvers.native.factorization import SchurFactorization, schur_applies
 
 #: The four-bar at its initial configuration: the Schur complement A M^-1 A^T has about

@@ -1,4 +1,4 @@
-"""The C runtime's KKT solve as a :class:`~dalembert.solvers.factorization.KKTFactorization`.
+"""The C runtime's KKT solve as a :class:`~dalembert.solvers.kkt.factorization.KKTFactorization`.
 
 ``dl_kkt_factor`` factors the KKT matrix the way the C loop's right-hand side solves it
 (:mod:`dalembert.solvers.native`: block Cholesky of ``M`` with the rows inside a block
@@ -26,7 +26,7 @@ import numpy as np
 from ...codegen.c_backend import CompileError
 from ...codegen.compiled import SparsePattern
 from ...errors import SingularSystemError
-from ..factorization import SINGULAR_MESSAGE, Backend, KKTFactorization
+from ..kkt.factorization import SINGULAR_MESSAGE, Backend, KKTFactorization
 from . import library
 from .structure import NotApplicable, SchurStructure, schur_structure
 

@@ -2,10 +2,10 @@
 
 A call also ends after a step that ends near a singular configuration (the smallest
 pivot ratio of the projection's ``A A^T`` below ``SCREEN``): the caller then
-measures as the Python loop does and decides (:mod:`~dalembert.solvers.careful`).
+measures as the Python loop does and decides (:mod:`~dalembert.solvers.singular.careful`).
 
 :class:`StretchRunner` drives ``dl_rk_run`` for one of the native Runge-Kutta
-solvers: each call takes steps as :func:`~dalembert.solvers.integrate.integrate`'s
+solvers: each call takes steps as :func:`~dalembert.solvers.running.integrate.integrate`'s
 loop takes them (step, project the end, interpolate and project the output times
 in the step, restart from the projected end) and returns after a fraction of a
 second, so Ctrl-C and the progress bar are served between calls. A step C cannot
@@ -22,7 +22,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ...numerics.singular import SCREEN
-from ..scipy_ivp import take_state
+from ..steppers.scipy_ivp import take_state
 from . import library
 from .turns import outside_python
 
@@ -87,7 +87,7 @@ class StretchRunner:
         with outside_python():  # the GIL is released: other threads run their Python
             status = self._call()
         #: whether the stretch ended after a step near a singular configuration (the
-        #: caller then measures it, :mod:`~dalembert.solvers.careful`)
+        #: caller then measures it, :mod:`~dalembert.solvers.singular.careful`)
         self.near_singular = status == library.NEAR_SINGULAR
         return status in (library.OK, library.NEAR_SINGULAR)
 

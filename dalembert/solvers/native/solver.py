@@ -12,10 +12,10 @@ from ...codegen.compiled import NumericModel
 from ...codegen.registry import REGISTRY
 from ...errors import SingularSystemError
 from ...numerics.rank import min_norm_multipliers
-from ..kkt import DROPPED_ROW_RTOL
+from ..kkt.dense import DROPPED_ROW_RTOL
+from ..kkt.sparse import SINGULAR_MESSAGE, matvec
 from ..outputs import SOLVED, output_arrays
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
-from ..sparse_kkt import SINGULAR_MESSAGE, matvec
 from . import library
 from .structure import NotApplicable, SchurStructure, schur_structure
 from .turns import outside_python

@@ -1,7 +1,7 @@
 """Explicit Runge-Kutta steps on the stepper contract (see :mod:`.`).
 
 A method is a :class:`Tableau` (SciPy's coefficients for RK23, RK45 and DOP853, read
-through :func:`dalembert.solvers.scipy_ivp.tableau_of`); :class:`ExplicitRungeKutta`
+through :func:`dalembert.solvers.steppers.scipy_ivp.tableau_of`); :class:`ExplicitRungeKutta`
 takes one attempt and gives an accepted step's interpolant, and
 :func:`controlled_step` joins it to a :class:`~.controller.PIController`. The
 formulas and the order of the floating-point operations are SciPy's, so the steps
@@ -102,7 +102,7 @@ class ExplicitRungeKutta:
     One step of DOP853 on ``y' = -y``:
 
     >>> from scipy.integrate import DOP853
-    >>> from dalembert.solvers.scipy_ivp import tableau_of
+    >>> from dalembert.solvers.steppers.scipy_ivp import tableau_of
     >>> rk = ExplicitRungeKutta(tableau_of(DOP853))
     >>> y0 = np.array([1.0])
     >>> step = rk.attempt(lambda t, y: -y, 0.0, y0, -y0, 0.1, rtol=1e-8, atol=1e-10)
@@ -246,7 +246,7 @@ def controlled_step(stepper: ExplicitRungeKutta, controller: PIController,
     Examples
     --------
     >>> from scipy.integrate import RK45
-    >>> from dalembert.solvers.scipy_ivp import tableau_of
+    >>> from dalembert.solvers.steppers.scipy_ivp import tableau_of
     >>> pi = PIController.for_method("PI", 4)
     >>> out = controlled_step(ExplicitRungeKutta(tableau_of(RK45)), pi, pi.initial_state(),
     ...                       lambda t, y: -y, 0.0, np.ones(1), -np.ones(1), 0.5,

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.integrate import DOP853, RK23, RK45
 
-from dalembert.solvers.scipy_ivp import tableau_of
 from dalembert.solvers.steppers.controller import PIController
 from dalembert.solvers.steppers.runge_kutta import ExplicitRungeKutta, controlled_step
+from dalembert.solvers.steppers.scipy_ivp import tableau_of
 
 METHODS = [DOP853, RK45, RK23]
 

@@ -5,7 +5,7 @@ instants ``t0 + k * dt`` (each computed, not accumulated) from the state there a
 held until the next one, as a digital controller acts. The right-hand side is smooth
 between instants and jumps at them: :func:`sampled_schedule` makes the
 :class:`~.segments.Schedule` whose reset at each instant takes a new sample (the state
-does not jump), and the segment driver (:mod:`~dalembert.solvers.segments`) runs one
+does not jump), and the segment driver (:mod:`~dalembert.solvers.running.segments`) runs one
 integration per interval. An output time within rounding of an instant (a ``t_eval``
 from ``np.linspace`` or ``np.arange``, or ``k / 10`` against ``k * 0.1``) shows the
 new sample, the value applied from that instant on; so does ``tf`` if it is an
@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from ..inputs import InputSignal
+from ...inputs import InputSignal
 from .segments import Schedule, SegmentState
 
 #: Output times within this many rounding units of the span's largest time (of ``dt``

@@ -6,7 +6,7 @@ equations are smooth and one ordinary integration (a *segment*) runs; at an inst
 
 - ``y``, the state ``[q, qd]`` (an impact; unchanged for a held input);
 - ``inputs``, the input values held over the next segment (a zero-order hold:
-  :mod:`~dalembert.solvers.sampled`); ``None``, the run's own inputs;
+  :mod:`~dalembert.solvers.running.sampled`); ``None``, the run's own inputs;
 - ``active``, the constraint rows the next segment enforces (a contact that opens or
   closes); ``None``, the run's own rows.
 
@@ -50,7 +50,7 @@ from .integrate import IntegrationResult, progress_bar
 
 @dataclass(frozen=True)
 class SegmentState:
-    """What a segment starts from (see :mod:`~dalembert.solvers.segments`).
+    """What a segment starts from (see :mod:`~dalembert.solvers.running.segments`).
 
     Attributes
     ----------
@@ -109,7 +109,7 @@ class Schedule:
 
 class Segment(Protocol):
     """One smooth segment, as :func:`run_segments` uses it (a
-    :class:`~dalembert.solvers.plan.SimulationPlan` is one)."""
+    :class:`~dalembert.solvers.running.plan.SimulationPlan` is one)."""
 
     def run(self) -> IntegrationResult:
         ...
@@ -147,7 +147,7 @@ class SegmentedRun:
 def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
                  t_span: tuple[float, float], y0: np.ndarray,
                  t_eval: np.ndarray | None = None, progress: bool = False) -> SegmentedRun:
-    """Run ``t_span`` segment by segment (see :mod:`~dalembert.solvers.segments`).
+    """Run ``t_span`` segment by segment (see :mod:`~dalembert.solvers.running.segments`).
 
     Parameters
     ----------
@@ -174,7 +174,7 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
     distance to 1 at each sample):
 
     >>> from scipy.integrate import RK45
-    >>> from dalembert.solvers.integrate import integrate
+    >>> from dalembert.solvers.running.integrate import integrate
     >>> class Held:
     ...     def __init__(self, a, b, start, t_eval, progress):
     ...         u = start.inputs[0]

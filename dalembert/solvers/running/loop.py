@@ -8,7 +8,7 @@ interpolant. The contract, documented on :class:`SimulationLoop` the way SciPy's
 ``OdeSolver`` documents its own, is small: :meth:`~SimulationLoop.advance` until
 :attr:`~SimulationLoop.status` is set, :meth:`~SimulationLoop.interrupt` on
 Ctrl-C, then :meth:`~SimulationLoop.result`. Which loop runs is decided once, by
-the simulation plan (:mod:`dalembert.solvers.plan`).
+the simulation plan (:mod:`dalembert.solvers.running.plan`).
 """
 
 from __future__ import annotations
@@ -19,22 +19,24 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ..errors import DalembertError
-from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
-from .careful import CarefulSteps, RetakeStep
-from .dense_output import DenseRecorder
-from .native.run import StretchRunner
-from .nonfinite import Diagnosis
-from .scipy_ivp import (
+from ...errors import DalembertError
+from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
+from ..native.run import StretchRunner
+from ..singular.careful import CarefulSteps, RetakeStep
+from ..singular.watch import Singularity, StepCollapse
+from ..steppers.dense_output import DenseRecorder
+from ..steppers.scipy_ivp import (
+    hand_over,
     last_stages,
+    last_step_size,
     restart,
     restart_second_order,
     roll_back,
     snapshot,
     step_inputs,
-    take_state,
+    step_size,
 )
-from .singular_watch import Singularity, StepCollapse
+from .nonfinite import Diagnosis
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
 
@@ -114,12 +116,12 @@ class PythonLoop(SimulationLoop):
     Before each step the solver's state, derivative and step size are checked: one
     that is not finite ends the run (a NaN step size would be retried forever, a NaN
     state spreads to every later one), with ``diagnose(t, y)`` saying which quantity
-    of the model is not finite there (:mod:`~dalembert.solvers.nonfinite`). An event
+    of the model is not finite there (:mod:`~dalembert.solvers.running.nonfinite`). An event
     function that raises or returns a value that is not finite ends the run too,
     keeping the steps before. Steps that collapse near a singular configuration of the
     constraints (``singular(t, y)`` says so, naming the rows) end the run with that
-    diagnosis (:mod:`~dalembert.solvers.singular_watch`). A step the careful model
-    rejects (:class:`~dalembert.solvers.careful.RetakeStep`: its projection jumped onto
+    diagnosis (:mod:`~dalembert.solvers.singular.watch`). A step the careful model
+    rejects (:class:`~dalembert.solvers.singular.careful.RetakeStep`: its projection jumped onto
     another branch of the constraints, or it ran too far without the nearly dependent
     ones) is taken again a quarter as long, up to ``JUMP_RETRIES`` times before the
     run stops saying so.
@@ -215,7 +217,7 @@ class PythonLoop(SimulationLoop):
                 self.solver is not self.native or not self.careful.model.careful:
             return False
         solver = self.solver
-        self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+        self.solver = self.careful.solver(solver.t, solver.y, step_size(solver))
         self.project = self.careful.model.project
         return True
 
@@ -223,9 +225,7 @@ class PythonLoop(SimulationLoop):
         """Hand the run back to its own solver after careful steps."""
         careful, native = self.solver, self.native
         self._careful_nfev += careful.nfev
-        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
-                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
-                   h_previous=careful.h_previous)
+        hand_over(careful, native, native.fun(careful.t, careful.y))
         self.solver, self.project = native, self.native_project
 
     def _step(self) -> None:
@@ -302,7 +302,7 @@ class PythonLoop(SimulationLoop):
             return self.collapse.quiet(self.n_steps)
         self.stop("failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
                   f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
-                  f"step before, the last {solver.h_previous if solver.h_previous else 0:.1e}) "
+                  f"step before, the last {last_step_size(solver) or 0:.1e}) "
                   f"{found}. The trajectory up to there is returned; a looser rtol or "
                   "another method may get through, or the mechanism may lock here")
 
@@ -458,7 +458,11 @@ class PythonLoop(SimulationLoop):
 
 
 class _EventFailed(Exception):
-    """An event function failed while its root was sought (the run is stopped)."""
+    """An event function failed while its root was sought (the run is stopped).
+
+    Internal control flow, never seen by a user: the event's value has already
+    stopped the run, saying why; this leaves SciPy's root search (``brentq``), and is
+    caught right around it."""
 
 
 def _event_name(event: Callable, k: int) -> str:
@@ -490,14 +494,14 @@ class _StepState:
 
 class StretchLoop(PythonLoop):
     """The loop in C: whole stretches of steps (step, projection, outputs at
-    ``t_eval``, restart) run by a :class:`~.native.run.StretchRunner`, returning to
+    ``t_eval``, restart) run by a :class:`~dalembert.solvers.native.run.StretchRunner`, returning to
     Python every fraction of a second; a step C cannot finish is taken the Python
     way (a step from values that are not finite among them: the Python loop then
     stops with its diagnosis). Only for a native Runge-Kutta solver with its native
     projection, no events and no dense output (the plan checks). Same steps and
     states as :class:`PythonLoop` (tested). Near a singular configuration (measured
     after every stretch) the steps are taken the Python way, carefully (``careful``,
-    :mod:`~dalembert.solvers.careful`), until the state is clear of it.
+    :mod:`~dalembert.solvers.singular.careful`), until the state is clear of it.
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,

@@ -168,7 +168,7 @@ def test_stiff_mechanism_with_implicit_methods(method, rtol, atol, tol):
 def test_finite_difference_jacobian_step_stays_bounded():
     # A state component that the right-hand side ignores made SciPy's num_jac grow its
     # step until overflow (RuntimeWarning, then BDF crawled); ours keeps a fixed step.
-    from dalembert.solvers.integrate import finite_difference_jacobian
+    from dalembert.solvers.running.integrate import finite_difference_jacobian
 
     jac = finite_difference_jacobian(lambda t_, y: np.array([y[1], -y[0], 0.0]))
     for _ in range(500):

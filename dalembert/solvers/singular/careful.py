@@ -7,7 +7,7 @@ much, the step size collapses, and the motion may leave its branch. While
 *careful*, the combinations of rows (scaled to unit length) whose singular values are
 below ``TRUNCATE`` of the largest, with the cluster they fall in (:func:`cluster`),
 are left out of the KKT solve and of the projections: the rank-revealing,
-minimum-norm treatment of dependent rows, for a moment (:mod:`.truncated_kkt`).
+minimum-norm treatment of dependent rows, for a moment (:mod:`~dalembert.solvers.kkt.truncated`).
 They are enforced again as soon as they are independent enough, the state projected
 onto them at once (velocities in the kinetic-energy metric, so that their return
 changes the energy to second order only).
@@ -33,12 +33,12 @@ from typing import Protocol
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ..codegen.compiled import NumericModel, SparsePattern
-from ..errors import SingularSystemError
-from ..numerics.gram import UnitGram
-from ..numerics.singular import GAP, JUMP, NEAR, SCREEN, TRUNCATE, named
-from .sparse_kkt import matvec
-from .truncated_kkt import TruncatedKKT
+from ...codegen.compiled import NumericModel, SparsePattern
+from ...errors import SingularSystemError
+from ...numerics.gram import UnitGram
+from ...numerics.singular import GAP, JUMP, NEAR, SCREEN, TRUNCATE, named
+from ..kkt.sparse import matvec
+from ..kkt.truncated import TruncatedKKT
 
 
 class Outputs(Protocol):
@@ -62,7 +62,11 @@ POSITION_RTOL = 1e-14
 class RetakeStep(Exception):
     """A step the loop must take again, shorter: its projection moved its end much
     further than its own error (a jump onto another branch of the constraints), or it
-    left combinations of rows out beyond the singular configuration's reach."""
+    left combinations of rows out beyond the singular configuration's reach.
+
+    Internal control flow, never seen by a user: raised by the careful projection and
+    caught by the loops (:mod:`~dalembert.solvers.running.loop`), which retake the step
+    a quarter as long, and stop the run with a warning when it keeps jumping."""
 
 
 @dataclass(frozen=True)

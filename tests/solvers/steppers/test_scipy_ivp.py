@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import BDF, DOP853, RK23, RK45, Radau
 
-from dalembert.solvers import scipy_ivp
+from dalembert.solvers.steppers import scipy_ivp
 
 
 def decay(t, y):

@@ -1,6 +1,6 @@
 """Watching a run for steps that collapse near a singular configuration.
 
-Both loops (:mod:`~dalembert.solvers.loop`: step by step in Python, or stretches of
+Both loops (:mod:`~dalembert.solvers.running.loop`: step by step in Python, or stretches of
 steps in C) note their progress after every unit of work in a :class:`StepCollapse`,
 with the thresholds of :mod:`dalembert.numerics.singular`. When the steps have
 collapsed, the loop asks the function :func:`singular_diagnosis` makes whether the
@@ -16,8 +16,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..codegen.compiled import NumericModel
-from ..numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, NEAR, named, near_dependent_rows
+from ...codegen.compiled import NumericModel
+from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, NEAR, named, near_dependent_rows
 
 #: ``singular(t, y)``: a sentence on the singular configuration at ``(t, y)``, or ``""``.
 Singularity = Callable[[float, np.ndarray], str]

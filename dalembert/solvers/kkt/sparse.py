@@ -26,11 +26,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..codegen.compiled import SparsePattern
-from ..errors import SingularSystemError
-from ..numerics.band import bandwidth as _bandwidth  # noqa: F401 (tests measure with it)
-from ..numerics.conditioning import condition_1norm
-from ..numerics.rank import min_norm_multipliers
+from ...codegen.compiled import SparsePattern
+from ...errors import SingularSystemError
+from ...numerics.band import bandwidth as _bandwidth  # noqa: F401 (tests measure with it)
+from ...numerics.conditioning import condition_1norm
+from ...numerics.rank import min_norm_multipliers
+from .dense import DROPPED_ROW_RTOL, _least_squares_kkt
 from .factorization import (  # noqa: F401 (BandLU, band_layout and the limits: here too)
     BAND_MAX,
     DENSE_MAX,
@@ -46,7 +47,6 @@ from .factorization import (  # noqa: F401 (BandLU, band_layout and the limits: 
     kkt_factorization,
     restricted_pattern,
 )
-from .kkt import DROPPED_ROW_RTOL, _least_squares_kkt
 
 _BACKENDS = {backend.value: backend for backend in Backend}
 
@@ -65,7 +65,7 @@ class KKTSolver:
     """Solves ``M qdd = f + A^T lambda``, ``A qdd = c`` from pattern values.
 
     ``kept`` (independent rows, see :func:`~dalembert.numerics.rank.constraint_rank`)
-    solves the reduced system of those rows, as :func:`~dalembert.solvers.kkt.solve_kkt`
+    solves the reduced system of those rows, as :func:`~dalembert.solvers.kkt.dense.solve_kkt`
     does; ``dense`` forces (``True``) or forbids (``False``) the dense path. The
     factorizations are :mod:`.factorization`'s, of the pattern of the solved rows
     (``method`` names the backend, chosen once per pattern).
@@ -131,7 +131,7 @@ class KKTSolver:
         return kkt.solve_stacked
 
     def _solve(self, Mv, f, Av, c, multipliers: bool = True):
-        """``(qdd, lambda or None, A^T lambda)``; see :func:`.kkt._redundant_solve`.
+        """``(qdd, lambda or None, A^T lambda)``; see :func:`.dense._redundant_solve`.
         Without ``multipliers`` the full-rank path leaves ``lambda`` out (``None``)."""
         n, p = self.pattern.n, self.pattern
         rhs = np.concatenate([f, c if self.kept is None else c[self.kept]])
@@ -171,7 +171,7 @@ def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:
     """Estimated 1-norm condition number of the KKT matrix (``inf`` if it cannot be
     factored): LAPACK's estimate from the band LU when the solver uses one, else from
     the sparse factorization and a few solves (:func:`scipy.sparse.linalg.onenormest`).
-    A cheap screen before the dense SVD diagnosis (:func:`.kkt.check_kkt`). The 2-norm
+    A cheap screen before the dense SVD diagnosis (:func:`.dense.check_kkt`). The 2-norm
     condition number is at most ``size`` times larger.
 
     >>> from dalembert.codegen.compiled import SparsePattern

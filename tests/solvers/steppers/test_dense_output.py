@@ -17,7 +17,7 @@ import pytest
 from pendulum_case import Q0
 from scipy.integrate import DOP853, RK23, RK45, Radau
 
-from dalembert.solvers.dense_output import DenseRecorder
+from dalembert.solvers.steppers.dense_output import DenseRecorder
 
 
 def oscillator(t, y):

@@ -2,7 +2,8 @@
 
 Near a singular configuration some combinations ``V`` of the (unit-length) rows of
 ``A`` are nearly dependent (:mod:`dalembert.numerics.gram`). The careful steps
-(:mod:`.careful`) enforce every other combination and leave those out: with
+(:mod:`~dalembert.solvers.singular.careful`) enforce every other combination and
+leave those out: with
 ``P = I - V V^T``,
 
     M x = f + A^T lambda,     P (A x - c) = 0,     V^T lambda = 0,
@@ -35,9 +36,9 @@ from collections.abc import Callable
 import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 
-from ..codegen.compiled import SparsePattern
+from ...codegen.compiled import SparsePattern
 from .factorization import BandLU
-from .sparse_kkt import matvec
+from .sparse import matvec
 
 #: The regularization of the KKT matrix, relative to the largest eigenvalue of
 #: ``A M^-1 A^T`` (rows scaled to unit length; ``M`` by its mean diagonal).

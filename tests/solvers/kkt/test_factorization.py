@@ -10,7 +10,7 @@ from factorization_cases import MODELS, case, dense_reference, relative, right_h
 
 from dalembert import SingularSystemError
 from dalembert.codegen.compiled import SparsePattern
-from dalembert.solvers.factorization import (
+from dalembert.solvers.kkt.factorization import (
     BAND_MAX,
     Backend,
     active_rows,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dalembert.codegen.compiled import SparsePattern
-from dalembert.solvers.truncated_kkt import TruncatedKKT
+from dalembert.solvers.kkt.truncated import TruncatedKKT
 
 
 def nearly_dependent_system(n: int, m: int, k: int, gap: float, seed: int):

@@ -1,6 +1,6 @@
 """Saying what is not finite at a state of a simulation, and where it likely comes from.
 
-A NaN or an infinity in a step ends the run (:mod:`~dalembert.solvers.loop`): a
+A NaN or an infinity in a step ends the run (:mod:`~dalembert.solvers.running.loop`): a
 step size that is NaN never shrinks below the smallest step, so the step would be
 retried forever, and a state that is not finite makes every later one so. The
 loops then call the function :func:`nonfinite_diagnosis` makes, which looks at the
@@ -17,8 +17,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..codegen.compiled import NumericModel
-from ..errors import DalembertError
+from ...codegen.compiled import NumericModel
+from ...errors import DalembertError
 
 #: ``diagnose(t, y)``: a sentence on what is not finite at ``(t, y)``, or ``""``.
 Diagnosis = Callable[[float, np.ndarray], str]

@@ -1,4 +1,4 @@
-"""The segment driver's contract (solvers/segments.py) on small exact cases.
+"""The segment driver's contract (solvers/running/segments.py) on small exact cases.
 
 References: closed forms (a ball falling and bouncing, its impacts at known instants; a
 ramp), the schedule's own instants and the states each segment was given.
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy.integrate import RK45
 
-from dalembert.solvers.integrate import integrate
-from dalembert.solvers.segments import Schedule, SegmentState, run_segments
+from dalembert.solvers.running.integrate import integrate
+from dalembert.solvers.running.segments import Schedule, SegmentState, run_segments
 
 G, E, H = 9.81, 0.5, 1.0  # gravity, restitution, drop height
 FIRST = np.sqrt(2 * H / G)  # the first impact; each bounce after lasts E times the one before

@@ -50,10 +50,10 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 from scipy.linalg import lapack
 
-from ..codegen.compiled import SparsePattern
-from ..errors import SingularSystemError
-from ..numerics.band import band_order
-from .kkt import _dense_solve, kkt_matrix
+from ...codegen.compiled import SparsePattern
+from ...errors import SingularSystemError
+from ...numerics.band import band_order
+from .dense import _dense_solve, kkt_matrix
 
 #: Largest KKT size ``n + m`` solved dense when the banded path does not apply.
 DENSE_MAX = 60
@@ -416,7 +416,7 @@ def choose_backend(pattern: SparsePattern, native: bool = False) -> Backend:
 
 
 def _schur_applies(pattern: SparsePattern) -> bool:
-    from .native.factorization import schur_applies  # the C layer builds on this one
+    from ..native.factorization import schur_applies  # the C layer builds on this one
     return schur_applies(pattern)
 
 
@@ -449,7 +449,7 @@ def kkt_factorization(pattern: SparsePattern, backend: Backend | None = None
     if backend is None:
         backend = choose_backend(pattern)
     if backend is Backend.SCHUR:
-        from .native.factorization import SchurFactorization
+        from ..native.factorization import SchurFactorization
         return SchurFactorization(pattern)
     return _PYTHON[backend](pattern)
 

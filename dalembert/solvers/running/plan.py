@@ -7,7 +7,7 @@ bound numeric model and the consistent initial state, and decides once
   and the projection in C) where it applies and ``backend`` allows, else in Python,
   with the reason the C loop does not apply;
 - the solver class: SciPy's method, under the chosen step-size controller
-  (:mod:`.step_control`), stepping in C where the loop is;
+  (:mod:`~dalembert.solvers.steppers.scipy_ivp`), stepping in C where the loop is;
 - whether whole stretches of steps run in C (:class:`~.loop.StretchLoop`): with
   the C loop's projection and neither events nor dense output;
 - the right-hand side, the projection after each step and the trajectory's outputs.
@@ -30,27 +30,27 @@ from typing import Literal
 import numpy as np
 from scipy.integrate import BDF, OdeSolver, Radau
 
-from ..codegen.compiled import NumericModel
-from ..inputs import InputSignal
-from ..options import Baumgarte, Projection, SimulationOptions
-from .careful import CarefulModel, CarefulSteps, Outputs
-from .dynamics import first_order_rhs
-from .initialization import InitializationReport
+from ...codegen.compiled import NumericModel
+from ...inputs import InputSignal
+from ...options import Baumgarte, Projection, SimulationOptions
+from ..dynamics import first_order_rhs
+from ..initialization import InitializationReport
+from ..native import NATIVE_METHODS, NotApplicable, native_solver
+from ..outputs import evaluate_outputs
+from ..projection import StepProjector
+from ..singular.careful import CarefulModel, CarefulSteps, Outputs
+from ..singular.watch import Singularity, singular_diagnosis
+from ..state import accelerations_at
+from ..steppers.scipy_ivp import ControlledSteps, controlled_class
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
-from .native import NATIVE_METHODS, NotApplicable, native_solver
 from .nonfinite import Diagnosis, nonfinite_diagnosis
-from .outputs import evaluate_outputs
-from .projection import StepProjector
-from .singular_watch import Singularity, singular_diagnosis
-from .state import accelerations_at
-from .step_control import ControlledSteps, controlled_class
 
 Loop = Literal["c", "python"]
 
 
 @dataclass(frozen=True)
 class SimulationPlan:
-    """How one simulation runs (see :mod:`dalembert.solvers.plan`).
+    """How one simulation runs (see :mod:`dalembert.solvers.running.plan`).
 
     Attributes
     ----------
@@ -78,13 +78,14 @@ class SimulationPlan:
         values first).
     diagnose
         ``diagnose(t, y)``: what is not finite at a state, for the message of a run
-        that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
+        that meets a NaN or an infinity (:mod:`~dalembert.solvers.running.nonfinite`).
     singular
         ``singular(t, y)``: the singular configuration of the constraints at a state,
         for the message of a run whose steps collapse there
-        (:mod:`~dalembert.solvers.singular_watch`).
+        (:mod:`~dalembert.solvers.singular.watch`).
     careful
-        The careful steps near a singular configuration (:mod:`~dalembert.solvers.careful`):
+        The careful steps near a singular configuration
+        (:mod:`~dalembert.solvers.singular.careful`):
         in the Python loop, its ``rhs`` and ``project``; the C loop takes them the Python
         way. ``None`` without them.
     """
@@ -241,7 +242,7 @@ def _careful_solver(cls: type[OdeSolver], rhs: Callable, t_bound: float,
                     options: dict[str, object], t: float, y: np.ndarray,
                     h_abs: float) -> OdeSolver:
     """A Python solver of the run's method and tolerances at ``(t, y)``, its first
-    step ``h_abs`` (the careful steps of the C loop, :mod:`.careful`)."""
+    step ``h_abs`` (the careful steps of the C loop, :mod:`~dalembert.solvers.singular.careful`)."""
     first = min(h_abs, abs(t_bound - t)) if h_abs > 0 else None
     return cls(rhs, t, y, t_bound, **{**options, "first_step": first})
 

@@ -24,9 +24,9 @@ import pytest
 from pendulum_case import PERIOD, Q0
 
 from dalembert import IntegrationWarning
-from dalembert.solvers import loop as loop_module
-from dalembert.solvers.dense_output import DenseRecorder
-from dalembert.solvers.integrate import integrate
+from dalembert.solvers.running import loop as loop_module
+from dalembert.solvers.running.integrate import integrate
+from dalembert.solvers.steppers.dense_output import DenseRecorder
 
 BACKENDS = ["c", "python"]
 

@@ -29,8 +29,8 @@ from dalembert.errors import (
 )
 from dalembert.examples.n_four_bar import build_multibody
 from dalembert.multibody import Ground, Multibody, PlanarBody, Revolute
-from dalembert.solvers.careful import RetakeStep
-from dalembert.solvers.integrate import finite_difference_jacobian, integrate
+from dalembert.solvers.running.integrate import finite_difference_jacobian, integrate
+from dalembert.solvers.singular.careful import RetakeStep
 
 G = 9.81
 

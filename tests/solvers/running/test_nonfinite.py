@@ -21,7 +21,7 @@ import sympy as sp
 from dalembert import Holonomic, InitialConditionError, IntegrationWarning, System, coordinates
 from dalembert.options import Baumgarte, simulation_options
 from dalembert.solvers.native import run as native_run
-from dalembert.solvers.plan import plan_simulation
+from dalembert.solvers.running.plan import plan_simulation
 
 x, y = coordinates("x y")
 BACKENDS = ["c", "python"]

@@ -27,8 +27,8 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.linalg
 
-from ..errors import SingularSystemError
-from ..numerics.rank import RANK_RTOL, min_norm_multipliers
+from ...errors import SingularSystemError
+from ...numerics.rank import RANK_RTOL, min_norm_multipliers
 
 #: A dropped (dependent) row may miss ``A qdd = c`` by this much (relative) before the
 #: reduced solve is distrusted and the full least-squares KKT system is solved instead.

@@ -2,7 +2,7 @@
 
 :func:`integrate` takes ``solve_ivp``'s arguments (``t_span``, ``t_eval``,
 ``dense_output``, ``events``, a solver class and its options) plus a projector,
-and runs one of the loops of :mod:`~dalembert.solvers.loop` under a progress bar
+and runs one of the loops of :mod:`~dalembert.solvers.running.loop` under a progress bar
 and Ctrl-C: a failure or an interruption ends the run but keeps every step
 computed so far (the start alone if it comes before the first step: the solver's
 start evaluates the model). It checks nothing: its arguments come from
@@ -16,12 +16,12 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ..errors import DalembertError, InputError
-from .careful import CarefulSteps
+from ...errors import DalembertError, InputError
+from ..singular.careful import CarefulSteps
+from ..singular.watch import Singularity
+from ..steppers.scipy_ivp import CONTROLLED, ControlledSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
-from .singular_watch import Singularity
-from .step_control import CONTROLLED, ControlledSteps
 
 __all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate", "progress_bar"]
 
@@ -60,12 +60,13 @@ def integrate(
         native solver with its native projection, no events, no dense output.
     diagnose
         ``diagnose(t, y)``: what is not finite at a state, for the message of a run
-        that meets a NaN or an infinity (:mod:`~dalembert.solvers.nonfinite`).
+        that meets a NaN or an infinity (:mod:`~dalembert.solvers.running.nonfinite`).
     singular
         ``singular(t, y)``: the singular configuration at a state, or ``""``; steps
-        that collapse there end the run (:mod:`~dalembert.solvers.singular_watch`).
+        that collapse there end the run (:mod:`~dalembert.solvers.singular.watch`).
     careful
-        The careful steps near a singular configuration (:mod:`~dalembert.solvers.careful`):
+        The careful steps near a singular configuration
+        (:mod:`~dalembert.solvers.singular.careful`):
         with ``stretches``, how to take them the Python way.
     solver_options
         Passed to ``method``.

@@ -8,7 +8,7 @@ import sympy as sp
 
 from dalembert import Holonomic, System, coordinates
 from dalembert.numerics.rank import constraint_rank
-from dalembert.solvers.kkt import kkt_accelerations, solve_kkt
+from dalembert.solvers.kkt.dense import kkt_accelerations, solve_kkt
 
 M = np.diag([1.0, 2.0, 3.0])
 F = np.array([1.0, -2.0, 0.5])
