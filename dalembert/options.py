@@ -27,10 +27,9 @@ import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
 from .errors import user_stacklevel
 from .inputs import InputSignal, input_signal
@@ -50,10 +49,12 @@ from .rules import (
     checked_keywords,
 )
 
-#: SciPy's solvers by the names ``solve_ivp`` knows them by.
-METHODS: dict[str, type[OdeSolver]] = {
-    "RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA,
-}
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolver
+
+#: SciPy's solvers by the names ``solve_ivp`` knows them by (``scipy.integrate`` is
+#: imported when a simulation is set up, not with dalembert: it is a large import).
+METHODS: tuple[str, ...] = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 Backend = Literal["auto", "c", "python"]
 StepController = Literal["PI", "scipy"]
@@ -127,7 +128,7 @@ class SimulationOptions:
     """Every option of one simulation, checked (see :func:`simulation_options`)."""
 
     t_span: tuple[float, float]
-    method: type[OdeSolver] = DOP853
+    method: type[OdeSolver]
     step: StepControl = field(default_factory=StepControl)
     stabilization: Stabilization = field(default_factory=Projection)
     output: Output = field(default_factory=Output)
@@ -155,7 +156,7 @@ INPUT_VALUES: list[Rule] = [CheckedWhereUsed("input values (see dalembert.inputs
 #: Every option of ``simulate`` that makes its :class:`SimulationOptions` (but the
 #: inputs, whose form depends on the model) and the forms it may take.
 SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
-    "method": [OneOf(tuple(METHODS)), SolverClass()],
+    "method": [OneOf(METHODS), SolverClass()],
     "rtol": [Tolerance()],
     "atol": [Tolerance()],
     "step_control": [OneOf(STEP_CONTROLS)],
@@ -279,8 +280,10 @@ def simulation_options(
     if first_step is not None and first_step > abs(span[1] - span[0]):
         raise ValueError(f"first_step={first_step!r} is longer than t_span {span}; give a "
                          "first step inside the span, or leave it None")
-    solver = METHODS[method] if isinstance(method, str) else method
-    if stabilization == "projection" and solver is LSODA:
+    import scipy.integrate  # here, not when dalembert is imported: a large import
+
+    solver = getattr(scipy.integrate, method) if isinstance(method, str) else method
+    if stabilization == "projection" and solver is scipy.integrate.LSODA:
         raise ValueError(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
             "stiff problems, or stabilization='baumgarte'"

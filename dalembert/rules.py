@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
 
 import numpy as np
-from scipy.integrate import OdeSolver
 
 #: The accepted forms of each keyword of one function.
 Table = Mapping[str, Sequence["Rule"]]
@@ -128,6 +127,8 @@ class SolverClass:
     description: str = "a scipy.integrate.OdeSolver subclass"
 
     def accepts(self, value: object) -> bool:
+        from scipy.integrate import OdeSolver  # not at import: a large import
+
         return isinstance(value, type) and issubclass(value, OdeSolver)
 
 

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import sympy as sp
-from scipy.integrate import OdeSolver
 
 from .codegen.compiled import CompiledEquations, NumericModel
 from .definition import Definition, SymbolicDefinition
@@ -51,15 +50,16 @@ from .options import (
 )
 from .rules import NONE, CheckedWhereUsed, FiniteNumber, Rule, checked_keywords, unchecked
 from .solvers.initialization import InitializationReport, consistent_state
-from .solvers.native.library import prepare_runtime
-from .solvers.running.integrate import IntegrationResult
-from .solvers.running.plan import SimulationPlan, plan_simulation
-from .solvers.running.sampled import sampled_schedule
-from .solvers.running.segments import Schedule, SegmentState, run_segments
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
-if TYPE_CHECKING:  # statics is imported on first use: it pulls in scipy.optimize
+if TYPE_CHECKING:  # imported on first use: statics pulls in scipy.optimize, the running
+    # layer scipy.integrate (large imports, not made by ``import dalembert``)
+    from scipy.integrate import OdeSolver
+
+    from .solvers.running.integrate import IntegrationResult
+    from .solvers.running.plan import SimulationPlan
+    from .solvers.running.segments import SegmentState
     from .statics import Equilibrium, Linearization
 
 #: A piece of the model (energies, constraints, forces...): build_model checks each.
@@ -352,6 +352,8 @@ class System:
     @cached_property
     def compiled(self) -> CompiledEquations:
         """Generated numeric functions (made on first use, then reused)."""
+        from .solvers.native.library import prepare_runtime
+
         prepare_runtime()  # the C loop compiles beside the derivation
         return self._definition.compile()
 
@@ -816,6 +818,8 @@ class System:
         if report.dependent_constraints or (report.rank is not None and report.rank.near):
             warnings.warn(str(report.rank), RedundantConstraintsWarning,
                           stacklevel=user_stacklevel())
+        from .solvers.running.plan import plan_simulation
+
         return plan_simulation(num, report, options)
 
     def run(self, plan: SimulationPlan, *, dynamics: bool = True) -> Trajectory:
@@ -841,6 +845,9 @@ class System:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
         constraint forces may be left uncomputed (NaN), for a caller that keeps none of
         them."""
+        from .solvers.running.sampled import sampled_schedule
+        from .solvers.running.segments import Schedule, run_segments
+
         signal, options = plan.options.inputs, plan.options
         schedule = Schedule.none()
         if signal is not None and signal.sample_time is not None:
