@@ -23,7 +23,7 @@ from ...errors import DalembertError
 from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
 from ..native.run import StretchRunner
 from ..singular.careful import CarefulSteps, RetakeStep
-from ..singular.watch import Singularity, StepCollapse
+from ..singular.watch import Runaway, Singularity, StepCollapse
 from ..steppers.dense_output import DenseRecorder
 from ..steppers.scipy_ivp import (
     hand_over,
@@ -131,7 +131,8 @@ class PythonLoop(SimulationLoop):
                  events: Sequence[Callable] = (), project: Projector | None = None,
                  dense_output: bool = False, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
-                 careful: CarefulSteps | None = None) -> None:
+                 careful: CarefulSteps | None = None,
+                 runaway: Runaway | None = None) -> None:
         self.solver = solver
         self.careful = careful
         #: The run's own solver and projection (the careful steps swap in others).
@@ -141,6 +142,7 @@ class PythonLoop(SimulationLoop):
         self.project = project
         self.diagnose = diagnose
         self.singular = singular
+        self.runaway = runaway
         self.collapse = StepCollapse(solver.t)
         self.events = list(events or ())
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
@@ -292,19 +294,32 @@ class PythonLoop(SimulationLoop):
                   "; the trajectory up to there is returned")
 
     def _watch_steps(self) -> None:
-        """Stop if the steps have collapsed near a singular configuration (after a
-        complete unit of work: the trajectory so far is kept)."""
-        if self.singular is None or not self.collapse.note(self.t_reached, self.n_steps):
+        """Stop if the steps have collapsed near a singular configuration, or keep
+        shrinking toward a time they would take hours to reach (after a complete unit
+        of work: the trajectory so far is kept)."""
+        if not self.collapse.note(self.t_reached, self.n_steps):
             return
         solver = self.solver
-        found = self.singular(solver.t, solver.y)
-        if not found:
+        found = self.singular(solver.t, solver.y) if self.singular is not None else ""
+        if found:
+            return self.stop(
+                "failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
+                f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
+                f"step before, the last {last_step_size(solver) or 0:.1e}) "
+                f"{found}. The trajectory up to there is returned; a looser rtol or "
+                "another method may get through, or the mechanism may lock here")
+        remaining = self.collapse.runaway(solver.t, solver.t_bound)
+        if remaining is None:
             return self.collapse.quiet(self.n_steps)
-        self.stop("failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
-                  f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
-                  f"step before, the last {last_step_size(solver) or 0:.1e}) "
-                  f"{found}. The trajectory up to there is returned; a looser rtol or "
-                  "another method may get through, or the mechanism may lock here")
+        growing = self.runaway(solver.t, solver.y) if self.runaway is not None else ""
+        self.stop(
+            "failed", f"integration stopped at t={solver.t:.6g}: the steps keep shrinking "
+            f"(the last {COLLAPSE_STEPS} or more averaged {self.collapse.window_step:.1e}, "
+            f"each window's less than the one before): at that size the rest of the run "
+            f"would take {remaining:.1e} steps. Something in the model grows without bound "
+            f"as the time nears a limit: " + (f"{growing}" if growing else
+                                              "a prescribed motion, an input or a force") +
+            ". The trajectory up to there is returned")
 
     def _failed(self, message: str) -> None:
         """Stop with ``message``, or with what is not finite at the step's start."""
@@ -507,8 +522,10 @@ class StretchLoop(PythonLoop):
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
                  project: Projector, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
-                 careful: CarefulSteps | None = None) -> None:
-        super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful)
+                 careful: CarefulSteps | None = None,
+                 runaway: Runaway | None = None) -> None:
+        super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful,
+                         runaway)
         self.runner = StretchRunner(solver, self.t_eval)
 
     def advance(self) -> None:
