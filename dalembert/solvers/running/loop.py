@@ -318,8 +318,7 @@ class PythonLoop(SimulationLoop):
             f"each window's less than the one before): at that size the rest of the run "
             f"would take {remaining:.1e} steps. Something in the model grows without bound "
             f"as the time nears a limit: " + (f"{growing}" if growing else
-                                              "a prescribed motion, an input or a force") +
-            ". The trajectory up to there is returned")
+                                              "a prescribed motion, an input or a force"))
 
     def _failed(self, message: str) -> None:
         """Stop with ``message``, or with what is not finite at the step's start."""
