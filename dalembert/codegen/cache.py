@@ -16,8 +16,10 @@ key (the caller's hash of everything the library depends on)::
 - Before a library is loaded, it must be a regular file of this user, not writable
   by others, with the size and SHA-256 of its digest record, written for this key.
   Anything else (empty, truncated, garbage, another entry's library, a symbolic
-  link) is never opened as a library: it is rebuilt, with a
-  :class:`~dalembert.errors.BadCacheEntryWarning` saying what was found.
+  link, a folder) is never opened as a library: it is rebuilt, with a
+  :class:`~dalembert.errors.BadCacheEntryWarning` saying what was found. A folder
+  standing where a file of the entry goes is removed only if it is this user's
+  (the cache's folder is private); another user's is named in the error.
 - A library just built is first loaded by a fresh interpreter in a child process,
   which calls its probe function (:data:`PROBE_SOURCE`): a library that would crash
   the loader fails the build there, not in the caller. Only then is its digest
@@ -371,6 +373,8 @@ class _Entry:
             record = work / "record"
             _write_synced(record, json.dumps({"key": self.key, "size": len(data),
                                               "sha256": hashlib.sha256(data).hexdigest()}))
+            for path in (self.source, self.record, self.library):
+                self._remove_folder_at(path)
             if source.exists():
                 os.chmod(source, 0o600)
                 os.replace(source, self.source)
@@ -381,6 +385,26 @@ class _Entry:
             raise _unwritable(self.folder, exc) from exc
         finally:
             shutil.rmtree(work, ignore_errors=True)
+
+    def _remove_folder_at(self, path: Path) -> None:
+        """Remove a folder standing where a file of the entry goes.
+
+        A rename of a file onto a folder fails, so the entry would fail to build on
+        every run. Only a folder of this user directly in the cache's folder (checked
+        private) is removed: anything it holds was put there by this user, in a
+        folder nobody else can write. Another user's folder is named, not touched.
+        """
+        try:
+            info = path.lstat()  # a link is replaced by the rename, never followed
+        except FileNotFoundError:
+            return
+        if not stat.S_ISDIR(info.st_mode):
+            return
+        if path.parent != self.folder or info.st_uid != os.geteuid():
+            raise CompileError(
+                f"{path} is a folder of uid {info.st_uid}, not yours: it was left in place; "
+                "remove it or set DALEMBERT_CACHE_DIR to a folder of your own")
+        shutil.rmtree(path)
 
 
 def _open_own_file(path: Path) -> int:
@@ -400,7 +424,9 @@ def _open_own_file(path: Path) -> int:
         raise _Untrusted(f"cannot be read ({exc.strerror})") from exc
     info = os.fstat(fd)
     why = None
-    if not stat.S_ISREG(info.st_mode):
+    if stat.S_ISDIR(info.st_mode):
+        why = "is a folder, not a file"
+    elif not stat.S_ISREG(info.st_mode):
         why = "is not a regular file"
     elif info.st_uid != os.geteuid():
         why = f"belongs to uid {info.st_uid}, not to you (uid {os.geteuid()})"

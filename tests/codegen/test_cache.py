@@ -713,3 +713,46 @@ def test_an_unavailable_runtime_is_said_once_with_its_cause(forks, root):
     assert message.startswith("the C simulation loop is unavailable, the Python loop runs "
                               "instead (slower): ")
     assert "a runtime that does not compile" in message
+
+
+# -- a folder where an entry's file goes --------------------------------------------------------
+@pytest.mark.parametrize("suffix", ["so", "sha256", "c"])
+def test_a_folder_in_place_of_an_entry_file_is_removed_and_the_entry_rebuilt(forks, root,
+                                                                             suffix):
+    """A folder of this user inside the cache, where a file of the entry goes, with a
+    file in it: a rename onto it would fail on every run, so it is removed. (The
+    source is not part of the check: with it, the library is damaged too.)"""
+    isolated(forks, load_seven, str(root))
+    files = entry(root)
+    files[suffix].unlink()
+    files[suffix].mkdir()
+    (files[suffix] / "inside").write_text("left here")
+    if suffix == "c":
+        replace_bytes(files["so"], b"")
+    result = isolated(forks, load_seven, str(root))
+    assert result["value"] == 7
+    assert [category for category, _ in result["warnings"]] == ["BadCacheEntryWarning"]
+    message = result["warnings"][0][1]
+    found = {"so": "is a folder, not a file", "sha256": "a folder, not a file",
+             "c": "is empty"}[suffix]
+    assert message.startswith(f"the cached library {files['so']} ") and found in message
+    assert message.endswith("; it was not loaded but rebuilt")
+    assert_valid(files)
+    assert isolated(forks, load_seven, str(root))["warnings"] == []  # repaired for good
+
+
+def test_another_users_folder_in_place_of_the_library_is_named_not_removed(forks, root):
+    if not IS_ROOT:
+        pytest.skip("giving a folder to another user needs root")
+    isolated(forks, load_seven, str(root))
+    files = entry(root)
+    files["so"].unlink()
+    files["so"].mkdir()
+    os.chown(files["so"], NOBODY, NOBODY)
+    kind, message = Child(forks, load_seven, str(root)).result()
+    assert kind == "raised"
+    assert message.startswith(f"CompileError: the cached library {files['so']} is a folder, "
+                              "not a file and cannot be rebuilt: ")
+    assert (f"{files['so']} is a folder of uid {NOBODY}, not yours: it was left in place; "
+            "remove it or set DALEMBERT_CACHE_DIR to a folder of your own") in message
+    assert files["so"].is_dir()
