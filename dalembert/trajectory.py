@@ -258,9 +258,11 @@ class Trajectory:
     def load(cls, path: str | os.PathLike, *, max_bytes: int | None = None) -> Trajectory:
         """Read a trajectory written by :meth:`save` (see there for an example).
 
-        The file is not trusted: nothing in it is unpickled, its declared sizes are
-        bounded before anything is decompressed, and its metadata and array shapes
-        are checked (:mod:`dalembert.trajectory_file`).
+        The file is not trusted: a path that is not a regular file (a FIFO) is
+        refused without waiting on it, the number of members and their declared
+        sizes are bounded before anything is decompressed, nothing in it is
+        unpickled, and its metadata and array shapes are checked
+        (:mod:`dalembert.trajectory_file`).
 
         Parameters
         ----------
@@ -275,8 +277,11 @@ class Trajectory:
         Raises
         ------
         TrajectoryFileError
-            The file is not a trajectory file, would take more than ``max_bytes``,
-            or holds inconsistent data (the message names the member or field).
+            The file is not a regular file or not a trajectory file, would take
+            more than ``max_bytes``, or holds inconsistent data (the message names
+            the member or field).
+        FileNotFoundError, PermissionError
+            The file is not there or cannot be read.
         """
         return cls(**trajectory_file.read(Path(path), max_bytes))
 

@@ -10,7 +10,10 @@ synced, then renamed over the target: the file appears whole or not at all, and 
 save killed midway leaves the old file as it was. The temporary file of a killed
 save is removed by a later save to the same path.
 
-Reading trusts nothing in the file: members other than those above are refused;
+Reading trusts nothing in the file: a path that is not a regular file (a FIFO, a
+folder) is refused before anything is read from it; an archive of more than
+:data:`MAX_MEMBERS` members is refused from the end record of its zip directory,
+before the directory is parsed; members other than those above are refused;
 before anything is decompressed, the sizes the archive declares must add up to at
 most ``max_bytes`` (by default :data:`MAX_EXPANSION` times the file's size, at
 least :data:`MIN_LIMIT`: ``save`` does not compress, so a file written by it
@@ -29,12 +32,13 @@ import math
 import os
 import re
 import stat
+import struct
 import tempfile
 import time
 import zipfile
 from contextlib import suppress
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -65,6 +69,9 @@ MIN_LIMIT = 64 * 2**20
 #: A save's temporary file older than this (seconds) and not locked was left by a
 #: killed save.
 ABANDONED_AFTER = 60.0
+#: The most members a trajectory file may have: its arrays and two per event
+#: function (4 990 of them). Checked from the zip directory before it is parsed.
+MAX_MEMBERS = 10_000
 
 _MEMBER = re.compile(rf"(meta|{'|'.join((*ARRAYS, *OPTIONAL_ARRAYS))}|[ty]_events_\d+)\.npy")
 #: What reading a damaged, encrypted or oddly compressed member raises.
@@ -238,30 +245,99 @@ it has no 'meta' member (Trajectory.save writes one)
 
 def _read_members(path: Path, max_bytes: int | None) -> dict[str, np.ndarray]:
     """Every member of the archive, read only once its declared sizes are within bounds."""
+    with _open_regular(path) as fh:
+        size = os.fstat(fh.fileno()).st_size
+        _check_member_count(fh, size, path)
+        try:
+            archive = zipfile.ZipFile(fh)
+        except (zipfile.BadZipFile, NotImplementedError, ValueError, EOFError) as exc:
+            raise TrajectoryFileError(f"{path} is not a trajectory file: it is not an .npz "
+                                      f"archive (Trajectory.save writes those): {exc}") from exc
+        with archive:
+            return _read_archive(archive, path, size, max_bytes)
+
+
+def _read_archive(archive: zipfile.ZipFile, path: Path, size: int,
+                  max_bytes: int | None) -> dict[str, np.ndarray]:
+    infos = archive.infolist()
+    if len(infos) > MAX_MEMBERS:  # the end record's count may understate the directory
+        raise _too_many(path, len(infos))
+    names = [info.filename for info in infos]
+    if "meta.npy" not in names:
+        raise TrajectoryFileError(f"{path} is an .npz archive but not a trajectory file: it "
+                                  "has no 'meta' member (Trajectory.save writes one)")
+    seen: set[str] = set()
+    for name in names:
+        if not _MEMBER.fullmatch(name) or name in seen:
+            raise TrajectoryFileError(f"{path} is not a trajectory file: it has an "
+                                      f"unexpected member {name!r}")
+        seen.add(name)
+    limit = max_bytes if max_bytes is not None else max(MAX_EXPANSION * size, MIN_LIMIT)
+    total = sum(info.file_size for info in infos)
+    if total > limit:
+        raise TrajectoryFileError(
+            f"{path} would take {total} bytes once read, more than the limit of {limit} "
+            f"bytes for a file of {size} bytes; if you trust it, pass "
+            "max_bytes= to Trajectory.load")
+    return {info.filename[:-4]: _read_array(archive, info, path) for info in infos}
+
+
+_FILE_KINDS = {stat.S_ISDIR: "a folder", stat.S_ISFIFO: "a FIFO", stat.S_ISSOCK: "a socket",
+               stat.S_ISCHR: "a character device", stat.S_ISBLK: "a block device"}
+
+
+def _open_regular(path: Path) -> BinaryIO:
+    """``path`` opened for reading if it is a regular file (following links).
+
+    It is opened without blocking and checked before anything is read: opening a FIFO
+    for reading would wait for a writer forever, and a device could be endless.
+    ``FileNotFoundError`` and ``PermissionError`` pass through, as from ``open``.
+    """
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     try:
-        archive = zipfile.ZipFile(path)
-    except (zipfile.BadZipFile, NotImplementedError, ValueError, EOFError) as exc:
-        raise TrajectoryFileError(f"{path} is not a trajectory file: it is not an .npz archive "
-                                  f"(Trajectory.save writes those): {exc}") from exc
-    with archive:
-        infos = archive.infolist()
-        names = [info.filename for info in infos]
-        if "meta.npy" not in names:
-            raise TrajectoryFileError(f"{path} is an .npz archive but not a trajectory file: it "
-                                      "has no 'meta' member (Trajectory.save writes one)")
-        for name in names:
-            if not _MEMBER.fullmatch(name) or names.count(name) > 1:
-                raise TrajectoryFileError(f"{path} is not a trajectory file: it has an "
-                                          f"unexpected member {name!r}")
-        limit = max_bytes if max_bytes is not None else max(
-            MAX_EXPANSION * path.stat().st_size, MIN_LIMIT)
-        total = sum(info.file_size for info in infos)
-        if total > limit:
-            raise TrajectoryFileError(
-                f"{path} would take {total} bytes once read, more than the limit of {limit} "
-                f"bytes for a file of {path.stat().st_size} bytes; if you trust it, pass "
-                "max_bytes= to Trajectory.load")
-        return {info.filename[:-4]: _read_array(archive, info, path) for info in infos}
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = next((name for test, name in _FILE_KINDS.items() if test(mode)),
+                        "a special file")
+            raise TrajectoryFileError(f"{path} is not a trajectory file: it is {kind}, not a "
+                                      "regular file")
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+#: The end record of a zip directory: signature, disk numbers, entry counts (this
+#: disk, all), directory size and offset, comment length.
+_END_RECORD = struct.Struct("<4s4H2LH")
+_END_SIGNATURE = b"PK\x05\x06"
+
+
+def _check_member_count(fh: BinaryIO, size: int, path: Path) -> None:
+    """Refuse an archive whose zip directory announces more than :data:`MAX_MEMBERS`
+    members, from its end record alone (the last 22 bytes to 64 KiB of the file),
+    before the directory is parsed.
+
+    A file without an end record is left to ``zipfile``, which says what it is not.
+    A count of 0xFFFF (a ZIP64 archive of that many members or more) is over the
+    limit too.
+    """
+    tail = min(size, _END_RECORD.size + 0xFFFF)  # the record, then a comment of up to 64 KiB
+    fh.seek(size - tail)
+    data = fh.read(tail)
+    at = data.rfind(_END_SIGNATURE)
+    if at >= 0 and at + _END_RECORD.size <= len(data):
+        count = _END_RECORD.unpack_from(data, at)[4]
+        if count > MAX_MEMBERS:
+            raise _too_many(path, count)
+    fh.seek(0)
+
+
+def _too_many(path: Path, count: int) -> TrajectoryFileError:
+    return TrajectoryFileError(
+        f"{path} is not a trajectory file: it has {count} members, more than the "
+        f"{MAX_MEMBERS} a trajectory file may have (one per array, two per event function)")
 
 
 def _read_array(archive: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> np.ndarray:
@@ -301,6 +377,9 @@ def _metadata(meta: np.ndarray, path: Path) -> dict[str, Any]:
                   "text")
     try:
         fields = json.loads(str(meta))
+    except RecursionError as exc:  # the parser recurses once per level
+        raise bad("the member 'meta'", "is JSON nested too deeply (a trajectory's metadata "
+                  "is a flat object)") from exc
     except ValueError as exc:
         raise bad("the member 'meta'", f"is not JSON ({exc})") from exc
     if not isinstance(fields, dict):

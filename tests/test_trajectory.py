@@ -487,3 +487,70 @@ def test_which_models_conserve_energy():
     # the motor brings the disk from rest to 4 rad/s: T = 1/2 0.5 4^2 = 4, its work
     assert run.energy_conserved is False and abs(run.energy[-1] - 4.0) < 1e-9
     assert "change of T + V 4 (relative" in run.summary()
+
+
+# -- files built to make a reader hang or crash ----------------------------------------------
+def many_members(path: Path, count: int) -> Path:
+    """An archive of ``count`` tiny members with names a trajectory may have."""
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("meta.npy", b"")
+        for e in range(count - 1):
+            archive.writestr(f"t_events_{e}.npy", b"")
+    return path
+
+
+def test_load_refuses_an_archive_of_too_many_members_at_once(tmp_path):
+    """20 001 members: refused from the zip directory's count, before any is read (it
+    took 34 s to get an answer, 150 000 none in 300 s)."""
+    path = many_members(tmp_path / "many.npz", 20_001)
+    start = time.perf_counter()
+    with pytest.raises(TrajectoryFileError, match=rf"{path} is not a trajectory file: it has "
+                                                  r"20001 members, more than the 10000 a "
+                                                  "trajectory file may have"):
+        Trajectory.load(path)
+    assert time.perf_counter() - start < 2.0  # a guard, not a benchmark: it was 34 s
+
+
+def test_load_counts_the_members_when_the_directory_understates_them(tmp_path):
+    """The count in the zip directory's end record says 3; the directory lists 20 001."""
+    path = many_members(tmp_path / "many.npz", 20_001)
+    data = bytearray(path.read_bytes())
+    end = data.rfind(b"PK\x05\x06")
+    data[end + 8:end + 12] = (3).to_bytes(2, "little") * 2
+    path.write_bytes(bytes(data))
+    start = time.perf_counter()
+    with pytest.raises(TrajectoryFileError, match=r"it has 20001 members, more than the 10000"):
+        Trajectory.load(path)
+    assert time.perf_counter() - start < 5.0
+
+
+def _load_in_a_child(path: Path) -> subprocess.CompletedProcess:
+    """``Trajectory.load(path)`` in a child process that prints the error (a hang fails)."""
+    script = ("import sys\nfrom dalembert import Trajectory, TrajectoryFileError\n"
+              "try:\n    Trajectory.load(sys.argv[1])\n"
+              "except TrajectoryFileError as exc:\n    print(exc)\n")
+    try:
+        return subprocess.run([sys.executable, "-c", script, str(path)], capture_output=True,
+                              text=True, timeout=60, cwd=Path(__file__).parents[1])
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"Trajectory.load({str(path)!r}) did not return within 60 s")
+
+
+@pytest.mark.parametrize(("make", "what"), [(os.mkfifo, "a FIFO"), (os.mkdir, "a folder")])
+def test_load_refuses_what_is_not_a_regular_file_without_blocking(tmp_path, make, what):
+    path = tmp_path / "run.npz"
+    make(path)
+    run = _load_in_a_child(path)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == (f"{path} is not a trajectory file: it is {what}, not a "
+                                  "regular file")
+
+
+def test_load_of_deeply_nested_metadata_names_the_file(traj, tmp_path):
+    content = members(traj.save(tmp_path / "good.npz"))
+    content["meta"] = np.array("[" * 100_000 + "]" * 100_000)
+    path = tmp_path / "deep.npz"
+    np.savez(path, **content)
+    with pytest.raises(TrajectoryFileError, match=rf"{path} is not a valid trajectory file: the "
+                                                  "member 'meta' is JSON nested too deeply"):
+        Trajectory.load(path)
