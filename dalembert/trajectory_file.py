@@ -261,7 +261,7 @@ def _read_archive(archive: zipfile.ZipFile, path: Path, size: int,
                   max_bytes: int | None) -> dict[str, np.ndarray]:
     infos = archive.infolist()
     if len(infos) > MAX_MEMBERS:  # the end record's count may understate the directory
-        raise _too_many(path, len(infos))
+        raise _too_many(path, str(len(infos)))
     names = [info.filename for info in infos]
     if "meta.npy" not in names:
         raise TrajectoryFileError(f"{path} is an .npz archive but not a trajectory file: it "
@@ -329,12 +329,12 @@ def _check_member_count(fh: BinaryIO, size: int, path: Path) -> None:
     at = data.rfind(_END_SIGNATURE)
     if at >= 0 and at + _END_RECORD.size <= len(data):
         count = _END_RECORD.unpack_from(data, at)[4]
-        if count > MAX_MEMBERS:
-            raise _too_many(path, count)
+        if count > MAX_MEMBERS:  # 0xFFFF: that many or more (ZIP64 holds the rest)
+            raise _too_many(path, f"{count} or more" if count == 0xFFFF else str(count))
     fh.seek(0)
 
 
-def _too_many(path: Path, count: int) -> TrajectoryFileError:
+def _too_many(path: Path, count: str) -> TrajectoryFileError:
     return TrajectoryFileError(
         f"{path} is not a trajectory file: it has {count} members, more than the "
         f"{MAX_MEMBERS} a trajectory file may have (one per array, two per event function)")

@@ -511,6 +511,17 @@ def test_load_refuses_an_archive_of_too_many_members_at_once(tmp_path):
     assert time.perf_counter() - start < 2.0  # a guard, not a benchmark: it was 34 s
 
 
+def test_load_says_a_zip64_count_is_a_lower_bound(tmp_path):
+    """An end record counting 0xFFFF members means that many or more."""
+    path = many_members(tmp_path / "few.npz", 3)
+    data = bytearray(path.read_bytes())
+    end = data.rfind(b"PK\x05\x06")
+    data[end + 8:end + 12] = (0xFFFF).to_bytes(2, "little") * 2
+    path.write_bytes(bytes(data))
+    with pytest.raises(TrajectoryFileError, match=r"it has 65535 or more members, more than "):
+        Trajectory.load(path)
+
+
 def test_load_counts_the_members_when_the_directory_understates_them(tmp_path):
     """The count in the zip directory's end record says 3; the directory lists 20 001."""
     path = many_members(tmp_path / "many.npz", 20_001)
