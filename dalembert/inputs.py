@@ -121,6 +121,10 @@ class InputSignal:
     def _values(self, value: object, where: tuple[int, ...], what: str,
                 t: float) -> np.ndarray:
         """``value`` as an array of ``len(where)`` finite numbers, or an InputError."""
+        if value is None:  # NumPy would make it NaN: a function without its return
+            raise InputError(f"{what} returned None at t={t:.6g}; it must return "
+                             f"{len(where)} number(s) ({', '.join(self.names[k] for k in where)})"
+                             " (a missing return statement?)")
         try:
             array = np.asarray(value, dtype=float)
         except (TypeError, ValueError) as exc:
