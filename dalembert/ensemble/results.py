@@ -73,7 +73,8 @@ class EnsembleResult:
         Parameters
         ----------
         cases
-            Case numbers to run again (default: :attr:`failed`).
+            Case numbers to run again (default: :attr:`failed`); new values are a
+            new ensemble (``simulate_many`` with a new case table).
         changes
             ``simulate_many`` keywords to change for the retry (``rtol=...``,
             ``scheduler=...``, ``client=...``, ``method="Radau"``...).
@@ -86,7 +87,7 @@ class EnsembleResult:
         """
         if self._rerun is None:
             raise ValueError("this result cannot be retried (it was not made by simulate_many)")
-        return self._rerun(self, self.failed if cases is None else list(cases), changes)
+        return self._rerun(self, self.failed if cases is None else cases, changes)
 
     def quantile(self, variable: str, q: Sequence[float] | float = (0.05, 0.5, 0.95),
                  **selection: Any) -> Any:

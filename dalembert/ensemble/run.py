@@ -413,12 +413,28 @@ class _Run:
         if fixed:
             raise EnsembleError(f"retry cannot change {', '.join(sorted(fixed))} (the results' "
                                 "layout); run simulate_many again for that")
+        indices = _case_numbers(indices)
         for i in indices:
             if not 0 <= i < len(self.cases):
                 raise EnsembleError(f"retry: there is no case {i} (cases 0..{len(self.cases) - 1})")
         again = _Run(self.system, self.t_span, self.cases.table, {**self.arguments, **changes},
                      self.store, self.overwrite)
         return again.execute(sorted(set(indices)), before)
+
+
+def _case_numbers(cases: Any) -> list[int]:
+    """``retry``'s ``cases`` as case numbers, or an error saying what they are not."""
+    try:
+        found = list(cases)
+    except TypeError:
+        found = [cases]  # one item, maybe one number
+    for item in found:
+        if isinstance(item, (bool, np.bool_)) or not isinstance(item, (int, np.integer)):
+            raise EnsembleError(
+                f"retry takes case numbers (cases=[0, 3]), got {item!r}: it runs cases of "
+                "this ensemble again; for new values, run simulate_many again with a new "
+                "case table")
+    return [int(i) for i in found]
 
 
 def _warn(summary: Any, interrupted: bool) -> None:
