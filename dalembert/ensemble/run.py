@@ -193,7 +193,9 @@ def simulate_many(
         A path ending in ``.zarr`` or ``.nc``: the arrays are written there as cases
         finish and read back lazily, so the client holds one block at a time.
     overwrite
-        Replace an existing ``store``. A netCDF file is replaced by a new file: a
+        Replace an existing ``store``: a file, or a folder only if it is a store
+        ``simulate_many`` wrote (it holds the marker file ``.dalembert-ensemble``) or
+        empty; another folder is refused, not removed. A netCDF file is replaced by a new file: a
         result still reading the old one keeps its data. A Zarr store is read by
         path: a result still reading the one replaced (an earlier ensemble's
         ``dataset``) reads the new one's arrays from then on.

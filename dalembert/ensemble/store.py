@@ -17,6 +17,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import mmap
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +31,9 @@ from .worker import QUANTITIES
 
 #: Per-case numbers stored beside the arrays (the rest of the summary is a table).
 CASE_NUMBERS = ("t_end", "energy_error", "seconds")
+#: The file a Zarr store written here holds: ``overwrite=True`` removes a folder only
+#: if it has it (or is an ensemble's Zarr store of a version before it).
+MARKER = ".dalembert-ensemble"
 
 
 @dataclass(frozen=True)
@@ -233,6 +237,8 @@ class FileSink(Sink):
         ds = layout.dataset(data)
         if self.kind == "zarr":
             ds.to_zarr(self.path, mode="w", compute=False, zarr_format=2)
+            # Zarr ignores files it does not know; this one says the folder may go.
+            (self.path / MARKER).write_text('{"written_by": "dalembert.ensemble"}\n')
         else:
             ds.to_netcdf(self.path, engine="h5netcdf", compute=False)
 
@@ -334,24 +340,50 @@ class _Closing:
 
 
 def check_store(path: Path, overwrite: bool) -> None:
-    """Refuse a store path of an unknown kind, or one that exists (unless ``overwrite``)."""
+    """Refuse a store path of an unknown kind, one that exists (unless ``overwrite``),
+    and a folder to overwrite that is not a store this library wrote (see :func:`_ours`).
+    """
     _kind(path)
-    if path.exists() and not overwrite:
+    if not os.path.lexists(path):
+        return
+    if not overwrite:
         raise EnsembleError(f"{path} exists; pass overwrite=True to replace it, or another "
                             "path")
+    if path.is_dir() and not path.is_symlink() and not _ours(path):
+        raise EnsembleError(
+            f"overwrite=True replaces only a store simulate_many wrote, and {path} is a folder "
+            f"it did not write (it has no {MARKER} marker and is not a Zarr store of an "
+            "ensemble); remove it yourself if it may go, or write to another path")
+
+
+def _ours(folder: Path) -> bool:
+    """Whether ``folder`` may be removed to overwrite it: empty, marked (:data:`MARKER`),
+    or a Zarr store with the ``status`` variable of an ensemble (versions before the
+    marker wrote those)."""
+    import json
+
+    if (folder / MARKER).is_file() or not any(folder.iterdir()):
+        return True
+    try:
+        attributes = json.loads((folder / "status" / ".zattrs").read_text())
+    except (OSError, ValueError):
+        return False
+    return ((folder / ".zgroup").is_file() and isinstance(attributes, dict)
+            and attributes.get("flag_meanings") == " ".join(STATUSES))
 
 
 def _remove(path: Path) -> None:
-    """Remove a store that is overwritten: the new one is a new file or folder, not the
-    old one rewritten in place. A result still reading an old netCDF file keeps its
-    data (and HDF5 cannot truncate a file that is open). A Zarr store is read by path:
-    a result still reading the old one reads the new one's chunks."""
+    """Remove a store that is overwritten (checked by :func:`check_store`): the new one
+    is a new file or folder, not the old one rewritten in place. A result still reading
+    an old netCDF file keeps its data (and HDF5 cannot truncate a file that is open). A
+    Zarr store is read by path: a result still reading the old one reads the new one's
+    chunks. A link is removed, not what it points to."""
     import shutil
 
     try:
-        if path.is_dir():
+        if path.is_dir() and not path.is_symlink():
             shutil.rmtree(path)
-        elif path.exists():
+        elif os.path.lexists(path):
             path.unlink()
     except OSError as exc:
         raise EnsembleError(f"could not replace {path} ({exc}); close what holds it open "

@@ -47,3 +47,35 @@ def test_retry_takes_numpy_case_numbers(pend):
     first = run(pend, grid(l=[1.0, 2.0]))
     again = first.retry(cases=np.array([1]))
     assert again.summary["status"].eq("finished").all()
+
+
+# -- overwrite ---------------------------------------------------------------------------------
+def test_overwrite_leaves_a_folder_this_library_did_not_write(pend, tmp_path):
+    folder = tmp_path / "thesis.zarr"
+    folder.mkdir()
+    (folder / "chapter1.tex").write_text("months of work")
+    with pytest.raises(EnsembleError) as info:
+        run(pend, grid(l=[1.0, 2.0]), store=folder, overwrite=True)
+    assert str(info.value) == (
+        f"overwrite=True replaces only a store simulate_many wrote, and {folder} is a folder "
+        "it did not write (it has no .dalembert-ensemble marker and is not a Zarr store of "
+        "an ensemble); remove it yourself if it may go, or write to another path")
+    assert (folder / "chapter1.tex").read_text() == "months of work"
+
+
+@pytest.mark.parametrize("marker", [True, False], ids=["marked", "of-an-earlier-version"])
+def test_overwrite_replaces_a_store_simulate_many_wrote(pend, tmp_path, marker):
+    store = tmp_path / "run.zarr"
+    run(pend, grid(l=[1.0, 2.0]), store=store)
+    if not marker:  # an ensemble's Zarr store, as versions without the marker wrote it
+        (store / ".dalembert-ensemble").unlink()
+    again = run(pend, grid(l=[1.0, 2.0, 3.0]), store=store, overwrite=True)
+    assert again.dataset.sizes["case"] == 3
+    assert (store / ".dalembert-ensemble").is_file()
+
+
+def test_overwrite_replaces_an_empty_folder_and_a_file(pend, tmp_path):
+    (tmp_path / "empty.zarr").mkdir()
+    (tmp_path / "old.nc").write_bytes(b"an old file")
+    for store in (tmp_path / "empty.zarr", tmp_path / "old.nc"):
+        assert run(pend, grid(l=[1.0]), store=store, overwrite=True).dataset.sizes["case"] == 1
