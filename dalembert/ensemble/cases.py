@@ -11,7 +11,7 @@ against a model once, before anything runs, and says which column is which.
 
 from __future__ import annotations
 
-import itertools
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -23,6 +23,9 @@ from ..errors import EnsembleError
 if TYPE_CHECKING:
     import pandas as pd
 
+#: The most cases :func:`grid` makes (two float columns of them take 160 MB, and an
+#: ensemble's results hundreds of times more).
+MAX_GRID_CASES = 10_000_000
 #: What a case table may be given as.
 CaseTable = Any  # a pandas DataFrame, a sequence of dicts, or a dict of columns
 
@@ -61,8 +64,15 @@ def grid(**axes: Sequence[float]) -> pd.DataFrame:
             raise EnsembleError(f"grid axis {name!r} must be a non-empty 1-D sequence of "
                                 f"numbers, got {values!r}")
         columns[name] = [_number(v, f"grid axis {name!r}") for v in column]
-    rows = list(itertools.product(*columns.values()))
-    return pd.DataFrame(rows, columns=list(columns), dtype=float)
+    count = math.prod(len(values) for values in columns.values())  # exact, before any is made
+    if count > MAX_GRID_CASES:
+        sizes = ", ".join(f"{name}={len(values)} values" for name, values in columns.items())
+        raise EnsembleError(f"grid({sizes}) makes {count} cases, more than the "
+                            f"{MAX_GRID_CASES} a grid may have; sweep fewer values, or draw "
+                            "cases at random with sample()")
+    axes_values = [np.asarray(values, dtype=float) for values in columns.values()]
+    mesh = np.meshgrid(*axes_values, indexing="ij")  # the first axis varies slowest
+    return pd.DataFrame(np.stack([m.ravel() for m in mesh], axis=1), columns=list(columns))
 
 
 def sample(dist: Mapping[Any, Any], n: int, seed: int | np.random.SeedSequence) -> pd.DataFrame:
@@ -233,7 +243,7 @@ def _table(cases: CaseTable) -> pd.DataFrame:
     if isinstance(cases, pd.DataFrame):
         table = cases.reset_index(drop=True)
     elif isinstance(cases, Mapping):
-        table = pd.DataFrame(dict(cases))
+        table = _columns_table(pd, dict(cases))
     elif isinstance(cases, Sequence) and not isinstance(cases, (str, bytes)):
         rows = list(cases)
         if not all(isinstance(r, Mapping) for r in rows):
@@ -252,6 +262,12 @@ def _table(cases: CaseTable) -> pd.DataFrame:
     if len(table) == 0:
         raise EnsembleError("there are no cases to run")
     table.columns = [c.strip() if isinstance(c, str) else c for c in table.columns]
+    seen: set[Any] = set()
+    for name in table.columns:
+        if name in seen:
+            raise EnsembleError(f"the case column {name!r} is given twice; give each column "
+                                "once")
+        seen.add(name)
     for name in table.columns:
         try:
             table[name] = table[name].astype(float)
@@ -259,6 +275,29 @@ def _table(cases: CaseTable) -> pd.DataFrame:
             raise EnsembleError(f"the case column {name!r} holds a value that is not a "
                                 f"number: {exc}") from exc
     return table
+
+
+def _columns_table(pd: Any, columns: dict[Any, Any]) -> pd.DataFrame:
+    """A dict of columns as a table: every column a sequence of one value per case (a
+    single number is the same in every case, as pandas has it)."""
+    lengths = {}
+    for name, values in columns.items():
+        array = np.asarray(values, dtype=object)
+        if array.ndim == 0:
+            continue
+        if array.ndim != 1:
+            raise EnsembleError(f"the case column {name!r} must be a 1-D sequence of numbers, "
+                                f"one per case, got {type(values).__name__} of shape "
+                                f"{array.shape}")
+        lengths[name] = len(array)
+    if len(set(lengths.values())) > 1:
+        listed = ", ".join(f"{name}: {n}" for name, n in lengths.items())
+        raise EnsembleError(f"the case columns have different lengths ({listed}); every "
+                            "column must give one value per case")
+    if not lengths:
+        raise EnsembleError("the case columns are single numbers; give each a list of one "
+                            "value per case, e.g. {'l': [1.0, 2.0]}")
+    return pd.DataFrame(columns)
 
 
 def _number(value: Any, what: str) -> float:

@@ -289,6 +289,7 @@ class _Run:
         if checked.output.t_eval is None:
             checked = self.system.check_options(self.t_span, **{
                 **a, "t_eval": np.linspace(*checked.t_span, DEFAULT_POINTS)})
+        _check_samples(checked)
         keep = _keep(keep)
         if "inputs" in keep and not self._input_names:
             raise EnsembleError("keep names 'inputs', but the model declares no inputs")
@@ -313,6 +314,8 @@ class _Run:
         layout = Layout(self.cases.table, self.settings.t_eval, self.system.coordinate_names,
                         self.system.constraint_names, self._input_names, self.settings.keep,
                         tuple(self.settings.outputs), chunk)
+        if self.store is None:
+            _check_memory(layout)
         out = sink(layout, self.store, indices, self.overwrite,
                    None if before is None else before.dataset)
         self._take(first, rows, out, None)  # the case auto ran here
@@ -422,6 +425,51 @@ class _Run:
         again = _Run(self.system, self.t_span, self.cases.table, {**self.arguments, **changes},
                      self.store, self.overwrite)
         return again.execute(sorted(set(indices)), before)
+
+
+#: The most samples of a zero-order hold (``sample_time``) over a case's span: their
+#: instants are listed before the run (8 bytes each).
+MAX_SAMPLES = 10**8
+
+
+def _check_samples(checked: Any) -> None:
+    """Refuse a ``sample_time`` that makes more than :data:`MAX_SAMPLES` samples per
+    case: each case would fail allocating their instants (or take days)."""
+    signal = checked.inputs
+    period = None if signal is None else signal.sample_time
+    if period is None:
+        return
+    t0, tf = checked.t_span
+    samples = abs(tf - t0) / period
+    if samples > MAX_SAMPLES:
+        raise EnsembleError(
+            f"sample_time={period:g} over t_span ({t0}, {tf}) makes {samples:.0f} samples per "
+            f"case, more than the {MAX_SAMPLES} a run may have; give a larger sample_time")
+
+
+def _check_memory(layout: Layout) -> None:
+    """Refuse results held in memory that would not fit in this machine's memory (they
+    would fail to be allocated, or swap, before the first case runs)."""
+    values = sum(math.prod(shape) for _, shape in layout.variables().values())
+    need = 8 * values
+    try:
+        have = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):  # not known here
+        return
+    if need > have:
+        raise EnsembleError(
+            f"the results of {layout.size} cases at {len(layout.t_eval)} output times would "
+            f"take {_bytes(need)} in memory, more than this machine's {_bytes(have)}: pass "
+            "store='results.zarr' (written as cases finish, read back lazily), or keep= fewer "
+            "quantities, fewer output times (t_eval=) or fewer cases")
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if n < 1000:
+            return f"{n:.1f} {unit}"
+        n /= 1000
+    return f"{n:.1f} PB"
 
 
 def _case_numbers(cases: Any) -> list[int]:

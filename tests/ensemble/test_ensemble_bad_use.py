@@ -79,3 +79,64 @@ def test_overwrite_replaces_an_empty_folder_and_a_file(pend, tmp_path):
     (tmp_path / "old.nc").write_bytes(b"an old file")
     for store in (tmp_path / "empty.zarr", tmp_path / "old.nc"):
         assert run(pend, grid(l=[1.0]), store=store, overwrite=True).dataset.sizes["case"] == 1
+
+
+# -- case tables and sizes, at the door ------------------------------------------------------------
+def test_columns_of_unequal_length_are_named(pend):
+    with pytest.raises(EnsembleError, match=r"the case columns have different lengths "
+                                            r"\(l: 2, m: 1\); every column must give one "
+                                            "value per case"):
+        run(pend, {"l": [1.0, 2.0], "m": [1.0]})
+
+
+@pytest.mark.parametrize("columns", [["l", "l"], ["l", " l"]], ids=["same", "same-stripped"])
+def test_a_column_given_twice_is_named(pend, columns):
+    import pandas as pd
+
+    with pytest.raises(EnsembleError, match="the case column 'l' is given twice; give each "
+                                            "column once"):
+        run(pend, pd.DataFrame([[1.0, 2.0]], columns=columns))
+
+
+def test_a_grid_of_too_many_cases_is_refused_before_it_is_made():
+    import time
+
+    start = time.perf_counter()
+    with pytest.raises(EnsembleError, match=r"grid\(a=10000 values, b=10000 values\) makes "
+                                            r"100000000 cases, more than the 10000000 a grid "
+                                            "may have"):
+        grid(a=np.arange(10_000.0), b=np.arange(10_000.0))
+    assert time.perf_counter() - start < 1.0  # nothing was built
+
+
+def test_results_larger_than_memory_are_refused_before_anything_runs(pend, monkeypatch):
+    def forbidden(*args, **kwargs):
+        raise AssertionError("a case ran")
+
+    monkeypatch.setattr("dalembert.ensemble.worker.run_case", forbidden)
+    times = np.linspace(0.0, 1.0, 10**6)
+    with pytest.raises(EnsembleError) as info:
+        pend.simulate_many((0.0, 1.0), grid(l=np.linspace(1.0, 2.0, 10**5)),
+                           initial_state=released, t_eval=times, scheduler="serial",
+                           progress=False)
+    message = str(info.value)
+    assert message.startswith("the results of 100000 cases at 1000000 output times would take "
+                              "8.0 TB in memory, more than this machine's ")
+    assert "pass store='results.zarr'" in message and "keep=" in message
+
+
+def test_a_sample_time_of_too_many_samples_is_refused_at_the_door():
+    import sympy as sp
+
+    from dalembert import System, coordinates
+
+    (theta,) = coordinates("theta")
+    u = sp.Symbol("u")
+    pushed = System([theta], kinetic=theta.diff() ** 2 / 2, potential=-9.81 * sp.cos(theta),
+                    generalized_forces={theta: u}, inputs=[u])
+    with pytest.raises(EnsembleError, match=r"sample_time=1e-10 over t_span \(0.0, 1.0\) makes "
+                                            r"10000000000 samples per case, more than the "
+                                            "100000000 a run may have; give a larger "
+                                            "sample_time"):
+        pushed.simulate_many((0.0, 1.0), {"theta": [1.0, 0.5]}, inputs=lambda t: 0.0,
+                             sample_time=1e-10, scheduler="serial", progress=False)
