@@ -55,6 +55,8 @@ class EnsembleResult:
     scheduler: str
     interrupted: bool = False
     _rerun: Callable[..., EnsembleResult] | None = field(default=None, repr=False)
+    #: The Zarr store or netCDF file the dataset is read from, if any.
+    store: Any = field(default=None, repr=False)
 
     @property
     def failed(self) -> list[int]:
@@ -109,11 +111,23 @@ class EnsembleResult:
             other dimensions left).
         """
         data = self._successful(variable, selection)
-        return data.quantile(q, dim="case").compute()
+        return self._computed(lambda: data.quantile(q, dim="case").compute(), variable)
 
     def mean(self, variable: str, **selection: Any) -> Any:
         """The mean over the cases that succeeded, at each output time (see :meth:`quantile`)."""
-        return self._successful(variable, selection).mean("case").compute()
+        data = self._successful(variable, selection)
+        return self._computed(lambda: data.mean("case").compute(), variable)
+
+    def _computed(self, compute: Callable[[], Any], variable: str) -> Any:
+        """``compute()``; reading a damaged store raises an error naming its chunk."""
+        if self.store is None:
+            return compute()
+        try:
+            return compute()
+        except Exception as exc:  # the codec's or file's own error
+            from .store import damaged_store
+
+            raise damaged_store(self.store, variable, exc) from exc
 
     def _successful(self, variable: str, selection: dict[str, Any]) -> Any:
         data = self.dataset[variable]

@@ -408,7 +408,7 @@ class _Run:
                     summary[column] = np.nan
             summary.loc[indices, retried.columns] = retried
         _warn(summary.loc[indices], interrupted)
-        return EnsembleResult(dataset, summary, scheduler, interrupted, self._retry)
+        return EnsembleResult(dataset, summary, scheduler, interrupted, self._retry, self.store)
 
     def _retry(self, before: EnsembleResult, indices: list[int],
                changes: dict[str, Any]) -> EnsembleResult:

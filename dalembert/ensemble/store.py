@@ -266,8 +266,13 @@ class FileSink(Sink):
                 if as_came:  # one batch made the block: written as it came
                     out[name][start:stop] = got[0][1][name]
                     continue
-                block = (np.full((stop - start, *shape[1:]), np.nan) if whole
-                         else np.array(out[name][start:stop]))
+                if whole:
+                    block = np.full((stop - start, *shape[1:]), np.nan)
+                else:  # the block's other cases are kept: read them first
+                    try:
+                        block = np.array(out[name][start:stop])
+                    except Exception as exc:  # a damaged chunk: the codec's own error
+                        raise damaged_store(self.path, name, exc) from exc
                 for indices, arrays in got:
                     block[indices - start] = arrays[name]
                 out[name][start:stop] = block
@@ -297,6 +302,49 @@ class FileSink(Sink):
         if self.kind == "zarr":
             return xr.open_zarr(self.path)
         return xr.open_dataset(self.path, engine="h5netcdf", chunks={})
+
+
+def damaged_store(path: Path, variable: str, exc: BaseException) -> EnsembleError:
+    """The error for a store ``variable`` of which cannot be read (``exc``), naming the
+    cases of its first chunk that cannot be read (each chunk is tried alone) and the
+    retry that rewrites it.
+
+    Parameters
+    ----------
+    path
+        The store.
+    variable
+        The variable being read.
+    exc
+        What reading it raised (a codec's error, a short file...).
+
+    Examples
+    --------
+    >>> str(damaged_store(Path("none.zarr"), "q", RuntimeError("bad")))
+    "the store none.zarr cannot be read: a chunk of 'q' is damaged (RuntimeError: bad)"
+    """
+    where = "a chunk"
+    retry = ""
+    try:
+        import zarr
+
+        array: Any = zarr.open_group(str(path), mode="r")[variable]
+        step = array.chunks[0]
+        for start in range(0, array.shape[0], step):
+            stop = min(start + step, array.shape[0])
+            try:
+                array[start:stop]
+            except Exception:  # this chunk is the damaged one
+                where = f"the chunk of {variable!r} holding cases {start} to {stop - 1}"
+                retry = (f"; result.retry(cases={list(range(start, stop))}) runs those cases "
+                         "again and rewrites it")
+                break
+    except Exception:  # not a Zarr store, or not readable at all: said as is
+        pass
+    if not retry:
+        where = f"a chunk of {variable!r}"
+    return EnsembleError(f"the store {path} cannot be read: {where} is damaged "
+                         f"({type(exc).__name__}: {exc}){retry}")
 
 
 def release_free_memory() -> None:

@@ -140,3 +140,24 @@ def test_a_sample_time_of_too_many_samples_is_refused_at_the_door():
                                             "sample_time"):
         pushed.simulate_many((0.0, 1.0), {"theta": [1.0, 0.5]}, inputs=lambda t: 0.0,
                              sample_time=1e-10, scheduler="serial", progress=False)
+
+
+# -- a damaged store -------------------------------------------------------------------------------
+def test_a_damaged_zarr_chunk_is_named_and_a_retry_of_its_cases_repairs_it(pend, tmp_path):
+    store = tmp_path / "run.zarr"
+    result = run(pend, grid(l=[1.0, 2.0, 3.0]), store=store, batch_size=2)
+    good = result.dataset["q"].values.copy()
+    (store / "q" / "0.0.0").write_bytes(b"garbage!" * 10)  # cases 0 and 1 of q
+    expected = (f"the store {store} cannot be read: the chunk of 'q' holding cases 0 to 1 is "
+                "damaged (")
+    for reduce in (lambda: result.mean("q"), lambda: result.quantile("q", 0.5)):
+        with pytest.raises(EnsembleError) as info:
+            reduce()
+        assert str(info.value).startswith(expected), str(info.value)
+        assert str(info.value).endswith("; result.retry(cases=[0, 1]) runs those cases again "
+                                        "and rewrites it")
+    with pytest.raises(EnsembleError, match="the chunk of 'q' holding cases 0 to 1 is damaged"):
+        result.retry(cases=[1])  # the other case of the chunk must be read to keep it
+    repaired = result.retry(cases=[0, 1])
+    assert np.array_equal(repaired.dataset["q"].values, good)
+    assert np.isfinite(repaired.mean("q").values).all()
