@@ -191,7 +191,10 @@ def simulate_many(
         chunk of a store along ``case``.
     store
         A path ending in ``.zarr`` or ``.nc``: the arrays are written there as cases
-        finish and read back lazily, so the client holds one block at a time.
+        finish and read back lazily, so the client holds one block at a time. If
+        the store cannot be written midway (a full disk), every case is kept in
+        memory from then on and returned there, with an
+        :class:`~dalembert.errors.EnsembleWarning` naming the store.
     overwrite
         Replace an existing ``store``: a file, or a folder only if it is a store
         ``simulate_many`` wrote (it holds the marker file ``.dalembert-ensemble``) or
@@ -408,7 +411,7 @@ class _Run:
                     summary[column] = np.nan
             summary.loc[indices, retried.columns] = retried
         _warn(summary.loc[indices], interrupted)
-        return EnsembleResult(dataset, summary, scheduler, interrupted, self._retry, self.store)
+        return EnsembleResult(dataset, summary, scheduler, interrupted, self._retry, out.stored)
 
     def _retry(self, before: EnsembleResult, indices: list[int],
                changes: dict[str, Any]) -> EnsembleResult:

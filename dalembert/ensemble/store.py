@@ -18,6 +18,7 @@ import ctypes
 import functools
 import mmap
 import os
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import EnsembleError
+from ..errors import EnsembleError, EnsembleWarning, user_stacklevel
 from .faults import CODE, STATUSES, BatchOutcome
 from .worker import QUANTITIES
 
@@ -144,6 +145,11 @@ def _status_attrs() -> dict[str, Any]:
 class Sink:
     """Takes finished cases (:meth:`write`), gives the dataset at the end (:meth:`dataset`)."""
 
+    @property
+    def stored(self) -> Path | None:
+        """The file or folder the dataset is read from (``None``: memory)."""
+        return None
+
     def __init__(self, layout: Layout, before: Any = None) -> None:
         self.layout = layout
         self.status = np.full(layout.size, CODE["not-run"], dtype=np.int8)
@@ -217,11 +223,51 @@ class FileSink(Sink):
         if before is None:
             check_store(path, overwrite)
             _remove(path)
-            self._create()
+            try:
+                self._create()
+            except OSError as exc:  # before any case ran here: nothing is lost
+                raise EnsembleError(f"could not create the store {path} ({exc.strerror or exc})"
+                                    "; free space there, or write to another path") from exc
         self.expected: dict[int, int] = {}
         for i in expected:
             self.expected[i // layout.chunk] = self.expected.get(i // layout.chunk, 0) + 1
         self.pending: dict[int, list[tuple[np.ndarray, dict[str, np.ndarray]]]] = {}
+        #: Where the arrays go once the store cannot be written (a full disk).
+        self.fallback: MemorySink | None = None
+        self.failure: OSError | None = None
+
+    @property
+    def stored(self) -> Path | None:
+        return self.path if self.fallback is None else None
+
+    def _fall_back(self, exc: OSError) -> None:
+        """Keep the arrays in memory from now on: those on disk are read back (where
+        they can be), those pending added, and every later block kept there. A full
+        disk then loses no computed case."""
+        self.failure = exc
+        fallback = MemorySink(self.layout)
+        try:
+            with self._reader() as out:
+                for name, values in fallback.data.items():
+                    values[...] = np.asarray(out[name][...])
+            fallback.written[:] = True  # blocks not written yet hold NaN on disk
+        except Exception:  # what cannot be read back is NaN, and said
+            fallback.written[:] = False
+        self.fallback = fallback
+        pending, self.pending = self.pending, {}
+        for got in pending.values():
+            for indices, arrays in got:
+                fallback._write_arrays(indices, arrays)
+
+    def _reader(self) -> Any:
+        """The store opened to read only (which a full disk still allows)."""
+        if self.kind == "zarr":
+            import zarr
+
+            return _Closing(zarr.open_group(str(self.path), mode="r"))
+        import h5netcdf
+
+        return h5netcdf.File(self.path, "r")
 
     def _create(self) -> None:
         import dask.array as da
@@ -243,6 +289,15 @@ class FileSink(Sink):
             ds.to_netcdf(self.path, engine="h5netcdf", compute=False)
 
     def _write_arrays(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+        if self.fallback is not None:
+            self.fallback._write_arrays(indices, arrays)
+            return
+        try:
+            self._write_blocks(indices, arrays)
+        except OSError as exc:  # a full disk, a store gone: the cases stay in memory
+            self._fall_back(exc)
+
+    def _write_blocks(self, indices: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
         chunks = indices // self.layout.chunk
         for k in np.unique(chunks):
             part = chunks == k
@@ -256,7 +311,7 @@ class FileSink(Sink):
             release_free_memory()
 
     def _flush(self, k: int) -> None:
-        got = self.pending.pop(k)
+        got = self.pending[k]  # dropped once written: a failed write keeps it
         start = k * self.layout.chunk
         stop = min(start + self.layout.chunk, self.layout.size)
         whole = sum(len(i) for i, _ in got) == stop - start
@@ -276,15 +331,21 @@ class FileSink(Sink):
                 for indices, arrays in got:
                     block[indices - start] = arrays[name]
                 out[name][start:stop] = block
+        del self.pending[k]
 
     def finish(self) -> None:
         """Write what is still pending and the per-case numbers."""
-        for k in list(self.pending):
-            self._flush(k)
-        with self._open() as out:
-            out["status"][:] = self.status
-            for name, values in self.numbers.items():
-                out[name][:] = values
+        if self.fallback is not None:
+            return
+        try:
+            for k in list(self.pending):
+                self._flush(k)
+            with self._open() as out:
+                out["status"][:] = self.status
+                for name, values in self.numbers.items():
+                    out[name][:] = values
+        except OSError as exc:
+            self._fall_back(exc)
 
     def _open(self) -> Any:
         if self.kind == "zarr":
@@ -299,9 +360,30 @@ class FileSink(Sink):
         import xarray as xr
 
         self.finish()
+        if self.fallback is not None:
+            return self._in_memory()
         if self.kind == "zarr":
             return xr.open_zarr(self.path)
         return xr.open_dataset(self.path, engine="h5netcdf", chunks={})
+
+
+    def _in_memory(self) -> Any:
+        """The dataset kept in memory after the store could not be written, with a
+        warning naming the store and where the results are."""
+        fallback, exc = self.fallback, self.failure
+        assert fallback is not None and exc is not None
+        fallback.status, fallback.numbers = self.status, self.numbers
+        lost = int((~fallback.written & (self.status != CODE["not-run"])).sum())
+        told = (f"the results of all {self.layout.size} cases are returned in memory "
+                "(result.dataset)") if not lost else (
+                f"the results are returned in memory (result.dataset), but the arrays of "
+                f"{lost} cases written before could not be read back (NaN there; see the "
+                "store)")
+        warnings.warn(
+            f"could not write to the store {self.path} ({exc.strerror or exc}); {told}; the "
+            f"store is incomplete. Save them elsewhere: result.dataset.to_zarr(path)",
+            EnsembleWarning, stacklevel=user_stacklevel())
+        return fallback.dataset()
 
 
 def damaged_store(path: Path, variable: str, exc: BaseException) -> EnsembleError:

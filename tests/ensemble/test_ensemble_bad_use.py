@@ -161,3 +161,39 @@ def test_a_damaged_zarr_chunk_is_named_and_a_retry_of_its_cases_repairs_it(pend,
     repaired = result.retry(cases=[0, 1])
     assert np.array_equal(repaired.dataset["q"].values, good)
     assert np.isfinite(repaired.mean("q").values).all()
+
+
+# -- a full disk under a store ---------------------------------------------------------------------
+@pytest.mark.parametrize("fails_from", [2, 4], ids=["a-block", "the-final-numbers"])
+def test_a_full_disk_keeps_every_computed_case_in_memory(pend, tmp_path, monkeypatch,
+                                                          fails_from):
+    """The disk fills after the first block is written (or once every block is, when
+    the per-case numbers are): every case is returned, in memory, and the warning
+    names the store."""
+    from dalembert.ensemble import store as store_module
+
+    cases = grid(l=[1.0, 1.5, 2.0, 2.5, 3.0, 3.5])
+    memory = run(pend, cases, batch_size=2)
+    opened = store_module.FileSink._open
+    calls = []
+
+    def filling(self):
+        calls.append(1)
+        if len(calls) >= fails_from:
+            raise OSError(28, "No space left on device", str(self.path))
+        return opened(self)
+
+    monkeypatch.setattr(store_module.FileSink, "_open", filling)
+    path = tmp_path / "run.zarr"
+    with pytest.warns(EnsembleWarning) as caught:
+        result = pend.simulate_many((0.0, 1.0), cases, initial_state=released, t_eval=T_EVAL,
+                                    scheduler="serial", progress=False, batch_size=2,
+                                    store=path)
+    (message,) = [str(w.message) for w in caught]
+    assert message.startswith(f"could not write to the store {path} (No space left on device)")
+    assert "the results of all 6 cases are returned in memory (result.dataset)" in message
+    assert result.summary["status"].eq("finished").all()
+    assert result.dataset["q"].chunks is None  # in memory, not read from the store
+    got, want = result.dataset["q"].values, memory.dataset["q"].values
+    assert np.array_equal(got, want), (np.isnan(got).sum(axis=(1, 2)), np.nanmax(abs(got - want)))
+    assert np.array_equal(result.dataset["status"].values, memory.dataset["status"].values)
