@@ -185,6 +185,12 @@ def simulate_many(
         Python loop and they would take over :data:`AUTO_PARALLEL_SECONDS`, else here
         too), ``"serial"``, ``"threads"``,
         ``"processes"`` (a local Dask cluster) or ``"dask"`` (the ``client`` given).
+        On ``"serial"`` and ``"threads"`` the cases run in this process: a crash
+        in a case (a segmentation fault in a user's C extension or ctypes code
+        called from an input, event or ``initial_state`` function) ends this
+        process and every case with it; on ``"processes"`` and ``"dask"`` only
+        that case is lost (status ``"lost"``). ``"auto"`` may choose threads for
+        such code: choose ``"processes"`` for code that may crash.
     client
         A ``dask.distributed.Client`` of any cluster (implies ``scheduler="dask"``).
     workers
