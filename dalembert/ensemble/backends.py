@@ -133,9 +133,7 @@ class Threads(Backend):
             warnings.simplefilter("ignore")
             self._futures = {self._pool.submit(run_batch, self.system, self.settings,
                                                b.indices, b.rows, self.names, self._stop,
-                                               False, _turns_unless_timed(self._turns,
-                                                                          self.settings))
-                             for b in batches}
+                                               False, self._turns) for b in batches}
             while self._futures:
                 done, _ = wait(self._futures, return_when=FIRST_COMPLETED)
                 for future in done:
@@ -171,16 +169,7 @@ def run_packed(pack: ModelPackage, indices: np.ndarray, rows: np.ndarray,
     except (ImportError, ValueError, AttributeError):  # not on a Dask worker
         threads = 1
     return run_batch(system, settings, indices, rows, names, record_warnings=threads == 1,
-                     turns=_turns_unless_timed(_TURNS, settings) if threads > 1 else None)
-
-
-def _turns_unless_timed(turns: threading.Lock, settings: CaseSettings) -> threading.Lock | None:
-    """The threads' turns (:mod:`dalembert.solvers.native.turns`), unless the cases have
-    a time limit: it stops a case by an exception raised in its thread
-    (:class:`~dalembert.ensemble.worker.CaseDeadline`), which could land while the
-    thread takes its turn back and leave the turn held. Without turns the threads
-    run a few percent slower (measured in that module), and stop safely."""
-    return turns if settings.timeout is None else None
+                     turns=_TURNS if threads > 1 else None)
 
 
 class Dask(Backend):

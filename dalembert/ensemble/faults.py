@@ -5,9 +5,7 @@ bad parameter value, a singular KKT matrix at its initial state) is recorded as
 ``"error"`` with its message; an integration that stops midway is ``"failed"``
 with the part computed; a case whose worker process died every time it was tried
 is ``"lost"``; a case the ensemble never reached, because it was interrupted, is
-``"not-run"``; a case stopped at its time limit (``timeout=`` of ``simulate_many``) is
-``"timeout"``, with what it computed before. :data:`SUCCESS` are the statuses that
-need no retry.
+``"not-run"``. :data:`SUCCESS` are the statuses that need no retry.
 """
 
 from __future__ import annotations
@@ -18,8 +16,7 @@ import numpy as np
 
 #: Every status a case can have, in the order of their codes (the ``status``
 #: variable of a stored ensemble holds the code; its attributes name them).
-STATUSES = ("finished", "event", "failed", "interrupted", "error", "lost", "not-run",
-            "timeout")
+STATUSES = ("finished", "event", "failed", "interrupted", "error", "lost", "not-run")
 #: A case with one of these statuses ran to the end of its span (or a terminal event).
 SUCCESS = frozenset({"finished", "event"})
 CODE = {name: code for code, name in enumerate(STATUSES)}
@@ -92,22 +89,6 @@ def lost_outcome(index: int, why: str) -> CaseOutcome:
     return CaseOutcome(index, "lost", f"the worker running this case died ({why}); it was "
                        "tried again and died again: a crash in the case itself (run it alone "
                        "with system.simulate to see), or workers short of memory")
-
-
-def timeout_outcome(index: int, limit: float | None, t_end: float | None, seconds: float,
-                    worker: str, started: float = np.nan) -> CaseOutcome:
-    """The record of a case stopped at its time limit (``limit`` seconds), at ``t_end``
-    if its simulation had started.
-
-    >>> timeout_outcome(2, 0.5, None, 0.5, "").message
-    'stopped after the time limit of 0.5 s per case (timeout=)'
-    """
-    if t_end is None or not np.isfinite(t_end):
-        message = f"stopped after the time limit of {limit:g} s per case (timeout=)"
-    else:
-        message = (f"stopped at t={t_end:.6g} after the time limit of {limit:g} s per case "
-                   "(timeout=); the part computed is kept")
-    return CaseOutcome(index, "timeout", message, seconds, worker, started=started)
 
 
 def not_run_outcome(index: int) -> CaseOutcome:

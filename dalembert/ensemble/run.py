@@ -32,7 +32,6 @@ from ..rules import (
     Function,
     OneOf,
     PositiveInteger,
-    PositiveNumber,
     Rule,
     check_parameters,
     checked_keywords,
@@ -97,7 +96,6 @@ SIMULATE_MANY_PARAMETERS: dict[str, list[Rule]] = {
     "store": [CheckedWhereUsed("a path ending in .zarr or .nc, or None")],
     "overwrite": [Boolean()],
     "progress": [Boolean()],
-    "timeout": [PositiveNumber(), NONE],
 }
 
 
@@ -122,7 +120,6 @@ def simulate_many(
     store: str | os.PathLike | None = None,
     overwrite: bool = False,
     progress: bool = True,
-    timeout: float | None = None,
     **options: Any,
 ) -> EnsembleResult:
     """Simulate ``system`` once per case and gather the results, labelled.
@@ -213,15 +210,6 @@ def simulate_many(
         ``dataset``) reads the new one's arrays from then on.
     progress
         A progress bar (tqdm; it appears once the ensemble has run two seconds).
-    timeout
-        Seconds each case may run (default: no limit). A case over it is stopped and
-        recorded with status ``"timeout"``; the others go on. It is stopped by an
-        exception raised in the thread running it (as Ctrl-C would be), on every
-        scheduler: at once in Python code (a user's function, the Python loop), in
-        the C loop only once its current stretch of steps returns to Python, and a
-        case blocked in one C call (a sleep, a C extension) not before that call
-        returns. With a limit, threads run without taking turns for their Python
-        (a few percent slower).
     options
         ``simulate``'s other keywords (``rtol``, ``method``, ``backend``...), checked
         once here.
@@ -262,7 +250,7 @@ def simulate_many(
                      initial_state=initial_state, case_inputs=case_inputs, outputs=outputs,
                      keep=keep,
                      scheduler=scheduler, client=client, workers=workers,
-                     batch_size=batch_size, progress=progress, timeout=timeout, **options)
+                     batch_size=batch_size, progress=progress, **options)
     run = _Run(system, t_span, cases, arguments, store, overwrite)
     return run.execute(list(range(len(run.cases))), None)
 
@@ -293,7 +281,6 @@ class _Run:
         self.workers = None if workers is None else int(workers)
         self.batch_size = None if batch_size is None else int(batch_size)
         self.progress = a.pop("progress")
-        timeout = a.pop("timeout")
         q0, qd0, t_eval = a.pop("q0"), a.pop("qd0"), a.pop("t_eval")
         parameters, outputs, keep = a.pop("parameters"), a.pop("outputs"), a.pop("keep")
         initial_state = self.arguments["initial_state"]
@@ -321,8 +308,7 @@ class _Run:
             coordinate_values(q0, names, "q0"), coordinate_values(qd0, names, "qd0"),
             parameter_values(self.system.parameters, parameters, coordinates=names,
                              inputs=self._input_names), self.cases.columns,
-            initial_state, keep, outputs, case_inputs,
-            None if timeout is None else float(timeout))
+            initial_state, keep, outputs, case_inputs)
 
     # -- running ---------------------------------------------------------------------
     def execute(self, indices: list[int], before: EnsembleResult | None) -> EnsembleResult:

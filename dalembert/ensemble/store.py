@@ -499,7 +499,7 @@ def _ours(folder: Path) -> bool:
     except (OSError, ValueError):
         return False
     return ((folder / ".zgroup").is_file() and isinstance(attributes, dict)
-            and str(attributes.get("flag_meanings", "")).startswith(" ".join(STATUSES[:7])))
+            and attributes.get("flag_meanings") == " ".join(STATUSES))
 
 
 def _remove(path: Path) -> None:

@@ -30,7 +30,7 @@ from ..solvers.outputs import SOLVED
 from ..system import System
 from ..trajectory import Trajectory
 from .cases import CaseColumns
-from .faults import BatchOutcome, CaseOutcome, error_outcome, timeout_outcome
+from .faults import BatchOutcome, CaseOutcome, error_outcome
 
 #: Quantities a trajectory has at every output time, and their dimensions beyond
 #: ``(case, time)`` (``coordinate``, ``constraint`` or ``input``; none for a scalar).
@@ -76,8 +76,6 @@ class CaseSettings:
     case_inputs
         ``f(case) -> inputs`` (any form of ``simulate``'s ``inputs=``), or ``None``:
         the options then hold placeholders for the inputs.
-    timeout
-        Seconds a case may run (:class:`CaseDeadline`), or ``None``: no limit.
     """
 
     t_span: tuple[float, float]
@@ -91,7 +89,6 @@ class CaseSettings:
     keep: tuple[str, ...] = DEFAULT_KEEP
     outputs: Mapping[str, Output] = field(default_factory=dict)
     case_inputs: Callable[[dict[str, float]], Any] | None = None
-    timeout: float | None = None
 
     @property
     def dynamics(self) -> bool:
@@ -229,23 +226,6 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
     ('finished', (2, 2))
     """
     start, started = time.perf_counter(), time.time()
-    deadline = CaseDeadline(settings.timeout)
-    try:
-        with deadline:
-            outcome = _run_case(system, settings, index, case, worker, record_warnings, start,
-                                started)
-    except CaseTimeout:  # stopped outside the simulation loop (set-up, outputs...)
-        return timeout_outcome(index, settings.timeout, None, time.perf_counter() - start,
-                               worker, started)
-    if deadline.fired and not outcome.ok:  # the loop stopped at the limit: its part kept
-        stopped = timeout_outcome(index, settings.timeout, outcome.numbers.get("t_end"),
-                                  outcome.seconds, worker, started)
-        outcome.status, outcome.message = stopped.status, stopped.message
-    return outcome
-
-
-def _run_case(system: System, settings: CaseSettings, index: int, case: dict[str, float],
-              worker: str, record_warnings: bool, start: float, started: float) -> CaseOutcome:
     caught: list[warnings.WarningMessage] = []
     with warnings.catch_warnings(record=True) if record_warnings else nullcontext() as got:
         if got is not None:
@@ -266,73 +246,6 @@ def _run_case(system: System, settings: CaseSettings, index: int, case: dict[str
     return CaseOutcome(index, str(traj.status), traj.message, seconds, worker, arrays,
                        _numbers(traj, arrays, settings), "\n".join(noted), plan.stretches,
                        started)
-
-
-class CaseTimeout(KeyboardInterrupt):
-    """Raised in a case's thread at its time limit. A ``KeyboardInterrupt``: the
-    simulation loop stops on it as on Ctrl-C, returning the part computed, and a
-    user's ``except Exception`` does not swallow it."""
-
-
-class CaseDeadline:
-    """A case's time limit: a timer that raises :class:`CaseTimeout` in the thread
-    running the case if it is still running after ``seconds``.
-
-    The exception is delivered when that thread next runs Python code (the
-    interpreter checks between bytecodes): in a Python loop or a user's Python
-    function at once, in the C loop between two stretches of steps. A thread blocked
-    in one C call (a sleep, a C extension) is stopped only when that call returns.
-
-    Parameters
-    ----------
-    seconds
-        The limit, or ``None`` (no timer).
-
-    Examples
-    --------
-    >>> with CaseDeadline(None) as deadline:
-    ...     pass
-    >>> deadline.fired
-    False
-    """
-
-    def __init__(self, seconds: float | None) -> None:
-        self.seconds, self.fired = seconds, False
-        self._lock = threading.Lock()
-        self._done = False
-        self._timer: threading.Timer | None = None
-        self._thread = threading.get_ident()
-
-    def __enter__(self) -> CaseDeadline:
-        if self.seconds is not None:
-            self._timer = threading.Timer(self.seconds, self._fire)
-            self._timer.daemon = True
-            self._timer.start()
-        return self
-
-    def _fire(self) -> None:
-        with self._lock:  # never after the case ended (see __exit__)
-            if not self._done:
-                self.fired = True
-                _raise_in(self._thread, CaseTimeout)
-
-    def __exit__(self, *exc: object) -> None:
-        if self._timer is None:
-            return
-        self._timer.cancel()
-        with self._lock:
-            self._done = True
-            if self.fired:  # delivered already, or still pending: then withdrawn here
-                _raise_in(self._thread, None)
-
-
-def _raise_in(thread: int, exception: type[BaseException] | None) -> None:
-    """Raise ``exception`` in the thread ``thread`` at its next Python instruction
-    (``None``: withdraw one not raised yet)."""
-    import ctypes
-
-    ctypes.pythonapi.PyThreadState_SetAsyncExc(
-        ctypes.c_ulong(thread), None if exception is None else ctypes.py_object(exception))
 
 
 def _inputs(system: System, settings: CaseSettings,

@@ -131,10 +131,3 @@ def damper(case: dict[str, float]) -> dict:
     """``case_inputs``: the bead braked along y by ``v = -c y'`` with the case's ``c``."""
     c = case["c"]
     return {"v": lambda t, q, qd: -c * qd[1]}
-
-
-def stuck_at_two(case: dict[str, float]) -> tuple[dict[str, float], None]:
-    """:func:`released`, but the case ``l = 2`` never returns (a Python loop forever)."""
-    while case["l"] == 2.0:
-        pass
-    return released(case)

@@ -197,30 +197,3 @@ def test_a_full_disk_keeps_every_computed_case_in_memory(pend, tmp_path, monkeyp
     got, want = result.dataset["q"].values, memory.dataset["q"].values
     assert np.array_equal(got, want), (np.isnan(got).sum(axis=(1, 2)), np.nanmax(abs(got - want)))
     assert np.array_equal(result.dataset["status"].values, memory.dataset["status"].values)
-
-
-# -- a time limit per case -----------------------------------------------------------------------
-@pytest.mark.parametrize("scheduler", ["serial", "threads"])
-def test_a_case_that_never_returns_is_stopped_at_its_time_limit(pend, scheduler):
-    import time
-
-    from ensemble_models import stuck_at_two
-
-    start = time.perf_counter()
-    with pytest.warns(EnsembleWarning, match=r"1 of 3 cases did not succeed \(1 timeout\); "
-                                             r"the first, case 1: stopped after the time "
-                                             r"limit of 0.5 s per case \(timeout=\)"):
-        result = pend.simulate_many((0.0, 1.0), grid(l=[1.0, 2.0, 3.0]),
-                                    initial_state=stuck_at_two, t_eval=T_EVAL,
-                                    scheduler=scheduler, workers=2, timeout=0.5,
-                                    progress=False)
-    assert time.perf_counter() - start < 30.0
-    assert result.summary["status"].tolist() == ["finished", "timeout", "finished"]
-    assert result.failed == [1]
-    assert np.isnan(result.dataset["q"].values[1]).all()
-    assert np.isfinite(result.dataset["q"].values[[0, 2]]).all()
-
-
-def test_the_time_limit_is_checked_at_the_door(pend):
-    with pytest.raises(EnsembleError, match="timeout"):
-        run(pend, grid(l=[1.0]), timeout=-1.0)
