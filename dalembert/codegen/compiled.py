@@ -21,6 +21,7 @@ from typing import TypeVar
 import numpy as np
 
 from ..equations.lagrange import Equations
+from ..numerics.state_layout import StateLayout
 from . import c_backend
 from .registry import (
     REGISTRY,
@@ -228,6 +229,11 @@ class NumericModel:
     @property
     def pattern(self) -> SparsePattern:
         return self.compiled.pattern
+
+    @property
+    def layout(self) -> StateLayout:
+        """Where ``q`` and ``qd`` sit in a first-order state of this model."""
+        return StateLayout(self.n)
 
     @property
     def holonomic_rows(self) -> tuple[int, ...]:

@@ -115,15 +115,15 @@ class StepProjector:
         self._zeros = np.zeros(n)
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
-        n = self.num.n
-        q = y[:n]
+        layout = self.num.layout
+        q, qd = layout.split(y)
         try:
             q = self.positions(t, q)
-            return np.concatenate([q, self.velocities(t, q, y[n:])])
+            return layout.join(q, self.velocities(t, q, qd))
         except (SingularSystemError, np.linalg.LinAlgError):
             pass
         q = project_positions(self.num, t, q)
-        return np.concatenate([q, project_velocities(self.num, t, q, y[n:])])
+        return layout.join(q, project_velocities(self.num, t, q, qd))
 
     def positions(self, t: float, q: np.ndarray, refactor: bool = False) -> np.ndarray:
         """Simplified Newton with one factorization; the dense path if it stalls.

@@ -32,6 +32,7 @@ from scipy.integrate import BDF, OdeSolver, Radau
 
 from ...codegen.compiled import NumericModel
 from ...inputs import InputSignal
+from ...numerics.state_layout import StateLayout
 from ...options import Baumgarte, Projection, SimulationOptions
 from ..dynamics import first_order_rhs
 from ..initialization import InitializationReport
@@ -110,7 +111,7 @@ class SimulationPlan:
     @property
     def y0(self) -> np.ndarray:
         """The consistent initial state ``[q0, qd0]``."""
-        return np.concatenate([self.initial.q, self.initial.qd])
+        return StateLayout(len(self.initial.q)).join(self.initial.q, self.initial.qd)
 
     def run(self) -> IntegrationResult:
         """Integrate: the raw states and statistics (``System.run`` adds the rest)."""
@@ -155,7 +156,7 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     >>> plan.loop, plan.solver.__name__, plan.stretches
     ('python', 'ControlledDOP853', False)
     """
-    t0, y0 = options.t_span[0], np.concatenate([initial.q, initial.qd])
+    t0, y0 = options.t_span[0], num.layout.join(initial.q, initial.qd)
     rank = initial.rank
     # Rows that depend on the others at the initial configuration only (a singular
     # one: the rank is higher nearby) are all kept: the careful steps leave the
@@ -224,14 +225,13 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         steps = CarefulSteps(careful, partial(_careful_solver, python_solver, careful_rhs,
                                               options.t_span[1], python_options)
                              if stepper is not None else None)
-    n = num.n
     if careful is not None:
         outputs = careful.outputs(outputs, signal)
     return SimulationPlan(
         options=options, initial=initial, loop="c" if native else "python",
         why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
         rhs=rhs, project=project, outputs=outputs,
-        events=tuple(_state_event(e, n, partial(_multipliers, num, signal))
+        events=tuple(_state_event(e, num.layout, partial(_multipliers, num, signal))
                      for e in output.events), parameters=num.p, num=num,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
@@ -253,10 +253,10 @@ def _with_inputs(num: NumericModel, signal: InputSignal | None,
     """``rhs`` with the inputs set from ``signal`` at each state first."""
     if signal is None:
         return rhs
-    n = num.n
+    layout = num.layout
 
     def with_inputs(t: float, y: np.ndarray) -> np.ndarray:
-        num.set_inputs(signal(t, y[:n], y[n:]))
+        num.set_inputs(signal(t, *layout.split(y)))
         return rhs(t, y)
 
     return with_inputs
@@ -285,18 +285,18 @@ def takes_multipliers(event: Callable) -> bool:
     return len(positional) >= 4
 
 
-def _state_event(event: Callable, n: int,
+def _state_event(event: Callable, layout: StateLayout,
                  multipliers: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
                  ) -> Callable:
     """Adapt ``event(t, q, qd)`` or ``event(t, q, qd, lam)`` (the multipliers at the state)
     to SciPy's ``event(t, y)``, keeping its attributes and its name (messages name it)."""
     if takes_multipliers(event):
         def wrapped(t: float, y: np.ndarray) -> float:
-            q, qd = y[:n], y[n:]
+            q, qd = layout.split(y)
             return event(t, q, qd, multipliers(t, q, qd))
     else:
         def wrapped(t: float, y: np.ndarray) -> float:
-            return event(t, y[:n], y[n:])
+            return event(t, *layout.split(y))
 
     update_wrapper(wrapped, event)
     wrapped.terminal = getattr(event, "terminal", False)  # type: ignore[attr-defined]

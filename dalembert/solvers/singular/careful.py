@@ -281,15 +281,15 @@ class CarefulModel:
         careful, cut = self._mode(t)
         if not careful or cut is None:
             return self._rhs(t, y)
-        num, n = self.num, self.num.n
-        q, qd = y[:n], y[n:]
+        num = self.num
+        q, qd = num.layout.split(y)
         Mv, f, Av, c = num.kkt_sparse(t, q, qd)
         try:
             solve = self._dynamics.factor(Mv, Av, cut.scale, cut.V, cut.largest)
         except SingularSystemError as exc:  # the mass matrix, then: the loop says so
             raise SingularSystemError(f"the KKT matrix is singular at t={t:.6g} although "
                                       "the nearly dependent constraints are left out") from exc
-        return np.concatenate([qd, solve(f, c[self.rows] * cut.scale)[0]])
+        return num.layout.join(qd, solve(f, c[self.rows] * cut.scale)[0])
 
     def project(self, t: float, y: np.ndarray) -> np.ndarray:
         """The projection, careful or not; at a step's end (a time beyond every one
@@ -362,9 +362,9 @@ class CarefulModel:
         return self.truncation.V.shape[1] if self.careful and self.truncation else 0
 
     def _careful_project(self, t: float, y: np.ndarray, cut: Truncation | None) -> np.ndarray:
-        num, n = self.num, self.num.n
+        num, layout = self.num, self.num.layout
         assert cut is not None  # careful: measured near
-        q, qd = self._positions_projected(t, y[:n].copy(), cut), y[n:]
+        q, qd = self._positions_projected(t, layout.q(y).copy(), cut), layout.qd(y)
         Mv, _, Av, _ = num.kkt_sparse(t, q, qd)
         b = num.velocity_sparse(t, q)[1]
         pattern = num.pattern
@@ -375,7 +375,7 @@ class CarefulModel:
             raise SingularSystemError(f"the velocity projection at t={t:.6g} is singular "
                                       "although the nearly dependent constraints are left "
                                       "out") from exc
-        return np.concatenate([q, qd + solve(np.zeros(n), -residual * cut.scale)[0]])
+        return layout.join(q, qd + solve(np.zeros(num.n), -residual * cut.scale)[0])
 
     def _positions_projected(self, t: float, q: np.ndarray, cut: Truncation) -> np.ndarray:
         """Newton with minimum-norm steps on the enforced combinations of ``psi`` (one
