@@ -42,9 +42,10 @@ class SparsePattern:
 
     The generated functions return only these entries, in this order; the pattern
     is computed once from the symbolic matrices (an entry that is zero symbolically
-    is zero at every state). Compared by identity; ``derived`` is where the solvers
-    keep what they compute from the pattern alone (index maps, orders), so that a
-    model simulated many times computes it once.
+    is zero at every state). Compared by identity and hashed so: what the solvers
+    compute from the pattern alone (index maps, orders) is kept in their typed caches
+    keyed by it (:mod:`dalembert.solvers.pattern_cache`), so that a model simulated
+    many times computes it once.
     """
 
     n: int
@@ -53,19 +54,23 @@ class SparsePattern:
     M_cols: np.ndarray
     A_rows: np.ndarray
     A_cols: np.ndarray
-    derived: dict = field(default_factory=dict, init=False, repr=False)
+    _remembered: dict = field(default_factory=dict, init=False, repr=False)
 
     def remember(self, key: object, make: Callable[[], T]) -> T:
-        """``derived[key]``, made by ``make()`` the first time.
+        """The value remembered under ``key``, made by ``make()`` the first time.
+
+        The C package's own keyed cache (:mod:`dalembert.solvers.native`); the Python
+        solvers keep theirs in typed :class:`~dalembert.solvers.pattern_cache.PatternCache`
+        objects. A value kept here is shared by every run and thread of the model.
 
         >>> p = SparsePattern(1, 0, np.zeros(1, int), np.zeros(1, int), np.zeros(0, int),
         ...                   np.zeros(0, int))
         >>> p.remember("size", lambda: 1) + p.remember("size", lambda: 2)
         2
         """
-        if key not in self.derived:
-            self.derived[key] = make()
-        return self.derived[key]
+        if key not in self._remembered:
+            self._remembered[key] = make()
+        return self._remembered[key]
 
     def dense_M(self, values: np.ndarray) -> np.ndarray:
         M = np.zeros((self.n, self.n))

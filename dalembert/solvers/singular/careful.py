@@ -39,6 +39,7 @@ from ...numerics.gram import UnitGram
 from ...numerics.singular import GAP, JUMP, NEAR, SCREEN, TRUNCATE, named
 from ..kkt.sparse import matvec
 from ..kkt.truncated import TruncatedKKT
+from ..pattern_cache import PatternCache
 
 
 class Outputs(Protocol):
@@ -182,8 +183,24 @@ def _singular_values(solver: TruncatedKKT, Av: np.ndarray, scale: np.ndarray,
     return np.linalg.norm(solver.transposed_product(Av, scale, V), axis=0)
 
 
-def _remembered(pattern: SparsePattern, rows: np.ndarray, what: str, make: Callable):
-    return pattern.remember((what, rows.tobytes()), make)
+def _truncated(p: SparsePattern, rows: np.ndarray | None) -> TruncatedKKT:
+    assert rows is not None  # always asked for with its rows
+    return TruncatedKKT(p, rows)
+
+
+def _truncated_unit(p: SparsePattern, rows: np.ndarray | None) -> TruncatedKKT:
+    assert rows is not None
+    return TruncatedKKT(p, rows, unit_mass=True)
+
+
+#: The unit-mass Gram matrices of each pattern's sets of rows (index maps only).
+_GRAMS: PatternCache[UnitGram] = PatternCache(
+    lambda p, rows: UnitGram(p.A_rows, p.A_cols, p.m, rows), "unit Gram matrices")
+#: The truncated KKT solves of each pattern's sets of rows, with the mass matrix...
+_TRUNCATED: PatternCache[TruncatedKKT] = PatternCache(_truncated, "truncated KKT solves")
+#: ... and with a unit mass matrix (the position projection).
+_TRUNCATED_UNIT: PatternCache[TruncatedKKT] = PatternCache(_truncated_unit,
+                                                           "truncated projections")
 
 
 class CarefulModel:
@@ -236,15 +253,10 @@ class CarefulModel:
         self._psi_at = np.array([place[int(r)] for r in self.rows[holonomic]], dtype=int)
         self._all_holonomic = bool(holonomic.all())
         hol_rows = self.rows[holonomic]
-        self._gram = _remembered(pattern, self.rows, "unit_gram", lambda: UnitGram(
-            pattern.A_rows, pattern.A_cols, num.m, self.rows))
-        self._hol_gram = self._gram if self._all_holonomic else _remembered(
-            pattern, hol_rows, "unit_gram", lambda: UnitGram(pattern.A_rows, pattern.A_cols,
-                                                             num.m, hol_rows))
-        self._dynamics = _remembered(pattern, self.rows, "truncated_kkt",
-                                     lambda: TruncatedKKT(pattern, self.rows))
-        self._positions = _remembered(pattern, hol_rows, "truncated_projection",
-                                      lambda: TruncatedKKT(pattern, hol_rows, unit_mass=True))
+        self._gram = _GRAMS.get(pattern, self.rows)
+        self._hol_gram = self._gram if self._all_holonomic else _GRAMS.get(pattern, hol_rows)
+        self._dynamics = _TRUNCATED.get(pattern, self.rows)
+        self._positions = _TRUNCATED_UNIT.get(pattern, hol_rows)
 
     def warning(self) -> str:
         """What the run's passages near singular configurations call for saying (``""``
