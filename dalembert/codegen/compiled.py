@@ -160,11 +160,12 @@ class CompiledEquations:
         return self.pattern.dense_A(values[:k]), values[k:]
 
     def bind(self, p: np.ndarray) -> NumericModel:
-        """The functions bound to the model's parameter values ``p`` (the inputs at 0
-        until :meth:`NumericModel.set_inputs`)."""
+        """The functions bound to the model's parameter values ``p`` (the inputs at 0;
+        read-only: a run writes its inputs into its own copy, :meth:`NumericModel.for_run`)."""
         p = np.concatenate([np.asarray(p, dtype=float), np.zeros(len(self.input_names))])
-        return NumericModel(self, p if self.expand_parameters is None
-                            else self.expand_parameters(p))
+        values = p if self.expand_parameters is None else self.expand_parameters(p)
+        values.flags.writeable = False
+        return NumericModel(self, values)
 
 
 @dataclass(frozen=True)
@@ -322,8 +323,24 @@ class NumericModel:
         start = self.compiled.input_offset
         return self.p[start:start + len(self.compiled.input_names)]
 
+    def for_run(self) -> NumericModel:
+        """The same functions and values with a parameter vector of the run's own, whose
+        inputs :meth:`set_inputs` sets (a bound model's values are read-only: whoever
+        shares it, another run or thread, sees them unchanged).
+
+        Examples
+        --------
+        >>> from dalembert.examples import cartesian_pendulum
+        >>> num = cartesian_pendulum.build().numeric()
+        >>> run = num.for_run()
+        >>> run.p is num.p, bool(np.array_equal(run.p, num.p)), num.p.flags.writeable
+        (False, True, False)
+        """
+        return NumericModel(self.compiled, self.p.copy())
+
     def set_inputs(self, values: np.ndarray) -> None:
-        """Set the inputs' values, which every evaluation from now on reads."""
+        """Set the inputs' values, which every evaluation from now on reads (on a run's
+        model, :meth:`for_run`; a bound model's values are read-only)."""
         self.inputs[:] = values
 
     def forces_at_rest(self, t: float, q: np.ndarray) -> np.ndarray:

@@ -156,6 +156,7 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     >>> plan.loop, plan.solver.__name__, plan.stretches
     ('python', 'ControlledDOP853', False)
     """
+    num = num.for_run()  # the run's inputs go in its own parameter vector
     t0, y0 = options.t_span[0], num.layout.join(initial.q, initial.qd)
     rank = initial.rank
     # Rows that depend on the others at the initial configuration only (a singular
