@@ -62,7 +62,7 @@ class StretchRunner:
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
             rows=interpolant, near2=SCREEN)
-        self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
+        self._call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
                              ctypes.addressof(self._run), self._y.ctypes.data,
                              self._K.ctypes.data, solver._stage.ctypes.data)
         self._nfev = 0
