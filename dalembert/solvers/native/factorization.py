@@ -29,8 +29,7 @@ from ...codegen.compiled import SparsePattern
 from ...errors import SingularSystemError
 from ..kkt.factorization import SINGULAR_MESSAGE, Backend, KKTFactorization
 from . import library
-from .structure import (NotApplicable, SchurStructure, model_struct, schur_structure,
-                        work_sizes)
+from .structure import NotApplicable, SchurStructure, model_struct, schur_structure, work_sizes
 
 _MESSAGES = {
     library.SINGULAR_MASS: "a block of the mass matrix is singular even with the active "

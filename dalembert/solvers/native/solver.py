@@ -17,8 +17,7 @@ from ..kkt.sparse import SINGULAR_MESSAGE, matvec
 from ..outputs import SOLVED, output_arrays
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
 from . import library
-from .structure import (NotApplicable, SchurStructure, model_struct, schur_structure,
-                        work_sizes)
+from .structure import NotApplicable, SchurStructure, model_struct, schur_structure, work_sizes
 from .turns import outside_python
 
 DOUBLE = np.dtype(np.float64).itemsize  # bytes, for addresses inside a buffer
