@@ -474,6 +474,12 @@ void solve_schur(const dl_model *md, dl_data *d, double *rhs, double *x) {
   apply_multipliers(md, d, d->y, rhs, x);
 }
 
+/* Whether the band entry at place t = hi (kd + 1) + (hi - lo) joins two active rows. */
+static int unit_gram_active(const dl_model *md, const unsigned char *active, int64_t t) {
+  const int64_t w = md->kd + 1, hi = t / w;
+  return active[md->band_row[hi]] && active[md->band_row[hi - t % w]];
+}
+
 /* The unit blocks' part of the factorization, in flat loops without per-block
  * branching: the same operations as fold_factor_block, block_forward, gram_block and
  * block_residual with nb = 1 (the block keeps 1 / L), only the order of the sums into S
@@ -498,10 +504,9 @@ DL_INLINE int unit_factor(const dl_model *md, dl_data *d, const unsigned char *a
     const int64_t v = md->unit_pair_vec[k];
     z[v] = a[v] * blocks[md->unit_pair_mat[k]];
   }
-  const int64_t w = md->kd + 1;
   for (int64_t k = 0; k < md->n_unit_gram; ++k) {
-    const int64_t t = md->unit_gram_target[k], hi = t / w;  /* S_hi,lo: the band's rows */
-    if (active && !(active[md->band_row[hi]] && active[md->band_row[hi - t % w]])) continue;
+    const int64_t t = md->unit_gram_target[k];
+    if (active && !unit_gram_active(md, active, t)) continue;
     d->S[t] += z[md->unit_gram_i[k]] * z[md->unit_gram_j[k]];
   }
   if (c)
