@@ -40,7 +40,10 @@ class NativeSolver:
     :class:`~dalembert.solvers.projection.StepProjector`, solved by the method of
     :mod:`dalembert.solvers.native`. Raises :class:`NotApplicable` (saying why) for
     models it does not cover: NumPy-generated functions, wide mass blocks or bands.
-    One instance per simulation: its work buffers are not shared between threads.
+    One instance per simulation: its ``dl_data`` (:attr:`data`: the parameter vector,
+    the work buffers, the inputs) is its own, never shared between threads; its
+    ``dl_model`` (:attr:`model`, constant) is shared by every instance over the same
+    compiled model, kept rows and Baumgarte gain.
 
     Parameters
     ----------
