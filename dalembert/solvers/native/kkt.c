@@ -238,7 +238,8 @@ DL_INLINE double fold_weight(double trace, double norm2, int64_t nb) {
 
 /* Block b of M (scattered) with its active internal rows folded in, factored (Mt =
  * L L^T). Each row's weight goes to fold (0: not folded), for the right-hand sides
- * solved later (fold_rhs); with c, u_b += w c_r a_r at once (dl_solve's pass). */
+ * solved later (solve_block_down); with c, u_b += w c_r a_r at once (dl_solve's
+ * pass). */
 DL_INLINE int fold_factor_block(const dl_model *md, dl_data *d, int64_t b,
                                 const unsigned char *active, const double *c, int64_t nb) {
   double *restrict B = d->blocks + md->block_mat[b];
