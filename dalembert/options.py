@@ -323,19 +323,45 @@ def check_events(events: Sequence[Callable]) -> None:
     Traceback (most recent call last):
     ...
     ValueError: The 'events' parameter of simulate: event 0 ('<lambda>') takes (t), so ...
+    >>> def hit(t, q, qd):
+    ...     return q[0]
+    >>> hit.terminal = "yes"
+    >>> check_events([hit])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'events' parameter of simulate: event 0 ('hit') has terminal='yes'; ...
     """
     for k, event in enumerate(events):
+        name = getattr(event, "__name__", type(event).__name__)
+        _check_event_attributes(k, name, event)
         try:
             signature = inspect.signature(event)
         except (TypeError, ValueError):  # a builtin without a signature: accepted
             continue
         if any(_binds(signature, size) for size in (3, 4)):
             continue
-        name = getattr(event, "__name__", type(event).__name__)
         raise ValueError(
             f"The 'events' parameter of simulate: event {k} ({name!r}) takes {signature}, "
             "so it cannot be called as event(t, q, qd) or event(t, q, qd, lam); give it "
             "the parameters t, q, qd (and lam for the multipliers)")
+
+
+def _check_event_attributes(k: int, name: str, event: Callable) -> None:
+    """``terminal`` (``solve_ivp``'s: a bool, or how many occurrences end the run) and
+    ``direction`` (a finite number), where the event sets them."""
+    where = f"The 'events' parameter of simulate: event {k} ({name!r})"
+    terminal = getattr(event, "terminal", False)
+    if not (isinstance(terminal, (bool, np.bool_)) or
+            (isinstance(terminal, (int, np.integer)) and terminal >= 0)):
+        raise ValueError(f"{where} has terminal={terminal!r}; give True (the first "
+                         "occurrence ends the run), False, or the number of occurrences "
+                         "that ends it")
+    direction = getattr(event, "direction", 0)
+    if isinstance(direction, bool) or not isinstance(direction, (int, float, np.number)) \
+            or not math.isfinite(direction):
+        raise ValueError(f"{where} has direction={direction!r}; give a number: positive "
+                         "(events where it goes from negative to positive), negative, or 0 "
+                         "(both)")
 
 
 def _binds(signature: inspect.Signature, size: int) -> bool:

@@ -147,6 +147,15 @@ def pend() -> System:
     return pendulum()
 
 
+def _with(**attributes):
+    """An event function ``q[0]`` with the attributes ``solve_ivp`` reads set."""
+    def crossing(t, q, qd):
+        return q[0]
+    for name, value in attributes.items():
+        setattr(crossing, name, value)
+    return crossing
+
+
 @pytest.mark.parametrize(("options", "culprit"), [
     ({"atol": [1e-9, 1e-9, 1e-9]}, "The 'atol' parameter of simulate must be a finite "
      "positive number or an array of 4 of them (one per position, then one per velocity); "
@@ -172,6 +181,11 @@ def pend() -> System:
      "event(t, q, qd, lam)"),
     ({"events": [lambda t, q, qd: q[0], _bottom]}, "event 1 ('_bottom') takes (t, q, qd, lam, "
      "tau), so it cannot be called"),
+    ({"events": [_with(terminal="yes")]}, "event 0 ('crossing') has terminal='yes'; give True"),
+    ({"events": [_with(terminal=-1)]}, "event 0 ('crossing') has terminal=-1; give True"),
+    ({"events": [_with(direction="up")]}, "event 0 ('crossing') has direction='up'; give a "
+     "number"),
+    ({"events": [_with(direction=np.nan)]}, "event 0 ('crossing') has direction=nan"),
 ])
 def test_simulate_refuses_at_the_door(pend, monkeypatch, options, culprit):
     # nothing past the door runs: no initial state, no plan
