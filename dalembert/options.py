@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .errors import user_stacklevel
+from .errors import StiffStabilizationWarning, user_stacklevel
 from .inputs import InputSignal, input_signal
 from .rules import (
     NONE,
@@ -288,12 +288,14 @@ def simulation_options(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
             "stiff problems, or stabilization='baumgarte'"
         )
+    stabilized = _stabilization(stabilization, baumgarte_gain)
+    _warn_stiff_gain(stabilized, solver, span)
     return SimulationOptions(
         t_span=span,
         method=solver,
         step=StepControl(step_control, _tolerance(rtol), _tolerance(atol),
                          None if first_step is None else float(first_step), float(max_step)),
-        stabilization=_stabilization(stabilization, baumgarte_gain),
+        stabilization=stabilized,
         output=Output(_times(t_eval, span), bool(dense_output), tuple(events), bool(progress)),
         backend=_backend(backend, native),
         redundant_constraints=redundant_constraints,
@@ -407,6 +409,32 @@ def _stabilization(name: str | None, gain: float | None) -> Stabilization:
         raise ValueError(f"baumgarte_gain={gain!r} is given with stabilization={name!r}; "
                          "the gain applies only to stabilization='baumgarte'")
     return Projection() if name == "projection" else None
+
+
+#: Steps an explicit method would need over ``t_span`` for the Baumgarte gain alone
+#: beyond which the gain is said to make the equations stiff.
+STIFF_GAIN_STEPS = 1e5
+
+
+def _warn_stiff_gain(stabilization: Stabilization, solver: type[OdeSolver],
+                     span: tuple[float, float]) -> None:
+    """Warn when the Baumgarte gain ``w`` alone forces an explicit method's steps below
+    about ``3 / w`` (the constraint error's modes decay at the rate ``w``) for more than
+    :data:`STIFF_GAIN_STEPS` steps over ``t_span``."""
+    import scipy.integrate
+
+    if not isinstance(stabilization, Baumgarte) or not issubclass(
+            solver, (scipy.integrate.RK23, scipy.integrate.RK45, scipy.integrate.DOP853)):
+        return
+    w = stabilization.gain
+    steps = abs(span[1] - span[0]) * w / 3
+    if steps > STIFF_GAIN_STEPS:
+        warnings.warn(
+            f"baumgarte_gain={w:g} makes the constraint errors decay in {1 / w:.1g} s: "
+            f"the explicit method {solver.__name__} must take steps about that short, some "
+            f"{steps:.1e} of them over t_span. Choose a gain a few times the fastest motion "
+            "of interest, or an implicit method (method='Radau')",
+            StiffStabilizationWarning, stacklevel=user_stacklevel())
 
 
 def _backend(backend: Backend, native: bool | None) -> Backend:
