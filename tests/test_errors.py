@@ -304,8 +304,8 @@ def _interrupting(rhs):
 def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch, native):
     # The C loop returns to Python after every stretch of steps (one step here), so
     # Ctrl-C lands between stretches too.
-    from dalembert.solvers.running import plan
     from dalembert.solvers.native import NativeSolver, run
+    from dalembert.solvers.running import plan
 
     real = plan.first_order_rhs
     monkeypatch.setattr(plan, "first_order_rhs", lambda *a: _interrupting(real(*a)))

@@ -138,6 +138,25 @@ def test_a_controller_that_raises_returns_the_run_so_far(backend):
     assert isinstance(record[0].message.__cause__, InputError)
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_controller_that_changes_its_arguments_changes_only_its_own_copy(backend):
+    """Writing into the q and qd it is given (wrapping an angle, zeroing a rate) leaves
+    the run alone: the same motion as the law written in SymPy."""
+    def meddling(t, q, qd):
+        torque = pd(t, q, qd)
+        q[0], qd[0] = 5.0, 0.0
+        return torque
+
+    times = np.linspace(0.0, 3.0, 31)
+    ours = pendulum().simulate((0, 3), {theta: 1.0}, inputs=meddling, t_eval=times,
+                               backend=backend)
+    reference = pendulum(-KP * theta - KD * theta.diff()).simulate(
+        (0, 3), {theta: 1.0}, t_eval=times, backend=backend)
+    assert ours.success
+    assert np.abs(ours.q - reference.q).max() < 1e-10
+    assert np.abs(ours.qd - reference.qd).max() < 1e-10
+
+
 @pytest.mark.parametrize(("inputs", "message"), [
     (None, r"the model's inputs u have no values: pass inputs=\{'u': \.\.\.\}"),
     ({"w": 1.0}, r"'w' is not an input of this model \(its inputs: u\)"),

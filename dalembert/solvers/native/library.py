@@ -125,7 +125,10 @@ MIRRORS: dict[str, type[ctypes.Structure]] = {
 
 class LayoutError(c_backend.CompileError):
     """A ctypes mirror does not match its C struct (treated as a failed compile: the C
-    loop does not apply)."""
+    loop does not apply).
+
+    Internal control flow, never seen by a user: :func:`~dalembert.solvers.native.native_solver`
+    turns it into :class:`~dalembert.solvers.native.structure.NotApplicable`."""
 
 
 class _Entry(ctypes.Structure):

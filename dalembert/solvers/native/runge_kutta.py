@@ -2,7 +2,7 @@
 
 :class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) subclass SciPy's
 solvers, through their versions under a choice of step-size controller
-(:mod:`~dalembert.solvers.steppers.step_control`), and replace only ``_step_impl``: the
+(:mod:`~dalembert.solvers.steppers.scipy_ivp`), and replace only ``_step_impl``: the
 stages, the error estimate and the step-size control run in ``runge_kutta.c`` with the
 same tableau, the same formulas and constants, so the steps taken are those of
 ``ControlledDOP853`` (SciPy's own under ``step_control="scipy"``) up to rounding
@@ -23,8 +23,15 @@ import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
 from ..steppers.runge_kutta import Tableau
-from ..steppers.scipy_ivp import INTERPOLATOR_POWER, Dop853DenseOutput, RungeKutta, tableau_of
-from ..steppers.step_control import ControlledDOP853, ControlledRK23, ControlledRK45
+from ..steppers.scipy_ivp import (
+    INTERPOLATOR_POWER,
+    ControlledDOP853,
+    ControlledRK23,
+    ControlledRK45,
+    Dop853DenseOutput,
+    RungeKutta,
+    tableau_of,
+)
 from . import library
 from .solver import NativeSolver
 

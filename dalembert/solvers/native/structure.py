@@ -42,7 +42,12 @@ BAND_MAX = 64
 
 
 class NotApplicable(ValueError):
-    """The pattern does not suit the native solve (the reason is the message)."""
+    """The pattern does not suit the native solve (the reason is the message).
+
+    Internal control flow, never seen by a user: the plan
+    (:func:`~dalembert.solvers.running.plan.plan_simulation`) catches it and runs the
+    Python loop, keeping the message as the reason the C loop does not apply
+    (``backend="c"`` turns that reason into a user error)."""
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ bound numeric model and the consistent initial state, and decides once
   and the projection in C) where it applies and ``backend`` allows, else in Python,
   with the reason the C loop does not apply;
 - the solver class: SciPy's method, under the chosen step-size controller
-  (:mod:`~dalembert.solvers.steppers.step_control`), stepping in C where the loop is;
+  (:mod:`~dalembert.solvers.steppers.scipy_ivp`), stepping in C where the loop is;
 - whether whole stretches of steps run in C (:class:`~.loop.StretchLoop`): with
   the C loop's projection and neither events nor dense output;
 - the right-hand side, the projection after each step and the trajectory's outputs.
@@ -39,9 +39,9 @@ from ..native import NATIVE_METHODS, NotApplicable, native_solver
 from ..outputs import evaluate_outputs
 from ..projection import StepProjector
 from ..singular.careful import CarefulModel, CarefulSteps, Outputs
-from ..singular.watch import Singularity, singular_diagnosis
+from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_diagnosis
 from ..state import accelerations_at
-from ..steppers.step_control import ControlledSteps, controlled_class
+from ..steppers.scipy_ivp import ControlledSteps, controlled_class
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
 
@@ -88,6 +88,10 @@ class SimulationPlan:
         (:mod:`~dalembert.solvers.singular.careful`):
         in the Python loop, its ``rhs`` and ``project``; the C loop takes them the Python
         way. ``None`` without them.
+    runaway
+        ``runaway(t, y)``: what in the model grew most since the start, for the message
+        of a run whose steps keep shrinking toward a limit time
+        (:mod:`~dalembert.solvers.singular.watch`).
     """
 
     options: SimulationOptions
@@ -104,6 +108,7 @@ class SimulationPlan:
     diagnose: Diagnosis = field(repr=False)
     singular: Singularity | None = field(repr=False, default=None)
     careful: CarefulSteps | None = field(repr=False, default=None)
+    runaway: Runaway | None = field(repr=False, default=None)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     num: NumericModel | None = field(repr=False, default=None)
 
@@ -121,7 +126,7 @@ class SimulationPlan:
             self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
-            singular=self.singular, careful=self.careful,
+            singular=self.singular, careful=self.careful, runaway=self.runaway,
             **self.solver_options)
 
 
@@ -235,7 +240,7 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
                      for e in output.events), parameters=num.p, num=num,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
-        careful=steps)
+        careful=steps, runaway=runaway_diagnosis(num, rows, initial.names, t0, y0))
 
 
 def _careful_solver(cls: type[OdeSolver], rhs: Callable, t_bound: float,
