@@ -649,7 +649,27 @@ static void baumgarte(const dl_model *md, dl_data *d, double t, const double *q,
   for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * d->psi[k];
 }
 
-/* y' = [qd, qdd] at (t, y); lambda may be NULL. */
+static int finite_all(const double *x, int64_t k) {
+  for (int64_t i = 0; i < k; ++i)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
+/* The KKT values at (t, y), evaluated again (a failed factorization overwrote them),
+ * hold a NaN or an infinity: M (its blocks), f (u by slot) or c. */
+static int kkt_values_not_finite(const dl_model *md, dl_data *d, double t, const double *y) {
+  const int64_t n = md->n;
+  if (eval_kkt(md, d, t, y, y + n) != DL_OK) return 0;
+  if (md->baumgarte != 0.0 && md->m) baumgarte(md, d, t, y, y + n, d->c);
+  return !finite_all(d->blocks, md->block_mat[md->n_blocks]) || !finite_all(d->u, n) ||
+         !finite_all(d->c, md->m);
+}
+
+/* y' = [qd, qdd] at (t, y); lambda may be NULL. A factorization that fails on values
+ * that are not finite (a force undefined at the state, a stage state gone NaN, a time
+ * that overflows) is not a singular matrix: the accelerations are then NaN, as the
+ * Python loop's solve gives them, so the step is cut and the loop names what is not
+ * finite. Looked at only after a failure: nothing is added to the solves that work. */
 int dl_rhs(const dl_model *md, dl_data *d, double t, const double *y, double *ydot,
            double *lambda) {
   const int64_t n = md->n;
@@ -657,7 +677,15 @@ int dl_rhs(const dl_model *md, dl_data *d, double t, const double *y, double *yd
   if (status != DL_OK) return status;
   if (md->baumgarte != 0.0 && md->m) baumgarte(md, d, t, y, y + n, d->c);
   memcpy(ydot, y + n, (size_t)n * sizeof(double));
-  return dl_solve(md, d, ydot + n, lambda);
+  const int solved = dl_solve(md, d, ydot + n, lambda);
+  if ((solved == DL_SINGULAR_MASS || solved == DL_SINGULAR_CONSTRAINTS) &&
+      kkt_values_not_finite(md, d, t, y)) {
+    for (int64_t i = 0; i < n; ++i) ydot[n + i] = NAN;
+    if (lambda)
+      for (int64_t r = 0; r < md->m; ++r) lambda[r] = NAN;
+    return DL_OK;
+  }
+  return solved;
 }
 
 
