@@ -5,6 +5,7 @@ Write ``T``, ``V``, forces and constraints in SymPy; get the constrained equatio
 forces and the constraints held to rounding level.
 """
 
+from .ensemble.run import simulate_many as _simulate_many
 from .errors import (  # every error and warning (errors.__all__)
     BadCacheEntryWarning,
     CompileError,
@@ -34,6 +35,7 @@ from .errors import (  # every error and warning (errors.__all__)
     RedundantConstraintsWarning,
     SingularConfigurationWarning,
     SingularSystemError,
+    StiffStabilizationWarning,
     SymbolicSolveError,
     TooManyConstraintsError,
     TrajectoryFileError,
@@ -43,8 +45,13 @@ from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
 from .model.forces import PointForce
 from .model.parameters import ParameterSet
-from .system import System
+from .system import System, install_ensemble
 from .trajectory import Trajectory
+
+# System.simulate_many runs an ensemble, a later layer than the System's: wired here, at
+# the package's root, which imports both (the ensemble imports only NumPy at once; Dask,
+# xarray and pandas when an ensemble runs).
+install_ensemble(_simulate_many)
 
 __version__ = "0.1.0"
 
@@ -98,6 +105,7 @@ __all__ = [
     "RedundantConstraintsWarning",
     "SingularConfigurationWarning",
     "SingularSystemError",
+    "StiffStabilizationWarning",
     "SymbolicSolveError",
     "System",
     "TooManyConstraintsError",

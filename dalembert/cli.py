@@ -50,7 +50,10 @@ DEFAULT_MODES = 3
 
 
 class _CommandError(Exception):
-    """A user-facing failure: printed as one line, exit status attached."""
+    """A user-facing failure: printed as one line, exit status attached.
+
+    Internal control flow of the command line: :func:`main` catches it and prints
+    its message; it never escapes as a traceback."""
 
     def __init__(self, message: str, status: int = EXIT_ERROR) -> None:
         super().__init__(message)

@@ -238,7 +238,9 @@ def _function(f: Callable[..., Any], what: str) -> Source:
                          "called as u(t, q, qd) (a controller of the state) or u(t) (of "
                          "the time); give it one of these signatures") from None
     if takes_state:
-        return lambda t, q, qd: f(t, q, qd)
+        # copies: the arrays given are the run's state, and a function may well change
+        # its arguments for its own use (wrapping an angle, say)
+        return lambda t, q, qd: f(t, q.copy(), qd.copy())
     return lambda t, q, qd: f(t)
 
 

@@ -1,12 +1,15 @@
 """The options of a simulation: one declared table, checked once, turned into typed values.
 
-:func:`simulation_options` is the only place where the keywords of
-:meth:`System.simulate <dalembert.System.simulate>` are checked: each against
-the constraints declared for it in :data:`SIMULATE_PARAMETERS` (one uniform
-message, "The 'rtol' parameter of simulate must be ...; got ..."), then the rules
-that tie two options together. What comes out is a :class:`SimulationOptions`
-made of typed values (a :class:`Baumgarte` stabilization holding its gain, a
-:class:`StepControl` holding its tolerances), which the layers below trust.
+:data:`SIMULATE_PARAMETERS` declares the forms each run option of
+:meth:`System.simulate <dalembert.System.simulate>` may take. Its rows are bound to
+``simulate``'s signature and to :func:`simulation_options`'s
+(:func:`dalembert.rules.checked_keywords`: a keyword without its row, or a row without
+its keyword, fails the import) and checked once, at whichever of them is called (one
+uniform message, "The 'rtol' parameter of simulate must be ...; got ...").
+:func:`simulation_options` then applies the rules that tie two options together. What
+comes out is a :class:`SimulationOptions` made of typed values (a :class:`Baumgarte`
+stabilization holding its gain, a :class:`StepControl` holding its tolerances), which
+the layers below trust.
 
 >>> options = simulation_options((0, 1), stabilization="baumgarte", baumgarte_gain=20.0)
 >>> options.stabilization
@@ -24,18 +27,34 @@ import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
-from .errors import user_stacklevel
+from .errors import StiffStabilizationWarning, user_stacklevel
 from .inputs import InputSignal, input_signal
+from .rules import (
+    NONE,
+    Boolean,
+    Callables,
+    CheckedWhereUsed,
+    Items,
+    OneOf,
+    PositiveInteger,
+    PositiveNumber,
+    Rule,
+    SolverClass,
+    Times,
+    Tolerance,
+    checked_keywords,
+)
 
-#: SciPy's solvers by the names ``solve_ivp`` knows them by.
-METHODS: dict[str, type[OdeSolver]] = {
-    "RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA,
-}
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolver
+
+#: SciPy's solvers by the names ``solve_ivp`` knows them by (``scipy.integrate`` is
+#: imported when a simulation is set up, not with dalembert: it is a large import).
+METHODS: tuple[str, ...] = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 Backend = Literal["auto", "c", "python"]
 StepController = Literal["PI", "scipy"]
@@ -109,7 +128,7 @@ class SimulationOptions:
     """Every option of one simulation, checked (see :func:`simulation_options`)."""
 
     t_span: tuple[float, float]
-    method: type[OdeSolver] = DOP853
+    method: type[OdeSolver]
     step: StepControl = field(default_factory=StepControl)
     stabilization: Stabilization = field(default_factory=Projection)
     output: Output = field(default_factory=Output)
@@ -122,127 +141,22 @@ class SimulationOptions:
 
 # --------------------------------------------------------------------------- the table
 
+#: ``redundant_constraints`` of a System, a run, an equilibrium.
+REDUNDANT_CONSTRAINTS: list[Rule] = [OneOf(REDUNDANT_MODES)]
+#: Parameter values overriding a model's: checked as they are read, against the model's
+#: names (a ParameterError naming the key).
+PARAMETER_VALUES: list[Rule] = [CheckedWhereUsed("a dict {parameter: value} or None")]
+#: Coordinates held fixed: checked as they are read, against the model's coordinates (an
+#: InitialConditionError naming the entry).
+FIXED: list[Rule] = [CheckedWhereUsed("a sequence of coordinates or None")]
+#: The values of a model's inputs (:func:`dalembert.inputs.input_signal` checks them
+#: against the model's inputs).
+INPUT_VALUES: list[Rule] = [CheckedWhereUsed("input values (see dalembert.inputs)")]
 
-class Rule(Protocol):
-    """One accepted form of a value: ``accepts(value)`` and how to say it."""
-
-    @property
-    def description(self) -> str: ...
-
-    def accepts(self, value: object) -> bool: ...
-
-
-@dataclass(frozen=True)
-class OneOf:
-    choices: tuple
-
-    @property
-    def description(self) -> str:
-        return "one of " + ", ".join(repr(c) for c in self.choices)
-
-    def accepts(self, value: object) -> bool:
-        return any(value is c or (c is not None and _same(value, c)) for c in self.choices)
-
-
-def _same(value: object, choice: object) -> bool:
-    try:
-        return bool(value == choice) and type(value) is type(choice)
-    except (TypeError, ValueError):
-        return False
-
-
-@dataclass(frozen=True)
-class PositiveNumber:
-    """A positive real number: finite, or also ``inf`` (a step limit)."""
-
-    infinite: bool = False
-
-    @property
-    def description(self) -> str:
-        return "a positive number (inf allowed)" if self.infinite else \
-            "a finite positive number"
-
-    def accepts(self, value: object) -> bool:
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
-            return False
-        v = float(value)
-        return v > 0 and (math.isfinite(v) or (self.infinite and v == math.inf))
-
-
-@dataclass(frozen=True)
-class Tolerance:
-    """A finite positive number, or an array of them (one per state component)."""
-
-    description: str = "a finite positive number or an array of them"
-
-    def accepts(self, value: object) -> bool:
-        if isinstance(value, bool):
-            return False
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError):
-            return False
-        if array.dtype.kind not in "iuf":  # strings, objects, booleans, complex
-            return False
-        return array.size > 0 and array.ndim <= 1 and bool(np.all(np.isfinite(array))
-                                                           & np.all(array > 0))
-
-
-@dataclass(frozen=True)
-class Times:
-    """A 1-D array of numbers (times; whether they are finite, ordered and inside
-    ``t_span`` is checked with ``t_span``, which says where they are not)."""
-
-    description: str = "a 1-D array of times"
-
-    def accepts(self, value: object) -> bool:
-        if isinstance(value, (str, bytes)):
-            return False
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError):
-            return False
-        return array.ndim == 1 and (array.size == 0 or array.dtype.kind in "iuf")
-
-
-@dataclass(frozen=True)
-class Boolean:
-    description: str = "True or False"
-
-    def accepts(self, value: object) -> bool:
-        return isinstance(value, (bool, np.bool_))
-
-
-@dataclass(frozen=True)
-class SolverClass:
-    description: str = "a scipy.integrate.OdeSolver subclass"
-
-    def accepts(self, value: object) -> bool:
-        return isinstance(value, type) and issubclass(value, OdeSolver)
-
-
-@dataclass(frozen=True)
-class Callables:
-    description: str = "a sequence of callables event(t, q, qd)"
-
-    def accepts(self, value: object) -> bool:
-        return (isinstance(value, Sequence) and not isinstance(value, (str, bytes))
-                and all(callable(e) for e in value))
-
-
-@dataclass(frozen=True)
-class IsNone:
-    description: str = "None"
-
-    def accepts(self, value: object) -> bool:
-        return value is None
-
-
-NONE = IsNone()
-
-#: Every option of ``simulate`` and the forms it may take.
+#: Every option of ``simulate`` that makes its :class:`SimulationOptions` (but the
+#: inputs, whose form depends on the model) and the forms it may take.
 SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
-    "method": [OneOf(tuple(METHODS)), SolverClass()],
+    "method": [OneOf(METHODS), SolverClass()],
     "rtol": [Tolerance()],
     "atol": [Tolerance()],
     "step_control": [OneOf(STEP_CONTROLS)],
@@ -252,7 +166,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "baumgarte_gain": [PositiveNumber(), NONE],
     "backend": [OneOf(BACKENDS)],
     "native": [Boolean(), NONE],
-    "redundant_constraints": [OneOf(REDUNDANT_MODES)],
+    "redundant_constraints": REDUNDANT_CONSTRAINTS,
     "velocity_projection": [OneOf(VELOCITY_PROJECTIONS)],
     "dense_output": [Boolean()],
     "progress": [Boolean()],
@@ -261,36 +175,39 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "sample_time": [PositiveNumber(), NONE],
 }
 
+#: The keywords of :func:`simulation_options`: ``simulate``'s run options and what the
+#: System tells of its model.
+OPTIONS_PARAMETERS: dict[str, list[Rule]] = {
+    **SIMULATE_PARAMETERS,
+    "inputs": INPUT_VALUES,
+    "state_size": [PositiveInteger(), NONE],
+    "input_names": [Items()],
+}
 
-def check_parameters(values: Mapping[str, object], table: Mapping[str, list[Rule]],
-                     caller: str) -> None:
-    """Raise one uniform ``ValueError`` for the first value no rule of its entry accepts.
+
+def run_options(arguments: Mapping[str, object]) -> dict[str, object]:
+    """The run options (:func:`simulation_options`'s keywords that ``simulate`` takes)
+    among a call's ``arguments``: what a function taking them as parameters of its own
+    passes on, so that an option added to the table reaches the run with no other edit.
 
     Parameters
     ----------
-    values
-        The keyword arguments to check, by name (every name must be in ``table``).
-    table
-        The accepted forms of each keyword.
-    caller
-        The function's name, for the message.
+    arguments
+        A call's arguments by name.
 
-    >>> check_parameters({"backend": "gpu"}, SIMULATE_PARAMETERS, "simulate")
-    Traceback (most recent call last):
-    ...
-    ValueError: The 'backend' parameter of simulate must be one of 'auto', 'c', 'python'; got 'gpu'.
+    Examples
+    --------
+    >>> run_options({"self": None, "q0": [1.0], "rtol": 1e-9, "inputs": None})
+    {'rtol': 1e-09, 'inputs': None}
     """
-    for name, value in values.items():
-        rules = table[name]
-        if not any(rule.accepts(value) for rule in rules):
-            forms = " or ".join(rule.description for rule in rules)
-            raise ValueError(f"The {name!r} parameter of {caller} must be {forms}; "
-                             f"got {value!r}.")
+    return {name: value for name, value in arguments.items()
+            if name in OPTIONS_PARAMETERS and name not in ("state_size", "input_names")}
 
 
 # --------------------------------------------------------------------------- the door
 
 
+@checked_keywords(OPTIONS_PARAMETERS, caller="simulate")
 def simulation_options(
     t_span: Sequence[float],
     *,
@@ -323,7 +240,7 @@ def simulation_options(
         As in :func:`scipy.integrate.solve_ivp`.
     step_control
         The explicit Runge-Kutta methods' step-size controller, ``"PI"`` or
-        ``"scipy"`` (:mod:`dalembert.solvers.steppers.step_control`).
+        ``"scipy"`` (:mod:`dalembert.solvers.steppers.scipy_ivp`).
     stabilization, baumgarte_gain
         ``"projection"``, ``"baumgarte"`` (with a finite positive gain, default 10) or
         ``None``; a gain with another stabilization is an error.
@@ -355,16 +272,7 @@ def simulation_options(
     ...
     ValueError: The 'atol' parameter of simulate must be ... or an array of 4 of them ...
     """
-    given = {
-        "method": method, "rtol": rtol, "atol": atol, "step_control": step_control,
-        "first_step": first_step, "max_step": max_step, "stabilization": stabilization,
-        "baumgarte_gain": baumgarte_gain, "backend": backend, "native": native,
-        "redundant_constraints": redundant_constraints,
-        "velocity_projection": velocity_projection, "events": events,
-        "dense_output": dense_output, "progress": progress, "t_eval": t_eval,
-        "sample_time": sample_time,
-    }
-    check_parameters(given, SIMULATE_PARAMETERS, "simulate")
+    # each keyword has been checked against its row of OPTIONS_PARAMETERS at the door
     check_events(events)
     if state_size is not None:
         _check_tolerance_sizes({"rtol": rtol, "atol": atol}, state_size)
@@ -372,18 +280,22 @@ def simulation_options(
     if first_step is not None and first_step > abs(span[1] - span[0]):
         raise ValueError(f"first_step={first_step!r} is longer than t_span {span}; give a "
                          "first step inside the span, or leave it None")
-    solver = METHODS[method] if isinstance(method, str) else method
-    if stabilization == "projection" and solver is LSODA:
+    import scipy.integrate  # here, not when dalembert is imported: a large import
+
+    solver = getattr(scipy.integrate, method) if isinstance(method, str) else method
+    if stabilization == "projection" and solver is scipy.integrate.LSODA:
         raise ValueError(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
             "stiff problems, or stabilization='baumgarte'"
         )
+    stabilized = _stabilization(stabilization, baumgarte_gain)
+    _warn_stiff_gain(stabilized, solver, span)
     return SimulationOptions(
         t_span=span,
         method=solver,
         step=StepControl(step_control, _tolerance(rtol), _tolerance(atol),
                          None if first_step is None else float(first_step), float(max_step)),
-        stabilization=_stabilization(stabilization, baumgarte_gain),
+        stabilization=stabilized,
         output=Output(_times(t_eval, span), bool(dense_output), tuple(events), bool(progress)),
         backend=_backend(backend, native),
         redundant_constraints=redundant_constraints,
@@ -413,19 +325,45 @@ def check_events(events: Sequence[Callable]) -> None:
     Traceback (most recent call last):
     ...
     ValueError: The 'events' parameter of simulate: event 0 ('<lambda>') takes (t), so ...
+    >>> def hit(t, q, qd):
+    ...     return q[0]
+    >>> hit.terminal = "yes"
+    >>> check_events([hit])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'events' parameter of simulate: event 0 ('hit') has terminal='yes'; ...
     """
     for k, event in enumerate(events):
+        name = getattr(event, "__name__", type(event).__name__)
+        _check_event_attributes(k, name, event)
         try:
             signature = inspect.signature(event)
         except (TypeError, ValueError):  # a builtin without a signature: accepted
             continue
         if any(_binds(signature, size) for size in (3, 4)):
             continue
-        name = getattr(event, "__name__", type(event).__name__)
         raise ValueError(
             f"The 'events' parameter of simulate: event {k} ({name!r}) takes {signature}, "
             "so it cannot be called as event(t, q, qd) or event(t, q, qd, lam); give it "
             "the parameters t, q, qd (and lam for the multipliers)")
+
+
+def _check_event_attributes(k: int, name: str, event: Callable) -> None:
+    """``terminal`` (``solve_ivp``'s: a bool, or how many occurrences end the run) and
+    ``direction`` (a finite number), where the event sets them."""
+    where = f"The 'events' parameter of simulate: event {k} ({name!r})"
+    terminal = getattr(event, "terminal", False)
+    if not (isinstance(terminal, (bool, np.bool_)) or
+            (isinstance(terminal, (int, np.integer)) and terminal >= 0)):
+        raise ValueError(f"{where} has terminal={terminal!r}; give True (the first "
+                         "occurrence ends the run), False, or the number of occurrences "
+                         "that ends it")
+    direction = getattr(event, "direction", 0)
+    if isinstance(direction, bool) or not isinstance(direction, (int, float, np.number)) \
+            or not math.isfinite(direction):
+        raise ValueError(f"{where} has direction={direction!r}; give a number: positive "
+                         "(events where it goes from negative to positive), negative, or 0 "
+                         "(both)")
 
 
 def _binds(signature: inspect.Signature, size: int) -> bool:
@@ -471,6 +409,32 @@ def _stabilization(name: str | None, gain: float | None) -> Stabilization:
         raise ValueError(f"baumgarte_gain={gain!r} is given with stabilization={name!r}; "
                          "the gain applies only to stabilization='baumgarte'")
     return Projection() if name == "projection" else None
+
+
+#: Steps an explicit method would need over ``t_span`` for the Baumgarte gain alone
+#: beyond which the gain is said to make the equations stiff.
+STIFF_GAIN_STEPS = 1e5
+
+
+def _warn_stiff_gain(stabilization: Stabilization, solver: type[OdeSolver],
+                     span: tuple[float, float]) -> None:
+    """Warn when the Baumgarte gain ``w`` alone forces an explicit method's steps below
+    about ``3 / w`` (the constraint error's modes decay at the rate ``w``) for more than
+    :data:`STIFF_GAIN_STEPS` steps over ``t_span``."""
+    import scipy.integrate
+
+    if not isinstance(stabilization, Baumgarte) or not issubclass(
+            solver, (scipy.integrate.RK23, scipy.integrate.RK45, scipy.integrate.DOP853)):
+        return
+    w = stabilization.gain
+    steps = abs(span[1] - span[0]) * w / 3
+    if steps > STIFF_GAIN_STEPS:
+        warnings.warn(
+            f"baumgarte_gain={w:g} makes the constraint errors decay in {1 / w:.1g} s: "
+            f"the explicit method {solver.__name__} must take steps about that short, some "
+            f"{steps:.1e} of them over t_span. Choose a gain a few times the fastest motion "
+            "of interest, or an implicit method (method='Radau')",
+            StiffStabilizationWarning, stacklevel=user_stacklevel())
 
 
 def _backend(backend: Backend, native: bool | None) -> Backend:

@@ -15,11 +15,10 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import sympy as sp
-from scipy.integrate import OdeSolver
 
-from .codegen import compiled as codegen
 from .codegen.compiled import CompiledEquations, NumericModel
-from .equations.lagrange import Equations, derive_equations
+from .definition import Definition, SymbolicDefinition
+from .equations.lagrange import Equations
 from .errors import (
     InitialConditionsAdjusted,
     InputError,
@@ -30,7 +29,6 @@ from .errors import (
     user_stacklevel,
 )
 from .inputs import InputSignal
-from .model.coordinates import t as time_symbol
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
@@ -38,26 +36,68 @@ from .model.sympy_mechanics import from_lagranges_method, is_sympy_method
 from .model.values import CoordinateValues, coordinate_values
 from .numerics.state_layout import StateLayout
 from .options import (
+    FIXED,
+    INPUT_VALUES,
+    PARAMETER_VALUES,
+    REDUNDANT_CONSTRAINTS,
     SIMULATE_PARAMETERS,
     Backend,
     RedundantConstraints,
     SimulationOptions,
     StepController,
     VelocityProjection,
-    check_parameters,
+    run_options,
     simulation_options,
 )
+from .rules import NONE, CheckedWhereUsed, FiniteNumber, Rule, checked_keywords, unchecked
 from .solvers.initialization import InitializationReport, consistent_state
-from .solvers.native.library import prepare_runtime
-from .solvers.running.integrate import IntegrationResult
-from .solvers.running.plan import SimulationPlan, plan_simulation
-from .solvers.running.sampled import sampled_schedule
-from .solvers.running.segments import Schedule, SegmentState, run_segments
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
 
-if TYPE_CHECKING:  # statics is imported on first use: it pulls in scipy.optimize
+if TYPE_CHECKING:  # imported on first use: statics pulls in scipy.optimize, the running
+    # layer scipy.integrate (large imports, not made by ``import dalembert``)
+    from scipy.integrate import OdeSolver
+
+    from .solvers.running.integrate import IntegrationResult
+    from .solvers.running.plan import SimulationPlan
+    from .solvers.running.segments import SegmentState
     from .statics import Equilibrium, Linearization
+
+#: A piece of the model (energies, constraints, forces...): build_model checks each.
+MODEL_PART: list[Rule] = [CheckedWhereUsed("a piece of the model (see dalembert.System)")]
+#: The keywords of :meth:`System.simulate`: the run options, the inputs (checked against
+#: the model's), and what belongs to one run (parameters, fixed coordinates).
+SIMULATE: dict[str, list[Rule]] = {
+    **SIMULATE_PARAMETERS,
+    "redundant_constraints": [*REDUNDANT_CONSTRAINTS, NONE],  # None: the System's own
+    "inputs": INPUT_VALUES,
+    "parameters": PARAMETER_VALUES,
+    "fixed": FIXED,
+}
+
+
+#: What runs :meth:`System.simulate_many`: :func:`dalembert.ensemble.simulate_many`, a
+#: later layer, which the System does not import (docs/design.md): the package's root
+#: installs it (:func:`install_ensemble`), as it imports both.
+_ENSEMBLE: Callable[..., Any] | None = None
+
+
+def install_ensemble(runner: Callable[..., Any]) -> None:
+    """Make ``runner(system, t_span, cases, **options)`` what
+    :meth:`System.simulate_many` calls.
+
+    Parameters
+    ----------
+    runner
+        The ensemble's entry point, :func:`dalembert.ensemble.simulate_many`.
+
+    Examples
+    --------
+    >>> import dalembert.ensemble
+    >>> install_ensemble(dalembert.ensemble.simulate_many)  # as dalembert does
+    """
+    global _ENSEMBLE
+    _ENSEMBLE = runner
 
 
 class System:
@@ -117,10 +157,12 @@ class System:
     True
     """
 
-    #: ``M`` comes from a kinetic energy, which must not be negative (a Lagrangian
-    #: given as ``lagrangian=`` may have an indefinite quadratic part).
-    _kinetic_energy = True
-
+    @checked_keywords({
+        "kinetic": MODEL_PART, "potential": MODEL_PART, "lagrangian": MODEL_PART,
+        "constraints": MODEL_PART, "generalized_forces": MODEL_PART, "forces": MODEL_PART,
+        "parameters": PARAMETER_VALUES, "velocities": MODEL_PART, "name": MODEL_PART,
+        "redundant_constraints": REDUNDANT_CONSTRAINTS, "inputs": MODEL_PART,
+    }, caller="System")
     def __init__(
         self,
         coordinates: Iterable[object],
@@ -141,14 +183,55 @@ class System:
             raise ModelError(
                 f"System takes coordinates, not a {type(coordinates).__name__}: use "
                 "System.from_lagranges_method(method, parameters=...) for a LagrangesMethod")
-        self.redundant_constraints = _check_redundant(redundant_constraints)
-        self.model: Model = build_model(
+        model = build_model(
             coordinates, kinetic=kinetic, potential=potential, lagrangian=lagrangian,
             constraints=constraints, generalized_forces=generalized_forces, forces=forces,
             velocities=velocities, name=name, inputs=inputs,
         )
-        self.parameter_values = parameter_values(self.model.parameters, parameters)
-        self._kinetic_energy = lagrangian is None
+        self._hold(SymbolicDefinition(model, kinetic_energy=lagrangian is None), parameters,
+                   redundant_constraints)
+
+    @classmethod
+    @checked_keywords({"parameters": PARAMETER_VALUES,
+                       "redundant_constraints": REDUNDANT_CONSTRAINTS}, caller="System")
+    def from_definition(
+        cls,
+        definition: Definition,
+        *,
+        parameters: Mapping[Any, object] | None = None,
+        redundant_constraints: RedundantConstraints = "minimum-norm",
+    ) -> System:
+        """The System of a :class:`~dalembert.definition.Definition` other than a symbolic
+        model's (a Multibody's, whose code is compiled part by part).
+
+        Parameters
+        ----------
+        definition
+            The names, parameters and code of the model.
+        parameters
+            Numeric values of its parameters.
+        redundant_constraints
+            As for :class:`System`.
+
+        Examples
+        --------
+        >>> from dalembert.multibody import chain
+        >>> mb = chain(2, 1.0, 1.0, 0.05)
+        >>> same = System.from_definition(mb.system.definition)
+        >>> same.coordinate_names == mb.system.coordinate_names
+        True
+        """
+        system = cls.__new__(cls)
+        system._hold(definition, parameters, redundant_constraints)
+        return system
+
+    def _hold(self, definition: Definition, parameters: Mapping[Any, object] | None,
+              redundant_constraints: RedundantConstraints) -> None:
+        self._definition = definition
+        self.redundant_constraints = redundant_constraints
+        self.parameter_values = parameter_values(
+            definition.parameters, parameters, coordinates=definition.coordinate_names,
+            inputs=[u.name for u in definition.inputs])
 
     @classmethod
     def from_lagranges_method(
@@ -198,28 +281,39 @@ class System:
                    generalized_forces=inputs.generalized_forces, parameters=parameters,
                    name=name, redundant_constraints=redundant_constraints)
 
-    # -- description -----------------------------------------------------------------
+    # -- description ----------------------------------------------------------------
+    @property
+    def definition(self) -> Definition:
+        """What this System is made from: names, parameters, code
+        (:class:`~dalembert.definition.Definition`)."""
+        return self._definition
+
+    @property
+    def model(self) -> Model:
+        """The global symbolic model."""
+        return self._definition.model
+
     @property
     def name(self) -> str:
-        return self.model.name
+        return self._definition.name
 
     @property
     def coordinate_names(self) -> tuple[str, ...]:
-        return self.model.coords.names
+        return self._definition.coordinate_names
 
     @property
     def constraint_names(self) -> tuple[str, ...]:
-        return self.model.constraints.names
+        return self._definition.constraint_names
 
     @property
     def parameters(self) -> tuple:
         """The model's parameter symbols (sorted by name)."""
-        return self.model.parameters
+        return self._definition.parameters
 
     @property
     def inputs(self) -> tuple[sp.Symbol, ...]:
         """The model's input symbols, in the order they were declared."""
-        return self.model.inputs
+        return self._definition.inputs
 
     @property
     def degrees_of_freedom(self) -> int:
@@ -234,19 +328,18 @@ class System:
     def rheonomic(self) -> bool:
         """Whether a constraint depends on time explicitly (a driven, prescribed motion:
         it may leave no degree of freedom)."""
-        return any(time_symbol in sp.sympify(e).free_symbols
-                   for e in self.model.constraints.exprs)
+        return self._definition.rheonomic
 
     @property
     def conserves_energy(self) -> bool:
         """Whether ``T + V`` is constant along every motion (no applied force, input or
         moving constraint: see :attr:`dalembert.model.model.Model.conserves_energy`); a
         trajectory's summary calls a change of it an error only then."""
-        return self.model.conserves_energy
+        return self._definition.conserves_energy
 
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` for a message: its name, kind and equation."""
-        return self.model.constraints.describe(i)
+        return self._definition.describe_constraint(i)
 
     def __repr__(self) -> str:
         return (f"System({self.name!r}, coordinates={list(self.coordinate_names)}, "
@@ -255,25 +348,22 @@ class System:
     # -- equations and code ----------------------------------------------------------
     def equations(self) -> Equations:
         """The symbolic constrained equations ``M qdd = f + A^T lambda``, ``A qdd = c``."""
-        return self._equations
-
-    @cached_property
-    def _equations(self) -> Equations:
-        return derive_equations(self.model)
+        return self._definition.equations()
 
     @cached_property
     def compiled(self) -> CompiledEquations:
         """Generated numeric functions (made on first use, then reused)."""
-        prepare_runtime()  # the C loop compiles beside the derivation
-        return self._compile()
+        from .solvers.native.library import prepare_runtime
 
-    def _compile(self) -> CompiledEquations:
-        # Looked up on the module so that tests (and profilers) can wrap it.
-        return codegen.compile_equations(self._equations)
+        prepare_runtime()  # the C loop compiles beside the derivation
+        return self._definition.compile()
 
     def numeric(self, parameters: Mapping[Any, object] | None = None) -> NumericModel:
         """The compiled equations bound to parameter values."""
-        p = resolve_parameters(self.parameters, self.parameter_values, parameters)
+        p = resolve_parameters(self.parameters, self.parameter_values, parameters,
+                               coordinates=self.coordinate_names,
+                               inputs=[u.name for u in self.inputs])
+        self._definition.check_values(p)
         return self.compiled.bind(p)
 
     # -- the dynamics at one state ---------------------------------------------------
@@ -369,6 +459,11 @@ class System:
         return q_, qd_
 
     # -- simulation ------------------------------------------------------------------
+    @checked_keywords({
+        "t0": [FiniteNumber()], "fixed": FIXED, "parameters": PARAMETER_VALUES,
+        "redundant_constraints": [*REDUNDANT_CONSTRAINTS, NONE],
+        "velocity_projection": SIMULATE_PARAMETERS["velocity_projection"],
+    })
     def consistent_initial_state(
         self,
         q0: CoordinateValues,
@@ -419,11 +514,7 @@ class System:
         >>> [round(float(v), 12) for v in (*report.q, *report.qd)]
         [1.0, 0.0, 0.0, -1.0]
         """
-        given: dict[str, object] = {"velocity_projection": velocity_projection}
-        if redundant_constraints is not None:  # None: the System's option
-            given["redundant_constraints"] = redundant_constraints
-        check_parameters(given, SIMULATE_PARAMETERS, "consistent_initial_state")
-        return self._initial_state(self.numeric(parameters), q0, qd0, t0, fixed,
+        return self._initial_state(self.numeric(parameters), q0, qd0, float(t0), fixed,
                                    redundant_constraints or self.redundant_constraints,
                                    velocity_projection)
 
@@ -441,8 +532,9 @@ class System:
                                 redundant_constraints=redundant_constraints,
                                 velocity_projection=velocity_projection,
                                 driven=self.rheonomic,
-                                kinetic_energy=self._kinetic_energy)
+                                kinetic_energy=self._definition.kinetic_energy)
 
+    @checked_keywords(SIMULATE)
     def simulate(
         self,
         t_span: Sequence[float],
@@ -498,7 +590,7 @@ class System:
         step_control
             The explicit Runge-Kutta methods' step-size controller: ``"PI"``
             (default; fewer rejected steps where stability limits the step, see
-            :mod:`dalembert.solvers.steppers.step_control`) or ``"scipy"`` (``solve_ivp``'s).
+            :mod:`dalembert.solvers.steppers.scipy_ivp`) or ``"scipy"`` (``solve_ivp``'s).
         stabilization
             ``"projection"`` (positions and velocities projected after every step:
             no tuning, residuals at rounding level), ``"baumgarte"`` (see
@@ -556,13 +648,9 @@ class System:
         >>> traj.t.tolist(), bool(traj.position_residual.max() < 1e-12)
         ([0.5, 1.0], True)
         """
-        options = self.check_options(
-            t_span, t_eval=t_eval, method=method, rtol=rtol, atol=atol, first_step=first_step,
-            max_step=max_step, step_control=step_control, stabilization=stabilization,
-            baumgarte_gain=baumgarte_gain, backend=backend, native=native,
-            redundant_constraints=redundant_constraints,
-            velocity_projection=velocity_projection, events=events, dense_output=dense_output,
-            progress=progress, inputs=inputs, sample_time=sample_time)
+        # The run options are this call's parameters named in the table (every one of
+        # them, checked at import): passed on as they are, checked already at the door.
+        options = self._options(t_span, run_options(locals()), unchecked(simulation_options))
         return self._run(self._plan(options, q0, qd0, parameters, fixed))
 
     def simulate_many(self, t_span: Sequence[float], cases: Any, **options: Any) -> Any:
@@ -595,10 +683,12 @@ class System:
         >>> result.summary["status"].tolist()
         ['finished', 'finished']
         """
-        from .ensemble import simulate_many  # Dask, xarray and pandas only when asked
+        if _ENSEMBLE is None:
+            raise RuntimeError("no ensemble runner is installed (dalembert/__init__.py "
+                               "installs dalembert.ensemble.simulate_many)")
+        return _ENSEMBLE(self, t_span, cases, **options)
 
-        return simulate_many(self, t_span, cases, **options)
-
+    @checked_keywords({"parameters": PARAMETER_VALUES, "fixed": FIXED})
     def plan(
         self,
         t_span: Sequence[float],
@@ -667,10 +757,16 @@ class System:
         >>> options.t_span, options.output.t_eval.tolist()
         ((0.0, 1.0), [0.5, 1.0])
         """
+        return self._options(t_span, options, simulation_options)
+
+    def _options(self, t_span: Sequence[float], options: Mapping[str, Any],
+                 make: Callable[..., SimulationOptions]) -> SimulationOptions:
+        """The options of a run of this System made by ``make`` (:func:`simulation_options`,
+        or its unchecked body for keywords checked at :meth:`simulate`'s door)."""
         if options.get("redundant_constraints") is None:  # None: the System's option
             options = {**options, "redundant_constraints": self.redundant_constraints}
-        return simulation_options(t_span, state_size=2 * len(self.coordinate_names),
-                                  input_names=[u.name for u in self.inputs], **options)
+        return make(t_span, state_size=2 * len(self.coordinate_names),
+                    input_names=[u.name for u in self.inputs], **options)
 
     def plan_checked(
         self,
@@ -723,6 +819,8 @@ class System:
         if report.dependent_constraints or (report.rank is not None and report.rank.near):
             warnings.warn(str(report.rank), RedundantConstraintsWarning,
                           stacklevel=user_stacklevel())
+        from .solvers.running.plan import plan_simulation
+
         return plan_simulation(num, report, options)
 
     def run(self, plan: SimulationPlan, *, dynamics: bool = True) -> Trajectory:
@@ -748,6 +846,9 @@ class System:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
         constraint forces may be left uncomputed (NaN), for a caller that keeps none of
         them."""
+        from .solvers.running.sampled import sampled_schedule
+        from .solvers.running.segments import Schedule, run_segments
+
         signal, options = plan.options.inputs, plan.options
         schedule = Schedule.none()
         if signal is not None and signal.sample_time is not None:
@@ -941,11 +1042,3 @@ class _LazyLabels(Sequence):
         if not -self._size <= i < self._size:
             raise IndexError(i)
         return self._describe(i % self._size)
-
-
-def _check_redundant(mode: RedundantConstraints) -> RedundantConstraints:
-    """The ``redundant_constraints`` option of a System, checked."""
-    check_parameters({"redundant_constraints": mode}, SIMULATE_PARAMETERS, "System")
-    return mode
-
-

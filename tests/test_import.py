@@ -1,4 +1,5 @@
-"""``import dalembert`` stays light: statics and plotting are imported on first use."""
+"""``import dalembert`` stays light: statics, plotting and SciPy's integrators and
+optimizers are imported on first use."""
 
 from __future__ import annotations
 
@@ -16,6 +17,21 @@ def test_import_leaves_statics_and_plotting_out():
     loaded = fresh("import sys, dalembert; print(sorted(m for m in sys.modules if m in "
                    "('dalembert.statics', 'dalembert.plotting', 'matplotlib')))")
     assert loaded == "[]"
+
+
+def test_import_leaves_scipy_integrate_and_optimize_out_until_a_run():
+    """They are large imports (about a third of a second together): a System is built
+    and its equations seen without them; a simulation brings them in."""
+    out = fresh("import sys, dalembert\n"
+                "heavy = ('scipy.integrate', 'scipy.optimize')\n"
+                "print(sorted(m for m in heavy if m in sys.modules))\n"
+                "from dalembert.examples import load\n"
+                "pendulum = load('pendulum').build()\n"
+                "pendulum.equations()\n"
+                "print(sorted(m for m in heavy if m in sys.modules))\n"
+                "pendulum.simulate((0, 0.1), {'x': 1.0, 'y': 0.0})\n"
+                "print('scipy.integrate' in sys.modules)")
+    assert out.splitlines() == ["[]", "[]", "True"]
 
 
 def test_multibody_leaves_plotting_and_statics_out():

@@ -138,6 +138,25 @@ def test_a_controller_that_raises_returns_the_run_so_far(backend):
     assert isinstance(record[0].message.__cause__, InputError)
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_controller_that_changes_its_arguments_changes_only_its_own_copy(backend):
+    """Writing into the q and qd it is given (wrapping an angle, zeroing a rate) leaves
+    the run alone: the same motion as the law written in SymPy."""
+    def meddling(t, q, qd):
+        torque = pd(t, q, qd)
+        q[0], qd[0] = 5.0, 0.0
+        return torque
+
+    times = np.linspace(0.0, 3.0, 31)
+    ours = pendulum().simulate((0, 3), {theta: 1.0}, inputs=meddling, t_eval=times,
+                               backend=backend)
+    reference = pendulum(-KP * theta - KD * theta.diff()).simulate(
+        (0, 3), {theta: 1.0}, t_eval=times, backend=backend)
+    assert ours.success
+    assert np.abs(ours.q - reference.q).max() < 1e-10
+    assert np.abs(ours.qd - reference.qd).max() < 1e-10
+
+
 @pytest.mark.parametrize(("inputs", "message"), [
     (None, r"the model's inputs u have no values: pass inputs=\{'u': \.\.\.\}"),
     ({"w": 1.0}, r"'w' is not an input of this model \(its inputs: u\)"),
@@ -231,3 +250,41 @@ def test_every_valid_form_of_a_function_still_runs():
                         (partial(max, 0.25), np.maximum(0.25, times))]:
         traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=law, t_eval=times)
         assert traj.success and np.allclose(traj.input("u"), values, rtol=0, atol=1e-15), law
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_an_input_that_raises_once_ends_the_run_in_every_loop(backend):
+    """Raising once (a sensor glitch) is reported, not retried away: the C loop's
+    stretches used to hand the step to Python, whose retry went through."""
+    calls = {"raised": False}
+
+    def glitch(t, q, qd):
+        if t > 0.5 and not calls["raised"]:
+            calls["raised"] = True
+            raise RuntimeError("glitch")
+        return pd(t, q, qd)
+
+    with pytest.warns(IntegrationWarning, match="glitch"):
+        traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=glitch,
+                                   t_eval=np.linspace(0, 1, 11), backend=backend)
+    assert traj.status == "failed" and "the input 'u' raised at t=0.5" in traj.message
+    assert 0.4 <= traj.t[-1] <= 0.5
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_ctrl_c_inside_an_input_function_interrupts_the_run_keeping_it(backend):
+    """A Ctrl-C lands in the input's function when the C loop calls it: the run stops
+    as interrupted, with the trajectory up to there (the C loop dropped it and ran on)."""
+    calls = {"pressed": False}
+
+    def pressed(t, q, qd):  # one Ctrl-C, as a signal gives it
+        if t > 0.5 and not calls["pressed"]:
+            calls["pressed"] = True
+            raise KeyboardInterrupt
+        return pd(t, q, qd)
+
+    with pytest.warns(IntegrationWarning, match="interrupted"):
+        traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=pressed,
+                                   t_eval=np.linspace(0, 1, 11), backend=backend)
+    assert traj.status == "interrupted"
+    assert 0.4 <= traj.t[-1] <= 0.5 and len(traj) >= 5

@@ -169,3 +169,82 @@ def test_check_options_refuses_what_simulate_refuses():
     with pytest.warns(UserWarning) as caught:  # the adjusted start, said at the caller's line
         system.plan_checked(system.check_options((0, 1)), [2.0, 0.0])
     assert caught[0].filename == __file__
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda s: s.simulate((0, 1), [0.0, -1.0], rtol=0.0),
+     "The 'rtol' parameter of simulate must be a finite positive number or an array of "
+     "them; got 0.0."),
+    (lambda s: s.plan((0, 1), [0.0, -1.0], backend="gpu"),
+     "The 'backend' parameter of simulate must be one of 'auto', 'c', 'python'; got 'gpu'."),
+    (lambda s: s.consistent_initial_state([0.0, -1.0], velocity_projection="nearest"),
+     "The 'velocity_projection' parameter of consistent_initial_state must be one of "
+     "'kinetic-energy', 'least-change'; got 'nearest'."),
+    (lambda s: s.equilibrium([0.1, -1.0], max_iter=0),
+     "The 'max_iter' parameter of equilibrium must be a positive whole number; got 0."),
+    (lambda s: s.linearize([0.0, -1.0], on_marginal="warn"),
+     "The 'on_marginal' parameter of linearize must be one of 'report', 'raise'; got 'warn'."),
+])
+def test_a_bad_keyword_is_refused_at_the_door_before_any_code_is_made(call, message):
+    system = pendulum()
+    with pytest.raises(ValueError) as info:
+        call(system)
+    assert str(info.value) == message
+    assert "compiled" not in vars(system)  # nothing derived or compiled before the refusal
+
+
+@pytest.mark.parametrize(("name", "where"), [
+    ("x", "'x' is a coordinate of this model, not a parameter: give its initial value in q0"),
+    ("u", "'u' is an input of this model, not a parameter: give its values with inputs="),
+])
+def test_a_parameter_named_as_a_coordinate_or_an_input_says_where_it_goes(name, where):
+    from dalembert import ParameterError
+
+    u = sp.Symbol("u")
+    pushed = System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2),
+                    generalized_forces={x: u}, inputs=[u], parameters={m: 1.0})
+    with pytest.raises(ParameterError, match=where):
+        pushed.simulate((0, 1), [0.0, 0.0], inputs={"u": 1.0}, parameters={name: 1.0})
+    with pytest.raises(ParameterError, match=where):
+        System([x], kinetic=x.diff() ** 2 / 2, generalized_forces={x: u}, inputs=[u],
+               parameters={name: 1.0})
+
+
+class Counting:
+    """A definition of one's own: a symbolic one, counting what the System asks of it."""
+
+    def __init__(self, inner):
+        self.inner, self.compiled = inner, 0
+
+    def compile(self):
+        self.compiled += 1
+        return self.inner.compile()
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+
+def test_a_system_runs_what_its_definition_gives():
+    from dalembert.definition import SymbolicDefinition
+    from dalembert.model.model import build_model
+
+    (z,) = coordinates("z")
+    falling = build_model([z], kinetic=m / 2 * z.diff() ** 2, potential=m * g * z)
+    definition = Counting(SymbolicDefinition(falling))
+    system = System.from_definition(definition, parameters={"m": 2.0, "g": 9.81})
+    assert system.definition is definition and system.coordinate_names == ("z",)
+    for v0 in (0.0, 3.0):
+        traj = system.simulate((0, 2), [10.0], [v0], t_eval=[1.0, 2.0])
+        # z(t) = z0 + v0 t - g t^2 / 2
+        np.testing.assert_allclose(traj["z"], [10.0 + v0 - 9.81 / 2, 10.0 + 2 * v0 - 2 * 9.81],
+                                   rtol=1e-12)
+    assert definition.compiled == 1
+
+
+def test_a_multibody_system_is_a_system_holding_its_mechanism():
+    from dalembert.multibody import chain
+    from dalembert.multibody.builder import multibody_of
+
+    mb = chain(2, 1.0, 1.0, 0.05)
+    assert isinstance(mb.system, System) and type(mb.system) is System
+    assert multibody_of(mb.system) is mb and mb.system.definition.multibody is mb

@@ -46,6 +46,7 @@ import stat
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator
@@ -141,10 +142,7 @@ def load_library(key: str, build: Callable[[Path], None],
         if problem is not None and problem is not _MISSING:
             warnings.warn(f"the cached library {entry.library} {problem}; it was not loaded "
                           "but rebuilt", BadCacheEntryWarning, stacklevel=3)
-    try:
-        return ctypes.CDLL(str(entry.library))
-    except OSError as exc:
-        raise CompileError(f"cannot load the cached library {entry.library}: {exc}") from exc
+    return _load_verified(entry)
 
 
 def private_folder(root: Path | None = None) -> Path:
@@ -159,7 +157,9 @@ def private_folder(root: Path | None = None) -> Path:
     ------
     UnsafeCacheError
         ``root`` or the folder belongs to another user or is writable by group or
-        others.
+        others, or a folder above ``root`` belongs to another user (not root) or is
+        writable by group or others without the sticky bit (as ``/tmp`` has it): its
+        owner or writers could swap the cache for a folder of theirs.
     CompileError
         It cannot be made, or is not a folder.
 
@@ -176,6 +176,7 @@ def private_folder(root: Path | None = None) -> Path:
     for path in (root, folder):
         _make_private(path)
         _check_private(path)
+    _check_parents(root)
     return folder
 
 
@@ -215,6 +216,41 @@ def _check_private(path: Path) -> None:
             "or set DALEMBERT_CACHE_DIR to a folder of your own")
 
 
+def _check_parents(root: Path) -> None:
+    """Refuse a cache below a folder someone else could change: one owned by another
+    user than root and this one, or writable by group or others without the sticky bit.
+
+    Such a folder's owner or writers can rename the cache away and put a folder of
+    theirs in its place (between the check of a library and its loading, or before
+    it), as ssh's ``StrictModes`` and git's ``safe.directory`` guard against. Both the
+    path as written and the one its links lead to are checked.
+    """
+    me = os.geteuid()
+    written = Path(os.path.abspath(root))
+    seen: set[Path] = set()
+    for parent in [*written.parents, *Path(os.path.realpath(written)).parents]:
+        if parent in seen:
+            continue
+        seen.add(parent)
+        try:
+            info = os.stat(parent)
+        except OSError as exc:
+            raise _unwritable(parent, exc) from exc
+        risk = (f"whoever can change {parent} can put a folder of theirs in place of the "
+                f"code cache {root}, and a library planted there would run as you")
+        if info.st_uid not in (0, me):
+            raise UnsafeCacheError(
+                f"the folder {parent} above the code cache belongs to uid {info.st_uid}, "
+                f"neither you (uid {me}) nor root: {risk}. Set DALEMBERT_CACHE_DIR to a "
+                "folder of your own")
+        if info.st_mode & _GROUP_OR_OTHERS_WRITE and not info.st_mode & stat.S_ISVTX:
+            raise UnsafeCacheError(
+                f"the folder {parent} above the code cache is writable by group or others "
+                f"(mode {stat.S_IMODE(info.st_mode):04o}) without the sticky bit: {risk}. "
+                f"Remove that permission (chmod go-w {parent}), or set DALEMBERT_CACHE_DIR "
+                "to a folder of your own")
+
+
 def _unwritable(path: Path, exc: OSError) -> CompileError:
     """The error for a cache that cannot be written, with the remedy for its cause."""
     if exc.errno == errno.ENOSPC:
@@ -227,7 +263,11 @@ def _unwritable(path: Path, exc: OSError) -> CompileError:
 
 
 class _Untrusted(Exception):
-    """A file of an entry that must not be read as part of it (the message says why)."""
+    """A file of an entry that must not be read as part of it (the message says why).
+
+    Internal control flow, never seen by a user: the entry's check
+    (:meth:`_Entry.problem`) turns it into what is wrong with the entry, which is then
+    not loaded but rebuilt."""
 
 
 #: What :meth:`_Entry.problem` says of an entry that is not there (not warned about).
@@ -241,15 +281,40 @@ class _Entry:
         self.folder, self.key = folder, key
         self.library, self.record, self.source, self.lock = (
             folder / f"dalembert_{key}{suffix}" for suffix in (".so", ".sha256", ".c", ".lock"))
+        #: An open descriptor of the library the last :meth:`problem` found sound.
+        self.verified: int | None = None
 
     def problem(self) -> str | None:
-        """``None`` when the library may be loaded, else what is wrong with it."""
+        """``None`` when the library may be loaded, else what is wrong with it.
+
+        The library's file is opened once: when it is sound, its descriptor is kept in
+        :attr:`verified`, and that file, not the path, is what gets loaded."""
+        self._forget()
         try:
-            data = _read_own_file(self.library)
+            fd = _open_own_file(self.library)
         except FileNotFoundError:
             return _MISSING
         except _Untrusted as why:
             return str(why)
+        try:
+            with os.fdopen(os.dup(fd), "rb") as fh:
+                data = fh.read()
+            problem = self._problem_with(data)
+        except BaseException:
+            os.close(fd)
+            raise
+        if problem is None:
+            self.verified = fd
+        else:
+            os.close(fd)
+        return problem
+
+    def _forget(self) -> None:
+        if self.verified is not None:
+            os.close(self.verified)
+            self.verified = None
+
+    def _problem_with(self, data: bytes) -> str | None:
         if not data:
             return "is empty"
         try:
@@ -318,8 +383,9 @@ class _Entry:
             shutil.rmtree(work, ignore_errors=True)
 
 
-def _read_own_file(path: Path) -> bytes:
-    """The bytes of ``path`` if it is a regular file of this user that others cannot write.
+def _open_own_file(path: Path) -> int:
+    """A descriptor of ``path`` if it is a regular file of this user that others cannot
+    write (the caller closes it).
 
     Raises ``FileNotFoundError`` when it is not there and :class:`_Untrusted` saying
     why it is not read.
@@ -332,16 +398,91 @@ def _read_own_file(path: Path) -> bytes:
         if exc.errno == errno.ENOENT:
             raise
         raise _Untrusted(f"cannot be read ({exc.strerror})") from exc
-    with os.fdopen(fd, "rb") as fh:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise _Untrusted("is not a regular file")
-        if info.st_uid != os.geteuid():
-            raise _Untrusted(f"belongs to uid {info.st_uid}, not to you (uid {os.geteuid()})")
-        if info.st_mode & _GROUP_OR_OTHERS_WRITE:
-            raise _Untrusted(f"is writable by group or others (mode "
-                             f"{stat.S_IMODE(info.st_mode):04o})")
+    info = os.fstat(fd)
+    why = None
+    if not stat.S_ISREG(info.st_mode):
+        why = "is not a regular file"
+    elif info.st_uid != os.geteuid():
+        why = f"belongs to uid {info.st_uid}, not to you (uid {os.geteuid()})"
+    elif info.st_mode & _GROUP_OR_OTHERS_WRITE:
+        why = f"is writable by group or others (mode {stat.S_IMODE(info.st_mode):04o})"
+    if why is not None:
+        os.close(fd)
+        raise _Untrusted(why)
+    return fd
+
+
+def _read_own_file(path: Path) -> bytes:
+    """The bytes of ``path`` if it is a regular file of this user that others cannot write
+    (see :func:`_open_own_file`)."""
+    with os.fdopen(_open_own_file(path), "rb") as fh:
         return fh.read()
+
+
+#: Where the open descriptors of a process are files of their own (Linux).
+_FD_FOLDER = Path("/proc/self/fd")
+#: The libraries loaded through their descriptor, by file identity, with the
+#: descriptor: kept open while the process lives (a library is never unloaded), so
+#: that its name ``/proc/self/fd/N`` is never given to another file (the dynamic
+#: loader returns a library already loaded under the same name).
+_LOADED: dict[tuple[int, int], tuple[int, ctypes.CDLL]] = {}
+_LOADING = threading.Lock()
+
+
+def cached_library(library: ctypes.CDLL) -> tuple[str, bytes] | None:
+    """The key and the bytes of a library :func:`load_library` loaded (the file it
+    checked and loaded), or ``None`` for another library.
+
+    Parameters
+    ----------
+    library
+        A loaded library.
+
+    Examples
+    --------
+    >>> import ctypes
+    >>> cached_library(ctypes.CDLL(None)) is None
+    True
+    """
+    key = getattr(library, "_dalembert_key", None)
+    if not isinstance(key, str):
+        return None
+    return key, Path(library._name).read_bytes()
+
+
+def _load_verified(entry: _Entry) -> ctypes.CDLL:
+    """Load the file ``entry``'s check verified, not whatever its path names now.
+
+    Where the process's descriptors are files (``/proc/self/fd``) the loader opens the
+    verified file itself, so a swap of the path after the check loads nothing of it;
+    elsewhere the path is loaded, the folders above it checked
+    (:func:`_check_parents`) so that no other user can swap it.
+    """
+    if entry.verified is None:  # built just now: checked as any entry before it is loaded
+        problem = entry.problem()
+        if problem is not None:
+            raise CompileError(f"the library just built at {entry.library} {problem}")
+    fd, entry.verified = entry.verified, None
+    assert fd is not None
+    try:
+        if not _FD_FOLDER.is_dir():
+            os.close(fd)
+            library = ctypes.CDLL(str(entry.library))
+        else:
+            info = os.fstat(fd)
+            identity = (info.st_dev, info.st_ino)
+            with _LOADING:
+                if identity in _LOADED:
+                    os.close(fd)
+                    return _LOADED[identity][1]
+                library = ctypes.CDLL(str(_FD_FOLDER / str(fd)))
+                _LOADED[identity] = (fd, library)
+        library._dalembert_key = entry.key  # type: ignore[attr-defined]
+        return library
+    except OSError as exc:
+        with suppress(OSError):
+            os.close(fd)
+        raise CompileError(f"cannot load the cached library {entry.library}: {exc}") from exc
 
 
 def _private_and_synced(path: Path) -> bytes:

@@ -24,10 +24,10 @@ trusts the client that sent them, as running its tasks already does.
 from __future__ import annotations
 
 import copyreg
+import ctypes
 import hashlib
 import io
 import pickle
-import re
 import threading
 import time
 from contextlib import suppress
@@ -39,9 +39,6 @@ from typing import Any
 from ..codegen import c_backend, cache
 from ..errors import CompileError
 from ..system import System
-
-#: A cached library's file name: ``dalembert_<key>.so``.
-_LIBRARY_NAME = re.compile(r"^dalembert_([0-9A-Za-z]+)\.so$")
 
 
 @dataclass(frozen=True)
@@ -194,23 +191,23 @@ def _libraries(system: System) -> list[Library]:
     """The cached libraries ``system``'s simulations load: its compiled functions' and,
     when they are C, the simulation loop's."""
     compiled = system.compiled
-    paths: list[Path] = []
+    loaded: list[ctypes.CDLL] = []
     for fn in (compiled.kkt_values, compiled.velocity_values, compiled.position_values,
                compiled.energy_values):
         lib = getattr(fn, "library", None) or getattr(fn, "_library", None)
         if lib is not None:
-            paths.append(Path(lib._name))
+            loaded.append(lib)
     if compiled.backend == "c" and c_backend.backend() == "c":
         from ..solvers.native.library import runtime
 
         with suppress(CompileError):
-            paths.append(Path(runtime()._name))
-    found: list[Library] = []
-    for path in dict.fromkeys(paths):  # each once, in order
-        match = _LIBRARY_NAME.match(path.name)
-        if match is not None and path.is_file():
-            found.append(Library(match.group(1), path.read_bytes()))
-    return found
+            loaded.append(runtime())
+    found: dict[str, Library] = {}
+    for lib in loaded:  # each once, in order
+        cached = cache.cached_library(lib)
+        if cached is not None and cached[0] not in found:
+            found[cached[0]] = Library(*cached)
+    return list(found.values())
 
 
 def _packer(buffer: io.BytesIO) -> pickle.Pickler:

@@ -21,9 +21,21 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import EnsembleError, EnsembleWarning
+from ..errors import EnsembleError, EnsembleWarning, user_stacklevel
 from ..model.parameters import parameter_values
 from ..model.values import CoordinateValues, coordinate_values
+from ..options import PARAMETER_VALUES
+from ..rules import (
+    NONE,
+    Boolean,
+    CheckedWhereUsed,
+    Function,
+    OneOf,
+    PositiveInteger,
+    Rule,
+    check_parameters,
+    checked_keywords,
+)
 from ..system import System
 from .backends import Backend, Batch, Dask, Interrupted, Serial, Threads, run_here
 from .cases import CaseTable, read_cases
@@ -65,6 +77,29 @@ _NOT_OPTIONS = {"q0": "q0=", "qd0": "qd0=", "parameters": "parameters=",
                 "progress": "progress= of simulate_many (one bar for the ensemble)"}
 
 
+#: The keywords of :func:`simulate_many` (``simulate``'s own are checked by
+#: ``System.check_options``). Those checked where used depend on the model or on another
+#: keyword.
+SIMULATE_MANY_PARAMETERS: dict[str, list[Rule]] = {
+    "q0": [CheckedWhereUsed("initial positions, as simulate's q0")],
+    "qd0": [CheckedWhereUsed("initial velocities, as simulate's qd0")],
+    "t_eval": [CheckedWhereUsed("output times, as simulate's t_eval")],
+    "parameters": PARAMETER_VALUES,
+    "initial_state": [Function(), NONE],
+    "case_inputs": [Function(), NONE],
+    "outputs": [CheckedWhereUsed("a dict {name: f(system, traj)}")],
+    "keep": [CheckedWhereUsed("trajectory quantities")],
+    "scheduler": [OneOf(SCHEDULERS)],
+    "client": [CheckedWhereUsed("a dask.distributed.Client or None")],
+    "workers": [PositiveInteger(), NONE],
+    "batch_size": [PositiveInteger(), NONE],
+    "store": [CheckedWhereUsed("a path ending in .zarr or .nc, or None")],
+    "overwrite": [Boolean()],
+    "progress": [Boolean()],
+}
+
+
+@checked_keywords(SIMULATE_MANY_PARAMETERS, error=EnsembleError)
 def simulate_many(
     system: System,
     t_span: Sequence[float],
@@ -231,11 +266,10 @@ class _Run:
         names = self.system.coordinate_names
         self.scheduler = _scheduler(a.pop("scheduler"), a.pop("client"))
         self.client = self.arguments["client"]
-        self.workers = _positive(a.pop("workers"), "workers")
-        self.batch_size = _positive(a.pop("batch_size"), "batch_size")
+        workers, batch_size = a.pop("workers"), a.pop("batch_size")
+        self.workers = None if workers is None else int(workers)
+        self.batch_size = None if batch_size is None else int(batch_size)
         self.progress = a.pop("progress")
-        if not isinstance(self.progress, bool):
-            raise EnsembleError(f"progress must be True or False, got {self.progress!r}")
         q0, qd0, t_eval = a.pop("q0"), a.pop("qd0"), a.pop("t_eval")
         parameters, outputs, keep = a.pop("parameters"), a.pop("outputs"), a.pop("keep")
         initial_state = self.arguments["initial_state"]
@@ -260,7 +294,8 @@ class _Run:
         return CaseSettings(
             checked.t_span, np.asarray(checked.output.t_eval, dtype=float), checked,
             coordinate_values(q0, names, "q0"), coordinate_values(qd0, names, "qd0"),
-            parameter_values(self.system.parameters, parameters), self.cases.columns,
+            parameter_values(self.system.parameters, parameters, coordinates=names,
+                             inputs=self._input_names), self.cases.columns,
             initial_state, keep, outputs, case_inputs)
 
     # -- running ---------------------------------------------------------------------
@@ -372,6 +407,8 @@ class _Run:
 
     def _retry(self, before: EnsembleResult, indices: list[int],
                changes: dict[str, Any]) -> EnsembleResult:
+        check_parameters({k: v for k, v in changes.items() if k in SIMULATE_MANY_PARAMETERS},
+                         SIMULATE_MANY_PARAMETERS, "retry", EnsembleError)
         fixed = {"t_eval", "keep", "outputs", "cases", "store"} & set(changes)
         if fixed:
             raise EnsembleError(f"retry cannot change {', '.join(sorted(fixed))} (the results' "
@@ -394,7 +431,7 @@ def _warn(summary: Any, interrupted: bool) -> None:
             if interrupted else f"{len(bad)} of {len(summary)} cases did not succeed ({counts})")
     warnings.warn(f"{head}; the first, case {bad.index[0]}: {first['message']}. "
                   "result.failed lists them, result.summary says why, result.retry() runs "
-                  "them again", EnsembleWarning, stacklevel=4)
+                  "them again", EnsembleWarning, stacklevel=user_stacklevel())
 
 
 def _batches(indices: list[int], chunk: int, values: np.ndarray, workers: int) -> list[Batch]:
@@ -417,9 +454,6 @@ def _batch_size(cases: int, workers: int) -> int:
 
 
 def _scheduler(scheduler: Any, client: Any) -> str:
-    if scheduler not in SCHEDULERS:
-        raise EnsembleError(f"scheduler must be one of {', '.join(map(repr, SCHEDULERS))}; got "
-                            f"{scheduler!r}")
     if client is not None:
         if not all(callable(getattr(client, name, None)) for name in ("submit", "nthreads")):
             hint = (f"; for scheduler={client!r} write scheduler={client!r}"
@@ -436,21 +470,10 @@ def _scheduler(scheduler: Any, client: Any) -> str:
     return scheduler
 
 
-def _positive(value: Any, name: str) -> int | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise EnsembleError(f"{name} must be a positive whole number or None, got {value!r}")
-    return int(value)
-
-
 def _inputs_of_cases(case_inputs: Any, inputs: object,
                      names: Sequence[str]) -> dict[str, object]:
     """``simulate``'s ``inputs=`` for the checks at the door when each case makes its
     own (``case_inputs``, called where the case runs): every input at 0 here."""
-    if not callable(case_inputs):
-        raise EnsembleError(f"case_inputs must be a function f(case) -> inputs, got "
-                            f"{type(case_inputs).__name__}")
     if inputs is not None:
         raise EnsembleError("give the inputs once (inputs=) or per case (case_inputs=), "
                             "not both")

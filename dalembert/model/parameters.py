@@ -10,7 +10,7 @@ model, each taking the values it uses.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -49,17 +49,31 @@ class ParameterSet(dict):
 
 
 def resolve_parameters(
-    symbols: tuple[sp.Symbol, ...], *value_sets: Mapping[Any, object] | None
+    symbols: tuple[sp.Symbol, ...], *value_sets: Mapping[Any, object] | None,
+    coordinates: Sequence[str] = (), inputs: Sequence[str] = (),
 ) -> np.ndarray:
     """Numeric values for ``symbols``, later value sets overriding earlier ones.
 
+    Parameters
+    ----------
+    symbols
+        The model's parameters, in the order of the array.
+    value_sets
+        Values by symbol or name (see :func:`parameter_values`).
+    coordinates, inputs
+        The model's coordinate and input names, for the message about a name given
+        as a parameter that is one of them.
+
+    Examples
+    --------
     >>> m, g = sp.symbols("m g")
     >>> resolve_parameters((g, m), {"m": 2.0}, {g: 9.81})
     array([9.81, 2.  ])
     """
     values: dict[str, float] = {}
     for value_set in value_sets:
-        values.update(parameter_values(symbols, value_set))
+        values.update(parameter_values(symbols, value_set, coordinates=coordinates,
+                                       inputs=inputs))
     missing = [s.name for s in symbols if s.name not in values]
     if missing:
         raise ParameterError(
@@ -70,12 +84,31 @@ def resolve_parameters(
 
 
 def parameter_values(
-    symbols: tuple[sp.Symbol, ...], value_set: Mapping[Any, object] | None
+    symbols: tuple[sp.Symbol, ...], value_set: Mapping[Any, object] | None, *,
+    coordinates: Sequence[str] = (), inputs: Sequence[str] = (),
 ) -> dict[str, float]:
     """Check a user's parameter dict: known names, finite numbers. Keyed by name.
 
+    Parameters
+    ----------
+    symbols
+        The model's parameters.
+    value_set
+        Values by symbol or name (a :class:`ParameterSet` says whether names the model
+        lacks are errors).
+    coordinates, inputs
+        The model's coordinate and input names: a parameter named as one of them is
+        told where its value goes instead (``q0``, ``inputs=``).
+
+    Examples
+    --------
     >>> parameter_values((sp.Symbol("m"),), {"m": 2})
     {'m': 2.0}
+    >>> parameter_values((sp.Symbol("m"),), {"x": 0.5}, coordinates=("x", "y"))
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    dalembert.errors.ParameterError: 'x' is a coordinate of this model, not a parameter: ...
     """
     names = {s.name for s in symbols}
     values: dict[str, float] = {}
@@ -91,6 +124,7 @@ def parameter_values(
             continue
         if name not in names:
             known = ", ".join(sorted(names)) or "none"
+            _raise_if_other_kind(name, known, coordinates, inputs)
             time = " ('t' is time, dalembert.t, never a parameter)" if name == "t" else ""
             raise ParameterError(
                 f"{name!r} is not a parameter of this model (its parameters: {known}){time}; "
@@ -100,6 +134,19 @@ def parameter_values(
             )
         values[name] = _finite_float(name, value)
     return values
+
+
+def _raise_if_other_kind(name: str, known: str, coordinates: Sequence[str],
+                         inputs: Sequence[str]) -> None:
+    """A name given as a parameter that is a coordinate or an input: where it goes."""
+    if name in coordinates:
+        where = "a coordinate of this model, not a parameter: give its initial value in q0"
+    elif name in inputs:
+        where = ("an input of this model, not a parameter: give its values with inputs= "
+                 "(simulate(inputs={...}))")
+    else:
+        return
+    raise ParameterError(f"{name!r} is {where} (its parameters: {known})")
 
 
 def _finite_float(name: str, value: Any) -> float:

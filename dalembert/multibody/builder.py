@@ -42,7 +42,7 @@ from .parametric import (
     with_numbers,
 )
 from .parts import gravity_potential
-from .system import MultibodySystem
+from .system import MultibodyDefinition
 from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
 
 _V = TypeVar("_V")
@@ -402,7 +402,7 @@ class Multibody:
         Its numeric code is assembled from one kernel per kind of body and joint
         (:mod:`dalembert.multibody.parts`); its symbolic equations are made on request.
         """
-        return MultibodySystem(self)
+        return System.from_definition(MultibodyDefinition(self), parameters=self.defaults)
 
     def body(self, name: str) -> MovingBody:
         """The body called ``name``.
@@ -606,7 +606,7 @@ def multibody_of(system: System) -> Multibody:
     >>> multibody_of(mb.system) is mb
     True
     """
-    mb = getattr(system, "_multibody", None)
+    mb = getattr(getattr(system, "definition", None), "multibody", None)
     if not isinstance(mb, Multibody):
         raise ModelError(f"{system!r} was not built by a dalembert.multibody.Multibody")
     return mb

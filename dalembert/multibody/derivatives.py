@@ -21,7 +21,10 @@ import sympy as sp
 
 class NotPolynomial(ValueError):
     """An expression holds something other than sums, products, positive integer powers,
-    sines and cosines."""
+    sines and cosines.
+
+    Internal control flow, never seen by a user: the part's equations then take the
+    general route (:func:`~dalembert.multibody.parts._constraint_equations`)."""
 
 
 def directional_derivative(expr: sp.Expr, direction: Mapping[sp.Symbol, sp.Expr],

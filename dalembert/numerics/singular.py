@@ -50,6 +50,13 @@ SCREEN = (10 * NEAR) ** 2
 COLLAPSE_STEPS = 500
 #: ... and have collapsed when their mean is below this fraction of the mean before.
 COLLAPSE_RATIO = 1e-3
+#: Steps that collapsed away from any singular configuration *run away* when, in this
+#: many windows in a row, each window's mean step is smaller than the last ...
+RUNAWAY_WINDOWS = 3
+#: ... and at that mean the rest of the run would take more than this many steps (some
+#: quantity of the model grows without bound as the time nears a finite limit: the run
+#: would crawl toward it for hours).
+RUNAWAY_STEPS = 1e8
 #: A projection that moves a step's end by more than this many times the step's
 #: tolerance (its error norm; an ordinary step's correction stays under 1, and near a
 #: singular configuration an exact projection's grows like the drift over the

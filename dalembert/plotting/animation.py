@@ -72,7 +72,8 @@ def _drawer(system: object,
         return lambda q: draw(system, q)
     from ..multibody.builder import Multibody  # only a multibody draws itself
 
-    mb = system if isinstance(system, Multibody) else getattr(system, "_multibody", None)
+    mb = system if isinstance(system, Multibody) else \
+        getattr(getattr(system, "definition", None), "multibody", None)
     if not isinstance(mb, Multibody):
         raise ValueError(
             "nothing to draw: give draw=draw(system, q) returning polylines, or a system "

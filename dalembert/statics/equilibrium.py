@@ -24,7 +24,6 @@ tangent space of the constraints, ``Z^T K Z`` (see
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -39,15 +38,18 @@ from ..errors import (
     InconsistentConstraintsError,
     MarginalStabilityError,
     RedundantConstraintsWarning,
+    user_stacklevel,
 )
 from ..model.coordinates import key_name
 from ..model.values import coordinate_values, free_mask
 from ..numerics.gauss_newton import ACCEPT_TOL, gauss_newton
 from ..numerics.rank import dependent_error, min_norm_multipliers, sparse_constraint_rank
+from ..options import FIXED, PARAMETER_VALUES, REDUNDANT_CONSTRAINTS, RedundantConstraints
+from ..rules import NONE, FiniteNumber, OneOf, PositiveInteger, PositiveNumber, checked_keywords
 
 # The Newton iteration (exact Jacobian, lstsq steps, Armijo backtracking, rounding-level
 # acceptance) and its scipy.optimize.root fallback are shared with extremum().
-from .newton import Attempt, check_settings, newton_iterations, root_then_newton
+from .newton import Attempt, newton_iterations, root_then_newton
 from .static_system import StaticsModel, StaticSystem, static_system
 
 __all__ = [
@@ -63,6 +65,9 @@ STABILITIES = ("stable", "unstable", "marginal", "undetermined")
 
 #: An eigenvalue of ``Z^T K Z`` with ``|k| <= MARGINAL_RTOL * max|K|`` counts as zero.
 MARGINAL_RTOL = 1e-8
+#: What to do where the constrained stiffness is singular.
+ON_MARGINAL = [OneOf(("report", "raise"))]
+
 #: Gauss-Newton iterations of the projection of the guess (a guess may be far off).
 _PROJECTION_ITER = 100
 
@@ -207,6 +212,11 @@ class Equilibrium:
 # --------------------------------------------------------------------------- public API
 
 
+@checked_keywords({
+    "parameters": PARAMETER_VALUES, "t": [FiniteNumber()], "fixed": FIXED,
+    "tol": [PositiveNumber()], "max_iter": [PositiveInteger()], "on_marginal": ON_MARGINAL,
+    "redundant_constraints": [*REDUNDANT_CONSTRAINTS, NONE],
+})
 def equilibrium(
     system: StaticsModel,
     guess: Mapping[object, float] | Sequence[float] | Array,
@@ -217,7 +227,7 @@ def equilibrium(
     tol: float = 1e-12,
     max_iter: int = 50,
     on_marginal: str = "report",
-    redundant_constraints: str | None = None,
+    redundant_constraints: RedundantConstraints | None = None,
 ) -> Equilibrium:
     """Find a static equilibrium of ``system`` near ``guess`` and classify it.
 
@@ -277,9 +287,7 @@ def equilibrium(
     >>> round(-2 * eq.multiplier("rod") * 1.0, 10)  # rod tension m g
     9.81
     """
-    check_settings(tol, max_iter)
-    _check_on_marginal(on_marginal)
-    t = _check_time(t)
+    t = float(t)
     sm = static_system(system, parameters)
     names = sm.coordinate_names
     q_guess = coordinate_values(guess, names, "guess")
@@ -288,10 +296,9 @@ def equilibrium(
     problem = _Newton(sm, t, q_start, free)
     z0 = np.concatenate([q_start[free], problem.initial_multipliers()])
     attempt = _solve(problem, z0, tol, max_iter, q_guess)
-    mode = redundant_constraints or getattr(system, "redundant_constraints", "minimum-norm")
-    if mode not in ("minimum-norm", "error"):
-        raise ValueError(f"redundant_constraints must be 'minimum-norm' or 'error', "
-                         f"got {mode!r}")
+    # None: the model's own option (a System's, checked when it was made)
+    mode = redundant_constraints if redundant_constraints is not None else \
+        str(getattr(system, "redundant_constraints", "minimum-norm"))
     return _make_equilibrium(problem, attempt, on_marginal, mode)
 
 
@@ -342,21 +349,6 @@ def marginal_message(names: Sequence[str], Z: Array, eigenvalues: Array, vectors
 
 
 # --------------------------------------------------------------------------- checks
-
-
-def _check_on_marginal(on_marginal: str) -> None:
-    if on_marginal not in ("report", "raise"):
-        raise ValueError(f"on_marginal must be 'report' or 'raise', not {on_marginal!r}")
-
-
-def _check_time(t: object) -> float:
-    try:
-        value = float(t)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"t must be a number, got {t!r}") from exc
-    if not math.isfinite(value):
-        raise ValueError(f"t must be finite, got {t!r}")
-    return value
 
 
 #: Coordinates a message shows of a point (a long chain's would fill pages).
@@ -538,7 +530,8 @@ def _make_equilibrium(problem: _Newton, attempt: Attempt, on_marginal: str,
             # vanish on the tangent space).
             lam = min_norm_multipliers(A, forces)
             dependent = tuple(rank.dependent_names)
-            warnings.warn(str(rank), RedundantConstraintsWarning, stacklevel=4)
+            warnings.warn(str(rank), RedundantConstraintsWarning,
+                          stacklevel=user_stacklevel())  # the user's call
     stability, eigenvalues = _stability(sm, A, -G, free, on_marginal)
     holding = np.where(free, 0.0, -(f0 + forces))
     return Equilibrium(

@@ -33,7 +33,10 @@ from ..errors import (
     SingularSystemError,
 )
 from ..model.values import CoordinateValues, coordinate_values, free_mask
+from ..options import FIXED, PARAMETER_VALUES
+from ..rules import NONE, FiniteNumber, PositiveNumber, checked_keywords
 from .equilibrium import (
+    ON_MARGINAL,
     Equilibrium,
     MarginalStabilityError,
     classify_stiffness,
@@ -161,6 +164,10 @@ class Linearization:
         ])
 
 
+@checked_keywords({
+    "parameters": PARAMETER_VALUES, "t": [FiniteNumber(), NONE], "fixed": FIXED,
+    "tol": [PositiveNumber()], "on_marginal": ON_MARGINAL,
+})
 def linearize(
     system: StaticsModel,
     q_eq: Equilibrium | Mapping[object, float] | Sequence[float] | Array,
@@ -214,8 +221,6 @@ def linearize(
     >>> round(float(lin.natural_frequencies[0].real) ** 2, 10)  # g / l
     9.81
     """
-    if on_marginal not in ("report", "raise"):
-        raise ValueError(f"on_marginal must be 'report' or 'raise', not {on_marginal!r}")
     given = q_eq if isinstance(q_eq, Equilibrium) else None
     sm = static_system(system, given.parameter_values if given else None, parameters)
     _reject_pfaffian(sm)

@@ -205,6 +205,91 @@ def test_a_verified_entry_is_loaded_without_building(forks, root, monkeypatch):
     assert c_backend.source_library(SEVEN).seven() == 7
 
 
+# -- the window between the check and the load ---------------------------------------------
+def load_after_a_swap(root: str, planted: str) -> dict:
+    """In a child: load SEVEN while the library's path is swapped for ``planted`` right
+    after its check passed (what another user who can write a folder above the cache
+    could do)."""
+    checked = cache._Entry.problem
+
+    def problem_then_swap(self):
+        found = checked(self)
+        if found is None:
+            os.replace(planted, self.library)
+        return found
+
+    cache._Entry.problem = problem_then_swap  # type: ignore[method-assign]
+    return load_seven(root)
+
+
+def test_a_library_swapped_after_its_check_is_not_loaded(forks, root, tmp_path):
+    """The file loaded is the one whose owner, mode and SHA-256 were checked: a planted
+    library moved onto the path between the check and the load never runs."""
+    isolated(forks, load_seven, str(root))  # a sound entry
+    marker = tmp_path / "marker"
+    planted = tmp_path / "planted.so"
+    compile_c(planted_source(marker), planted)
+    planted.chmod(0o600)
+    planted_bytes = planted.read_bytes()
+    result = isolated(forks, load_after_a_swap, str(root), str(planted))
+    assert entry(root)["so"].read_bytes() == planted_bytes  # the swap happened
+    assert result["value"] == 7 and result["native"]
+    assert not marker.exists()
+
+
+def shared_parent(tmp_path: Path, how: str) -> tuple[Path, str]:
+    """A cache below a folder made shared ``how``; the start of the expected message."""
+    shared = tmp_path / "project"
+    shared.mkdir()
+    if how == "another user's":
+        os.chown(shared, NOBODY, NOBODY)
+        return shared, f"the folder {shared} above the code cache belongs to uid {NOBODY}"
+    shared.chmod(0o775 if how == "group-writable" else 0o777)
+    mode = "0775" if how == "group-writable" else "0777"
+    return shared, (f"the folder {shared} above the code cache is writable by group or "
+                    f"others (mode {mode}) without the sticky bit")
+
+
+@pytest.mark.parametrize("how", ["group-writable", "world-writable", "another user's"])
+def test_a_cache_below_a_folder_others_can_change_is_refused(tmp_path, monkeypatch, how):
+    if how == "another user's" and not IS_ROOT:
+        pytest.skip("giving a folder to another user needs root")
+    shared, expected = shared_parent(tmp_path, how)
+    root = shared / "deep" / "cache"
+    monkeypatch.setenv("DALEMBERT_CACHE_DIR", str(root))
+    with pytest.raises(UnsafeCacheError) as info:
+        c_backend.source_library(SEVEN)
+    message = str(info.value)
+    assert expected in message and "run as you" in message
+    assert "DALEMBERT_CACHE_DIR to a folder of your own" in message
+    if how != "another user's":
+        assert f"chmod go-w {shared}" in message
+    assert not (root / cache.FOLDER).exists() or not any((root / cache.FOLDER).glob("*.so"))
+
+
+def test_a_cache_below_a_sticky_shared_folder_is_used(forks, tmp_path):
+    """Like /tmp: writable by all, but only an entry's owner may rename or remove it."""
+    shared = tmp_path / "tmp"
+    shared.mkdir()
+    shared.chmod(0o1777)
+    result = isolated(forks, load_seven, str(shared / "cache"))
+    assert result["value"] == 7 and result["warnings"] == []
+
+
+def test_a_cache_reached_through_a_link_checks_the_folders_the_link_passes(tmp_path,
+                                                                          monkeypatch):
+    """A link from a private folder into a shared one: the shared folder is named."""
+    shared, expected = shared_parent(tmp_path, "world-writable")
+    (shared / "real").mkdir(mode=0o700)
+    private = tmp_path / "mine"
+    private.mkdir(mode=0o700)
+    (private / "link").symlink_to(shared / "real")
+    monkeypatch.setenv("DALEMBERT_CACHE_DIR", str(private / "link" / "cache"))
+    with pytest.raises(UnsafeCacheError) as info:
+        c_backend.source_library(SEVEN)
+    assert expected in str(info.value)
+
+
 # -- bad entries: rebuilt, never loaded ------------------------------------------------------
 def truncated(files, root):
     replace_bytes(files["so"], files["so"].read_bytes()[:2000])

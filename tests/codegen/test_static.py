@@ -34,7 +34,7 @@ from dalembert.multibody import (
     SpringDamper,
     chain,
 )
-from dalembert.multibody.system import MultibodySystem
+from dalembert.multibody.system import MultibodyDefinition
 
 
 def pfaffian_with_drift() -> System:
@@ -138,7 +138,7 @@ def no_global_model(monkeypatch):
     def refuse(self):
         raise AssertionError("the global symbolic model was built")
 
-    monkeypatch.setattr(MultibodySystem, "model", property(refuse))
+    monkeypatch.setattr(MultibodyDefinition, "model", property(refuse))
 
 
 def hand_derived_chain_modes(n: int, length: float, mass: float, radius: float, g: float):

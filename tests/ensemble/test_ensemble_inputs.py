@@ -112,7 +112,8 @@ def test_case_inputs_given_wrongly_are_refused(bead):
     with pytest.raises(EnsembleError, match="not both"):
         bead.simulate_many((0.0, 1.0), cases, q0=[0.0, 0.0], case_inputs=damper,
                            inputs={"u": 0.0, "v": 0.0}, progress=False)
-    with pytest.raises(EnsembleError, match="case_inputs must be a function"):
+    with pytest.raises(EnsembleError, match="The 'case_inputs' parameter of simulate_many "
+                       "must be a function or None; got"):
         bead.simulate_many((0.0, 1.0), cases, q0=[0.0, 0.0], case_inputs={"v": 0.0},
                            progress=False)
     with pytest.raises(EnsembleError, match="the model declares no inputs"):

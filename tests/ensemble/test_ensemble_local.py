@@ -20,7 +20,7 @@ from ensemble_models import (
 )
 from scipy import stats
 
-from dalembert import EnsembleError, EnsembleWarning
+from dalembert import EnsembleError, EnsembleWarning, ParameterError
 from dalembert.ensemble import grid, sample
 
 T_EVAL = np.linspace(0.0, 2.0, 41)
@@ -180,6 +180,14 @@ def _hermite_root(t0, t1, x0, x1, v0, v1):
     return t0 + s * h
 
 
+def test_the_warning_of_failed_cases_points_at_the_users_call(pend):
+    cases = [{"l": 1.0, "m": 1.0}, {"l": 1.0, "m": np.nan}]
+    with pytest.warns(EnsembleWarning) as caught:
+        pend.simulate_many((0.0, 1.0), cases, initial_state=released, t_eval=T_EVAL[:3],
+                           scheduler="serial", progress=False)
+    assert [w.filename for w in caught if w.category is EnsembleWarning] == [__file__]
+
+
 def test_failing_cases_are_recorded_and_the_others_complete(pend):
     cases = [{"l": 1.0, "m": 1.0}, {"l": 1.0, "m": 0.0},  # no inertia: KKT singular
              {"l": 1.5, "m": 1.0}, {"l": 1.0, "m": np.nan}, {"l": 0.5, "m": 2.0}]
@@ -303,7 +311,8 @@ def test_overwriting_a_netcdf_store_an_earlier_result_reads(pend, tmp_path):
 def test_bad_arguments_are_refused_before_anything_runs(pend):
     cases = grid(l=[1.0])
     for kwargs, match in [
-        ({"scheduler": "mpi"}, "scheduler must be one of"),
+        ({"scheduler": "mpi"}, "The 'scheduler' parameter of simulate_many must be one of "
+                               "'auto', 'serial', 'threads', 'processes', 'dask'; got 'mpi'"),
         ({"scheduler": "dask"}, "needs client="),
         ({"client": "serial"}, "client must be a dask.distributed.Client, got str 'serial'; "
                                "for scheduler='serial' write scheduler='serial'"),
@@ -312,13 +321,17 @@ def test_bad_arguments_are_refused_before_anything_runs(pend):
         ({"outputs": {"q": tip_z}}, "name of a trajectory quantity"),
         ({"store": "run.csv"}, "must end in .zarr"),
         ({"dense_output": True}, "dense_output"),
-        ({"workers": 0}, "workers must be a positive whole number"),
+        ({"workers": 0}, "The 'workers' parameter of simulate_many must be a positive whole "
+                         "number or None; got 0"),
     ]:
         with pytest.raises(EnsembleError, match=match):
             pend.simulate_many((0.0, 1.0), cases, initial_state=released, progress=False,
                                **kwargs)
     with pytest.raises(ValueError, match="The 'rtol' parameter of simulate"):
         pend.simulate_many((0.0, 1.0), cases, initial_state=released, rtol=-1.0)
+    with pytest.raises(ParameterError, match="'x' is a coordinate of this model, not a "
+                                             "parameter: give its initial value in q0"):
+        pend.simulate_many((0.0, 1.0), cases, initial_state=released, parameters={"x": 0.1})
 
 
 def test_auto_runs_short_ensembles_here_and_long_ones_in_parallel(pend, monkeypatch):

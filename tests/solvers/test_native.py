@@ -26,7 +26,7 @@ from dalembert.solvers.native.structure import BLOCK_MAX, schur_structure
 from dalembert.solvers.outputs import evaluate_outputs
 from dalembert.solvers.projection import StepProjector
 from dalembert.solvers.running.integrate import integrate
-from dalembert.solvers.steppers.step_control import CONTROLLED
+from dalembert.solvers.steppers.scipy_ivp import CONTROLLED
 
 
 def initial(name: str):

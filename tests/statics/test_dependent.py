@@ -21,6 +21,7 @@ from scipy.optimize import brentq
 
 from dalembert.errors import ConstraintError, RedundantConstraintsWarning
 from dalembert.examples import four_bar
+from dalembert.statics import equilibrium
 
 G = 9.81
 A_, B_, C_, D_ = four_bar.LENGTHS
@@ -60,6 +61,14 @@ def hanging():
     with pytest.warns(RedundantConstraintsWarning, match=r"J4_2, J4_4, J4_5"):
         rest = system.equilibrium(guess)
     return theta, system, rest
+
+
+def test_the_warning_points_at_the_users_call(hanging):
+    _, system, rest = hanging
+    with pytest.warns(RedundantConstraintsWarning) as caught:
+        system.equilibrium(rest.q)
+        equilibrium(system, rest.q)  # the function the method is an alias of
+    assert [w.filename for w in caught] == [__file__, __file__]
 
 
 def test_equilibrium_of_the_four_bar_is_the_minimum_of_v(hanging):

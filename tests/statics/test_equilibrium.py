@@ -343,5 +343,6 @@ def test_bad_arguments(pendulum):
         equilibrium(pendulum, [0.1, -1.0], tol=0.0)
     with pytest.raises(ValueError, match="on_marginal"):
         equilibrium(pendulum, [0.1, -1.0], on_marginal="ignore")
-    with pytest.raises(ValueError, match="t must be finite"):
+    with pytest.raises(ValueError, match="The 't' parameter of equilibrium must be a finite "
+                       "number; got inf"):
         equilibrium(pendulum, [0.1, -1.0], t=math.inf)

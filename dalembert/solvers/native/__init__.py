@@ -44,18 +44,35 @@ folded (checked at the initial state).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ...codegen.c_backend import CompileError
 from ...codegen.compiled import NumericModel
 from ...errors import DalembertError
 from .library import LayoutError
-from .runge_kutta import NATIVE_METHODS, NativeDOP853, NativeRK23, NativeRK45
 from .solver import NativeSolver
 from .structure import NotApplicable
 
+if TYPE_CHECKING:
+    from .runge_kutta import NATIVE_METHODS, NativeDOP853, NativeRK23, NativeRK45
+
 __all__ = ["NATIVE_METHODS", "NativeDOP853", "NativeRK23", "NativeRK45", "NativeSolver",
            "NotApplicable", "native_solver"]
+
+#: Made on first use (PEP 562): they subclass SciPy's solvers, and ``scipy.integrate``
+#: is a large import that ``import dalembert`` (through the ensemble's thread turns,
+#: :mod:`.turns`) should not make.
+_STEPPERS = ("NATIVE_METHODS", "NativeDOP853", "NativeRK23", "NativeRK45")
+
+
+def __getattr__(name: str) -> object:
+    if name in _STEPPERS:
+        from . import runge_kutta
+
+        return getattr(runge_kutta, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def native_solver(num: NumericModel, y0: np.ndarray, t0: float = 0.0, baumgarte: float = 0.0,

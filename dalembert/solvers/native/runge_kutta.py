@@ -2,7 +2,7 @@
 
 :class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) subclass SciPy's
 solvers, through their versions under a choice of step-size controller
-(:mod:`~dalembert.solvers.steppers.step_control`), and replace only ``_step_impl``: the
+(:mod:`~dalembert.solvers.steppers.scipy_ivp`), and replace only ``_step_impl``: the
 stages, the error estimate and the step-size control run in ``runge_kutta.c`` with the
 same tableau, the same formulas and constants, so the steps taken are those of
 ``ControlledDOP853`` (SciPy's own under ``step_control="scipy"``) up to rounding
@@ -23,8 +23,15 @@ import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
 from ..steppers.runge_kutta import Tableau
-from ..steppers.scipy_ivp import INTERPOLATOR_POWER, Dop853DenseOutput, RungeKutta, tableau_of
-from ..steppers.step_control import ControlledDOP853, ControlledRK23, ControlledRK45
+from ..steppers.scipy_ivp import (
+    INTERPOLATOR_POWER,
+    ControlledDOP853,
+    ControlledRK23,
+    ControlledRK45,
+    Dop853DenseOutput,
+    RungeKutta,
+    tableau_of,
+)
 from . import library
 from .solver import NativeSolver
 
@@ -85,7 +92,7 @@ class _NativeSteps(RungeKutta):
         y_new = np.empty(self.n)
         st.t, st.h_abs, st.err_old, st.nfev = self.t, self.h_abs, self.err_old, 0
         status = self._native.lib.dl_rk_step(
-            self._native._address, *self._fixed, y.ctypes.data, K.ctypes.data,
+            *self._native._at, *self._fixed, y.ctypes.data, K.ctypes.data,
             y_new.ctypes.data, self._stage.ctypes.data)
         self.nfev += st.nfev
         if status == library.STEP_TOO_SMALL:
@@ -122,7 +129,7 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
         y_old = np.ascontiguousarray(self.y_old, dtype=np.float64)
         nfev = ctypes.c_int64(0)
         status = self._native.lib.dl_stages(
-            self._native._address, A, width, C, s, s, width,
+            *self._native._at, A, width, C, s, s, width,
             self.t_old, h, y_old.ctypes.data, K.ctypes.data, self._stage.ctypes.data,
             ctypes.addressof(nfev))
         self.nfev += nfev.value

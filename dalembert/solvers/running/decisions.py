@@ -18,7 +18,7 @@ from ...codegen.compiled import NumericModel
 from ...options import Backend, Baumgarte, Output, Projection, SimulationOptions
 from ..initialization import InitializationReport
 from ..native import NATIVE_METHODS, NativeSolver, NotApplicable, native_solver
-from ..steppers.step_control import ControlledSteps, controlled_class
+from ..steppers.scipy_ivp import ControlledSteps, controlled_class
 
 Loop = Literal["c", "python"]
 

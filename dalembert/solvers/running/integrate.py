@@ -18,8 +18,8 @@ from scipy.integrate import OdeSolver
 
 from ...errors import DalembertError, InputError
 from ..singular.careful import CarefulSteps
-from ..singular.watch import Singularity
-from ..steppers.step_control import CONTROLLED, ControlledSteps
+from ..singular.watch import Runaway, Singularity
+from ..steppers.scipy_ivp import CONTROLLED, ControlledSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
 
@@ -41,6 +41,7 @@ def integrate(
     diagnose: Diagnosis | None = None,
     singular: Singularity | None = None,
     careful: CarefulSteps | None = None,
+    runaway: Runaway | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -68,6 +69,10 @@ def integrate(
         The careful steps near a singular configuration
         (:mod:`~dalembert.solvers.singular.careful`):
         with ``stretches``, how to take them the Python way.
+    runaway
+        ``runaway(t, y)``: what in the model grew most since the start, or ``""``;
+        steps that keep shrinking toward a time the run would take hours to reach
+        end it naming that (:meth:`~dalembert.solvers.singular.watch.StepCollapse.runaway`).
     solver_options
         Passed to ``method``.
 
@@ -95,10 +100,11 @@ def integrate(
             # may fail right there, and a Ctrl-C may land there too
             solver = method(fun, t0, y0, tf, **solver_options)
             if stretches and project is not None:
-                loop = StretchLoop(solver, times, project, diagnose, singular, careful)
+                loop = StretchLoop(solver, times, project, diagnose, singular, careful,
+                                   runaway)
             else:
                 loop = PythonLoop(solver, times, events, project, dense_output, diagnose,
-                                  singular, careful)
+                                  singular, careful, runaway)
             bar = progress_bar(t0, tf) if progress else None
             while loop.status is None:
                 loop.advance()

@@ -23,16 +23,18 @@ from ...errors import DalembertError
 from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
 from ..native.run import StretchRunner
 from ..singular.careful import CarefulSteps, RetakeStep
-from ..singular.watch import Singularity, StepCollapse
+from ..singular.watch import Runaway, Singularity, StepCollapse
 from ..steppers.dense_output import DenseRecorder
 from ..steppers.scipy_ivp import (
+    hand_over,
     last_stages,
+    last_step_size,
     restart,
     restart_second_order,
     roll_back,
     snapshot,
     step_inputs,
-    take_state,
+    step_size,
 )
 from .nonfinite import Diagnosis
 
@@ -129,7 +131,8 @@ class PythonLoop(SimulationLoop):
                  events: Sequence[Callable] = (), project: Projector | None = None,
                  dense_output: bool = False, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
-                 careful: CarefulSteps | None = None) -> None:
+                 careful: CarefulSteps | None = None,
+                 runaway: Runaway | None = None) -> None:
         self.solver = solver
         self.careful = careful
         #: The run's own solver and projection (the careful steps swap in others).
@@ -139,6 +142,7 @@ class PythonLoop(SimulationLoop):
         self.project = project
         self.diagnose = diagnose
         self.singular = singular
+        self.runaway = runaway
         self.collapse = StepCollapse(solver.t)
         self.events = list(events or ())
         self.t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
@@ -215,7 +219,7 @@ class PythonLoop(SimulationLoop):
                 self.solver is not self.native or not self.careful.model.careful:
             return False
         solver = self.solver
-        self.solver = self.careful.solver(solver.t, solver.y, solver.h_abs)
+        self.solver = self.careful.solver(solver.t, solver.y, step_size(solver))
         self.project = self.careful.model.project
         return True
 
@@ -223,9 +227,7 @@ class PythonLoop(SimulationLoop):
         """Hand the run back to its own solver after careful steps."""
         careful, native = self.solver, self.native
         self._careful_nfev += careful.nfev
-        take_state(native, t=careful.t, t_old=careful.t_old, y=careful.y,
-                   f=native.fun(careful.t, careful.y), h_abs=careful.h_abs,
-                   h_previous=careful.h_previous)
+        hand_over(careful, native, native.fun(careful.t, careful.y))
         self.solver, self.project = native, self.native_project
 
     def _step(self) -> None:
@@ -292,19 +294,31 @@ class PythonLoop(SimulationLoop):
                   "; the trajectory up to there is returned")
 
     def _watch_steps(self) -> None:
-        """Stop if the steps have collapsed near a singular configuration (after a
-        complete unit of work: the trajectory so far is kept)."""
-        if self.singular is None or not self.collapse.note(self.t_reached, self.n_steps):
+        """Stop if the steps have collapsed near a singular configuration, or keep
+        shrinking toward a time they would take hours to reach (after a complete unit
+        of work: the trajectory so far is kept)."""
+        if not self.collapse.note(self.t_reached, self.n_steps):
             return
         solver = self.solver
-        found = self.singular(solver.t, solver.y)
-        if not found:
+        found = self.singular(solver.t, solver.y) if self.singular is not None else ""
+        if found:
+            return self.stop(
+                "failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
+                f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
+                f"step before, the last {last_step_size(solver) or 0:.1e}) "
+                f"{found}. The trajectory up to there is returned; a looser rtol or "
+                "another method may get through, or the mechanism may lock here")
+        remaining = self.collapse.runaway(solver.t, solver.t_bound)
+        if remaining is None:
             return self.collapse.quiet(self.n_steps)
-        self.stop("failed", f"integration stopped at t={solver.t:.6g}: the steps collapsed "
-                  f"(the last {COLLAPSE_STEPS} or more under {COLLAPSE_RATIO:g} of the mean "
-                  f"step before, the last {solver.h_previous if solver.h_previous else 0:.1e}) "
-                  f"{found}. The trajectory up to there is returned; a looser rtol or "
-                  "another method may get through, or the mechanism may lock here")
+        growing = self.runaway(solver.t, solver.y) if self.runaway is not None else ""
+        self.stop(
+            "failed", f"integration stopped at t={solver.t:.6g}: the steps keep shrinking "
+            f"(the last {COLLAPSE_STEPS} or more averaged {self.collapse.window_step:.1e}, "
+            f"each window's less than the one before): at that size the rest of the run "
+            f"would take {remaining:.1e} steps. Something in the model grows without bound "
+            f"as the time nears a limit: " + (f"{growing}" if growing else
+                                              "a prescribed motion, an input or a force"))
 
     def _failed(self, message: str) -> None:
         """Stop with ``message``, or with what is not finite at the step's start."""
@@ -458,7 +472,11 @@ class PythonLoop(SimulationLoop):
 
 
 class _EventFailed(Exception):
-    """An event function failed while its root was sought (the run is stopped)."""
+    """An event function failed while its root was sought (the run is stopped).
+
+    Internal control flow, never seen by a user: the event's value has already
+    stopped the run, saying why; this leaves SciPy's root search (``brentq``), and is
+    caught right around it."""
 
 
 def _event_name(event: Callable, k: int) -> str:
@@ -503,14 +521,21 @@ class StretchLoop(PythonLoop):
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
                  project: Projector, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
-                 careful: CarefulSteps | None = None) -> None:
-        super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful)
+                 careful: CarefulSteps | None = None,
+                 runaway: Runaway | None = None) -> None:
+        super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful,
+                         runaway)
         self.runner = StretchRunner(solver, self.t_eval)
 
     def advance(self) -> None:
         if self.solver is not self.native or self._careful_from_here():
             return super().advance()  # careful steps
-        ran = self.runner.run()
+        try:
+            ran = self.runner.run()
+        except DalembertError as exc:  # the inputs' function failed: the steps before kept
+            self._absorb()
+            self.error = exc  # chained to the run's warning
+            return self._failed(f"integration failed at t={self.solver.t:.6g}: {exc}")
         self._absorb()
         if not ran:  # C left the next step to the step-by-step loop
             return super().advance()

@@ -8,7 +8,7 @@ a function of :mod:`.decisions` returning a typed value)
   and the projection in C) where it applies and ``backend`` allows, else in Python,
   with the reason the C loop does not apply;
 - the solver class: SciPy's method, under the chosen step-size controller
-  (:mod:`~dalembert.solvers.steppers.step_control`), stepping in C where the loop is;
+  (:mod:`~dalembert.solvers.steppers.scipy_ivp`), stepping in C where the loop is;
 - whether whole stretches of steps run in C (:class:`~.loop.StretchLoop`): with
   the C loop's projection and neither events nor dense output;
 - the right-hand side, the projection after each step and the trajectory's outputs.
@@ -43,7 +43,7 @@ from ..native import NativeSolver
 from ..outputs import evaluate_outputs
 from ..projection import StepProjector
 from ..singular.careful import CarefulModel, CarefulSteps, Outputs
-from ..singular.watch import Singularity, singular_diagnosis
+from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_diagnosis
 from ..state import accelerations_at
 from .decisions import (
     Loop,
@@ -97,6 +97,10 @@ class SimulationPlan:
         (:mod:`~dalembert.solvers.singular.careful`):
         in the Python loop, its ``rhs`` and ``project``; the C loop takes them the Python
         way. ``None`` without them.
+    runaway
+        ``runaway(t, y)``: what in the model grew most since the start, for the message
+        of a run whose steps keep shrinking toward a limit time
+        (:mod:`~dalembert.solvers.singular.watch`).
     """
 
     options: SimulationOptions
@@ -113,6 +117,7 @@ class SimulationPlan:
     diagnose: Diagnosis = field(repr=False)
     singular: Singularity | None = field(repr=False, default=None)
     careful: CarefulSteps | None = field(repr=False, default=None)
+    runaway: Runaway | None = field(repr=False, default=None)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     num: NumericModel | None = field(repr=False, default=None)
 
@@ -130,7 +135,7 @@ class SimulationPlan:
             self.rhs, self.options.t_span, self.y0, method=self.solver, t_eval=out.t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
-            singular=self.singular, careful=self.careful,
+            singular=self.singular, careful=self.careful, runaway=self.runaway,
             **self.solver_options)
 
 
@@ -208,7 +213,7 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
                      for e in options.output.events), parameters=num.p, num=num,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
-        careful=steps)
+        careful=steps, runaway=runaway_diagnosis(num, rows, initial.names, t0, y0))
 
 
 def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulModel | None,

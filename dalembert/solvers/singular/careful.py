@@ -63,7 +63,11 @@ POSITION_RTOL = 1e-14
 class RetakeStep(Exception):
     """A step the loop must take again, shorter: its projection moved its end much
     further than its own error (a jump onto another branch of the constraints), or it
-    left combinations of rows out beyond the singular configuration's reach."""
+    left combinations of rows out beyond the singular configuration's reach.
+
+    Internal control flow, never seen by a user: raised by the careful projection and
+    caught by the loops (:mod:`~dalembert.solvers.running.loop`), which retake the step
+    a quarter as long, and stop the run with a warning when it keeps jumping."""
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""Watching a run for steps that collapse near a singular configuration.
+"""Watching a run for steps that collapse, near a singular configuration or not.
 
 Both loops (:mod:`~dalembert.solvers.running.loop`: step by step in Python, or stretches of
 steps in C) note their progress after every unit of work in a :class:`StepCollapse`,
@@ -6,7 +6,12 @@ with the thresholds of :mod:`dalembert.numerics.singular`. When the steps have
 collapsed, the loop asks the function :func:`singular_diagnosis` makes whether the
 state is near a singular configuration of the constraints, and if so stops with a
 message naming the time and the rows that lose rank: within a few thousand steps of
-the creep starting, instead of crawling for minutes.
+the creep starting, instead of crawling for minutes. Otherwise, when the steps keep
+shrinking so that the rest of the run would take more than
+:data:`~dalembert.numerics.singular.RUNAWAY_STEPS` (:meth:`StepCollapse.runaway`),
+something in the model grows without bound as the time nears a limit (a prescribed
+motion or an input that diverges): the loop stops with what
+:func:`runaway_diagnosis` names as growing fastest.
 """
 
 from __future__ import annotations
@@ -17,10 +22,20 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, NEAR, named, near_dependent_rows
+from ...numerics.singular import (
+    COLLAPSE_RATIO,
+    COLLAPSE_STEPS,
+    NEAR,
+    RUNAWAY_STEPS,
+    RUNAWAY_WINDOWS,
+    named,
+    near_dependent_rows,
+)
 
 #: ``singular(t, y)``: a sentence on the singular configuration at ``(t, y)``, or ``""``.
 Singularity = Callable[[float, np.ndarray], str]
+#: ``runaway(t, y)``: a sentence on what in the model grew most since the start, or ``""``.
+Runaway = Callable[[float, np.ndarray], str]
 
 
 class StepCollapse:
@@ -46,6 +61,9 @@ class StepCollapse:
         self.t0 = t0
         self._marks: deque[tuple[float, int]] = deque([(t0, 0)])
         self._quiet_until = 0
+        #: The mean step of the last window :meth:`note` looked at.
+        self.window_step = 0.0
+        self._shrinking: list[float] = []  # the mean steps of the windows running away
 
     def note(self, t: float, steps: int) -> bool:
         marks = self._marks
@@ -57,7 +75,48 @@ class StepCollapse:
         if n_w == 0 or steps - n_w < COLLAPSE_STEPS or steps < self._quiet_until:
             return False
         before = abs(t_w - self.t0) / n_w
-        return abs(t - t_w) / (steps - n_w) < COLLAPSE_RATIO * before
+        self.window_step = abs(t - t_w) / (steps - n_w)
+        return self.window_step < COLLAPSE_RATIO * before
+
+    def runaway(self, t: float, t_bound: float) -> float | None:
+        """After a collapse no singular configuration explains (:meth:`note` said so):
+        the steps the rest of the run would take at the last window's mean step, once
+        that exceeded :data:`~dalembert.numerics.singular.RUNAWAY_STEPS` in
+        :data:`~dalembert.numerics.singular.RUNAWAY_WINDOWS` windows in a row, each
+        window's mean step smaller than the last; else ``None``.
+
+        A short stiff stretch that the steps come out of is not a runaway: its windows
+        stop shrinking, and the count starts again.
+
+        Parameters
+        ----------
+        t
+            The time reached.
+        t_bound
+            The end of the run.
+
+        Examples
+        --------
+        >>> watch = StepCollapse(0.0)
+        >>> watch.note(0.5, 1000)               # steps of 5e-4
+        False
+        >>> t, steps = 0.5, 1000
+        >>> for width in (1e-9, 1e-10, 1e-11):  # windows of 600 steps, each 10x shorter
+        ...     t, steps = t + width, steps + 600
+        ...     print(watch.note(t, steps), watch.runaway(t, 1.0) is not None)
+        ...     watch.quiet(steps)
+        True False
+        True False
+        True True
+        """
+        remaining = abs(t_bound - t) / self.window_step if self.window_step > 0 \
+            else float("inf")
+        if remaining <= RUNAWAY_STEPS or (self._shrinking and
+                                          self.window_step >= self._shrinking[-1]):
+            self._shrinking = []
+        if remaining > RUNAWAY_STEPS:
+            self._shrinking.append(self.window_step)
+        return remaining if len(self._shrinking) >= RUNAWAY_WINDOWS else None
 
     def quiet(self, steps: int) -> None:
         """No collapse reported before ``COLLAPSE_STEPS`` more steps (the state was not
@@ -130,3 +189,70 @@ def singular_diagnosis(num: NumericModel, constraint_names: Sequence[str] | None
                 "there (a linkage folding flat, a chain stretched straight)")
 
     return singular
+
+
+#: A quantity is named as growing when it is this many times its size at the start
+#: (or, for one that started at zero, this many times the start's typical size).
+_GREW = 100.0
+
+
+def runaway_diagnosis(num: NumericModel, constraint_names: Sequence[str] | None,
+                      coordinate_names: Sequence[str], t0: float,
+                      y0: np.ndarray) -> Runaway:
+    """The function saying what in ``num`` grew most between the start and a state: the
+    prescribed rates of the constraints (``-b`` of ``A qd + b = 0``: a driver's),
+    the generalized forces, the velocities.
+
+    Parameters
+    ----------
+    num
+        The compiled equations bound to parameter values.
+    constraint_names, coordinate_names
+        The names of the constraint rows (default: ``row 0``, ``row 1``...) and of
+        the coordinates.
+    t0, y0
+        The start: time and state ``[q, qd]``.
+
+    Examples
+    --------
+    >>> from dalembert import Holonomic, System, coordinates, t
+    >>> (x,) = coordinates("x")
+    >>> driven = System([x], kinetic=x.diff() ** 2 / 2,
+    ...                 constraints=[Holonomic(x - 1 / (1 - t), name="drive")])
+    >>> runaway = runaway_diagnosis(driven.numeric(), ["drive"], ["x"], 0.0,
+    ...                             np.array([1.0, 1.0]))
+    >>> runaway(0.999, np.array([1000.0, 1e6]))
+    'the prescribed rate of drive (-b of its row) grew from 1 to 1e+06'
+    """
+    n = num.n
+    if constraint_names is None:
+        constraint_names = [f"row {k}" for k in range(num.m)]
+    labels = ([f"the prescribed rate of {name} (-b of its row)" for name in constraint_names]
+              + [f"the generalized force on {name}" for name in coordinate_names]
+              + [f"the velocity {name}_dot" for name in coordinate_names])
+
+    def sizes(t: float, y: np.ndarray) -> np.ndarray:
+        q, qd = y[:n], y[n:]
+        b = num.velocity_sparse(t, q)[1] if num.m else np.zeros(0)
+        f = num.compiled.split_kkt(num.compiled.kkt_values(t, q, qd, num.p))[1]
+        return np.abs(np.concatenate([b, f, qd]))
+
+    start = sizes(t0, np.asarray(y0, dtype=float))
+    floor = max(float(np.max(start, initial=0.0)), 1.0) * 1e-3
+
+    def runaway(t: float, y: np.ndarray) -> str:
+        with np.errstate(all="ignore"):
+            now = sizes(t, np.asarray(y, dtype=float))
+            growth = now / np.maximum(start, floor)
+        growth[~np.isfinite(growth)] = np.inf
+        # a prescribed rate or a force that grows is a cause; the velocities follow it
+        causes = len(labels) - n
+        order = [int(k) for k in np.argsort(-growth[:causes], kind="stable")
+                 if growth[k] > _GREW][:2]
+        if not order:
+            order = [causes + int(k) for k in np.argsort(-growth[causes:], kind="stable")
+                     if growth[causes + k] > _GREW][:1]
+        return "; ".join(f"{labels[k]} grew from {start[k]:.2g} to {now[k]:.2g}"
+                         for k in order)
+
+    return runaway

@@ -20,7 +20,7 @@ array([-0.5, -0.5])
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, OdeSolver
+from scipy.integrate import BDF, DOP853, RK23, RK45, OdeSolver
 from scipy.integrate._ivp import dop853_coefficients
 from scipy.integrate._ivp.rk import (
     MAX_FACTOR,
@@ -32,22 +32,30 @@ from scipy.integrate._ivp.rk import (
 )
 
 from ...numerics.state_layout import StateLayout
-from .runge_kutta import Tableau
+from ...options import StepController
+from .controller import ControllerState, PIController
+from .runge_kutta import ExplicitRungeKutta, Tableau, controlled_step
 
 __all__ = [
+    "CONTROLLED",
     "INTERPOLATOR_POWER",
     "MAX_FACTOR",
     "MIN_FACTOR",
     "SAFETY",
+    "ControlledSteps",
     "Dop853DenseOutput",
     "RungeKutta",
+    "controlled_class",
+    "hand_over",
     "interpolant_form",
     "last_stages",
+    "last_step_size",
     "restart",
     "restart_second_order",
     "roll_back",
     "snapshot",
     "step_inputs",
+    "step_size",
     "tableau_of",
     "take_state",
 ]
@@ -233,3 +241,129 @@ def interpolant_form(dense: object) -> tuple[str, np.ndarray, np.ndarray] | None
     if isinstance(dense, Dop853DenseOutput):
         return "dop853", dense.y_old, dense.F
     return None
+
+
+def step_size(solver: OdeSolver) -> float:
+    """The size of the next step ``solver`` will try (0 for a solver without one).
+
+    Parameters
+    ----------
+    solver
+        A SciPy solver.
+    """
+    return float(getattr(solver, "h_abs", 0.0) or 0.0)
+
+
+def last_step_size(solver: OdeSolver) -> float | None:
+    """The size of the last step ``solver`` took, ``None`` before its first.
+
+    Parameters
+    ----------
+    solver
+        A SciPy solver.
+    """
+    return getattr(solver, "h_previous", None)
+
+
+def hand_over(source: OdeSolver, target: OdeSolver, f: np.ndarray) -> None:
+    """Bring the explicit Runge-Kutta ``target`` to where ``source`` stands (the careful
+    steps handing a run back to the solver that steps in C), its next step as
+    ``source``'s.
+
+    Parameters
+    ----------
+    source, target
+        SciPy Runge-Kutta solvers of the same problem.
+    f
+        The right-hand side at ``source``'s state, as ``target`` evaluates it.
+    """
+    take_state(target, t=source.t, t_old=source.t_old, y=source.y, f=f,
+               h_abs=step_size(source), h_previous=last_step_size(source) or 0.0)
+
+
+# SciPy's explicit Runge-Kutta classes stepping on our stepper contract: start-up,
+# dense output and restarts stay SciPy's; each step is taken by
+# :func:`~.runge_kutta.controlled_step` with the method's
+# :class:`~.runge_kutta.ExplicitRungeKutta` and a :class:`~.controller.PIController`,
+# PI control by default (``step_control="PI"``), SciPy's own under
+# ``step_control="scipy"`` (:mod:`.controller` says why PI).
+
+
+class ControlledSteps(RungeKutta):
+    """Mixin for a SciPy ``RungeKutta`` subclass: its steps taken by our stepper under
+    ``step_control``.
+
+    ``controller`` is the controller's value (``step_control``'s unless one is given)
+    and ``controller_state`` its memory (the
+    error of the last accepted step), kept across restarts from a projected state: the
+    step-size history is the integration's, not the state's.
+    """
+
+    def __init__(self, fun, t0, y0, t_bound, *, step_control: StepController = "PI",
+                 controller: PIController | None = None, **options) -> None:
+        super().__init__(fun, t0, y0, t_bound, **options)
+        self.step_control = step_control
+        self.controller = controller if controller is not None else \
+            PIController.for_method(step_control, self.error_estimator_order)
+        self.controller_state: ControllerState = self.controller.initial_state()
+        self.stepper = ExplicitRungeKutta(tableau_of(type(self)))
+
+    @property
+    def err_old(self) -> float:
+        """The controller's memory: the error of the last accepted step."""
+        return self.controller_state.err_old
+
+    @err_old.setter
+    def err_old(self, value: float) -> None:
+        self.controller_state = ControllerState(value)
+
+    def _step_impl(self):
+        out = controlled_step(self.stepper, self.controller, self.controller_state, self.fun,
+                              self.t, self.y, self.f, self.h_abs, direction=self.direction,
+                              t_bound=self.t_bound, rtol=self.rtol, atol=self.atol,
+                              max_step=self.max_step, K=self._stage_storage())
+        step = out.step
+        if step is None:
+            return False, self.TOO_SMALL_STEP
+        self.h_previous, self.y_old = step.h, step.y
+        self.t, self.y, self.h_abs, self.f = step.t_new, step.y_new, out.h_abs, step.f_new
+        self.controller_state = out.state
+        return True, None
+
+    def _stage_storage(self):
+        """SciPy's own stage array (its dense output reads the stages from it)."""
+        return getattr(self, "K_extended", self.K)
+
+
+class ControlledDOP853(ControlledSteps, DOP853):
+    """:class:`scipy.integrate.DOP853` under ``step_control`` (PI by default).
+
+    >>> sol = ControlledDOP853(lambda t, y: -y, 0.0, np.array([1.0]), 1.0, rtol=1e-8,
+    ...                        atol=1e-10)
+    >>> while sol.status == "running":
+    ...     _ = sol.step()
+    >>> bool(abs(sol.y[0] - np.exp(-1.0)) < 1e-8)
+    True
+    """
+
+
+class ControlledRK45(ControlledSteps, RK45):
+    """:class:`scipy.integrate.RK45` under ``step_control`` (PI by default)."""
+
+
+class ControlledRK23(ControlledSteps, RK23):
+    """:class:`scipy.integrate.RK23` under ``step_control`` (PI by default)."""
+
+
+CONTROLLED: dict[type[OdeSolver], type[OdeSolver]] = {
+    DOP853: ControlledDOP853, RK45: ControlledRK45, RK23: ControlledRK23,
+}
+
+
+def controlled_class(cls: type[OdeSolver], step_control: StepController) -> type[OdeSolver]:
+    """The class that integrates ``cls``'s method under ``step_control``: SciPy's
+    explicit Runge-Kutta classes become their controlled versions under PI; other
+    solvers (the implicit ones, controlled ones already, a user's) stay as they are."""
+    if step_control == "PI" and cls in CONTROLLED:
+        return CONTROLLED[cls]
+    return cls

@@ -7,7 +7,7 @@ from scipy.integrate import DOP853, RK23, RK45, Radau
 
 from dalembert.options import STEP_CONTROLS, simulation_options
 from dalembert.solvers.running.integrate import integrate
-from dalembert.solvers.steppers.step_control import CONTROLLED, controlled_class
+from dalembert.solvers.steppers.scipy_ivp import CONTROLLED, controlled_class
 
 METHODS = [DOP853, RK45, RK23]
 
