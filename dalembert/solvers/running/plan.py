@@ -287,14 +287,17 @@ def _state_event(event: Callable, layout: StateLayout,
                  multipliers: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
                  ) -> Callable:
     """Adapt ``event(t, q, qd)`` or ``event(t, q, qd, lam)`` (the multipliers at the state)
-    to SciPy's ``event(t, y)``, keeping its attributes and its name (messages name it)."""
+    to SciPy's ``event(t, y)``, keeping its attributes and its name (messages name it).
+    The event gets copies: what it is given is the run's state, and a function may well
+    change its arguments for its own use."""
     if takes_multipliers(event):
         def wrapped(t: float, y: np.ndarray) -> float:
             q, qd = layout.split(y)
-            return event(t, q, qd, multipliers(t, q, qd))
+            return event(t, q.copy(), qd.copy(), multipliers(t, q, qd))
     else:
         def wrapped(t: float, y: np.ndarray) -> float:
-            return event(t, *layout.split(y))
+            q, qd = layout.split(y)
+            return event(t, q.copy(), qd.copy())
 
     update_wrapper(wrapped, event)
     wrapped.terminal = getattr(event, "terminal", False)  # type: ignore[attr-defined]
