@@ -130,6 +130,10 @@ class InitialConditionsAdjusted(DalembertWarning):
     """Initial conditions violated the constraints and were projected onto them."""
 
 
+class StiffStabilizationWarning(DalembertWarning):
+    """A Baumgarte gain so high that an explicit method must take tiny steps."""
+
+
 class IntegrationWarning(DalembertWarning):
     """Integration stopped early; the trajectory holds the part computed so far."""
 
@@ -189,6 +193,7 @@ __all__ = [
     "RedundantConstraintsWarning",
     "SingularConfigurationWarning",
     "SingularSystemError",
+    "StiffStabilizationWarning",
     "SymbolicSolveError",
     "TooManyConstraintsError",
     "TrajectoryFileError",

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .errors import user_stacklevel
+from .errors import StiffStabilizationWarning, user_stacklevel
 from .inputs import InputSignal, input_signal
 from .rules import (
     NONE,
@@ -288,12 +288,14 @@ def simulation_options(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
             "stiff problems, or stabilization='baumgarte'"
         )
+    stabilized = _stabilization(stabilization, baumgarte_gain)
+    _warn_stiff_gain(stabilized, solver, span)
     return SimulationOptions(
         t_span=span,
         method=solver,
         step=StepControl(step_control, _tolerance(rtol), _tolerance(atol),
                          None if first_step is None else float(first_step), float(max_step)),
-        stabilization=_stabilization(stabilization, baumgarte_gain),
+        stabilization=stabilized,
         output=Output(_times(t_eval, span), bool(dense_output), tuple(events), bool(progress)),
         backend=_backend(backend, native),
         redundant_constraints=redundant_constraints,
@@ -323,19 +325,45 @@ def check_events(events: Sequence[Callable]) -> None:
     Traceback (most recent call last):
     ...
     ValueError: The 'events' parameter of simulate: event 0 ('<lambda>') takes (t), so ...
+    >>> def hit(t, q, qd):
+    ...     return q[0]
+    >>> hit.terminal = "yes"
+    >>> check_events([hit])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'events' parameter of simulate: event 0 ('hit') has terminal='yes'; ...
     """
     for k, event in enumerate(events):
+        name = getattr(event, "__name__", type(event).__name__)
+        _check_event_attributes(k, name, event)
         try:
             signature = inspect.signature(event)
         except (TypeError, ValueError):  # a builtin without a signature: accepted
             continue
         if any(_binds(signature, size) for size in (3, 4)):
             continue
-        name = getattr(event, "__name__", type(event).__name__)
         raise ValueError(
             f"The 'events' parameter of simulate: event {k} ({name!r}) takes {signature}, "
             "so it cannot be called as event(t, q, qd) or event(t, q, qd, lam); give it "
             "the parameters t, q, qd (and lam for the multipliers)")
+
+
+def _check_event_attributes(k: int, name: str, event: Callable) -> None:
+    """``terminal`` (``solve_ivp``'s: a bool, or how many occurrences end the run) and
+    ``direction`` (a finite number), where the event sets them."""
+    where = f"The 'events' parameter of simulate: event {k} ({name!r})"
+    terminal = getattr(event, "terminal", False)
+    if not (isinstance(terminal, (bool, np.bool_)) or
+            (isinstance(terminal, (int, np.integer)) and terminal >= 0)):
+        raise ValueError(f"{where} has terminal={terminal!r}; give True (the first "
+                         "occurrence ends the run), False, or the number of occurrences "
+                         "that ends it")
+    direction = getattr(event, "direction", 0)
+    if isinstance(direction, bool) or not isinstance(direction, (int, float, np.number)) \
+            or not math.isfinite(direction):
+        raise ValueError(f"{where} has direction={direction!r}; give a number: positive "
+                         "(events where it goes from negative to positive), negative, or 0 "
+                         "(both)")
 
 
 def _binds(signature: inspect.Signature, size: int) -> bool:
@@ -381,6 +409,32 @@ def _stabilization(name: str | None, gain: float | None) -> Stabilization:
         raise ValueError(f"baumgarte_gain={gain!r} is given with stabilization={name!r}; "
                          "the gain applies only to stabilization='baumgarte'")
     return Projection() if name == "projection" else None
+
+
+#: Steps an explicit method would need over ``t_span`` for the Baumgarte gain alone
+#: beyond which the gain is said to make the equations stiff.
+STIFF_GAIN_STEPS = 1e5
+
+
+def _warn_stiff_gain(stabilization: Stabilization, solver: type[OdeSolver],
+                     span: tuple[float, float]) -> None:
+    """Warn when the Baumgarte gain ``w`` alone forces an explicit method's steps below
+    about ``3 / w`` (the constraint error's modes decay at the rate ``w``) for more than
+    :data:`STIFF_GAIN_STEPS` steps over ``t_span``."""
+    import scipy.integrate
+
+    if not isinstance(stabilization, Baumgarte) or not issubclass(
+            solver, (scipy.integrate.RK23, scipy.integrate.RK45, scipy.integrate.DOP853)):
+        return
+    w = stabilization.gain
+    steps = abs(span[1] - span[0]) * w / 3
+    if steps > STIFF_GAIN_STEPS:
+        warnings.warn(
+            f"baumgarte_gain={w:g} makes the constraint errors decay in {1 / w:.1g} s: "
+            f"the explicit method {solver.__name__} must take steps about that short, some "
+            f"{steps:.1e} of them over t_span. Choose a gain a few times the fastest motion "
+            "of interest, or an implicit method (method='Radau')",
+            StiffStabilizationWarning, stacklevel=user_stacklevel())
 
 
 def _backend(backend: Backend, native: bool | None) -> Backend:

@@ -34,6 +34,7 @@ from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
 from .model.sympy_mechanics import from_lagranges_method, is_sympy_method
 from .model.values import CoordinateValues, coordinate_values
+from .numerics.state_layout import StateLayout
 from .options import (
     FIXED,
     INPUT_VALUES,
@@ -888,9 +889,9 @@ class System:
                 and progress == options.output.progress \
                 and _same_times(t_eval, options.output.t_eval):
             return plan  # the run is one segment: its own plan as it is
-        n = len(self.coordinate_names)
-        initial = dataclasses.replace(plan.initial, q=y[:n].copy(), qd=y[n:].copy(),
-                                      q_given=y[:n].copy(), qd_given=y[n:].copy())
+        q, qd = StateLayout(len(self.coordinate_names)).split(y)
+        initial = dataclasses.replace(plan.initial, q=q.copy(), qd=qd.copy(),
+                                      q_given=q.copy(), qd_given=qd.copy())
         return dataclasses.replace(plan, initial=initial, options=dataclasses.replace(
             options, t_span=(a, b),
             output=dataclasses.replace(options.output, t_eval=t_eval, progress=progress)))
@@ -962,16 +963,16 @@ class System:
     def _trajectory(self, result: IntegrationResult, plan: SimulationPlan,
                     derived: dict[str, np.ndarray],
                     applied: np.ndarray | None = None) -> Trajectory:
-        n = len(self.coordinate_names)
+        layout = StateLayout(len(self.coordinate_names))
         signal = plan.options.inputs
         derived = dict(derived)
         energies = derived.pop("energies")
         if applied is None and signal is not None:  # the inputs at the points recorded
-            applied = np.array([_or_nan(signal, t, y[:n], y[n:], len(signal.names))
+            applied = np.array([_or_nan(signal, t, *layout.split(y), len(signal.names))
                                 for t, y in zip(result.t, result.y)])
             applied = applied.reshape(len(result.t), len(signal.names))
         return Trajectory(
-            t=result.t, q=result.y[:, :n], qd=result.y[:, n:], **derived,
+            t=result.t, q=layout.rows_q(result.y), qd=layout.rows_qd(result.y), **derived,
             kinetic_energy=energies[:, 0], potential_energy=energies[:, 1],
             jacobi_integral=energies[:, 2], coordinate_names=self.coordinate_names,
             constraint_names=self.constraint_names, status=result.status,

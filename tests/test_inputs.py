@@ -250,3 +250,41 @@ def test_every_valid_form_of_a_function_still_runs():
                         (partial(max, 0.25), np.maximum(0.25, times))]:
         traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=law, t_eval=times)
         assert traj.success and np.allclose(traj.input("u"), values, rtol=0, atol=1e-15), law
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_an_input_that_raises_once_ends_the_run_in_every_loop(backend):
+    """Raising once (a sensor glitch) is reported, not retried away: the C loop's
+    stretches used to hand the step to Python, whose retry went through."""
+    calls = {"raised": False}
+
+    def glitch(t, q, qd):
+        if t > 0.5 and not calls["raised"]:
+            calls["raised"] = True
+            raise RuntimeError("glitch")
+        return pd(t, q, qd)
+
+    with pytest.warns(IntegrationWarning, match="glitch"):
+        traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=glitch,
+                                   t_eval=np.linspace(0, 1, 11), backend=backend)
+    assert traj.status == "failed" and "the input 'u' raised at t=0.5" in traj.message
+    assert 0.4 <= traj.t[-1] <= 0.5
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_ctrl_c_inside_an_input_function_interrupts_the_run_keeping_it(backend):
+    """A Ctrl-C lands in the input's function when the C loop calls it: the run stops
+    as interrupted, with the trajectory up to there (the C loop dropped it and ran on)."""
+    calls = {"pressed": False}
+
+    def pressed(t, q, qd):  # one Ctrl-C, as a signal gives it
+        if t > 0.5 and not calls["pressed"]:
+            calls["pressed"] = True
+            raise KeyboardInterrupt
+        return pd(t, q, qd)
+
+    with pytest.warns(IntegrationWarning, match="interrupted"):
+        traj = pendulum().simulate((0, 1), {theta: 1.0}, inputs=pressed,
+                                   t_eval=np.linspace(0, 1, 11), backend=backend)
+    assert traj.status == "interrupted"
+    assert 0.4 <= traj.t[-1] <= 0.5 and len(traj) >= 5

@@ -21,6 +21,7 @@ from typing import TypeVar
 import numpy as np
 
 from ..equations.lagrange import Equations
+from ..numerics.state_layout import StateLayout
 from . import c_backend
 from .registry import (
     REGISTRY,
@@ -41,9 +42,10 @@ class SparsePattern:
 
     The generated functions return only these entries, in this order; the pattern
     is computed once from the symbolic matrices (an entry that is zero symbolically
-    is zero at every state). Compared by identity; ``derived`` is where the solvers
-    keep what they compute from the pattern alone (index maps, orders), so that a
-    model simulated many times computes it once.
+    is zero at every state). Compared by identity and hashed so: what the solvers
+    compute from the pattern alone (index maps, orders) is kept in their typed caches
+    keyed by it (:mod:`dalembert.solvers.pattern_cache`), so that a model simulated
+    many times computes it once.
     """
 
     n: int
@@ -52,19 +54,23 @@ class SparsePattern:
     M_cols: np.ndarray
     A_rows: np.ndarray
     A_cols: np.ndarray
-    derived: dict = field(default_factory=dict, init=False, repr=False)
+    _remembered: dict = field(default_factory=dict, init=False, repr=False)
 
     def remember(self, key: object, make: Callable[[], T]) -> T:
-        """``derived[key]``, made by ``make()`` the first time.
+        """The value remembered under ``key``, made by ``make()`` the first time.
+
+        The C package's own keyed cache (:mod:`dalembert.solvers.native`); the Python
+        solvers keep theirs in typed :class:`~dalembert.solvers.pattern_cache.PatternCache`
+        objects. A value kept here is shared by every run and thread of the model.
 
         >>> p = SparsePattern(1, 0, np.zeros(1, int), np.zeros(1, int), np.zeros(0, int),
         ...                   np.zeros(0, int))
         >>> p.remember("size", lambda: 1) + p.remember("size", lambda: 2)
         2
         """
-        if key not in self.derived:
-            self.derived[key] = make()
-        return self.derived[key]
+        if key not in self._remembered:
+            self._remembered[key] = make()
+        return self._remembered[key]
 
     def dense_M(self, values: np.ndarray) -> np.ndarray:
         M = np.zeros((self.n, self.n))
@@ -154,11 +160,12 @@ class CompiledEquations:
         return self.pattern.dense_A(values[:k]), values[k:]
 
     def bind(self, p: np.ndarray) -> NumericModel:
-        """The functions bound to the model's parameter values ``p`` (the inputs at 0
-        until :meth:`NumericModel.set_inputs`)."""
+        """The functions bound to the model's parameter values ``p`` (the inputs at 0;
+        read-only: a run writes its inputs into its own copy, :meth:`NumericModel.for_run`)."""
         p = np.concatenate([np.asarray(p, dtype=float), np.zeros(len(self.input_names))])
-        return NumericModel(self, p if self.expand_parameters is None
-                            else self.expand_parameters(p))
+        values = p if self.expand_parameters is None else self.expand_parameters(p)
+        values.flags.writeable = False
+        return NumericModel(self, values)
 
 
 @dataclass(frozen=True)
@@ -228,6 +235,11 @@ class NumericModel:
     @property
     def pattern(self) -> SparsePattern:
         return self.compiled.pattern
+
+    @property
+    def layout(self) -> StateLayout:
+        """Where ``q`` and ``qd`` sit in a first-order state of this model."""
+        return StateLayout(self.n)
 
     @property
     def holonomic_rows(self) -> tuple[int, ...]:
@@ -311,8 +323,24 @@ class NumericModel:
         start = self.compiled.input_offset
         return self.p[start:start + len(self.compiled.input_names)]
 
+    def for_run(self) -> NumericModel:
+        """The same functions and values with a parameter vector of the run's own, whose
+        inputs :meth:`set_inputs` sets (a bound model's values are read-only: whoever
+        shares it, another run or thread, sees them unchanged).
+
+        Examples
+        --------
+        >>> from dalembert.examples import cartesian_pendulum
+        >>> num = cartesian_pendulum.build().numeric()
+        >>> run = num.for_run()
+        >>> run.p is num.p, bool(np.array_equal(run.p, num.p)), num.p.flags.writeable
+        (False, True, False)
+        """
+        return NumericModel(self.compiled, self.p.copy())
+
     def set_inputs(self, values: np.ndarray) -> None:
-        """Set the inputs' values, which every evaluation from now on reads."""
+        """Set the inputs' values, which every evaluation from now on reads (on a run's
+        model, :meth:`for_run`; a bound model's values are read-only)."""
         self.inputs[:] = values
 
     def forces_at_rest(self, t: float, q: np.ndarray) -> np.ndarray:

@@ -129,7 +129,8 @@ def _rigid(bodies: Sequence[RigidBody], frame: Frame, positions: Sequence[Vector
     for i, (value, name) in enumerate(zip(orientations, names)):
         if value is None:
             continue
-        arr = np.asarray(value, dtype=float)
+        arr = _numbers(value, f"orientation of {name!r}",
+                       "a 3x3 rotation matrix or 4 Euler parameters")
         if arr.shape == (3, 3):
             matrices[i] = arr
         else:
@@ -161,7 +162,7 @@ def _triples(values: Sequence[Vector | float | None], what: str,
 def _triple(value: Vector | float | None, what: str) -> FloatArray:
     if value is None:
         return np.zeros(3)
-    arr = np.asarray(value, dtype=float)
+    arr = _numbers(value, what, "3 finite numbers")
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise InitialConditionError(f"the {what} must be 3 finite numbers, got {value!r}")
     return arr
@@ -170,7 +171,8 @@ def _triple(value: Vector | float | None, what: str) -> FloatArray:
 def _quaternion(value: Orientation, name: str) -> FloatArray:
     """Unit Euler parameters of an orientation given as 4 numbers (matrices are read
     by :func:`_rigid`, all at once)."""
-    arr = np.asarray(value, dtype=float)
+    arr = _numbers(value, f"orientation of {name!r}",
+                   "a 3x3 rotation matrix or 4 Euler parameters")
     if arr.shape != (4,) or not np.all(np.isfinite(arr)):
         raise InitialConditionError(
             f"the orientation of {name!r} must be a 3x3 rotation matrix or 4 Euler "
@@ -212,7 +214,7 @@ def _in_plane(value: Vector | None, what: str) -> FloatArray:
     """``(x, y)`` of a vector given as 2 numbers or 3 with ``z = 0``."""
     if value is None:
         return np.zeros(2)
-    arr = np.asarray(value, dtype=float)
+    arr = _numbers(value, what, "2 or 3 finite numbers")
     if arr.shape not in ((2,), (3,)) or not np.all(np.isfinite(arr)):
         raise InitialConditionError(f"the {what} must be 2 or 3 finite numbers, got {value!r}")
     if arr.shape == (3,) and arr[2] != 0:
@@ -225,7 +227,8 @@ def _angle(orientation: Orientation | None, name: str) -> float:
     """The angle about ``z`` of a number or a rotation matrix about ``z``."""
     if orientation is None:
         return 0.0
-    arr = np.asarray(orientation, dtype=float)
+    arr = _numbers(orientation, f"orientation of planar body {name!r}",
+                   "an angle about z or a 3x3 rotation matrix about z")
     if arr.shape == ():
         if not np.isfinite(arr):
             raise InitialConditionError(f"the angle of {name!r} must be finite, got {arr}")
@@ -246,7 +249,7 @@ def _about_z(value: Vector | float | None, what: str) -> float:
     """``w_z`` of an angular velocity given as a number or ``(0, 0, w_z)``."""
     if value is None:
         return 0.0
-    arr = np.asarray(value, dtype=float)
+    arr = _numbers(value, what, "a number or 3 finite numbers")
     if arr.shape == () and np.isfinite(arr):
         return float(arr)
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
@@ -257,3 +260,15 @@ def _about_z(value: Vector | float | None, what: str) -> float:
             f"the {what} {arr.tolist()} has x or y components, but a planar body turns "
             "about z only")
     return float(arr[2])
+
+
+def _numbers(value: object, what: str, expected: str) -> FloatArray:
+    """``value`` as an array of floats, or an error naming the body's quantity (a value
+    nested one level too deep, such as ``{"crank": {"x": 0.5}}``, is not numbers)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        hint = (" (a dict: give the numbers themselves, not a dict of them)"
+                if isinstance(value, dict) else "")
+        raise InitialConditionError(f"the {what} must be {expected}, got {value!r}{hint}"
+                                    ) from None

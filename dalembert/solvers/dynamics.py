@@ -53,11 +53,12 @@ def first_order_rhs(
     num: NumericModel, baumgarte: float = 0.0, kept: np.ndarray | None = None
 ) -> Callable:
     """``F(t, y)`` for SciPy's integrators (``kept``: see the module docstring)."""
-    n = num.n
+    layout = num.layout
     solver = kkt_solver(num.pattern, kept)
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
-        qdd = solver.accelerations(*_blocks(num, t, y[:n], y[n:], baumgarte))
-        return np.concatenate([y[n:], qdd])
+        q, qd = layout.split(y)
+        qdd = solver.accelerations(*_blocks(num, t, q, qd, baumgarte))
+        return layout.join(qd, qdd)
 
     return rhs

@@ -37,6 +37,7 @@ from ..codegen.compiled import NumericModel, SparsePattern
 from ..errors import ConstraintError, InitialConditionError, ModelError
 from ..numerics.gauss_newton import POSITION_TOL
 from ..numerics.rank import RANK_RTOL
+from .pattern_cache import PatternCache
 
 #: The largest distance from a holonomic constraint that its residual tolerance may
 #: allow, relative to ``max(1, max|q|)``.
@@ -172,7 +173,7 @@ def _most_negative_block(pat: SparsePattern, Mv: np.ndarray):
     """``(eigenvalue, coordinates, direction, largest eigenvalue)`` of the block of ``M``
     with the most negative eigenvalue (relative to its largest), or ``None``."""
     worst = None
-    for size, indices, fill in pat.remember("mass blocks", lambda: _mass_blocks(pat)):
+    for size, indices, fill in _MASS_BLOCKS.get(pat):
         stacked = np.zeros((len(indices), size, size))
         stacked[fill[0], fill[1], fill[2]] = Mv[fill[3]]
         values = np.linalg.eigvalsh(stacked)
@@ -215,6 +216,11 @@ def _mass_blocks(pat: SparsePattern) -> MassBlocks:
         fill = (block, position[pat.M_rows[entries]], position[pat.M_cols[entries]], entries)
         groups.append((int(size), np.array([members[i] for i in chosen]), fill))
     return groups
+
+
+#: The connected blocks of each pattern's ``M``.
+_MASS_BLOCKS: PatternCache[MassBlocks] = PatternCache(lambda p, _: _mass_blocks(p),
+                                                      "mass matrix blocks")
 
 
 def _block_matrix(pat: SparsePattern, Mv: np.ndarray, block: np.ndarray) -> np.ndarray:

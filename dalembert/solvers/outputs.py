@@ -70,9 +70,9 @@ def _fill(out: dict[str, np.ndarray], num: NumericModel, solver, t: np.ndarray,
           y: np.ndarray, rows: np.ndarray, cols: np.ndarray,
           inputs: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None) -> None:
     """The rows of ``out`` (``solver``: ``None`` leaves the KKT system unsolved)."""
-    n, m = num.n, num.m
+    n, m, layout = num.n, num.m, num.layout
     for i, (ti, yi) in enumerate(zip(t, y)):
-        q, qd = yi[:n], yi[n:]
+        q, qd = layout.split(yi)
         if inputs is not None:
             num.set_inputs(inputs(ti, q, qd))
         Av = None

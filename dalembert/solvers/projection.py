@@ -35,6 +35,7 @@ from ..numerics.gauss_newton import (
 )
 from ..numerics.rank import RANK_RTOL
 from .kkt.sparse import kkt_solver, matvec
+from .pattern_cache import PatternCache, read_only
 
 
 def project_positions(
@@ -76,6 +77,17 @@ def project_velocities(
 FAST_NEWTON = 4
 
 
+def _unit_mass(pattern: SparsePattern, _: object) -> SparsePattern:
+    """The pattern of a unit mass matrix and ``A`` (the projections' metric)."""
+    diagonal = read_only(np.arange(pattern.n))
+    return SparsePattern(pattern.n, pattern.m, diagonal, diagonal, pattern.A_rows,
+                         pattern.A_cols)
+
+
+#: Each pattern's unit-mass pattern.
+_UNIT_MASS: PatternCache[SparsePattern] = PatternCache(_unit_mass, "unit-mass patterns")
+
+
 class StepProjector:
     """``project(t, y)``: the state projected onto the constraints (see module docstring).
 
@@ -99,8 +111,7 @@ class StepProjector:
     def __init__(self, num: NumericModel, kept: np.ndarray | None = None) -> None:
         self.num = num
         n, pat = num.n, num.pattern
-        unit = pat.remember("unit_mass", lambda: SparsePattern(
-            n, num.m, np.arange(n), np.arange(n), pat.A_rows, pat.A_cols))
+        unit = _UNIT_MASS.get(pat)
         self._ones = np.ones(n)
         holonomic = np.array(num.holonomic_rows, dtype=np.intp)
         solved = np.ones(num.m, dtype=bool)
@@ -115,15 +126,15 @@ class StepProjector:
         self._zeros = np.zeros(n)
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
-        n = self.num.n
-        q = y[:n]
+        layout = self.num.layout
+        q, qd = layout.split(y)
         try:
             q = self.positions(t, q)
-            return np.concatenate([q, self.velocities(t, q, y[n:])])
+            return layout.join(q, self.velocities(t, q, qd))
         except (SingularSystemError, np.linalg.LinAlgError):
             pass
         q = project_positions(self.num, t, q)
-        return np.concatenate([q, project_velocities(self.num, t, q, y[n:])])
+        return layout.join(q, project_velocities(self.num, t, q, qd))
 
     def positions(self, t: float, q: np.ndarray, refactor: bool = False) -> np.ndarray:
         """Simplified Newton with one factorization; the dense path if it stalls.

@@ -222,3 +222,26 @@ def test_ill_conditioned_large_model_is_explained(monkeypatch, dense_check):
     assert "a thin rod" in text and "not determined" not in text
     if dense_check:
         assert "the motion of x0 would be determined to only about" in text
+
+
+@pytest.mark.parametrize(("planar", "keyword", "value", "culprit"), [
+    (True, "positions", {"x": 0.5}, "the position of 'link1' must be 2 or 3 finite numbers"),
+    (True, "orientations", {"theta": 1.0}, "the orientation of planar body 'link1' must be "
+     "an angle about z or a 3x3 rotation matrix about z"),
+    (True, "angular_velocities", "fast", "the angular velocity of 'link1' must be a number "
+     "or 3 finite numbers, got 'fast'"),
+    (False, "positions", {"x": 0.5}, "the position of 'link1' must be 3 finite numbers"),
+    (False, "orientations", {"q": 1.0}, "the orientation of 'link1' must be a 3x3 rotation "
+     "matrix or 4 Euler parameters"),
+    (False, "angular_velocities", {"w": 1.0}, "the angular velocity of 'link1' must be 3 "
+     "finite numbers"),
+])
+def test_a_body_value_nested_too_deep_or_not_numbers_is_named(planar, keyword, value, culprit):
+    """``positions={"link1": {"x": 0.5}}`` (one level too deep) names the body and what
+    it takes (it gave float()'s TypeError naming nothing)."""
+    mb = chain(2, 1.0, 1.0, 0.05, planar=planar, **({"joint": "revolute"} if planar else {}))
+    with pytest.raises(InitialConditionError) as info:
+        mb.initial_state(**{keyword: {"link1": value}})
+    assert culprit in str(info.value)
+    if isinstance(value, dict):
+        assert "(a dict: give the numbers themselves" in str(info.value)

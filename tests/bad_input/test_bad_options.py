@@ -11,6 +11,7 @@ option's documented meaning, not the table itself.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from bad_input_cases import pendulum
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dalembert import System
+from dalembert import StiffStabilizationWarning, System
 from dalembert.options import SIMULATE_PARAMETERS, simulation_options
 
 FAST = settings(max_examples=30, deadline=2000)
@@ -147,6 +148,15 @@ def pend() -> System:
     return pendulum()
 
 
+def _with(**attributes):
+    """An event function ``q[0]`` with the attributes ``solve_ivp`` reads set."""
+    def crossing(t, q, qd):
+        return q[0]
+    for name, value in attributes.items():
+        setattr(crossing, name, value)
+    return crossing
+
+
 @pytest.mark.parametrize(("options", "culprit"), [
     ({"atol": [1e-9, 1e-9, 1e-9]}, "The 'atol' parameter of simulate must be a finite "
      "positive number or an array of 4 of them (one per position, then one per velocity); "
@@ -172,6 +182,11 @@ def pend() -> System:
      "event(t, q, qd, lam)"),
     ({"events": [lambda t, q, qd: q[0], _bottom]}, "event 1 ('_bottom') takes (t, q, qd, lam, "
      "tau), so it cannot be called"),
+    ({"events": [_with(terminal="yes")]}, "event 0 ('crossing') has terminal='yes'; give True"),
+    ({"events": [_with(terminal=-1)]}, "event 0 ('crossing') has terminal=-1; give True"),
+    ({"events": [_with(direction="up")]}, "event 0 ('crossing') has direction='up'; give a "
+     "number"),
+    ({"events": [_with(direction=np.nan)]}, "event 0 ('crossing') has direction=nan"),
 ])
 def test_simulate_refuses_at_the_door(pend, monkeypatch, options, culprit):
     # nothing past the door runs: no initial state, no plan
@@ -212,3 +227,18 @@ def test_every_callable_form_of_an_event_is_accepted(pend):
         assert abs(traj.t_events[0][0] - quarter) < 1e-8, form
     # signatures that cannot be read are accepted (the call decides)
     simulation_options((0.0, 1.0), events=[max, partial(max, 0.0)])
+
+
+def test_a_baumgarte_gain_that_makes_an_explicit_method_crawl_is_said(pend):
+    """w = 1e6 on a 10 s run: the constraint errors decay in a microsecond, so DOP853's
+    steps must be that short (some 3e6 of them); Radau's need not, nor a usual gain's."""
+    with pytest.warns(StiffStabilizationWarning, match=r"baumgarte_gain=1e\+06 makes the "
+                      r"constraint errors decay in 1e-06 s: the explicit method DOP853 must "
+                      r"take steps about that short, some 3\.3e\+06") as caught:
+        pend.plan((0, 10), q0=[1.0, 0.0], stabilization="baumgarte", baumgarte_gain=1e6)
+    assert caught[0].filename == __file__
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", StiffStabilizationWarning)
+        pend.plan((0, 10), q0=[1.0, 0.0], stabilization="baumgarte", baumgarte_gain=1e6,
+                  method="Radau")
+        pend.plan((0, 10), q0=[1.0, 0.0], stabilization="baumgarte", baumgarte_gain=50.0)

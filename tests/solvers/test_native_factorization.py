@@ -46,7 +46,7 @@ def test_other_active_rows_refactor_without_rebuilding(model):
     name, pattern, values, f, c, kept = model
     tol = TOLERANCE.get(name, 1e-12)
     kkt = SchurFactorization(pattern)
-    structure, tables = kkt.structure, kkt._tables
+    structure, shared = kkt.structure, kkt._shared
     rhs = right_hand_sides(f, c, k=3, seed=2)
     band = np.intersect1d(kkt.structure.band_row, kept)
     fewer = np.setdiff1d(kept, band[-3:])
@@ -61,7 +61,7 @@ def test_other_active_rows_refactor_without_rebuilding(model):
         noisy = rhs.copy()
         noisy[pattern.n:][~active] = 1e3
         assert np.array_equal(kkt.solve(noisy)[0], x)
-    assert kkt.structure is structure and kkt._tables is tables
+    assert kkt.structure is structure and kkt._shared is shared
 
 
 def test_an_inactive_row_inside_a_block_is_not_folded():

@@ -28,10 +28,10 @@ def test_residual_jacobians_are_reached_from_c(make):
     args = (ctypes.c_void_p * 5)(*[a.ctypes.data for a in (t, q, qd, qdd, lam)])
     lib, which = library.runtime(), library.FUNCTIONS["residual_jacobians"]
     before = NativeSolver(num)  # not generated yet: no function in its place
-    assert lib.dl_call(ctypes.addressof(before.model), which, args, None) == -1
+    assert lib.dl_call(*before._at, which, args, None) == -1
     reference = num.evaluate("residual_jacobians", 0.3, q, qd, qdd, lam)
     solver = NativeSolver(num)
     out = np.full(len(reference), np.nan)
-    assert lib.dl_call(ctypes.addressof(solver.model), which, args, out.ctypes.data) == 0
+    assert lib.dl_call(*solver._at, which, args, out.ctypes.data) == 0
     assert np.array_equal(out, reference)
-    assert lib.dl_call(ctypes.addressof(solver.model), library.FN_COUNT, args, None) == -1
+    assert lib.dl_call(*solver._at, library.FN_COUNT, args, None) == -1

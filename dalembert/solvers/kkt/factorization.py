@@ -43,7 +43,6 @@ import enum
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from typing import TypeVar
 
 import numpy as np
 import scipy.sparse as sps
@@ -53,6 +52,7 @@ from scipy.linalg import lapack
 from ...codegen.compiled import SparsePattern
 from ...errors import SingularSystemError
 from ...numerics.band import band_order
+from ..pattern_cache import PatternCache, read_only
 from .dense import _dense_solve, kkt_matrix
 
 #: Largest KKT size ``n + m`` solved dense when the banded path does not apply.
@@ -63,7 +63,6 @@ BAND_MAX = 40
 #: threshold pivoting relaxed so that the order is mostly kept (zero (2,2) block).
 PERMC = "MMD_AT_PLUS_A"
 DIAG_PIVOT_THRESH = 0.1
-T = TypeVar("T")
 SINGULAR_MESSAGE = (
     "the KKT matrix [[M, A^T], [A, 0]] became singular: the accelerations are not "
     "determined (a singular configuration of the constraints, or a coordinate without "
@@ -134,8 +133,7 @@ class KKTFactorization(ABC):
         self.n_values = len(pattern.M_rows) + len(pattern.A_rows)
         self.active: np.ndarray | None = None  # the rows of the last factorization
         self._all_active = True
-        self._every_row = _derived(pattern, "kkt every row",
-                                   lambda: _read_only(np.ones(self.m, dtype=bool)))
+        self._every_row = _EVERY_ROW.get(pattern)
 
     def factor(self, values: np.ndarray, active: np.ndarray | None = None) -> None:
         """Factor the KKT matrix of ``values`` with the rows ``active`` (default all).
@@ -212,7 +210,8 @@ class KKTFactorization(ABC):
 
 class _Entries:
     """The entries of ``K = [[M, A^T], [A, D]]`` (``D`` diagonal: 1 on an inactive row,
-    else 0) and where each value comes from in ``[M values, A values, D]``."""
+    else 0) and where each value comes from in ``[M values, A values, D]`` (read-only
+    arrays: one per pattern, shared by every run)."""
 
     def __init__(self, pattern: SparsePattern) -> None:
         n, m = pattern.n, pattern.m
@@ -225,6 +224,8 @@ class _Entries:
                                     diagonal]).astype(np.intp)
         self.src = np.concatenate([np.arange(n_m), n_m + np.arange(n_a),
                                    n_m + np.arange(n_a), n_m + n_a + np.arange(m)])
+        for array in (self.rows, self.cols, self.src):
+            read_only(array)
         self.n_ordered = n_m + 2 * n_a
         self.size = n + m
         self._a_rows = pattern.A_rows
@@ -239,20 +240,15 @@ class _Entries:
         return out
 
 
+#: Each pattern's mask of every row active (read-only).
+_EVERY_ROW: PatternCache[np.ndarray] = PatternCache(
+    lambda p, _: read_only(np.ones(p.m, dtype=bool)), "every constraint row active")
+#: Each pattern's KKT entries and where their values come from.
+_ENTRIES: PatternCache[_Entries] = PatternCache(lambda p, _: _Entries(p), "KKT entries")
+
+
 def _entries(pattern: SparsePattern) -> _Entries:
-    return _derived(pattern, "kkt entries", lambda: _Entries(pattern))
-
-
-def _derived(pattern: SparsePattern, key: str, make: Callable[[], T]) -> T:
-    """``pattern.remember(key, make)``, without its call once made (objects are made
-    per factorization, so this is on the path of every solve)."""
-    found = pattern.derived.get(key)
-    return pattern.remember(key, make) if found is None else found
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    array.flags.writeable = False
-    return array
+    return _ENTRIES.get(pattern)
 
 
 def restricted_pattern(pattern: SparsePattern, rows: np.ndarray
@@ -275,16 +271,23 @@ def restricted_pattern(pattern: SparsePattern, rows: np.ndarray
     >>> kept.m, kept.A_rows.tolist(), kept.A_cols.tolist(), taken.tolist()
     (1, [0, 0], [0, 1], [1, 2])
     """
-    rows = np.asarray(rows, dtype=np.intp)
+    return _RESTRICTED.get(pattern, np.asarray(rows, dtype=np.intp))
 
-    def make() -> tuple[SparsePattern, np.ndarray]:
-        position = np.full(pattern.m, -1)
-        position[rows] = np.arange(len(rows))
-        taken = np.flatnonzero(position[pattern.A_rows] >= 0)
-        return SparsePattern(pattern.n, len(rows), pattern.M_rows, pattern.M_cols,
-                             position[pattern.A_rows[taken]], pattern.A_cols[taken]), taken
 
-    return pattern.remember(("restricted pattern", rows.tobytes()), make)
+def _restrict(pattern: SparsePattern, rows: np.ndarray | None
+              ) -> tuple[SparsePattern, np.ndarray]:
+    assert rows is not None
+    position = np.full(pattern.m, -1)
+    position[rows] = np.arange(len(rows))
+    taken = read_only(np.flatnonzero(position[pattern.A_rows] >= 0))
+    return SparsePattern(pattern.n, len(rows), pattern.M_rows, pattern.M_cols,
+                         position[pattern.A_rows[taken]], pattern.A_cols[taken]), taken
+
+
+#: The pattern of ``M`` and some rows of ``A``, and which of ``A``'s values it takes
+#: (by pattern and rows kept).
+_RESTRICTED: PatternCache[tuple[SparsePattern, np.ndarray]] = PatternCache(
+    _restrict, "restricted patterns")
 
 
 class DenseFactorization(KKTFactorization):
@@ -328,10 +331,16 @@ class BandFactorization(KKTFactorization):
 def band_lu(pattern: SparsePattern) -> BandLU:
     """The :class:`BandLU` of a pattern's KKT matrix (its order made from ``M`` and ``A``
     alone; made once per pattern)."""
-    def make() -> BandLU:
-        e = _entries(pattern)
-        return BandLU(e.rows, e.cols, e.src, e.size, ordered=e.n_ordered)
-    return _derived(pattern, "kkt band lu", make)
+    return _BAND_LU.get(pattern)
+
+
+def _make_band_lu(pattern: SparsePattern, _: object) -> BandLU:
+    e = _entries(pattern)
+    return BandLU(e.rows, e.cols, e.src, e.size, ordered=e.n_ordered)
+
+
+#: Each pattern's band order and storage map of the KKT matrix.
+_BAND_LU: PatternCache[BandLU] = PatternCache(_make_band_lu, "KKT band LU structures")
 
 
 def band_condition(pattern: SparsePattern, values: np.ndarray) -> float:
@@ -354,13 +363,10 @@ class SpluFactorization(KKTFactorization):
 
     def __init__(self, pattern: SparsePattern) -> None:
         super().__init__(pattern)
-        self._entries = e = _entries(pattern)
+        self._entries = _entries(pattern)
         # Two structures: with the (2,2) diagonal for inactive rows, and without it when
         # every row is active (SuperLU's order and pivots then see the KKT pattern alone)
-        self._maps = pattern.remember("kkt csc", lambda: tuple(
-            (e.src[:k][order], indices, indptr)
-            for k in (e.n_ordered, len(e.rows))
-            for order, indices, indptr in [csc_map(e.rows[:k], e.cols[:k], e.size)]))
+        self._maps = _CSC_MAPS.get(pattern)
 
     def matrix(self, values: np.ndarray, active: np.ndarray | None = None) -> sps.csc_matrix:
         """The KKT matrix of ``values`` (``[M values, A values]``) and rows ``active``."""
@@ -380,6 +386,22 @@ class SpluFactorization(KKTFactorization):
 
     def _stacked(self, rhs: np.ndarray) -> np.ndarray:
         return self._lu.solve(rhs)
+
+
+CscMaps = tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]
+
+
+def _csc_maps(pattern: SparsePattern, _: object) -> CscMaps:
+    """``(source of each value, indices, indptr)`` of the CSC KKT matrix: without the
+    (2,2) diagonal, then with it."""
+    e = _entries(pattern)
+    return tuple((read_only(e.src[:k][order]), read_only(indices), read_only(indptr))
+                 for k in (e.n_ordered, len(e.rows))
+                 for order, indices, indptr in [csc_map(e.rows[:k], e.cols[:k], e.size)])
+
+
+#: Each pattern's CSC maps of the KKT matrix (:class:`SpluFactorization`).
+_CSC_MAPS: PatternCache[CscMaps] = PatternCache(_csc_maps, "KKT CSC maps")
 
 
 _PYTHON: dict[Backend, Callable[[SparsePattern], KKTFactorization]] = {
@@ -408,16 +430,20 @@ def choose_backend(pattern: SparsePattern, native: bool = False) -> Backend:
     >>> choose_backend(pattern)
     <Backend.BAND: 'band'>
     """
-    if native and pattern.remember("kkt schur applies", lambda: _schur_applies(pattern)):
+    if native and _SCHUR_APPLIES.get(pattern):
         return Backend.SCHUR
     if band_lu(pattern).width <= BAND_MAX:
         return Backend.BAND
     return Backend.DENSE if pattern.n + pattern.m <= DENSE_MAX else Backend.SPLU
 
 
-def _schur_applies(pattern: SparsePattern) -> bool:
+def _schur_applies(pattern: SparsePattern, _: object) -> bool:
     from ..native.factorization import schur_applies  # the C layer builds on this one
     return schur_applies(pattern)
+
+
+#: Whether the C block/Schur solver suits each pattern.
+_SCHUR_APPLIES: PatternCache[bool] = PatternCache(_schur_applies, "Schur backend applies")
 
 
 def kkt_factorization(pattern: SparsePattern, backend: Backend | None = None

@@ -31,6 +31,7 @@ from ...errors import SingularSystemError
 from ...numerics.band import bandwidth as _bandwidth  # noqa: F401 (tests measure with it)
 from ...numerics.conditioning import condition_1norm
 from ...numerics.rank import min_norm_multipliers
+from ..pattern_cache import PatternCache
 from .dense import DROPPED_ROW_RTOL, _least_squares_kkt
 from .factorization import (  # noqa: F401 (BandLU, band_layout and the limits: here too)
     BAND_MAX,
@@ -162,9 +163,11 @@ def kkt_solver(pattern: SparsePattern, kept: np.ndarray | None = None) -> KKTSol
     >>> kkt_solver(pattern) is kkt_solver(pattern)
     True
     """
-    rows = None if kept is None else np.asarray(kept, dtype=np.intp)
-    key = ("kkt_solver", None if rows is None else rows.tobytes())
-    return pattern.remember(key, lambda: KKTSolver(pattern, rows))
+    return _SOLVERS.get(pattern, None if kept is None else np.asarray(kept, dtype=np.intp))
+
+
+#: The solver of each pattern and set of kept rows (index maps only: shared by runs).
+_SOLVERS: PatternCache[KKTSolver] = PatternCache(KKTSolver, "KKT solvers")
 
 
 def kkt_condition(solver: KKTSolver, Mv: np.ndarray, Av: np.ndarray) -> float:

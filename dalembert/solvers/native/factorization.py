@@ -1,11 +1,12 @@
 """The C runtime's KKT solve as a :class:`~dalembert.solvers.kkt.factorization.KKTFactorization`.
 
-``dl_kkt_factor`` factors the KKT matrix the way the C loop's right-hand side solves it
-(:mod:`dalembert.solvers.native`: block Cholesky of ``M`` with the rows inside a block
-folded in, band ``LDL^T`` of the Schur complement ``A Mt^-1 A^T``) for the values on
-the pattern and a set of active rows; ``dl_kkt_solve`` solves it for many right-hand
-sides. Its tables are the C loop's (:mod:`.structure`, all rows); its work arrays
-belong to the object.
+``dl_kkt_factor`` factors the KKT matrix with the C loop's own factorization (the one
+its right-hand side uses, :mod:`dalembert.solvers.native`: block Cholesky of ``M`` with
+the rows inside a block folded in, band ``LDL^T`` of the Schur complement
+``A Mt^-1 A^T``) for the values on the pattern and a set of active rows;
+``dl_kkt_solve`` solves it for many right-hand sides. The tables (a ``dl_model``,
+:mod:`.structure`, all rows) are made once per pattern and shared; the factors (a
+``dl_data``) belong to the object.
 
 >>> import numpy as np
 >>> from dalembert.codegen.compiled import SparsePattern
@@ -28,7 +29,7 @@ from ...codegen.compiled import SparsePattern
 from ...errors import SingularSystemError
 from ..kkt.factorization import SINGULAR_MESSAGE, Backend, KKTFactorization
 from . import library
-from .structure import NotApplicable, SchurStructure, schur_structure
+from .structure import NotApplicable, SchurStructure, model_struct, schur_structure, work_sizes
 
 _MESSAGES = {
     library.SINGULAR_MASS: "a block of the mass matrix is singular even with the active "
@@ -56,13 +57,15 @@ def schur_applies(pattern: SparsePattern) -> bool:
     return True
 
 
-class _Tables:
-    """The structure's tables as ``int64`` arrays C reads (made once per pattern)."""
+class _SharedModel:
+    """The ``dl_model`` of a pattern (its structure's tables as ``int64`` arrays C reads),
+    made once per pattern and shared by every factorization over it: C only reads it."""
 
-    def __init__(self, structure: SchurStructure) -> None:
+    def __init__(self, pattern: SparsePattern, structure: SchurStructure) -> None:
         self._arrays = {name: np.ascontiguousarray(a, dtype=np.int64)
                         for name, a in structure.arrays().items()}
-        self.address = {name: a.ctypes.data for name, a in self._arrays.items()}
+        self.model = model_struct(structure, pattern,
+                                  {name: a.ctypes.data for name, a in self._arrays.items()})
 
 
 class SchurFactorization(KKTFactorization):
@@ -70,7 +73,8 @@ class SchurFactorization(KKTFactorization):
 
     Raises :class:`~dalembert.solvers.native.structure.NotApplicable` (saying why) for
     a pattern it does not serve and :class:`~dalembert.codegen.c_backend.CompileError`
-    without the runtime; :func:`schur_applies` asks first.
+    without the runtime; :func:`schur_applies` asks first. The pattern's ``dl_model`` is
+    shared; the factors (a ``dl_data``) are the object's own.
 
     Parameters
     ----------
@@ -84,30 +88,21 @@ class SchurFactorization(KKTFactorization):
         super().__init__(pattern)
         self.lib = library.runtime()
         s = self.structure = schur_structure(pattern)
-        tables = pattern.remember("native kkt factorization tables", lambda: _Tables(s))
-        self._tables = tables  # kept alive: the struct points into it
+        self._shared = pattern.remember("native kkt factorization model",
+                                        lambda: _SharedModel(pattern, s))
         n, m = self.n, self.m
-        sizes = {"blocks": int(s.block_mat[-1]), "a": int(s.pair_vec[-1]),
-                 "y": int(s.pair_vec[-1]), "u": n, "S": len(s.band_row) * (s.kd + 1),
-                 "r": len(s.band_row), "elim": int(s.elim_at[-1])}
+        sizes = {"blocks": int(s.block_mat[-1]), "a": int(s.pair_vec[-1]), "u": n,
+                 **work_sizes(s, n, m)}
         # zeroed: the pair vectors' slots no value of A lands in stay zero (load_pairs)
         self._work = {name: np.zeros(max(size, 1)) for name, size in sizes.items()}
-        model = library.Model(n=n, m=m, nM=len(pattern.M_rows), nA=len(pattern.A_rows),
-                              n_blocks=s.n_blocks, n_pairs=s.n_pairs, kd=s.kd,
-                              n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
-                              n_dropped_pairs=s.n_dropped_pairs, n_dropped=0)
-        for name in s.arrays():
-            setattr(model, name, tables.address[name])
+        self._mask = np.zeros(max(m, 1), dtype=np.uint8)
+        data = library.Data(conditioning=np.inf)
         for name, array in self._work.items():
-            setattr(model, name, array.ctypes.data)
-        self._model = model
-        self._active_work = np.zeros(max(m, 1), dtype=np.uint8)
-        self._fold = np.zeros(max(s.n_pairs, 1))
-        self._rows = np.zeros(max(m, 1))
-        self._factor_state = library.Factor(active=self._active_work.ctypes.data,
-                                            fold=self._fold.ctypes.data,
-                                            rows=self._rows.ctypes.data, factored=0)
-        self._at = (ctypes.addressof(self._model), ctypes.addressof(self._factor_state))
+            owner, _, field = name.rpartition(".")
+            setattr(data.factor if owner else data, field, array.ctypes.data)
+        data.factor.mask = self._mask.ctypes.data
+        self._data = data
+        self._at = (ctypes.addressof(self._shared.model), ctypes.addressof(self._data))
 
     def _factor(self, values: np.ndarray, active: np.ndarray) -> None:
         values = np.ascontiguousarray(values, dtype=float)

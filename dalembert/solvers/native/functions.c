@@ -31,16 +31,18 @@
   } while (0)
 
 /* Evaluate function `which` into out (F->size values): args holds its arguments but the
- * last (a scalar such as t as a pointer to it), md->p is passed as the parameter vector.
+ * last (a scalar such as t as a pointer to it), the run's
+ * d->p is passed as the parameter vector.
  * DL_OK, or -1 when `which` names no generated function. */
-int dl_call(const dl_model *md, int64_t which, const double *const *args, double *out) {
+int dl_call(const dl_model *md, const dl_data *d, int64_t which, const double *const *args,
+            double *out) {
   if (which < 0 || which >= DL_FN_COUNT) return -1;
   const dl_function *F = &md->fn[which];
   if (!F->fn || F->n_args < 1 || F->n_args > DL_MAX_ARGS) return -1;
   if (F->size == 0) return DL_OK;
   const double *a[DL_MAX_ARGS];
   for (int64_t i = 0; i + 1 < F->n_args; ++i) a[i] = args[i];
-  a[F->n_args - 1] = md->p;
+  a[F->n_args - 1] = d->p;
   if (F->K) memset(out, 0, (size_t)F->size * sizeof(double));  /* a driver adds */
   switch (F->n_args) {
     case 1: DL_CALL(DL_T1, DL_V1); break;

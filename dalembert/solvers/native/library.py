@@ -52,10 +52,12 @@ class Function(ctypes.Structure):
 
 
 class Model(ctypes.Structure):
+    """``dl_model``: what is constant for a model (C only reads it; shared by its runs)."""
+
     _fields_ = [
         *((name, _i64) for name in ("n", "m", "nM", "nA", "n_hol")),
-        ("p", _ptr), ("fn", Function * FN_COUNT),
-        ("holonomic", _ptr), ("baumgarte", _f64), ("n_blocks", _i64),
+        ("fn", Function * FN_COUNT), ("holonomic", _ptr), ("baumgarte", _f64),
+        ("n_blocks", _i64),
         *((name, _ptr) for name in ("block_start", "slot_coord", "block_mat", "M_at")),
         ("n_pairs", _i64),
         *((name, _ptr) for name in ("pair_row", "pair_block", "pair_vec", "A_at", "block_pairs",
@@ -66,21 +68,29 @@ class Model(ctypes.Structure):
         *((name, _ptr) for name in ("unit_slot", "unit_mat", "unit_pair_vec", "unit_pair_row",
                                     "unit_pair_slot", "unit_pair_mat", "unit_gram_target",
                                     "unit_gram_i", "unit_gram_j")),
-        *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
-                                    "r", "lambda", "qdd", "q_trial", "elim", "error_work",
-                                    "active")),
-        ("kkt_in_layout", _i64), ("c", _ptr),
-        ("n_dropped_pairs", _i64), ("n_dropped", _i64), ("dropped_rows", _ptr),
-        ("dropped_rtol", _f64), ("inputs", _ptr), ("input_state", _ptr),
-        ("conditioning", _f64), ("gram_diagonal", _ptr), ("unit_mass", _ptr),
-        ("unit_root", _ptr),
+        ("kkt_in_layout", _i64), ("n_dropped_pairs", _i64), ("n_dropped", _i64),
+        ("dropped_rows", _ptr), ("dropped_rtol", _f64),
     ]
 
 
 class Factor(ctypes.Structure):
-    """``dl_factor``: the work of one KKT factorization (``dl_kkt_factor``)."""
+    """``dl_factor``: what the held KKT factors were made from (inside :class:`Data`)."""
 
-    _fields_ = [("active", _ptr), ("fold", _ptr), ("rows", _ptr), ("factored", _i64)]
+    _fields_ = [("active", _ptr), ("mask", _ptr), ("fold", _ptr), ("rows", _ptr),
+                ("factored", _i64)]
+
+
+class Data(ctypes.Structure):
+    """``dl_data``: everything one run writes (its parameter vector, work arrays,
+    factorization and inputs); one per run, over a shared :class:`Model`."""
+
+    _fields_ = [
+        ("p", _ptr),
+        *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
+                                    "r", "lambda", "qdd", "q_trial", "elim", "error_work", "c")),
+        ("factor", Factor), ("inputs", _ptr), ("input_state", _ptr), ("conditioning", _f64),
+        ("gram_diagonal", _ptr), ("unit_mass", _ptr), ("unit_root", _ptr),
+    ]
 
 
 class Tableau(ctypes.Structure):
@@ -108,7 +118,8 @@ class Run(ctypes.Structure):
 
 #: The C struct each mirror stands for.
 MIRRORS: dict[str, type[ctypes.Structure]] = {
-    "dl_function": Function, "dl_model": Model, "dl_factor": Factor, "dl_tableau": Tableau,
+    "dl_function": Function, "dl_model": Model, "dl_factor": Factor, "dl_data": Data,
+    "dl_tableau": Tableau,
     "dl_stepper": Stepper, "dl_run": Run}
 
 
@@ -222,16 +233,17 @@ def _runtime_if_possible() -> None:
 def _runtime() -> ctypes.CDLL:
     lib = c_backend.source_library(runtime_source())
     signatures = {
-        "dl_rhs": [_ptr, _f64, _ptr, _ptr, _ptr],
-        "dl_project": [_ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
+        # (model, data, ...) each
+        "dl_rhs": [_ptr, _ptr, _f64, _ptr, _ptr, _ptr],
+        "dl_project": [_ptr, _ptr, _f64, _ptr, _ptr, _i64, _i64, _f64, _f64],
         "dl_kkt_factor": [_ptr] * 4,
         "dl_kkt_solve": [_ptr, _ptr, _i64, _ptr, _i64, _ptr],
-        "dl_rk_step": [_ptr] * 7,
-        "dl_rk_run": [_ptr] * 7,
-        "dl_outputs": [_ptr, _i64, *[_ptr] * 8],
-        "dl_stages": [_ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr, _ptr,
-                      _ptr],
-        "dl_call": [_ptr, _i64, _ptr, _ptr],
+        "dl_rk_step": [_ptr] * 8,
+        "dl_rk_run": [_ptr] * 8,
+        "dl_outputs": [_ptr, _ptr, _i64, *[_ptr] * 8],
+        "dl_stages": [_ptr, _ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr,
+                      _ptr, _ptr],
+        "dl_call": [_ptr, _ptr, _i64, _ptr, _ptr],
     }
     for name, argtypes in signatures.items():
         fn = getattr(lib, name)

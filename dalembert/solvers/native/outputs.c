@@ -5,34 +5,34 @@
  * constraint force A^T lambda, the largest position and velocity residuals, and the
  * energies [T, V, h]. With qdd NULL (lambda and force too) the KKT solves are left
  * out: the residuals and energies alone. */
-int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, double *qdd,
-               double *lambda, double *force, double *position_residual,
+int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
+               double *qdd, double *lambda, double *force, double *position_residual,
                double *velocity_residual, double *energies) {
   const int64_t n = md->n, m = md->m;
   for (int64_t i = 0; i < k; ++i) {
     const double t = times[i], *q = Y + i * 2 * n, *qd = q + n;
-    int status = qdd ? eval_kkt(md, t, q, qd) : load_inputs(md, t, q, qd);
-    if (status == DL_OK && qdd) status = dl_solve(md, qdd + i * n, lambda + i * m);
+    int status = qdd ? eval_kkt(md, d, t, q, qd) : load_inputs(md, d, t, q, qd);
+    if (status == DL_OK && qdd) status = dl_solve(md, d, qdd + i * n, lambda + i * m);
     if (status != DL_OK) return status;
-    eval_static(&md->fn[DL_FN_VELOCITY], t, q, md->p, md->vel_values);
-    double *vres = md->lambda;  /* A qd + b by row */
-    for (int64_t r = 0; r < m; ++r) vres[r] = md->vel_values[md->nA + r];
-    if (!qdd) load_pairs(md, md->vel_values);  /* A, else loaded by eval_kkt */
-    add_A_times(md, qd, 1.0, vres);
+    eval_static(&md->fn[DL_FN_VELOCITY], t, q, d->p, d->vel_values);
+    double *vres = d->lambda;  /* A qd + b by row */
+    for (int64_t r = 0; r < m; ++r) vres[r] = d->vel_values[md->nA + r];
+    if (!qdd) load_pairs(md, d, d->vel_values);  /* A, else loaded by eval_kkt */
+    add_A_times(md, d, qd, 1.0, vres);
     if (qdd) {
       double *F = force + i * n;
       const double *lam = lambda + i * m;
       memset(F, 0, (size_t)n * sizeof(double));
       for (int64_t p = 0; p < md->n_pairs; ++p) {  /* F = A^T lam */
         const int64_t b = md->pair_block[p], nb = block_size(md, b), s0 = md->block_start[b];
-        const double *a = md->a + md->pair_vec[p];
+        const double *a = d->a + md->pair_vec[p];
         for (int64_t j = 0; j < nb; ++j) F[md->slot_coord[s0 + j]] += a[j] * lam[md->pair_row[p]];
       }
     }
     velocity_residual[i] = max_abs(vres, m);
-    eval_static(&md->fn[DL_FN_POSITION], t, q, md->p, md->psi);
-    position_residual[i] = max_abs(md->psi, md->n_hol);
-    eval_state(&md->fn[DL_FN_ENERGY], t, q, qd, md->p, energies + 3 * i);
+    eval_static(&md->fn[DL_FN_POSITION], t, q, d->p, d->psi);
+    position_residual[i] = max_abs(d->psi, md->n_hol);
+    eval_state(&md->fn[DL_FN_ENERGY], t, q, qd, d->p, energies + 3 * i);
   }
   return DL_OK;
 }

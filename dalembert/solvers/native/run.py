@@ -62,7 +62,7 @@ class StretchRunner:
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
             rows=interpolant, near2=SCREEN)
-        self._call = partial(native.lib.dl_rk_run, native._address, *solver._fixed,
+        self._call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
                              ctypes.addressof(self._run), self._y.ctypes.data,
                              self._K.ctypes.data, solver._stage.ctypes.data)
         self._nfev = 0
@@ -74,6 +74,8 @@ class StretchRunner:
 
         ``False`` if C could not finish the next step: the caller takes it (from the
         solver's state after :meth:`take`, which must follow, after a Ctrl-C too).
+        What the inputs' function raised (an :class:`~dalembert.errors.InputError`, a
+        Ctrl-C landing in it) is raised again here, :meth:`take` still to follow.
         """
         solver, st, run = self.solver, self.solver._stepper, self._run
         self._y[:] = solver.y
@@ -89,6 +91,8 @@ class StretchRunner:
         #: whether the stretch ended after a step near a singular configuration (the
         #: caller then measures it, :mod:`~dalembert.solvers.singular.careful`)
         self.near_singular = status == library.NEAR_SINGULAR
+        if status == library.INPUT:  # the inputs' function raised (or took a Ctrl-C):
+            self.solver._native._check(status)  # raised here, not retried in Python
         return status in (library.OK, library.NEAR_SINGULAR)
 
     def take(self) -> tuple[int, np.ndarray, np.ndarray] | None:

@@ -66,28 +66,29 @@ static void combine(const double *y, double h, const double *K, const double *w,
 
 /* Stages j0 <= j < j1: K[j] = f(t + C[j - row0] h, y + h sum_k A[j - row0][k] K[k]);
  * A has rows of length lda and starts at stage row0. */
-int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64_t row0,
-              int64_t j0, int64_t j1, double t, double h, const double *y, double *K,
-              double *stage, int64_t *nfev) {
+int dl_stages(const dl_model *md, dl_data *d, const double *A, int64_t lda, const double *C,
+              int64_t row0, int64_t j0, int64_t j1, double t, double h, const double *y,
+              double *K, double *stage, int64_t *nfev) {
   const int64_t n_state = 2 * md->n;
   for (int64_t j = j0; j < j1; ++j) {
     combine(y, h, K, A + (j - row0) * lda, j, n_state, stage);
     ++*nfev;
-    const int status = dl_rhs(md, t + C[j - row0] * h, stage, K + j * n_state, NULL);
+    const int status = dl_rhs(md, d, t + C[j - row0] * h, stage, K + j * n_state, NULL);
     if (status != DL_OK) return status;
   }
   return DL_OK;
 }
 
 /* One Runge-Kutta step from (st->t, y, f = K[0] on entry): y_new, f_new = K[s]. */
-static int rk_attempt(dl_model *md, const dl_tableau *tb, dl_stepper *st, double h,
-                      const double *y, double *K, double *y_new, double *stage) {
+static int rk_attempt(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st,
+                      double h, const double *y, double *K, double *y_new,
+                      double *stage) {
   const int64_t n_state = 2 * md->n, s = tb->n_stages;
-  const int status = dl_stages(md, tb->A, s, tb->C, 0, 1, s, st->t, h, y, K, stage, &st->nfev);
+  const int status = dl_stages(md, d, tb->A, s, tb->C, 0, 1, s, st->t, h, y, K, stage, &st->nfev);
   if (status != DL_OK) return status;
   combine(y, h, K, tb->B, s, n_state, y_new);
   st->nfev++;
-  return dl_rhs(md, st->t + h, y_new, K + s * n_state, NULL);
+  return dl_rhs(md, d, st->t + h, y_new, K + s * n_state, NULL);
 }
 
 static int all_finite(const double *x, int64_t n) {
@@ -103,8 +104,8 @@ static int all_finite(const double *x, int64_t n) {
  * below min_step and would be retried forever. Otherwise the retries end: each
  * rejection shrinks the step by the safety factor at least (min_factor where the error is NaN, as a
  * stage that is not finite makes it) until it is accepted or below min_step. */
-int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
-               double *y_new, double *stage) {
+int dl_rk_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st,
+               const double *y, double *K, double *y_new, double *stage) {
   const int64_t n_state = 2 * md->n;
   const double t = st->t;
   if (!isfinite(t) || isnan(st->h_abs) || !all_finite(y, n_state) || !all_finite(K, n_state))
@@ -120,13 +121,13 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
     if (st->direction * (t_new - st->t_bound) > 0) t_new = st->t_bound;
     const double h = t_new - t;
     h_abs = fabs(h);
-    const int status = rk_attempt(md, tb, st, h, y, K, y_new, stage);
+    const int status = rk_attempt(md, d, tb, st, h, y, K, y_new, stage);
     if (status != DL_OK) return status;
     for (int64_t i = 0; i < n_state; ++i) {
       const double big = fabs(y[i]) > fabs(y_new[i]) ? fabs(y[i]) : fabs(y_new[i]);
       stage[i] = st->atol[i] + big * st->rtol;
     }
-    const double err = error_norm(tb, K, n_state, h, stage, md->error_work);
+    const double err = error_norm(tb, K, n_state, h, stage, d->error_work);
     if (err < 1.0) {
       double factor = err == 0.0 ? st->max_factor
                                  : st->safety * pow(err, -st->alpha) * pow(st->err_old, st->beta);
@@ -149,9 +150,9 @@ int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double 
  * restart (y_old, the unprojected y_new, the stages K), made as scipy makes it:
  * rows = (K^T P)^T for RkDenseOutput; for DOP853 the extra stages go into K, then
  * rows = F: [dy, h f_old - dy, 2 dy - h (f_new + f_old), h D K]. */
-static int make_interpolant(dl_model *md, const dl_tableau *tb, dl_stepper *st, double t_old,
-                            double h, const double *y_old, const double *y_new, double *K,
-                            double *rows, double *stage) {
+static int make_interpolant(const dl_model *md, dl_data *d, const dl_tableau *tb,
+                            dl_stepper *st, double t_old, double h, const double *y_old,
+                            const double *y_new, double *K, double *rows, double *stage) {
   const int64_t n_state = 2 * md->n, s1 = tb->n_stages + 1;
   if (!tb->n_extra) {
     for (int64_t j = 0; j < tb->n_P; ++j)
@@ -159,7 +160,7 @@ static int make_interpolant(dl_model *md, const dl_tableau *tb, dl_stepper *st, 
     return DL_OK;
   }
   const int64_t width = s1 + tb->n_extra;
-  const int status = dl_stages(md, tb->A_extra, width, tb->C_extra, s1, s1, width, t_old, h,
+  const int status = dl_stages(md, d, tb->A_extra, width, tb->C_extra, s1, s1, width, t_old, h,
                                y_old, K, stage, &st->nfev);
   if (status != DL_OK) return status;
   const double *f_old = K, *f_new = K + tb->n_stages * n_state;
@@ -199,8 +200,8 @@ static void interpolate(const dl_tableau *tb, int64_t n_state, double t_old, dou
   for (int64_t i = 0; i < n_state; ++i) y[i] += y_old[i];
 }
 
-static int project(dl_model *md, const dl_run *run, double t, double *y) {
-  return dl_project(md, t, y, run->holonomic, run->max_newton, run->max_full,
+static int project(const dl_model *md, dl_data *d, const dl_run *run, double t, double *y) {
+  return dl_project(md, d, t, y, run->holonomic, run->max_newton, run->max_full,
                     run->position_tol, run->accept_tol);
 }
 
@@ -209,20 +210,20 @@ static int project(dl_model *md, const dl_run *run, double t, double *y) {
  * run->n_out (interpolated and projected; the one at t_new is the projected end). On
  * DL_OK the outputs are counted (n_out, next_eval) and the caller restarts from y_end;
  * on any other status run is as before and the caller restores st. */
-static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run,
-                       const double *y, double *K, double *stage) {
+static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st,
+                       dl_run *run, const double *y, double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
   const double t_old = st->t;
-  int status = dl_rk_step(md, tb, st, y, K, run->y_new, stage);
+  int status = dl_rk_step(md, d, tb, st, y, K, run->y_new, stage);
   if (status != DL_OK) return status;
-  const double t_new = st->t, d = st->direction;
+  const double t_new = st->t, dir = st->direction;
   const int every_step = run->n_eval < 0;
   int64_t hi = run->next_eval;
-  while (hi < run->n_eval && d * run->t_eval[hi] <= d * t_new) ++hi;
+  while (hi < run->n_eval && dir * run->t_eval[hi] <= dir * t_new) ++hi;
   const int64_t count = every_step ? 1 : hi - run->next_eval;
   if (run->n_out + count > run->capacity) return DL_OUTPUTS;
   memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
-  if ((status = project(md, run, t_new, run->y_end)) != DL_OK) return status;
+  if ((status = project(md, d, run, t_new, run->y_end)) != DL_OK) return status;
   int made = 0;
   for (int64_t k = 0; k < count; ++k) {
     const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
@@ -232,16 +233,16 @@ static int finish_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_ru
       memcpy(row, run->y_end, (size_t)n_state * sizeof(double));
       continue;
     }
-    if (!made && (status = make_interpolant(md, tb, st, t_old, t_new - t_old, y, run->y_new, K,
+    if (!made && (status = make_interpolant(md, d, tb, st, t_old, t_new - t_old, y, run->y_new, K,
                                             run->rows, stage)) != DL_OK)
       return status;
     made = 1;
     interpolate(tb, n_state, t_old, t_new - t_old, y, run->rows, s, row);
-    if ((status = project(md, run, s, row)) != DL_OK) return status;
+    if ((status = project(md, d, run, s, row)) != DL_OK) return status;
   }
   run->next_eval = hi;
   run->n_out += count;
-  return md->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
+  return d->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
 }
 
 /* Seconds on the monotonic clock: a call's budget serves Ctrl-C and the progress bar,
@@ -262,8 +263,8 @@ static double wall_seconds(void) {
  * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
  * Every loop inside a step is bounded, so the call returns within a step of the time
  * budget and Ctrl-C is served. */
-int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
-              double *K, double *stage) {
+int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st, dl_run *run,
+              double *y, double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
   const double start = wall_seconds();
   run->n_steps = run->n_out = 0;
@@ -271,7 +272,7 @@ int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, d
   while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
     if (run->n_steps && wall_seconds() - start > run->max_seconds) break;
     const dl_stepper before = *st;
-    const int status = finish_step(md, tb, st, run, y, K, stage);
+    const int status = finish_step(md, d, tb, st, run, y, K, stage);
     if (status != DL_OK && status != DL_NEAR_SINGULAR) {
       *st = before;
       /* a full buffer after some steps just ends this call */

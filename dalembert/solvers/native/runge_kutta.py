@@ -92,7 +92,7 @@ class _NativeSteps(RungeKutta):
         y_new = np.empty(self.n)
         st.t, st.h_abs, st.err_old, st.nfev = self.t, self.h_abs, self.err_old, 0
         status = self._native.lib.dl_rk_step(
-            self._native._address, *self._fixed, y.ctypes.data, K.ctypes.data,
+            *self._native._at, *self._fixed, y.ctypes.data, K.ctypes.data,
             y_new.ctypes.data, self._stage.ctypes.data)
         self.nfev += st.nfev
         if status == library.STEP_TOO_SMALL:
@@ -129,7 +129,7 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
         y_old = np.ascontiguousarray(self.y_old, dtype=np.float64)
         nfev = ctypes.c_int64(0)
         status = self._native.lib.dl_stages(
-            self._native._address, A, width, C, s, s, width,
+            *self._native._at, A, width, C, s, s, width,
             self.t_old, h, y_old.ctypes.data, K.ctypes.data, self._stage.ctypes.data,
             ctypes.addressof(nfev))
         self.nfev += nfev.value

@@ -1,11 +1,15 @@
 /* The simulation loop of dalembert in C: declarations shared by its sources.
  *
  * The model's generated functions (KKT blocks, velocity constraint, position
- * constraint, ...: dl_model.fn, by the registry's places) are called through pointers; everything else here is hand-written
- * and model independent. See native/__init__.py for the method and the tables.
+ * constraint, ...: dl_model.fn, by the registry's places) are called through pointers;
+ * everything else here is hand-written and model independent. See native/__init__.py
+ * for the method and the tables. Every entry point takes the model (dl_model: constant,
+ * read only, one for any number of runs on any threads) and one run's data (dl_data:
+ * everything the call writes).
  * The sources, compiled together into one library (library.py):
- *   kkt.c          the KKT solve (block Cholesky, Schur complement in band LDL^T form),
- *                  also as a factorization with many right-hand sides (dl_kkt_factor)
+ *   kkt.c          the KKT factorization (block Cholesky, Schur complement in band
+ *                  LDL^T form) and its solves: the right-hand side's, and many
+ *                  right-hand sides over any active rows (dl_kkt_factor, dl_kkt_solve)
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
@@ -42,7 +46,7 @@ typedef void (*flat_static)(const double *, const double *, const double *, doub
 
 /* One generated function: a scatter driver (K != NULL, adds into out) or a flat one
  * (fn NULL: not generated). Its n_args arguments are arrays, the parameter vector last
- * (dl_call passes md->p there); see codegen/registry.py. */
+ * (dl_call passes the run's d->p there); see codegen/registry.py. */
 typedef struct {
   void *fn;
   const int64_t *K;
@@ -60,9 +64,12 @@ enum { DL_FN_KKT = 0, DL_FN_VELOCITY = 1, DL_FN_POSITION = 2, DL_FN_ENERGY = 3,
 /* The most arguments dl_call passes a generated function. */
 enum { DL_MAX_ARGS = 8 };
 
+/* A model as the runtime sees it: what is constant for a compiled model, its Schur
+ * structure, its kept rows and its stabilization. C only reads it (const everywhere),
+ * so one dl_model serves any number of runs at once, on any threads; what a run writes
+ * is its dl_data. */
 typedef struct {
   int64_t n, m, nM, nA, n_hol;
-  const double *p;
   dl_function fn[DL_FN_COUNT];
   const int64_t *holonomic;   /* n_hol: constraint row of each psi entry */
   double baumgarte;
@@ -81,20 +88,16 @@ typedef struct {
   const int64_t *band_row;
   const int64_t *gram_start, *gram_target;  /* per block: band place of z_i . z_j, j <= i,
                                              * over its external pairs */
-  /* the 1 x 1 blocks without internal rows, solved in flat loops (see unit_pass) */
+  /* the 1 x 1 blocks without internal rows, solved in flat loops (see unit_factor) */
   const int64_t *unit;        /* n_blocks: 1 for such a block */
   int64_t n_unit, n_unit_pairs, n_unit_gram;
   const int64_t *unit_slot, *unit_mat;                      /* n_unit */
   const int64_t *unit_pair_vec, *unit_pair_row, *unit_pair_slot, *unit_pair_mat;
   const int64_t *unit_gram_target, *unit_gram_i, *unit_gram_j;  /* n_unit_gram */
-  /* work arrays */
-  double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
-  double *elim, *error_work;  /* error_work: 4 n */
-  const unsigned char *active;  /* the rows S was last factored with (NULL: all) */
   /* kkt_in_layout: the kkt function writes straight into blocks (M), u (f by slot), a
-   * (A) and c, all inside values; else values is [M, f, A, c] and load_kkt moves them */
+   * (A) and c, all inside dl_data.values; else values is [M, f, A, c] and load_kkt moves
+   * them */
   int64_t kkt_in_layout;
-  double *c;                  /* the KKT right-hand side (in values) */
   /* dependent rows left out of the solve (a closed loop's redundant joint rows): their
    * pairs follow the others' (n_pairs on) and only load A, the products with A and the
    * check that qdd still meets them (dropped_rtol, as the Python loop's) see them;
@@ -102,6 +105,28 @@ typedef struct {
   int64_t n_dropped_pairs, n_dropped;
   const int64_t *dropped_rows;
   double dropped_rtol;
+} dl_model;
+
+/* What the held KKT factors (dl_data's blocks, y, elim, S) were made from. Kept as a
+ * struct of its own inside dl_data: the factors are the data's work arrays, so a
+ * factorization cannot outlive or move apart from its data, but the record of which
+ * rows it holds is read by every solve and reset by every factorization together. */
+typedef struct {
+  const unsigned char *active;  /* the rows of the held factors (NULL: all) */
+  unsigned char *mask;        /* m: dl_kkt_factor's copy of its rows (active points here) */
+  double *fold;               /* n_pairs: weight of each folded internal pair (0: not) */
+  double *rows;               /* m: a right-hand side's rows, then its multipliers */
+  int64_t factored;           /* 1 while the factors are the KKT matrix's of dl_kkt_factor */
+} dl_factor;
+
+/* Everything one run writes: its parameter vector, its work arrays, its factorization,
+ * its inputs. One per run (or per factorization object); never shared between threads. */
+typedef struct {
+  double *p;                  /* the parameter vector (the inputs' slots written in) */
+  double *values, *vel_values, *psi, *blocks, *a, *y, *u, *S, *r, *lambda, *qdd, *q_trial;
+  double *elim, *error_work;  /* error_work: 4 n */
+  double *c;                  /* the KKT right-hand side (in values) */
+  dl_factor factor;
   /* the model's inputs (NULL: none): before every evaluation of the KKT values the state
    * is copied into input_state ([q, qd], 2 n) and inputs(t) writes their values into p;
    * non-zero if it failed (DL_INPUT) */
@@ -111,19 +136,9 @@ typedef struct {
    * (factor_schur: band_conditioning), and the band rows' diagonals before it. */
   double conditioning;
   double *gram_diagonal;      /* m */
-  /* n_unit: the 1 x 1 masses of the last solve and 1 / sqrt of them (unit_pass) */
+  /* n_unit: the 1 x 1 masses of the last factorization and 1 / sqrt of them */
   double *unit_mass, *unit_root;
-} dl_model;
-
-/* The work of one KKT factorization (dl_kkt_factor, dl_kkt_solve), apart from the
- * model's constant tables: the rows it was made with and what its solves need besides
- * the factors the model's work arrays hold (blocks, y, elim, S). */
-typedef struct {
-  unsigned char *active;      /* m: 1 for a row of the factorization (its own copy) */
-  double *fold;               /* n_pairs: weight of each folded internal pair (0: not) */
-  double *rows;               /* m: a right-hand side's rows, then its multipliers */
-  int64_t factored;           /* 1 after a successful dl_kkt_factor */
-} dl_factor;
+} dl_data;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
 typedef struct {
@@ -209,44 +224,50 @@ DL_INLINE int64_t block_size(const dl_model *md, int64_t b) {
    : (kd) == 3 ? F(__VA_ARGS__, 3) : (kd) == 4 ? F(__VA_ARGS__, 4)                        \
    : (kd) == 5 ? F(__VA_ARGS__, 5) : (kd) == 9 ? F(__VA_ARGS__, 9) : F(__VA_ARGS__, kd))
 
-/* kkt.c: the generated functions, A's values, the KKT solve */
+/* kkt.c: the generated functions, A's values, the KKT factorization and solves */
 DL_INTERNAL void eval_state(const dl_function *F, double t, const double *q, const double *qd,
                             const double *p, double *out);
 DL_INTERNAL void eval_static(const dl_function *F, double t, const double *q, const double *p,
                              double *out);
-DL_INTERNAL void load_pairs(dl_model *md, const double *Av);
-DL_INTERNAL void add_A_times(const dl_model *md, const double *x, double w, double *out);
-DL_INTERNAL int load_inputs(dl_model *md, double t, const double *q, const double *qd);
-DL_INTERNAL int eval_kkt(dl_model *md, double t, const double *q, const double *qd);
-DL_INTERNAL int dl_solve(dl_model *md, double *qdd, double *lambda);
-DL_INTERNAL int factor_schur(dl_model *md, const unsigned char *active);
-DL_INTERNAL void solve_schur(dl_model *md, double *rhs, double *x);
-int dl_rhs(dl_model *md, double t, const double *y, double *ydot, double *lambda);
-int dl_kkt_factor(dl_model *md, dl_factor *fa, const double *values,
+DL_INTERNAL void load_pairs(const dl_model *md, dl_data *d, const double *Av);
+DL_INTERNAL void add_A_times(const dl_model *md, const dl_data *d, const double *x, double w,
+                             double *out);
+DL_INTERNAL int load_inputs(const dl_model *md, dl_data *d, double t, const double *q,
+                            const double *qd);
+DL_INTERNAL int eval_kkt(const dl_model *md, dl_data *d, double t, const double *q,
+                         const double *qd);
+DL_INTERNAL int dl_solve(const dl_model *md, dl_data *d, double *qdd, double *lambda);
+DL_INTERNAL int factor_schur(const dl_model *md, dl_data *d, const unsigned char *active);
+DL_INTERNAL void solve_schur(const dl_model *md, dl_data *d, double *rhs, double *x);
+int dl_rhs(const dl_model *md, dl_data *d, double t, const double *y, double *ydot,
+           double *lambda);
+int dl_kkt_factor(const dl_model *md, dl_data *d, const double *values,
                   const unsigned char *active);
-int dl_kkt_solve(dl_model *md, dl_factor *fa, int64_t k, const double *rhs, int64_t ldr,
+int dl_kkt_solve(const dl_model *md, dl_data *d, int64_t k, const double *rhs, int64_t ldr,
                  double *out);
 
 /* outputs.c */
-int dl_outputs(dl_model *md, int64_t k, const double *times, const double *Y, double *qdd,
-               double *lambda, double *force, double *position_residual,
+int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
+               double *qdd, double *lambda, double *force, double *position_residual,
                double *velocity_residual, double *energies);
 
 /* projection.c */
-int dl_project(dl_model *md, double t, double *y, const unsigned char *holonomic,
-               int64_t max_newton, int64_t max_full, double position_tol, double accept_tol);
+int dl_project(const dl_model *md, dl_data *d, double t, double *y,
+               const unsigned char *holonomic, int64_t max_newton, int64_t max_full,
+               double position_tol, double accept_tol);
 
 /* runge_kutta.c */
-int dl_stages(dl_model *md, const double *A, int64_t lda, const double *C, int64_t row0,
-              int64_t j0, int64_t j1, double t, double h, const double *y, double *K,
-              double *stage, int64_t *nfev);
-int dl_rk_step(dl_model *md, const dl_tableau *tb, dl_stepper *st, const double *y, double *K,
-               double *y_new, double *stage);
-int dl_rk_run(dl_model *md, const dl_tableau *tb, dl_stepper *st, dl_run *run, double *y,
-              double *K, double *stage);
+int dl_stages(const dl_model *md, dl_data *d, const double *A, int64_t lda, const double *C,
+              int64_t row0, int64_t j0, int64_t j1, double t, double h, const double *y,
+              double *K, double *stage, int64_t *nfev);
+int dl_rk_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st,
+               const double *y, double *K, double *y_new, double *stage);
+int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st, dl_run *run,
+              double *y, double *K, double *stage);
 
 /* functions.c */
-int dl_call(const dl_model *md, int64_t which, const double *const *args, double *out);
+int dl_call(const dl_model *md, const dl_data *d, int64_t which, const double *const *args,
+            double *out);
 
 /* layout.c: one entry per struct size ("dl_model"), field offset ("dl_model.n"), return
  * code ("DL_OK") and function place ("DL_FN_KKT"), for library.py to compare with its

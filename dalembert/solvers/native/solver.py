@@ -17,7 +17,7 @@ from ..kkt.sparse import SINGULAR_MESSAGE, matvec
 from ..outputs import SOLVED, output_arrays
 from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, StepProjector
 from . import library
-from .structure import NotApplicable, SchurStructure, schur_structure
+from .structure import NotApplicable, SchurStructure, model_struct, schur_structure, work_sizes
 from .turns import outside_python
 
 DOUBLE = np.dtype(np.float64).itemsize  # bytes, for addresses inside a buffer
@@ -40,7 +40,10 @@ class NativeSolver:
     :class:`~dalembert.solvers.projection.StepProjector`, solved by the method of
     :mod:`dalembert.solvers.native`. Raises :class:`NotApplicable` (saying why) for
     models it does not cover: NumPy-generated functions, wide mass blocks or bands.
-    One instance per simulation: its work buffers are not shared between threads.
+    One instance per simulation: its ``dl_data`` (:attr:`data`: the parameter vector,
+    the work buffers, the inputs) is its own, never shared between threads; its
+    ``dl_model`` (:attr:`model`, constant) is shared by every instance over the same
+    compiled model, kept rows and Baumgarte gain.
 
     Parameters
     ----------
@@ -70,13 +73,20 @@ class NativeSolver:
         self.lib = library.runtime()
         self.kept = None if kept is None else np.asarray(kept, dtype=np.int64)
         self.structure = schur_structure(num.pattern, self.kept)
-        self._tables = num.pattern.remember(
-            ("native tables", None if self.kept is None else self.kept.tobytes()),
-            lambda: _Tables(self.structure, num, kkt))
-        self._keep: list[object] = []  # every array the C struct points to (kept alive)
-        self.model = self._model(handles, baumgarte)
-        self._address = ctypes.addressof(self.model)
-        self._holonomic_mask = self._tables.address["holonomic_mask"]
+        kept_key = None if self.kept is None else self.kept.tobytes()
+        tables = num.pattern.remember(("native tables", kept_key),
+                                      lambda: _Tables(self.structure, num, kkt))
+        generated = tuple(name for name, h in handles.items() if h is not None)
+        #: the model's constant part, shared by every solver over the same compiled model,
+        #: kept rows and stabilization (C only reads it)
+        self.shared = num.pattern.remember(
+            ("native model", kept_key, float(baumgarte), generated),
+            lambda: _SharedModel(tables, self.structure, num, handles, baumgarte))
+        self.model = self.shared.model
+        self._keep: list[object] = []  # every array the run's struct points to (kept alive)
+        self.data = self._data()
+        self._at = (ctypes.addressof(self.model), ctypes.addressof(self.data))
+        self._holonomic_mask = tables.address["holonomic_mask"]
         self._fallback: StepProjector | None = None  # made on first need
         self._io()
         self._input_error: BaseException | None = None  # what the inputs' callback raised
@@ -92,64 +102,26 @@ class NativeSolver:
         # zeroed: kkt.c's pair vectors rely on it (load_pairs writes only A's slots)
         return self._array(np.zeros(max(int(size), 1)), np.float64)
 
-    def _model(self, handles, baumgarte: float) -> library.Model:
-        num, s = self.num, self.structure
+    def _data(self) -> library.Data:
+        """This run's ``dl_data``: its parameter vector and work arrays."""
+        num, s, shared = self.num, self.structure, self.shared
         n, m = self.n, self.m
-        nM, nA = len(num.pattern.M_rows), len(num.pattern.A_rows)
         # the vector itself (no copy): the inputs' callback writes into it
         self._parameters = num.p
-        tables = self._tables.address
-        model = library.Model(n=n, m=m, nM=nM, nA=nA, n_hol=len(num.holonomic_rows),
-                              p=self._array(num.p, np.float64), baumgarte=baumgarte,
-                              holonomic=tables["holonomic"],
-                              n_blocks=s.n_blocks, n_pairs=s.n_pairs, kd=s.kd,
-                              n_dropped_pairs=s.n_dropped_pairs,
-                              n_dropped=len(s.dropped_rows), dropped_rtol=DROPPED_ROW_RTOL,
-                              n_elim_blocks=len(s.elim_blocks), m_band=len(s.band_row),
-                              n_unit=len(s.unit_slot), n_unit_pairs=len(s.unit_pair_vec),
-                              n_unit_gram=len(s.unit_gram_target), conditioning=np.inf)
-        for name, h in handles.items():
-            if name != "kkt" and h is not None:
-                model.fn[library.FUNCTIONS[name]] = self._function(name, h)
-        for name in s.arrays():
-            setattr(model, name, tables[name])
-        vectors = int(s.pair_vec[-1])
-        sizes = {"vel_values": nA + m, "psi": len(num.holonomic_rows), "y": vectors,
-                 "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row), "lambda": m,
-                 "qdd": n, "q_trial": n, "elim": s.elim_at[-1], "error_work": 4 * n,
-                 "gram_diagonal": m, "unit_mass": len(s.unit_slot),
-                 "unit_root": len(s.unit_slot)}
+        data = library.Data(p=self._array(num.p, np.float64), conditioning=np.inf)
+        sizes = {"vel_values": len(num.pattern.A_rows) + m, "psi": len(num.holonomic_rows),
+                 "lambda": m, "qdd": n, "q_trial": n, "error_work": 4 * n,
+                 "gram_diagonal": m, **work_sizes(s, n, m)}
         for name, size in sizes.items():
-            setattr(model, name, self._buffer(size))
-        self._kkt(model, handles["kkt"])
-        return model
-
-    def _function(self, name: str, h, target: int | None = None, size: int | None = None):
-        """The generated function ``name`` as ``dl_model.fn`` holds it."""
-        return library.Function(h.address or None, h.K or None, h.index or None,
-                                target or h.target or None, size or h.size,
-                                len(REGISTRY[name].arguments))
-
-    def _kkt(self, model: library.Model, h) -> None:
-        """The KKT values' buffer: in the solve's layout ``[blocks, u, a, c]`` when the
-        kkt function is a scatter driver (its targets remapped, so it writes each value
-        where the solve reads it), else ``[M, f, A, c]`` beside the layout's buffers."""
-        m, parts, start = self.m, self._tables.parts, self._tables.start
-        model.kkt_in_layout = bool(h.K and h.targets)
-        if not model.kkt_in_layout:
-            model.fn[library.FUNCTIONS["kkt"]] = self._function("kkt", h)
-            for name, size in parts.items():
-                setattr(model, name, self._buffer(size))
-            values = self._buffer(h.size)
-            model.values, model.c = values, values + DOUBLE * (h.size - m)
-            return
-        c_at = start["a"] + parts["a"]
-        model.fn[library.FUNCTIONS["kkt"]] = self._function(
-            "kkt", h, self._tables.address["kkt_targets"], c_at + m)
-        values = self._buffer(c_at + m)
-        model.values, model.c = values, values + DOUBLE * c_at
-        for name in parts:
-            setattr(model, name, values + DOUBLE * start[name])
+            owner, _, field = name.rpartition(".")
+            setattr(data.factor if owner else data, field, self._buffer(size))
+        data.factor.mask = self._array(np.zeros(max(m, 1)), np.uint8)
+        values = self._buffer(shared.values_size)
+        data.values, data.c = values, values + DOUBLE * shared.c_at
+        for name, size in shared.parts.items():  # the solve's layout [blocks, u, a]
+            at = shared.part_at.get(name)
+            setattr(data, name, self._buffer(size) if at is None else values + DOUBLE * at)
+        return data
 
     def _check(self, status: int) -> None:
         if status == library.INPUT and self._input_error is not None:
@@ -166,7 +138,7 @@ class NativeSolver:
         ``DL_INPUT`` and is raised again by the Python side (:meth:`_check`)."""
         self._input_error = None
         if signal is None:
-            self.model.inputs = None
+            self.data.inputs = None
             self._callback = None
             return
         n, p = self.n, self._parameters
@@ -174,7 +146,7 @@ class NativeSolver:
         slots = slice(start, start + len(self.num.compiled.input_names))
         state = np.zeros(2 * n)  # C copies [q, qd] here before each call
         q, qd = state[:n], state[n:]
-        self.model.input_state = self._array(state, np.float64)
+        self.data.input_state = self._array(state, np.float64)
 
         def inputs(t: float) -> int:
             try:
@@ -185,7 +157,7 @@ class NativeSolver:
                 return 1
 
         self._callback = library.INPUTS_CALLBACK(inputs)  # kept alive while C may call it
-        self.model.inputs = ctypes.cast(self._callback, ctypes.c_void_p).value
+        self.data.inputs = ctypes.cast(self._callback, ctypes.c_void_p).value
 
     def _io(self) -> None:
         """Fixed input/output buffers: taking a new array's address costs more than a copy."""
@@ -196,7 +168,7 @@ class NativeSolver:
 
     def _evaluate(self, t: float, y: np.ndarray, lam_at: int | None) -> None:
         self._y[:] = y
-        self._check(self.lib.dl_rhs(self._address, t, self._y_at, self._ydot_at, lam_at))
+        self._check(self.lib.dl_rhs(*self._at, t, self._y_at, self._ydot_at, lam_at))
 
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """``[qd, qdd]`` at ``(t, y)``, ``y = [q, qd]``."""
@@ -222,7 +194,7 @@ class NativeSolver:
             at = [a[lo:].ctypes.data if dynamics or name not in SOLVED else None
                   for name, a in out.items()]  # NULL: C leaves the solves out
             with outside_python():  # the GIL is released: other threads run their Python
-                status = self.lib.dl_outputs(self._address, hi - lo, times[lo:].ctypes.data,
+                status = self.lib.dl_outputs(*self._at, hi - lo, times[lo:].ctypes.data,
                                              states[lo:].ctypes.data, *at)
             self._check(status)
         if self.kept is not None and dynamics:
@@ -244,14 +216,14 @@ class NativeSolver:
             out["constraint_forces"][i] = matvec(pattern.A_cols, pattern.A_rows, Av, lam, n)
 
     def projection_arguments(self) -> tuple[int, int, int, float, float]:
-        """The arguments of ``dl_project`` after ``(model, t, y)``, as :meth:`project`
+        """The arguments of ``dl_project`` after ``(model, data, t, y)``, as :meth:`project`
         passes them (the C loop projects with the same)."""
         return self._holonomic_mask, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, ACCEPT_TOL
 
     def project(self, t: float, y: np.ndarray) -> np.ndarray:
         """``y`` projected onto the constraints; the Python projector if C cannot."""
         self._y[:] = y
-        status = self.lib.dl_project(self._address, t, self._y_at, *self.projection_arguments())
+        status = self.lib.dl_project(*self._at, t, self._y_at, *self.projection_arguments())
         projected = self._y.copy()
         if status == library.OK:
             return projected
@@ -293,3 +265,44 @@ class _Tables:
             self._table = (ctypes.c_void_p * len(self._targets))(
                 *(t.ctypes.data for t in self._targets))
             self.address["kkt_targets"] = ctypes.addressof(self._table)
+
+
+class _SharedModel:
+    """The ``dl_model`` of a compiled model, set of kept rows and stabilization: its
+    tables, its generated functions and where the KKT values go in a run's buffer. C
+    only reads it, so every :class:`NativeSolver` over it (runs with other parameter
+    values, on other threads) shares it; each has its own ``dl_data``."""
+
+    def __init__(self, tables: _Tables, structure: SchurStructure, num: NumericModel,
+                 handles: dict, baumgarte: float) -> None:
+        self._tables = tables  # kept alive: the struct points into it
+        model = model_struct(structure, num.pattern, tables.address)
+        model.n_hol, model.holonomic = len(num.holonomic_rows), tables.address["holonomic"]
+        model.baumgarte, model.dropped_rtol = baumgarte, DROPPED_ROW_RTOL
+        for name, h in handles.items():
+            if name != "kkt" and h is not None:
+                model.fn[library.FUNCTIONS[name]] = _function(name, h)
+        kkt, m, parts, start = handles["kkt"], num.m, tables.parts, tables.start
+        #: the sizes of the solve's layout [blocks, u, a]; part_at: their places in the
+        #: KKT values' buffer when the kkt function writes there (else buffers apart)
+        self.parts: dict[str, int] = parts
+        model.kkt_in_layout = bool(kkt.K and kkt.targets)
+        if model.kkt_in_layout:  # the targets remapped: each value lands where it is read
+            c_at = start["a"] + parts["a"]
+            model.fn[library.FUNCTIONS["kkt"]] = _function(
+                "kkt", kkt, tables.address["kkt_targets"], c_at + m)
+            self.part_at = {name: start[name] for name in parts}
+            self.values_size, self.c_at = c_at + m, c_at
+        else:  # [M, f, A, c], moved into the layout by load_kkt
+            model.fn[library.FUNCTIONS["kkt"]] = _function("kkt", kkt)
+            self.part_at = {}
+            self.values_size, self.c_at = kkt.size, kkt.size - m
+        self.model = model
+
+
+def _function(name: str, h, target: int | None = None, size: int | None = None
+              ) -> library.Function:
+    """The generated function ``name`` as ``dl_model.fn`` holds it."""
+    return library.Function(h.address or None, h.K or None, h.index or None,
+                            target or h.target or None, size or h.size,
+                            len(REGISTRY[name].arguments))

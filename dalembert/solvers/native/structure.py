@@ -33,6 +33,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ...codegen.compiled import SparsePattern
 from ...numerics.band import band_order
+from . import library
 
 #: Largest block of ``M`` factored dense (a rigid body has 7 coordinates).
 BLOCK_MAX = 64
@@ -288,3 +289,30 @@ def _gram(pair_row: np.ndarray, first: np.ndarray, block_pairs: np.ndarray,
         hi, lo = np.maximum(pi, pj), np.minimum(pi, pj)
         target[gram_start[blocks][:, None] + np.arange(len(i))] = hi * (kd + 1) + (hi - lo)
     return {"gram_start": gram_start, "gram_target": target}
+
+
+def model_struct(s: SchurStructure, pattern: SparsePattern,
+                 address: dict[str, int]) -> library.Model:
+    """A ``dl_model`` with ``s``'s sizes and tables (``address[name]``: where C reads
+    each of :meth:`SchurStructure.arrays`); the caller fills in the rest (functions,
+    holonomic rows, stabilization, the dropped rows' tolerance)."""
+    model = library.Model(n=pattern.n, m=pattern.m, nM=len(pattern.M_rows),
+                          nA=len(pattern.A_rows), n_blocks=s.n_blocks, n_pairs=s.n_pairs,
+                          kd=s.kd, n_dropped_pairs=s.n_dropped_pairs,
+                          n_dropped=len(s.dropped_rows), n_elim_blocks=len(s.elim_blocks),
+                          m_band=len(s.band_row), n_unit=len(s.unit_slot),
+                          n_unit_pairs=len(s.unit_pair_vec),
+                          n_unit_gram=len(s.unit_gram_target))
+    for name in s.arrays():
+        setattr(model, name, address[name])
+    return model
+
+
+def work_sizes(s: SchurStructure, n: int, m: int) -> dict[str, int]:
+    """The sizes of the factorization's work arrays in a ``dl_data`` (the KKT values'
+    buffers, the projections' and the steps' apart); ``factor.*`` are
+    ``dl_data.factor``'s."""
+    units = len(s.unit_slot)
+    return {"y": int(s.pair_vec[-1]), "S": len(s.band_row) * (s.kd + 1), "r": len(s.band_row),
+            "elim": int(s.elim_at[-1]), "unit_mass": units, "unit_root": units,
+            "factor.fold": s.n_pairs, "factor.rows": m}

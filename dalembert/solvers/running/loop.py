@@ -530,7 +530,12 @@ class StretchLoop(PythonLoop):
     def advance(self) -> None:
         if self.solver is not self.native or self._careful_from_here():
             return super().advance()  # careful steps
-        ran = self.runner.run()
+        try:
+            ran = self.runner.run()
+        except DalembertError as exc:  # the inputs' function failed: the steps before kept
+            self._absorb()
+            self.error = exc  # chained to the run's warning
+            return self._failed(f"integration failed at t={self.solver.t:.6g}: {exc}")
         self._absorb()
         if not ran:  # C left the next step to the step-by-step loop
             return super().advance()

@@ -57,7 +57,7 @@ def nonfinite_diagnosis(num: NumericModel, names: Sequence[str],
     >>> diagnose(0.0, np.array([1.0, 0.0, 0.0, 1.0]))
     ''
     """
-    n = num.n
+    n, layout = num.n, num.layout
     state_names = [*names, *(f"{name}_dot" for name in names)]
     rows = list(constraint_names) if constraint_names is not None else \
         [f"row {k}" for k in range(num.m)]
@@ -65,7 +65,7 @@ def nonfinite_diagnosis(num: NumericModel, names: Sequence[str],
 
     def diagnose(t: float, y: np.ndarray) -> str:
         y = np.asarray(y, dtype=float)
-        q, qd = y[:n], y[n:]
+        q, qd = layout.split(y)
         if not np.isfinite(t):
             return f"the time is {t}"
         if bad := _named(y, state_names):
@@ -96,7 +96,7 @@ def nonfinite_diagnosis(num: NumericModel, names: Sequence[str],
                 return f"the position constraints are not finite ({bad})"
         if rhs is not None:
             try:
-                qdd = np.asarray(rhs(t, y), dtype=float)[n:]
+                qdd = layout.qd(np.asarray(rhs(t, y), dtype=float))
             except DalembertError:  # a KKT solve may refuse what overflows in it
                 qdd = np.full(n, np.nan)
             if bad := _named(qdd, names):

@@ -1,7 +1,8 @@
 """One simulation's plan: every decision about how it runs, made in one place.
 
 :func:`plan_simulation` takes the checked options (:mod:`dalembert.options`), the
-bound numeric model and the consistent initial state, and decides once
+bound numeric model and the consistent initial state, and decides once (each decision
+a function of :mod:`.decisions` returning a typed value)
 
 - the loop: in C (:mod:`dalembert.solvers.native`: the right-hand side, the steps
   and the projection in C) where it applies and ``backend`` allows, else in Python,
@@ -12,9 +13,12 @@ bound numeric model and the consistent initial state, and decides once
   the C loop's projection and neither events nor dense output;
 - the right-hand side, the projection after each step and the trajectory's outputs.
 
-The resulting :class:`SimulationPlan` is a frozen value: :meth:`System.run
+The resulting :class:`SimulationPlan` is a frozen dataclass: :meth:`System.run
 <dalembert.System.run>` executes it, and a variant is ``dataclasses.replace(plan,
-stretches=False)`` (the step-by-step loop, same results to rounding).
+stretches=False)`` (the step-by-step loop, same results to rounding). Its run's state
+is not all per run yet: the plan holds the run's model (its own parameter vector,
+where the inputs are written), the C loop's solver and the careful steps' model, which
+:meth:`SimulationPlan.run` restarts; one plan runs in one thread at a time.
 
 Both loops give the same trajectory to rounding (tested).
 """
@@ -25,27 +29,32 @@ import inspect
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial, update_wrapper
-from typing import Literal
 
 import numpy as np
 from scipy.integrate import BDF, OdeSolver, Radau
 
 from ...codegen.compiled import NumericModel
 from ...inputs import InputSignal
-from ...options import Baumgarte, Projection, SimulationOptions
+from ...numerics.state_layout import StateLayout
+from ...options import SimulationOptions
 from ..dynamics import first_order_rhs
 from ..initialization import InitializationReport
-from ..native import NATIVE_METHODS, NotApplicable, native_solver
+from ..native import NativeSolver
 from ..outputs import evaluate_outputs
 from ..projection import StepProjector
 from ..singular.careful import CarefulModel, CarefulSteps, Outputs
 from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_diagnosis
 from ..state import accelerations_at
-from ..steppers.scipy_ivp import ControlledSteps, controlled_class
+from .decisions import (
+    Loop,
+    choose_loop,
+    choose_solver,
+    choose_stabilization,
+    choose_stretches,
+    kept_rows,
+)
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
-
-Loop = Literal["c", "python"]
 
 
 @dataclass(frozen=True)
@@ -115,7 +124,7 @@ class SimulationPlan:
     @property
     def y0(self) -> np.ndarray:
         """The consistent initial state ``[q0, qd0]``."""
-        return np.concatenate([self.initial.q, self.initial.qd])
+        return StateLayout(len(self.initial.q)).join(self.initial.q, self.initial.qd)
 
     def run(self) -> IntegrationResult:
         """Integrate: the raw states and statistics (``System.run`` adds the rest)."""
@@ -160,87 +169,71 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     >>> plan.loop, plan.solver.__name__, plan.stretches
     ('python', 'ControlledDOP853', False)
     """
-    t0, y0 = options.t_span[0], np.concatenate([initial.q, initial.qd])
-    rank = initial.rank
-    # Rows that depend on the others at the initial configuration only (a singular
-    # one: the rank is higher nearby) are all kept: the careful steps leave the
-    # dependency out while it lasts, where dropping a row for good would let it go.
-    kept = rank.kept if rank is not None and rank.rank_nearby is None else None
-    stabilization = options.stabilization
-    gain = stabilization.gain if isinstance(stabilization, Baumgarte) else 0.0
-    projection = isinstance(stabilization, Projection)
-    native, why = None, ""
-    if options.backend != "python":
-        try:
-            native = native_solver(num, y0, t0, gain, kept)
-        except NotApplicable as exc:
-            if options.backend == "c":
-                raise ValueError(f"backend='c', but the C loop does not apply: {exc}") \
-                    from exc
-            why = str(exc)
+    num = num.for_run()  # the run's inputs go in its own parameter vector
+    t0, y0 = options.t_span[0], num.layout.join(initial.q, initial.qd)
+    kept = kept_rows(initial)
+    stabilization = choose_stabilization(options)
+    gain, projection = stabilization.gain, stabilization.projection
+    loop = choose_loop(num, y0, t0, gain, kept, options.backend)
+    native = loop.native
     # inputs at every evaluation (a sampled signal is held: its caller sets the values)
     signal = options.inputs if options.inputs and options.inputs.sample_time is None else None
     if native is not None:
         native.set_inputs(signal)
-    step = options.step
-    solver = controlled_class(options.method, step.controller)
-    solver_options = step.solver_options()
-    stepper = NATIVE_METHODS.get(options.method) if native is not None else None
-    rhs: Callable[[float, np.ndarray], np.ndarray]
-    outputs: Outputs
-    careful, careful_rhs = None, None
-    rows = rank.names if rank is not None else None
+    chosen = choose_solver(options, native)
+    solver, solver_options, stepper = chosen.solver, chosen.options, chosen.stepper
+    stretches = choose_stretches(stepper, projection, options.output)
+    rows = initial.rank.names if initial.rank is not None else None
+    careful = None
     if projection and num.m:  # near a singular configuration: careful steps in Python
         careful = CarefulModel(num, kept, first_order_rhs(num, 0.0, kept),
                                native.project if native is not None else
                                StepProjector(num, kept), options.t_span, rows,
                                (options.step.rtol, options.step.atol))
-        careful_rhs = _with_inputs(num, signal, careful.rhs)
-    python_options = dict(solver_options)
-    output = options.output
-    stretches = stepper is not None and projection and not output.events \
-        and not output.dense_output
-    if native is not None:
-        rhs, outputs = native.rhs, native.outputs
-        project = native.project if projection else None
-        if stepper is not None:
-            solver, solver_options["native"] = stepper, native
-            if careful is not None and not stretches:  # measured after each step
-                project = careful.project
-    elif careful is not None and careful_rhs is not None:
-        rhs, project = careful_rhs, careful.project
-        outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
-    else:
-        rhs = _with_inputs(num, signal, first_order_rhs(num, gain, kept))
-        project = StepProjector(num, kept) if projection else None
-        outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
-    if issubclass(solver, ControlledSteps):
-        solver_options["step_control"] = step.controller
-    python_solver = controlled_class(options.method, step.controller)
-    if issubclass(python_solver, ControlledSteps):
-        python_options["step_control"] = step.controller
+    rhs, project, outputs = _functions(num, native, careful, signal, gain, projection,
+                                       kept, stepper is not None and not stretches)
     if solver in (Radau, BDF):
         solver_options["jac"] = finite_difference_jacobian(rhs)
     steps = None
     # careful steps: in the Python loop's own solver, or (a solver stepping in C) in one
     # of the same method stepping in Python; not for the implicit solvers with the C rhs
-    if careful is not None and careful_rhs is not None and (stepper is not None or
-                                                            native is None):
-        steps = CarefulSteps(careful, partial(_careful_solver, python_solver, careful_rhs,
-                                              options.t_span[1], python_options)
+    if careful is not None and (stepper is not None or native is None):
+        careful_rhs = _with_inputs(num, signal, careful.rhs)
+        steps = CarefulSteps(careful, partial(_careful_solver, chosen.python_solver,
+                                              careful_rhs, options.t_span[1],
+                                              chosen.python_options)
                              if stepper is not None else None)
-    n = num.n
     if careful is not None:
         outputs = careful.outputs(outputs, signal)
     return SimulationPlan(
-        options=options, initial=initial, loop="c" if native else "python",
-        why_python=why, solver=solver, solver_options=solver_options, stretches=stretches,
-        rhs=rhs, project=project, outputs=outputs,
-        events=tuple(_state_event(e, n, partial(_multipliers, num, signal))
-                     for e in output.events), parameters=num.p, num=num,
+        options=options, initial=initial, loop=loop.loop,
+        why_python=loop.why_python, solver=solver, solver_options=solver_options,
+        stretches=stretches, rhs=rhs, project=project, outputs=outputs,
+        events=tuple(_state_event(e, num.layout, partial(_multipliers, num, signal))
+                     for e in options.output.events), parameters=num.p, num=num,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
         careful=steps, runaway=runaway_diagnosis(num, rows, initial.names, t0, y0))
+
+
+def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulModel | None,
+               signal: InputSignal | None, gain: float, projection: bool,
+               kept: np.ndarray | None, measured: bool
+               ) -> tuple[Callable[[float, np.ndarray], np.ndarray],
+                          Callable[[float, np.ndarray], np.ndarray] | None, Outputs]:
+    """The run's ``rhs``, projection after each step and outputs: the C loop's, the
+    careful steps' (which measure after each step; ``measured``: a C stepper's steps
+    one by one) or the Python loop's."""
+    if native is not None:
+        project = native.project if projection else None
+        if careful is not None and measured:  # measured after each step
+            project = careful.project
+        return native.rhs, project, native.outputs
+    outputs = partial(evaluate_outputs, num, kept=kept, inputs=signal)
+    if careful is not None:
+        return _with_inputs(num, signal, careful.rhs), careful.project, outputs
+    rhs = _with_inputs(num, signal, first_order_rhs(num, gain, kept))
+    return rhs, StepProjector(num, kept) if projection else None, outputs
 
 
 def _careful_solver(cls: type[OdeSolver], rhs: Callable, t_bound: float,
@@ -258,10 +251,10 @@ def _with_inputs(num: NumericModel, signal: InputSignal | None,
     """``rhs`` with the inputs set from ``signal`` at each state first."""
     if signal is None:
         return rhs
-    n = num.n
+    layout = num.layout
 
     def with_inputs(t: float, y: np.ndarray) -> np.ndarray:
-        num.set_inputs(signal(t, y[:n], y[n:]))
+        num.set_inputs(signal(t, *layout.split(y)))
         return rhs(t, y)
 
     return with_inputs
@@ -290,18 +283,21 @@ def takes_multipliers(event: Callable) -> bool:
     return len(positional) >= 4
 
 
-def _state_event(event: Callable, n: int,
+def _state_event(event: Callable, layout: StateLayout,
                  multipliers: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
                  ) -> Callable:
     """Adapt ``event(t, q, qd)`` or ``event(t, q, qd, lam)`` (the multipliers at the state)
-    to SciPy's ``event(t, y)``, keeping its attributes and its name (messages name it)."""
+    to SciPy's ``event(t, y)``, keeping its attributes and its name (messages name it).
+    The event gets copies: what it is given is the run's state, and a function may well
+    change its arguments for its own use."""
     if takes_multipliers(event):
         def wrapped(t: float, y: np.ndarray) -> float:
-            q, qd = y[:n], y[n:]
-            return event(t, q, qd, multipliers(t, q, qd))
+            q, qd = layout.split(y)
+            return event(t, q.copy(), qd.copy(), multipliers(t, q, qd))
     else:
         def wrapped(t: float, y: np.ndarray) -> float:
-            return event(t, y[:n], y[n:])
+            q, qd = layout.split(y)
+            return event(t, q.copy(), qd.copy())
 
     update_wrapper(wrapped, event)
     wrapped.terminal = getattr(event, "terminal", False)  # type: ignore[attr-defined]

@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from ...inputs import InputSignal
+from ...numerics.state_layout import StateLayout
 from .segments import Schedule, SegmentState
 
 #: Output times within this many rounding units of the span's largest time (of ``dt``
@@ -77,9 +78,10 @@ def sampled_schedule(signal: InputSignal, t_span: tuple[float, float], n: int) -
     """
     assert signal.sample_time is not None
     t0, tf = t_span
+    layout = StateLayout(n)
 
     def sample(t: float, state: SegmentState) -> SegmentState:
-        return SegmentState(state.y, signal(t, state.y[:n], state.y[n:]), state.active)
+        return SegmentState(state.y, signal(t, *layout.split(state.y)), state.active)
 
     scale = max(abs(t0), abs(tf), signal.sample_time)
     return Schedule(sample_instants(t_span, signal.sample_time), sample,

@@ -39,6 +39,7 @@ from ...numerics.gram import UnitGram
 from ...numerics.singular import GAP, JUMP, NEAR, SCREEN, TRUNCATE, named
 from ..kkt.sparse import matvec
 from ..kkt.truncated import TruncatedKKT
+from ..pattern_cache import PatternCache
 
 
 class Outputs(Protocol):
@@ -186,8 +187,24 @@ def _singular_values(solver: TruncatedKKT, Av: np.ndarray, scale: np.ndarray,
     return np.linalg.norm(solver.transposed_product(Av, scale, V), axis=0)
 
 
-def _remembered(pattern: SparsePattern, rows: np.ndarray, what: str, make: Callable):
-    return pattern.remember((what, rows.tobytes()), make)
+def _truncated(p: SparsePattern, rows: np.ndarray | None) -> TruncatedKKT:
+    assert rows is not None  # always asked for with its rows
+    return TruncatedKKT(p, rows)
+
+
+def _truncated_unit(p: SparsePattern, rows: np.ndarray | None) -> TruncatedKKT:
+    assert rows is not None
+    return TruncatedKKT(p, rows, unit_mass=True)
+
+
+#: The unit-mass Gram matrices of each pattern's sets of rows (index maps only).
+_GRAMS: PatternCache[UnitGram] = PatternCache(
+    lambda p, rows: UnitGram(p.A_rows, p.A_cols, p.m, rows), "unit Gram matrices")
+#: The truncated KKT solves of each pattern's sets of rows, with the mass matrix...
+_TRUNCATED: PatternCache[TruncatedKKT] = PatternCache(_truncated, "truncated KKT solves")
+#: ... and with a unit mass matrix (the position projection).
+_TRUNCATED_UNIT: PatternCache[TruncatedKKT] = PatternCache(_truncated_unit,
+                                                           "truncated projections")
 
 
 class CarefulModel:
@@ -240,15 +257,10 @@ class CarefulModel:
         self._psi_at = np.array([place[int(r)] for r in self.rows[holonomic]], dtype=int)
         self._all_holonomic = bool(holonomic.all())
         hol_rows = self.rows[holonomic]
-        self._gram = _remembered(pattern, self.rows, "unit_gram", lambda: UnitGram(
-            pattern.A_rows, pattern.A_cols, num.m, self.rows))
-        self._hol_gram = self._gram if self._all_holonomic else _remembered(
-            pattern, hol_rows, "unit_gram", lambda: UnitGram(pattern.A_rows, pattern.A_cols,
-                                                             num.m, hol_rows))
-        self._dynamics = _remembered(pattern, self.rows, "truncated_kkt",
-                                     lambda: TruncatedKKT(pattern, self.rows))
-        self._positions = _remembered(pattern, hol_rows, "truncated_projection",
-                                      lambda: TruncatedKKT(pattern, hol_rows, unit_mass=True))
+        self._gram = _GRAMS.get(pattern, self.rows)
+        self._hol_gram = self._gram if self._all_holonomic else _GRAMS.get(pattern, hol_rows)
+        self._dynamics = _TRUNCATED.get(pattern, self.rows)
+        self._positions = _TRUNCATED_UNIT.get(pattern, hol_rows)
 
     def warning(self) -> str:
         """What the run's passages near singular configurations call for saying (``""``
@@ -285,15 +297,15 @@ class CarefulModel:
         careful, cut = self._mode(t)
         if not careful or cut is None:
             return self._rhs(t, y)
-        num, n = self.num, self.num.n
-        q, qd = y[:n], y[n:]
+        num = self.num
+        q, qd = num.layout.split(y)
         Mv, f, Av, c = num.kkt_sparse(t, q, qd)
         try:
             solve = self._dynamics.factor(Mv, Av, cut.scale, cut.V, cut.largest)
         except SingularSystemError as exc:  # the mass matrix, then: the loop says so
             raise SingularSystemError(f"the KKT matrix is singular at t={t:.6g} although "
                                       "the nearly dependent constraints are left out") from exc
-        return np.concatenate([qd, solve(f, c[self.rows] * cut.scale)[0]])
+        return num.layout.join(qd, solve(f, c[self.rows] * cut.scale)[0])
 
     def project(self, t: float, y: np.ndarray) -> np.ndarray:
         """The projection, careful or not; at a step's end (a time beyond every one
@@ -366,9 +378,9 @@ class CarefulModel:
         return self.truncation.V.shape[1] if self.careful and self.truncation else 0
 
     def _careful_project(self, t: float, y: np.ndarray, cut: Truncation | None) -> np.ndarray:
-        num, n = self.num, self.num.n
+        num, layout = self.num, self.num.layout
         assert cut is not None  # careful: measured near
-        q, qd = self._positions_projected(t, y[:n].copy(), cut), y[n:]
+        q, qd = self._positions_projected(t, layout.q(y).copy(), cut), layout.qd(y)
         Mv, _, Av, _ = num.kkt_sparse(t, q, qd)
         b = num.velocity_sparse(t, q)[1]
         pattern = num.pattern
@@ -379,7 +391,7 @@ class CarefulModel:
             raise SingularSystemError(f"the velocity projection at t={t:.6g} is singular "
                                       "although the nearly dependent constraints are left "
                                       "out") from exc
-        return np.concatenate([q, qd + solve(np.zeros(n), -residual * cut.scale)[0]])
+        return layout.join(q, qd + solve(np.zeros(num.n), -residual * cut.scale)[0])
 
     def _positions_projected(self, t: float, q: np.ndarray, cut: Truncation) -> np.ndarray:
         """Newton with minimum-norm steps on the enforced combinations of ``psi`` (one

@@ -31,6 +31,7 @@ from scipy.integrate._ivp.rk import (
     RungeKutta,
 )
 
+from ...numerics.state_layout import StateLayout
 from ...options import StepController
 from .controller import ControllerState, PIController
 from .runge_kutta import ExplicitRungeKutta, Tableau, controlled_step
@@ -123,9 +124,9 @@ def restart_second_order(solver: OdeSolver, y: np.ndarray) -> None:
         The projected state ``[q, qd]``.
     """
     if isinstance(solver, RungeKutta):
-        n = y.size // 2
+        layout = StateLayout.of(y)
         solver.y = y.copy()
-        solver.f = np.concatenate([y[n:], solver.f[n:]])
+        solver.f = layout.join(layout.qd(y), layout.qd(solver.f))
     else:
         restart(solver, y)
 

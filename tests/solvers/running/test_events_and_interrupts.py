@@ -52,6 +52,26 @@ def division():
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
+def test_an_event_that_changes_its_arguments_changes_only_its_own_copy(pendulum, backend):
+    """An event that writes into the q and qd it is given (q[0] = 5, qd[0] = 0) finds the
+    crossings at PERIOD / 4 and 3 PERIOD / 4 and leaves the motion as it is without it
+    (it pinned or froze the run)."""
+    def meddling(t, q, qd, lam):
+        value = q[0]
+        q[0], qd[0], lam[0] = 5.0, 0.0, 0.0
+        return value
+
+    times = np.linspace(0, PERIOD, 9)
+    plain = pendulum.simulate((0, PERIOD), Q0, t_eval=times, backend=backend)
+    traj = pendulum.simulate((0, PERIOD), Q0, t_eval=times, backend=backend,
+                             events=[meddling])
+    assert traj.success
+    np.testing.assert_allclose(traj.t_events[0], [PERIOD / 4, 3 * PERIOD / 4], atol=1e-10)
+    assert np.abs(traj.q - plain.q).max() < 1e-12
+    assert np.abs(traj.qd - plain.qd).max() < 1e-12
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize(("failure", "said"), [
     (nan, "returned nan at t="), (division, "raised ZeroDivisionError at t=")])
 def test_a_failing_event_ends_the_run_with_the_steps_before(pendulum, backend, failure, said):

@@ -19,6 +19,7 @@ import pytest
 import sympy as sp
 
 from dalembert import Holonomic, InitialConditionError, IntegrationWarning, System, coordinates
+from dalembert import t as time_symbol
 from dalembert.options import Baumgarte, simulation_options
 from dalembert.solvers.native import run as native_run
 from dalembert.solvers.running.plan import plan_simulation
@@ -144,3 +145,28 @@ def test_model_nan_inside_a_step_does_not_end_a_healthy_run(time_bound):
         warnings.simplefilter("error", IntegrationWarning)
         traj = system.simulate((0, 5), [0, 0], [1, 2], first_step=3.0, rtol=1e-9, atol=1e-11)
     assert traj.success and np.abs(traj["x"]).max() < 2
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_force_turning_nan_mid_run_on_a_pendulum_is_named_in_both_loops(time_bound,
+                                                                         backend):
+    """sqrt(1.5 - t) on a pendulum, whose rod row depends on the state: the stages past
+    t = 1.5 go NaN and so does A there. The C loop called that a singular KKT matrix; both
+    loops now say the derivative was not finite, and stop at t = 1.5."""
+    system = System([x, y], kinetic=(x.diff() ** 2 + y.diff() ** 2) / 2, potential=9.81 * y,
+                    generalized_forces={x: sp.sqrt(sp.Rational(3, 2) - time_symbol)},
+                    constraints=[Holonomic(x**2 + y**2 - 1, name="rod")])
+    with time_bound(BOUND):
+        traj = failed(lambda: system.simulate((0, 3), {x: 1.0, y: 0.0}, backend=backend))
+    assert "the derivative was not finite within the step" in traj.message
+    assert "singular" not in traj.message.split("or the motion")[0]
+    assert abs(traj.t[-1] - 1.5) < 1e-6
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_time_span_near_the_largest_float_is_named(time_bound, pendulum, backend):
+    with time_bound(BOUND):
+        traj = failed(lambda: pendulum.simulate((1e300, 1.5e300), {x: 1.0, y: 0.0},
+                                                backend=backend))
+    assert "the derivative was not finite within the step" in traj.message
+    assert "KKT matrix" not in traj.message
