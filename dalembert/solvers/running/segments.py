@@ -241,6 +241,12 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
                 record.add(segment, shown, last.y[keep], state, outputs)
             if bar is not None:
                 bar.update(abs(_reached(last, a, b, ended) - a))
+            if record.interrupted:
+                last.status = "interrupted"
+                last.message = (f"interrupted by the user at t={last.t[-1]:.6g}, while the "
+                                "outputs were computed: the states are kept, the "
+                                "accelerations, multipliers and energies from there are NaN")
+                break
             if ended:
                 break
             state = SegmentState(last.y[-1], state.inputs, state.active)
@@ -281,6 +287,8 @@ class _Record:
         self.derived: list[dict[str, np.ndarray]] = []
         self.inputs: list[np.ndarray | None] = []
         self.made: tuple[Segment, SegmentOutputs]
+        #: A Ctrl-C came while outputs were computed: their arrays from there are NaN.
+        self.interrupted = False
 
     def add(self, segment: Segment, t: np.ndarray, y: np.ndarray, state: SegmentState,
             outputs: SegmentOutputs) -> None:
@@ -289,9 +297,21 @@ class _Record:
             return
         self.t.append(np.asarray(t, dtype=float))
         self.y.append(y)
-        self.derived.append(outputs(segment, np.asarray(t, dtype=float), y))
+        self.derived.append(self._outputs(segment, np.asarray(t, dtype=float), y, outputs))
         self.inputs.append(None if state.inputs is None else
                            np.tile(np.asarray(state.inputs, dtype=float), (len(t), 1)))
+
+    def _outputs(self, segment: Segment, t: np.ndarray, y: np.ndarray,
+                 outputs: SegmentOutputs) -> dict[str, np.ndarray]:
+        """The derived arrays at the points; after a Ctrl-C (during them or before) NaN
+        of the same shapes, the states kept: a long run is not lost for its outputs."""
+        if not self.interrupted:
+            try:
+                return outputs(segment, t, y)
+            except KeyboardInterrupt:
+                self.interrupted = True
+        empty = outputs(segment, np.zeros(0), np.zeros((0, y.shape[1])))
+        return {name: np.full((len(t), *v.shape[1:]), np.nan) for name, v in empty.items()}
 
     def joined(self, size: int, t0: float) -> SegmentedRun:
         pieces = self.segments

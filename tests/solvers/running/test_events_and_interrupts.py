@@ -253,3 +253,30 @@ def test_an_event_whose_root_cannot_be_located(pendulum):
         traj = pendulum.simulate((0, 1), Q0, events=[fickle])
     assert traj.status == "failed" and len(traj) == 3
     assert traj.message.startswith("event 0 (fickle) changed sign between t=")
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_ctrl_c_while_the_outputs_are_computed_keeps_the_states(pendulum, backend,
+                                                                 monkeypatch):
+    """A Ctrl-C in the outputs (after a long run) returns the trajectory, interrupted, with
+    every state as the run computed it and the derived quantities NaN (it raised a raw
+    KeyboardInterrupt and lost the run)."""
+    import dalembert.system as system_module
+
+    times = np.linspace(0, PERIOD, 21)
+    plain = pendulum.simulate((0, PERIOD), Q0, t_eval=times, backend=backend)
+    real = system_module._segment_outputs
+
+    def pressed(plan, t, y, dynamics=True):
+        if len(t):
+            raise KeyboardInterrupt
+        return real(plan, t, y, dynamics=dynamics)
+
+    monkeypatch.setattr(system_module, "_segment_outputs", pressed)
+    with pytest.warns(IntegrationWarning, match="while the outputs were computed"):
+        traj = pendulum.simulate((0, PERIOD), Q0, t_eval=times, backend=backend)
+    assert traj.status == "interrupted"
+    np.testing.assert_array_equal(traj.t, plain.t)
+    np.testing.assert_array_equal(traj.q, plain.q)
+    np.testing.assert_array_equal(traj.qd, plain.qd)
+    assert np.isnan(traj.energy).all() and np.isnan(traj.multipliers).all()
