@@ -649,20 +649,14 @@ static void baumgarte(const dl_model *md, dl_data *d, double t, const double *q,
   for (int64_t k = 0; k < md->n_hol; ++k) c[md->holonomic[k]] -= g * g * d->psi[k];
 }
 
-static int finite_all(const double *x, int64_t k) {
-  for (int64_t i = 0; i < k; ++i)
-    if (!isfinite(x[i])) return 0;
-  return 1;
-}
-
 /* The KKT values at (t, y), evaluated again (a failed factorization overwrote them),
  * hold a NaN or an infinity: M (its blocks), f (u by slot) or c. */
 static int kkt_values_not_finite(const dl_model *md, dl_data *d, double t, const double *y) {
   const int64_t n = md->n;
   if (eval_kkt(md, d, t, y, y + n) != DL_OK) return 0;
   if (md->baumgarte != 0.0 && md->m) baumgarte(md, d, t, y, y + n, d->c);
-  return !finite_all(d->blocks, md->block_mat[md->n_blocks]) || !finite_all(d->u, n) ||
-         !finite_all(d->c, md->m);
+  return !all_finite(d->blocks, md->block_mat[md->n_blocks]) || !all_finite(d->u, n) ||
+         !all_finite(d->c, md->m);
 }
 
 /* y' = [qd, qdd] at (t, y); lambda may be NULL. A factorization that fails on values

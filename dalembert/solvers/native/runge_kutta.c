@@ -91,12 +91,6 @@ static int rk_attempt(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_s
   return dl_rhs(md, d, st->t + h, y_new, K + s * n_state, NULL);
 }
 
-static int all_finite(const double *x, int64_t n) {
-  for (int64_t i = 0; i < n; ++i)
-    if (!isfinite(x[i])) return 0;
-  return 1;
-}
-
 /* Steps from st->t until one is accepted (steppers/runge_kutta.py's controlled_step, under
  * the controller whose values st holds; scipy's own steps with beta = 0). K[0] must hold
  * f(t, y) on entry; on return y_new, K[s] = f(t_new, y_new) and st is advanced.

@@ -205,6 +205,12 @@ DL_INLINE double max_abs(const double *x, int64_t n) {
   return m;
 }
 
+DL_INLINE int all_finite(const double *x, int64_t n) {
+  for (int64_t i = 0; i < n; ++i)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
 DL_INLINE int64_t block_size(const dl_model *md, int64_t b) {
   return md->block_start[b + 1] - md->block_start[b];
 }

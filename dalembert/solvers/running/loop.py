@@ -543,7 +543,8 @@ class StretchLoop(PythonLoop):
             return self.stop("finished", "the integration reached the end of t_span")
         if self.runner.near_singular and self.careful is not None:
             solver = self.solver
-            self.careful.model.measure(solver.t, solver.y[:solver.n // 2])
+            model = self.careful.model
+            model.measure(solver.t, model.num.layout.q(solver.y))
             if self._careful_from_here():
                 return
         self._watch_steps()

@@ -446,7 +446,7 @@ class CarefulModel:
             if not (self.passages and dynamics):
                 return out
             for i, (ti, yi) in enumerate(zip(t, y)):
-                q, qd = yi[:num.n], yi[num.n:]
+                q, qd = num.layout.split(yi)
                 if num.m == 0 or not np.all(np.isfinite(yi)):
                     continue
                 cut = measure(self._gram, num.velocity_sparse(ti, q)[0]).truncation

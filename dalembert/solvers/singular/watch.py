@@ -167,7 +167,7 @@ def singular_diagnosis(num: NumericModel, constraint_names: Sequence[str] | None
     def singular(t: float, y: np.ndarray) -> str:
         if num.m == 0:
             return ""
-        q = np.asarray(y, dtype=float)[:num.n]
+        q = num.layout.q(np.asarray(y, dtype=float))
         A = pattern.dense_A(num.velocity_sparse(t, q)[0])[rows]
         if norm0 is not None:
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -224,7 +224,7 @@ def runaway_diagnosis(num: NumericModel, constraint_names: Sequence[str] | None,
     >>> runaway(0.999, np.array([1000.0, 1e6]))
     'the prescribed rate of drive (-b of its row) grew from 1 to 1e+06'
     """
-    n = num.n
+    n, layout = num.n, num.layout
     if constraint_names is None:
         constraint_names = [f"row {k}" for k in range(num.m)]
     labels = ([f"the prescribed rate of {name} (-b of its row)" for name in constraint_names]
@@ -232,9 +232,9 @@ def runaway_diagnosis(num: NumericModel, constraint_names: Sequence[str] | None,
               + [f"the velocity {name}_dot" for name in coordinate_names])
 
     def sizes(t: float, y: np.ndarray) -> np.ndarray:
-        q, qd = y[:n], y[n:]
+        q, qd = layout.split(y)
         b = num.velocity_sparse(t, q)[1] if num.m else np.zeros(0)
-        f = num.compiled.split_kkt(num.compiled.kkt_values(t, q, qd, num.p))[1]
+        f = num.kkt_sparse(t, q, qd)[1]
         return np.abs(np.concatenate([b, f, qd]))
 
     start = sizes(t0, np.asarray(y0, dtype=float))
