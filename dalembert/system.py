@@ -7,10 +7,9 @@ code generated once per System however often it is simulated.
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from functools import cached_property, partial
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -60,7 +59,6 @@ if TYPE_CHECKING:  # imported on first use: statics pulls in scipy.optimize, the
 
     from .solvers.running.integrate import IntegrationResult
     from .solvers.running.plan import SimulationPlan
-    from .solvers.running.segments import SegmentState
     from .statics import Equilibrium, Linearization
 
 #: A piece of the model (energies, constraints, forces...): build_model checks each.
@@ -846,55 +844,20 @@ class System:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
         constraint forces may be left uncomputed (NaN), for a caller that keeps none of
         them."""
-        from .solvers.running.sampled import sampled_schedule
-        from .solvers.running.segments import Schedule, run_segments
+        from .solvers.running.execute import execute
 
-        signal, options = plan.options.inputs, plan.options
-        schedule = Schedule.none()
-        if signal is not None and signal.sample_time is not None:
-            schedule = sampled_schedule(signal, options.t_span, len(self.coordinate_names))
-        joined = run_segments(partial(self._segment, plan),
-                              partial(_segment_outputs, dynamics=dynamics), schedule,
-                              options.t_span, plan.y0, options.output.t_eval,
-                              options.output.progress)
-        result = joined.result
-        if signal is not None and signal.sample_time is not None:
-            result.stats["n_samples"] = result.stats["n_segments"]
-        passed = plan.careful.model.warning() if plan.careful is not None else ""
-        if passed:
-            warnings.warn(passed, SingularConfigurationWarning, stacklevel=user_stacklevel())
+        done = execute(plan, dynamics)
+        result = done.run.result
+        if done.passages:
+            warnings.warn(done.passages, SingularConfigurationWarning,
+                          stacklevel=user_stacklevel())
         if not result.success:
             reached = result.t[-1] if len(result.t) else plan.options.t_span[0]
             warning = IntegrationWarning(f"{result.message}; returning the trajectory up to "
                                          f"t={reached:.6g}")
             warning.__cause__ = result.error  # an event function's exception, chained
             warnings.warn(warning, stacklevel=user_stacklevel())  # the user's call
-        return self._trajectory(result, plan, joined.derived, joined.inputs)
-
-    def _segment(self, plan: SimulationPlan, a: float, b: float, start: SegmentState,
-                 t_eval: np.ndarray | None, progress: bool) -> SimulationPlan:
-        """The plan of one segment ``[a, b]`` of a run (:mod:`~dalembert.solvers.running.segments`)
-        from ``start``: the run's own plan (its solver functions, its C loop) from that
-        state, which is consistent (projected after every step), with the inputs held
-        at ``start.inputs`` (set in the model now: the driver runs the segment and takes
-        its outputs before it makes the next)."""
-        if start.active is not None:
-            raise NotImplementedError("a reset of the active constraint rows is not "
-                                      "supported by System's runs yet")
-        options = plan.options
-        if start.inputs is not None and plan.num is not None:
-            plan.num.set_inputs(start.inputs)
-        y = start.y
-        if (a, b) == options.t_span and np.array_equal(y, plan.y0) \
-                and progress == options.output.progress \
-                and _same_times(t_eval, options.output.t_eval):
-            return plan  # the run is one segment: its own plan as it is
-        q, qd = StateLayout(len(self.coordinate_names)).split(y)
-        initial = dataclasses.replace(plan.initial, q=q.copy(), qd=qd.copy(),
-                                      q_given=q.copy(), qd_given=qd.copy())
-        return dataclasses.replace(plan, initial=initial, options=dataclasses.replace(
-            options, t_span=(a, b),
-            output=dataclasses.replace(options.output, t_eval=t_eval, progress=progress)))
+        return self._trajectory(result, plan, done.run.derived, done.run.inputs)
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:
@@ -983,40 +946,6 @@ class System:
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
             energy_conserved=self.conserves_energy,
         )
-
-
-def _missing(like: np.ndarray) -> np.ndarray:
-    """A row where an output could not be computed: NaN (False for a mark)."""
-    return np.zeros_like(like) if like.dtype == bool else np.full_like(like, np.nan)
-
-
-def _same_times(a: np.ndarray | None, b: np.ndarray | None) -> bool:
-    return a is b or (a is not None and b is not None and np.array_equal(a, b))
-
-
-def _segment_outputs(plan: Any, times: np.ndarray, states: np.ndarray,
-                     dynamics: bool = True) -> dict[str, np.ndarray]:
-    """The derived arrays at points of a segment (a plan; see :meth:`System._run` for
-    ``dynamics``). A run that failed because its inputs could not be computed has
-    points where they still cannot: those rows are NaN."""
-    try:
-        return plan.outputs(times, states, dynamics=dynamics)
-    except InputError:
-        rows: list[dict[str, np.ndarray] | None] = []
-        for t, y in zip(times, states):
-            try:
-                rows.append(plan.outputs(np.array([t]), y[None], dynamics=dynamics))
-            except InputError:
-                rows.append(None)
-        template = next((r for r in rows if r is not None), None)
-        if template is None:
-            empty = plan.outputs(np.zeros(0), np.zeros((0, states.shape[1])),
-                                 dynamics=dynamics)
-            return {name: np.full((len(rows), *v.shape[1:]), np.nan)
-                    for name, v in empty.items()}
-        return {name: np.concatenate([r[name] if r is not None else _missing(template[name])
-                                      for r in rows])
-                for name in template}
 
 
 def _or_nan(signal: InputSignal, t: float, q: np.ndarray, qd: np.ndarray,

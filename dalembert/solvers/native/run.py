@@ -22,7 +22,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ...numerics.singular import SCREEN
-from ..steppers.scipy_ivp import take_state
+from ..steppers.scipy_ivp import step_start, take_state
 from . import library
 from .turns import outside_python
 
@@ -38,9 +38,10 @@ class StretchRunner:
     with outputs at ``t_eval`` (or at every step end if ``None``).
 
     :meth:`run` calls C; :meth:`take` hands over what it did and brings the SciPy
-    solver object up to date (``t``, ``y``, ``f``, ``h_abs``, ``h_previous``,
-    ``nfev``, ``status``). The two are separate so that what a call did survives a
-    Ctrl-C that lands right after it: ``take`` can be called again until it returns.
+    solver object up to date (through the adapter's ``take_state``: its time, state,
+    derivative, step sizes, ``nfev`` and ``status``). The two are separate so that what
+    a call did survives a Ctrl-C that lands right after it: ``take`` can be called
+    again until it returns.
     """
 
     def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
@@ -48,7 +49,7 @@ class StretchRunner:
         rows = max(ROWS[0], min(ROWS[1], BUFFER_DOUBLES // n_state))
         if t_eval is not None:  # no more than the output times (a large buffer is mapped anew)
             rows = max(1, min(rows, len(t_eval)))
-        self._K, self._y = solver._stages(), np.empty(n_state)
+        self._K, self._y = solver.stage_storage(), np.empty(n_state)
         self._t_out, self._y_out = np.empty(rows), np.empty((rows, n_state))
         self._work = np.empty((2 + solver._n_rows, n_state))  # y_new, y_end, rows
         self._t_eval = np.ascontiguousarray([] if t_eval is None else t_eval, dtype=float)
@@ -78,9 +79,10 @@ class StretchRunner:
         Ctrl-C landing in it) is raised again here, :meth:`take` still to follow.
         """
         solver, st, run = self.solver, self.solver._stepper, self._run
-        self._y[:] = solver.y
-        self._K[0] = solver.f
-        st.t, st.h_abs, st.err_old, st.nfev = solver.t, solver.h_abs, solver.err_old, 0
+        start = step_start(solver)
+        self._y[:] = start.y
+        self._K[0] = start.f
+        st.t, st.h_abs, st.err_old, st.nfev = start.t, start.h_abs, start.state.err_old, 0
         if self._ahead is not None:
             run.next_eval = int(np.searchsorted(self._ahead, solver.direction * solver.t,
                                                 "right"))

@@ -1,12 +1,13 @@
 """SciPy's explicit Runge-Kutta solvers with each step taken in C.
 
-:class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) subclass SciPy's
-solvers, through their versions under a choice of step-size controller
-(:mod:`~dalembert.solvers.steppers.scipy_ivp`), and replace only ``_step_impl``: the
-stages, the error estimate and the step-size control run in ``runge_kutta.c`` with the
-same tableau, the same formulas and constants, so the steps taken are those of
+:class:`NativeDOP853` (and ``NativeRK45``, ``NativeRK23``) are the controlled solvers
+of :mod:`~dalembert.solvers.steppers.scipy_ivp` whose step (``take_step``, the stepper
+contract) runs in ``runge_kutta.c``: the stages, the error estimate and the step-size
+control with the same tableau, formulas and constants, so the steps taken are those of
 ``ControlledDOP853`` (SciPy's own under ``step_control="scipy"``) up to rounding
-(tested). Start-up (the initial step), dense output and everything else stay SciPy's.
+(tested). DOP853's interpolant has its extra stages evaluated in C too. Start-up (the
+initial step), dense output and everything else stay SciPy's, behind the adapter:
+nothing here reads or writes SciPy's solver attributes.
 
 Beyond single steps, a :class:`~.run.StretchRunner` runs whole stretches of the
 simulation loop in C for them (the projection after each step, the outputs at
@@ -22,34 +23,37 @@ from typing import ClassVar
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
+from ..steppers.controller import ControllerState
 from ..steppers.runge_kutta import Tableau
 from ..steppers.scipy_ivp import (
     INTERPOLATOR_POWER,
     ControlledDOP853,
     ControlledRK23,
     ControlledRK45,
-    Dop853DenseOutput,
-    RungeKutta,
+    ControlledSteps,
+    StepEnd,
+    StepStart,
     tableau_of,
 )
 from . import library
 from .solver import NativeSolver
 
 
-class _NativeSteps(RungeKutta):
-    """Mixin for a SciPy ``RungeKutta`` subclass; ``native`` is a :class:`NativeSolver`."""
+class _NativeSteps(ControlledSteps):
+    """Mixin for a controlled solver class; ``native`` is a :class:`NativeSolver`."""
 
-    _TABLEAU: ClassVar[tuple[library.Tableau, int, list]]  # per class, made on first use
+    _TABLEAU: ClassVar[tuple[library.Tableau, int, int, list]]  # per class, made on first use
 
     def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self._native = native
         # the class keeps the arrays the tableau points to alive
-        self._tableau, self._n_rows, _ = self._made_tableau()
-        self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
+        self._tableau, self._n_rows, self._n_stages, _ = self._made_tableau()
+        tolerances = self.tolerances
+        self._atol = tolerances.atol
         pi = self.controller  # the one controller: C reads its values
         self._stepper = library.Stepper(t_bound=t_bound, direction=self.direction,
-                                        rtol=self.rtol, max_step=self.max_step,
+                                        rtol=tolerances.rtol, max_step=tolerances.max_step,
                                         atol=self._atol.ctypes.data, alpha=pi.alpha,
                                         beta=pi.beta, safety=pi.safety,
                                         min_factor=pi.min_factor, max_factor=pi.max_factor,
@@ -58,9 +62,9 @@ class _NativeSteps(RungeKutta):
         self._fixed = (ctypes.addressof(self._tableau), ctypes.addressof(self._stepper))
 
     @classmethod
-    def _made_tableau(cls) -> tuple[library.Tableau, int, list]:
-        """The method's tableau for C, the rows of its interpolant and the arrays the
-        tableau points to, made once per class (C only reads them)."""
+    def _made_tableau(cls) -> tuple[library.Tableau, int, int, list]:
+        """The method's tableau for C, the rows of its interpolant, its number of stages
+        and the arrays the tableau points to, made once per class (C only reads them)."""
         made = cls.__dict__.get("_TABLEAU")
         if made is None:
             tb = tableau_of(cls)
@@ -68,7 +72,7 @@ class _NativeSteps(RungeKutta):
                     for a in (tb.A, tb.B, tb.C, tb.E, tb.E3)]
             A, B, C, E, E3 = (a.ctypes.data if a is not None else None for a in keep)
             tableau = library.Tableau(tb.n_stages, A, B, C, E, E3)
-            made = (tableau, cls._interpolant(tb, tableau, keep), keep)
+            made = (tableau, cls._interpolant(tb, tableau, keep), tb.n_stages, keep)
             cls._TABLEAU = made
         return made
 
@@ -81,29 +85,23 @@ class _NativeSteps(RungeKutta):
         tableau.n_P, tableau.P = P.shape[1], P.ctypes.data
         return P.shape[1]
 
-    def _stages(self) -> np.ndarray:
-        """The stage buffer the interpolant needs (DOP853: with its extra stages)."""
-        return self.K
-
-    def _step_impl(self):
-        st, K = self._stepper, self.K  # K: rows of stages, C-contiguous in SciPy's solvers
-        y = np.ascontiguousarray(self.y, dtype=np.float64)
-        K[0] = self.f
+    def take_step(self, start: StepStart) -> StepEnd | str:
+        st, K = self._stepper, self.stage_storage()  # K: rows of stages, C-contiguous
+        y = np.ascontiguousarray(start.y, dtype=np.float64)
+        K[0] = start.f
         y_new = np.empty(self.n)
-        st.t, st.h_abs, st.err_old, st.nfev = self.t, self.h_abs, self.err_old, 0
+        st.t, st.h_abs, st.err_old, st.nfev = start.t, start.h_abs, start.state.err_old, 0
         status = self._native.lib.dl_rk_step(
             *self._native._at, *self._fixed, y.ctypes.data, K.ctypes.data,
             y_new.ctypes.data, self._stage.ctypes.data)
         self.nfev += st.nfev
         if status == library.STEP_TOO_SMALL:
-            return False, self.TOO_SMALL_STEP
+            return self.TOO_SMALL_STEP
         if status == library.NOT_FINITE:  # the loop checks first; said here for other callers
-            return False, "the step would start from values that are not finite"
+            return "the step would start from values that are not finite"
         self._native._check(status)
-        self.h_previous, self.y_old = st.h_previous, y
-        self.t, self.y, self.h_abs, self.err_old = st.t, y_new, st.h_abs, st.err_old
-        self.f = K[self.n_stages].copy()
-        return True, None
+        return StepEnd(y, st.h_previous, st.t, y_new, K[self._n_stages].copy(), st.h_abs,
+                       ControllerState(st.err_old))
 
 
 class NativeDOP853(_NativeSteps, ControlledDOP853):
@@ -118,29 +116,18 @@ class NativeDOP853(_NativeSteps, ControlledDOP853):
         tableau.n_D, tableau.D = len(D), D.ctypes.data
         return INTERPOLATOR_POWER
 
-    def _stages(self) -> np.ndarray:
-        return self.K_extended
-
-    def _dense_output_impl(self):
-        # SciPy's DOP853._dense_output_impl with the three extra stages evaluated in C.
-        K, h, s = self.K_extended, self.h_previous, self.n_stages + 1
+    def fill_extra_stages(self, t_old: float, h: float, y_old: np.ndarray,
+                          K: np.ndarray) -> None:
+        s = self._n_stages + 1
         A, C = self._tableau.A_extra, self._tableau.C_extra  # addresses
         width = len(K)
-        y_old = np.ascontiguousarray(self.y_old, dtype=np.float64)
+        y_old = np.ascontiguousarray(y_old, dtype=np.float64)
         nfev = ctypes.c_int64(0)
         status = self._native.lib.dl_stages(
-            *self._native._at, A, width, C, s, s, width,
-            self.t_old, h, y_old.ctypes.data, K.ctypes.data, self._stage.ctypes.data,
-            ctypes.addressof(nfev))
+            *self._native._at, A, width, C, s, s, width, t_old, h, y_old.ctypes.data,
+            K.ctypes.data, self._stage.ctypes.data, ctypes.addressof(nfev))
         self.nfev += nfev.value
         self._native._check(status)
-        F = np.empty((INTERPOLATOR_POWER, self.n))
-        f_old, delta_y = K[0], self.y - self.y_old
-        F[0] = delta_y
-        F[1] = h * f_old - delta_y
-        F[2] = 2 * delta_y - h * (self.f + f_old)
-        F[3:] = h * np.dot(self.D, K)
-        return Dop853DenseOutput(self.t_old, self.t, self.y_old, F)
 
 
 class NativeRK45(_NativeSteps, ControlledRK45):

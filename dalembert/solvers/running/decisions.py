@@ -17,7 +17,7 @@ from scipy.integrate import OdeSolver
 from ...codegen.compiled import NumericModel
 from ...options import Backend, Baumgarte, Output, Projection, SimulationOptions
 from ..initialization import InitializationReport
-from ..native import NATIVE_METHODS, NativeSolver, NotApplicable, native_solver
+from ..native import NATIVE_METHODS, NotApplicable, native_solver
 from ..steppers.scipy_ivp import ControlledSteps, controlled_class
 
 Loop = Literal["c", "python"]
@@ -74,24 +74,22 @@ class LoopChoice:
 
     Parameters
     ----------
-    native
-        The C loop's solver, or ``None``: the Python loop.
+    loop
+        ``"c"`` or ``"python"``.
     why_python
         Why the C loop does not apply (empty if it runs, or ``backend="python"``).
     """
 
-    native: NativeSolver | None
+    loop: Loop
     why_python: str
-
-    @property
-    def loop(self) -> Loop:
-        """``"c"`` or ``"python"``."""
-        return "c" if self.native is not None else "python"
 
 
 def choose_loop(num: NumericModel, y0: np.ndarray, t0: float, gain: float,
                 kept: np.ndarray | None, backend: Backend) -> LoopChoice:
     """The C loop where it applies and ``backend`` allows, else the Python loop.
+
+    Whether it applies is tried: a C solver of the model is made and solves at the
+    initial state (each run then makes its own, :func:`~.run_data.start_run`).
 
     Parameters
     ----------
@@ -112,13 +110,14 @@ def choose_loop(num: NumericModel, y0: np.ndarray, t0: float, gain: float,
         ``backend="c"`` where the C loop does not apply (saying why).
     """
     if backend == "python":
-        return LoopChoice(None, "")
+        return LoopChoice("python", "")
     try:
-        return LoopChoice(native_solver(num, y0, t0, gain, kept), "")
+        native_solver(num, y0, t0, gain, kept)
     except NotApplicable as exc:
         if backend == "c":
             raise ValueError(f"backend='c', but the C loop does not apply: {exc}") from exc
-        return LoopChoice(None, str(exc))
+        return LoopChoice("python", str(exc))
+    return LoopChoice("c", "")
 
 
 @dataclass(frozen=True)
@@ -130,7 +129,8 @@ class SolverChoice:
     solver
         The ``OdeSolver`` class that steps (stepping in C where the loop is).
     options
-        Its keyword arguments (a Jacobian is added once the right-hand side is known).
+        Its keyword arguments (a run adds its C solver and, for the implicit methods,
+        a Jacobian of its right-hand side).
     stepper
         The C stepper of the method where the C loop runs, else ``None``.
     python_solver, python_options
@@ -145,7 +145,7 @@ class SolverChoice:
     python_options: dict[str, object]
 
 
-def choose_solver(options: SimulationOptions, native: NativeSolver | None) -> SolverChoice:
+def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
     """SciPy's method under the chosen step-size controller, or its C stepper where the
     C loop runs and has one.
 
@@ -154,15 +154,15 @@ def choose_solver(options: SimulationOptions, native: NativeSolver | None) -> So
     options
         The checked options.
     native
-        The C loop's solver, or ``None``.
+        Whether the C loop runs.
     """
     step = options.step
     solver = controlled_class(options.method, step.controller)
     solver_options = step.solver_options()
     python_options = dict(solver_options)
-    stepper = NATIVE_METHODS.get(options.method) if native is not None else None
+    stepper = NATIVE_METHODS.get(options.method) if native else None
     if stepper is not None:
-        solver, solver_options["native"] = stepper, native
+        solver = stepper
     if issubclass(solver, ControlledSteps):
         solver_options["step_control"] = step.controller
     python_solver = controlled_class(options.method, step.controller)

@@ -240,7 +240,7 @@ class CarefulModel:
         self.tolerance = tolerance
         self.names = list(names) if names is not None else [f"row {k}" for k in range(num.m)]
         self.direction = 1.0 if t_span[1] >= t_span[0] else -1.0
-        self._start = self._reached = t_span[0]
+        self._reached = t_span[0]
         pattern = num.pattern
         self.rows = np.arange(num.m) if kept is None else np.asarray(kept, dtype=np.intp)
         self.careful = False
@@ -270,11 +270,9 @@ class CarefulModel:
         return passages_message(self.passages, [self.names[int(r)] for r in self.rows])
 
     def restart(self, t: float, q: np.ndarray) -> None:
-        """Ready for a run from ``(t, q)`` (a run's start forgets the passages of an
-        earlier one; a sampled run's later pieces add to its first's)."""
+        """Ready for a segment of the run from ``(t, q)`` (the passages of the run's
+        earlier segments are kept: a run's data is its own, made for it)."""
         self._reached = t
-        if t == self._start:
-            self.passages = []
         self.careful, self._last_step = False, (False, None)
         self.measure(t, q)
 

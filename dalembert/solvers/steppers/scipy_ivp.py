@@ -19,6 +19,8 @@ array([-0.5, -0.5])
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.integrate import BDF, DOP853, RK23, RK45, OdeSolver
 from scipy.integrate._ivp import dop853_coefficients
@@ -43,8 +45,9 @@ __all__ = [
     "MIN_FACTOR",
     "SAFETY",
     "ControlledSteps",
-    "Dop853DenseOutput",
-    "RungeKutta",
+    "StepEnd",
+    "StepStart",
+    "StepTolerances",
     "controlled_class",
     "hand_over",
     "interpolant_form",
@@ -56,6 +59,7 @@ __all__ = [
     "snapshot",
     "step_inputs",
     "step_size",
+    "step_start",
     "tableau_of",
     "take_state",
 ]
@@ -289,6 +293,62 @@ def hand_over(source: OdeSolver, target: OdeSolver, f: np.ndarray) -> None:
 # ``step_control="scipy"`` (:mod:`.controller` says why PI).
 
 
+@dataclass(frozen=True, eq=False)
+class StepStart:
+    """Where a controlled solver's next step starts.
+
+    Attributes
+    ----------
+    t, y, f
+        The time, the state and the derivative there (the first stage).
+    h_abs
+        The step size to try first.
+    state
+        The controller's memory.
+    """
+
+    t: float
+    y: np.ndarray
+    f: np.ndarray
+    h_abs: float
+    state: ControllerState
+
+
+@dataclass(frozen=True, eq=False)
+class StepEnd:
+    """An accepted step, as the solver continues from it.
+
+    Attributes
+    ----------
+    y_old, h
+        The state the step started from and its signed size.
+    t, y, f
+        Its end: the time, the state and the derivative there.
+    h_abs
+        The next step's size.
+    state
+        The controller's memory after it.
+    """
+
+    y_old: np.ndarray
+    h: float
+    t: float
+    y: np.ndarray
+    f: np.ndarray
+    h_abs: float
+    state: ControllerState
+
+
+@dataclass(frozen=True, eq=False)
+class StepTolerances:
+    """A solver's tolerances and largest step, as SciPy checked them (``atol`` one
+    value per component)."""
+
+    rtol: float
+    atol: np.ndarray
+    max_step: float
+
+
 class ControlledSteps(RungeKutta):
     """Mixin for a SciPy ``RungeKutta`` subclass: its steps taken by our stepper under
     ``step_control``.
@@ -297,6 +357,12 @@ class ControlledSteps(RungeKutta):
     and ``controller_state`` its memory (the
     error of the last accepted step), kept across restarts from a projected state: the
     step-size history is the integration's, not the state's.
+
+    Each step is :meth:`take_step`, from a :class:`StepStart` to a :class:`StepEnd`
+    (or the message saying why no step could be taken); a subclass taking its steps elsewhere (in
+    C, :mod:`dalembert.solvers.native.runge_kutta`) overrides it alone, and reads what
+    it needs through :attr:`tolerances` and :meth:`stage_storage`: this class alone
+    reads and writes SciPy's solver attributes.
     """
 
     def __init__(self, fun, t0, y0, t_bound, *, step_control: StepController = "PI",
@@ -317,26 +383,72 @@ class ControlledSteps(RungeKutta):
     def err_old(self, value: float) -> None:
         self.controller_state = ControllerState(value)
 
-    def _step_impl(self):
-        out = controlled_step(self.stepper, self.controller, self.controller_state, self.fun,
-                              self.t, self.y, self.f, self.h_abs, direction=self.direction,
-                              t_bound=self.t_bound, rtol=self.rtol, atol=self.atol,
-                              max_step=self.max_step, K=self._stage_storage())
+    @property
+    def tolerances(self) -> StepTolerances:
+        """The tolerances and the largest step, as SciPy checked them."""
+        atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
+        return StepTolerances(float(self.rtol), atol, float(self.max_step))
+
+    def stage_storage(self) -> np.ndarray:
+        """SciPy's own stage array, one row per stage and the last step's end
+        derivative after them (DOP853: room for its interpolant's extra stages); its
+        dense output reads the stages from it."""
+        return np.asarray(getattr(self, "K_extended", self.K))  # the array itself
+
+    def take_step(self, start: StepStart) -> StepEnd | str:
+        """One accepted step from ``start`` (attempts repeated, shorter, until one is
+        accepted), or the message saying why none could be taken (the step became too
+        small).
+
+        Parameters
+        ----------
+        start
+            Where the step starts (:func:`step_start`).
+        """
+        out = controlled_step(self.stepper, self.controller, start.state, self.fun,
+                              start.t, start.y, start.f, start.h_abs,
+                              direction=self.direction, t_bound=self.t_bound,
+                              rtol=self.rtol, atol=self.atol, max_step=self.max_step,
+                              K=self.stage_storage())
         step = out.step
         if step is None:
-            return False, self.TOO_SMALL_STEP
-        self.h_previous, self.y_old = step.h, step.y
-        self.t, self.y, self.h_abs, self.f = step.t_new, step.y_new, out.h_abs, step.f_new
-        self.controller_state = out.state
+            return self.TOO_SMALL_STEP
+        return StepEnd(step.y, step.h, step.t_new, step.y_new, step.f_new, out.h_abs,
+                       out.state)
+
+    def _step_impl(self):
+        end = self.take_step(step_start(self))
+        if isinstance(end, str):
+            return False, end
+        self.h_previous, self.y_old = end.h, end.y_old
+        self.t, self.y, self.h_abs, self.f = end.t, end.y, end.h_abs, end.f
+        self.controller_state = end.state
         return True, None
 
-    def _stage_storage(self):
-        """SciPy's own stage array (its dense output reads the stages from it)."""
-        return getattr(self, "K_extended", self.K)
+
+def step_start(solver: ControlledSteps) -> StepStart:
+    """Where ``solver``'s next step starts.
+
+    Parameters
+    ----------
+    solver
+        A controlled explicit Runge-Kutta solver.
+
+    Examples
+    --------
+    >>> solver = ControlledRK45(lambda t, y: -y, 0.0, np.ones(1), 1.0)
+    >>> start = step_start(solver)
+    >>> start.t, start.f
+    (0.0, array([-1.]))
+    """
+    return StepStart(solver.t, solver.y, solver.f, solver.h_abs, solver.controller_state)
 
 
 class ControlledDOP853(ControlledSteps, DOP853):
     """:class:`scipy.integrate.DOP853` under ``step_control`` (PI by default).
+
+    Its dense output is SciPy's, the three extra stages of the interpolant evaluated by
+    :meth:`fill_extra_stages` (in C where the steps are).
 
     >>> sol = ControlledDOP853(lambda t, y: -y, 0.0, np.array([1.0]), 1.0, rtol=1e-8,
     ...                        atol=1e-10)
@@ -345,6 +457,34 @@ class ControlledDOP853(ControlledSteps, DOP853):
     >>> bool(abs(sol.y[0] - np.exp(-1.0)) < 1e-8)
     True
     """
+
+    def fill_extra_stages(self, t_old: float, h: float, y_old: np.ndarray,
+                          K: np.ndarray) -> None:
+        """Evaluate the interpolant's extra stages of the step from ``(t_old, y_old)`` of
+        size ``h`` into the rows of ``K`` after the step's own (SciPy's evaluation).
+
+        Parameters
+        ----------
+        t_old, h, y_old
+            The step's start, signed size and initial state.
+        K
+            The stage rows (:meth:`stage_storage`).
+        """
+        for s, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA), start=self.n_stages + 1):
+            dy = np.dot(K[:s].T, a[:s]) * h
+            K[s] = self.fun(t_old + c * h, y_old + dy)
+
+    def _dense_output_impl(self):
+        # SciPy's DOP853._dense_output_impl, its extra stages by fill_extra_stages
+        K, h = self.K_extended, self.h_previous
+        self.fill_extra_stages(self.t_old, h, self.y_old, K)
+        F = np.empty((INTERPOLATOR_POWER, self.n), dtype=self.y_old.dtype)
+        f_old, delta_y = K[0], self.y - self.y_old
+        F[0] = delta_y
+        F[1] = h * f_old - delta_y
+        F[2] = 2 * delta_y - h * (self.f + f_old)
+        F[3:] = h * np.dot(self.D, K)
+        return Dop853DenseOutput(self.t_old, self.t, self.y_old, F)
 
 
 class ControlledRK45(ControlledSteps, RK45):

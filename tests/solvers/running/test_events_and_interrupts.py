@@ -233,9 +233,10 @@ def test_outputs_in_chunks_are_those_of_one_call(pendulum, monkeypatch):
     plan = pendulum.plan((0, 1), Q0, backend="c", t_eval=np.linspace(0, 1, 11))
     traj = pendulum.run(plan)
     y = np.hstack([traj.q, traj.qd])
-    whole = plan.outputs(traj.t, y)
+    outputs = plan.start().outputs
+    whole = outputs(traj.t, y)
     monkeypatch.setattr(native_solver, "OUTPUT_CHUNK", 3)
-    chunked = plan.outputs(traj.t, y)
+    chunked = outputs(traj.t, y)
     for key, value in whole.items():
         assert np.array_equal(chunked[key], value), key
 
@@ -261,18 +262,18 @@ def test_ctrl_c_while_the_outputs_are_computed_keeps_the_states(pendulum, backen
     """A Ctrl-C in the outputs (after a long run) returns the trajectory, interrupted, with
     every state as the run computed it and the derived quantities NaN (it raised a raw
     KeyboardInterrupt and lost the run)."""
-    import dalembert.system as system_module
+    import dalembert.solvers.running.execute as execute_module
 
     times = np.linspace(0, PERIOD, 21)
     plain = pendulum.simulate((0, PERIOD), Q0, t_eval=times, backend=backend)
-    real = system_module._segment_outputs
+    real = execute_module._outputs
 
-    def pressed(plan, t, y, dynamics=True):
+    def pressed(segment, t, y, dynamics=True):
         if len(t):
             raise KeyboardInterrupt
-        return real(plan, t, y, dynamics=dynamics)
+        return real(segment, t, y, dynamics=dynamics)
 
-    monkeypatch.setattr(system_module, "_segment_outputs", pressed)
+    monkeypatch.setattr(execute_module, "_outputs", pressed)
     with pytest.warns(IntegrationWarning, match="while the outputs were computed"):
         traj = pendulum.simulate((0, PERIOD), Q0, t_eval=times, backend=backend)
     assert traj.status == "interrupted"

@@ -122,7 +122,8 @@ def test_the_c_step_refuses_what_is_not_finite(time_bound, pendulum):
     """dl_rk_step and dl_rk_run hand a NaN step size or derivative back to Python at
     once: before, a NaN step size was retried forever inside one call to C."""
     plan = pendulum.plan((0, 1), [1, 0], backend="c")
-    solver = plan.solver(plan.rhs, 0.0, plan.y0, 1.0, **plan.solver_options)
+    data = plan.start()
+    solver = plan.solver(data.rhs, 0.0, plan.y0, 1.0, **data.solver_options)
     runner = native_run.StretchRunner(solver, None)
     with time_bound(BOUND):
         for name, value in [("h_abs", float("nan")), ("f", np.full(4, np.nan))]:

@@ -47,8 +47,9 @@ def test_c_steps_read_the_controllers_values():
     custom = PIController(alpha=0.0875, beta=0.05, safety=0.8, max_factor=1.5)
 
     def steps(p, controller):
-        options = {k: v for k, v in p.solver_options.items()}
-        solver = p.solver(p.rhs, 0.0, p.y0, 2.0, controller=controller, **options)
+        data = p.start()
+        solver = p.solver(data.rhs, 0.0, p.y0, 2.0, controller=controller,
+                          **data.solver_options)
         times = []
         while solver.status == "running":
             solver.step()
