@@ -305,10 +305,10 @@ def test_keyboard_interrupt_in_the_right_hand_side(pend, monkeypatch, native):
     # The C loop returns to Python after every stretch of steps (one step here), so
     # Ctrl-C lands between stretches too.
     from dalembert.solvers.native import NativeSolver, run
-    from dalembert.solvers.running import plan
+    from dalembert.solvers.running import run_data
 
-    real = plan.first_order_rhs
-    monkeypatch.setattr(plan, "first_order_rhs", lambda *a: _interrupting(real(*a)))
+    real = run_data.first_order_rhs
+    monkeypatch.setattr(run_data, "first_order_rhs", lambda *a: _interrupting(real(*a)))
     monkeypatch.setattr(NativeSolver, "rhs", _interrupting(NativeSolver.rhs))
     monkeypatch.setattr(run, "MAX_STEPS", 1)
     monkeypatch.setattr(run.StretchRunner, "run", _interrupting(run.StretchRunner.run))

@@ -34,6 +34,7 @@ from ...codegen.compiled import NumericModel
 from ...inputs import InputSignal
 from ...numerics.state_layout import StateLayout
 from ..dynamics import first_order_rhs
+from ..jacobian import first_order_jacobian
 from ..native import NativeSolver
 from ..outputs import evaluate_outputs
 from ..projection import StepProjector
@@ -189,7 +190,7 @@ def start_run(plan: SimulationPlan) -> RunData:
     if stepping_in_c:
         solver_options["native"] = native
     if plan.solver in (Radau, BDF):
-        solver_options["jac"] = finite_difference_jacobian(rhs)
+        solver_options["jac"] = _jacobian(num, rhs, kept, gain, signal)
     steps = None
     # careful steps: in the Python loop's own solver, or (a solver stepping in C) in one
     # of the same method stepping in Python; not for the implicit solvers with the C rhs
@@ -230,6 +231,18 @@ def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulM
         return _with_inputs(num, signal, careful.rhs), careful.project, outputs
     rhs = _with_inputs(num, signal, first_order_rhs(num, gain, kept))
     return rhs, StepProjector(num, kept) if projection else None, outputs
+
+
+def _jacobian(num: NumericModel, rhs: Callable[[float, np.ndarray], np.ndarray],
+              kept: np.ndarray | None, gain: float, signal: InputSignal | None
+              ) -> Callable[[float, np.ndarray], np.ndarray]:
+    """The implicit solvers' Jacobian: exact (:mod:`~dalembert.solvers.jacobian`) where
+    the right-hand side is the KKT system's alone, else forward differences of ``rhs``
+    (Baumgarte's terms, and inputs computed from the state at every evaluation, whose
+    derivatives the exact one leaves out)."""
+    if gain == 0.0 and signal is None:
+        return first_order_jacobian(num, kept)
+    return finite_difference_jacobian(rhs)
 
 
 def _careful_solver(cls: type[OdeSolver], rhs: Callable, t_bound: float,
