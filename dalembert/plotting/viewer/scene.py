@@ -45,6 +45,9 @@ from ...trajectory import Trajectory
 DEFAULT_TRACES = 4
 #: Relative size of a particle's sphere (of the scene's extent).
 POINT_SIZE = 0.025
+#: A joint marker's radius at most (of the scene's extent; else a little more than
+#: its body's).
+JOINT_SIZE = 0.02
 #: A spoke's radius: that of a solid cylinder of the body's mass and axial inertia,
 #: kept between these fractions of the body's longest spoke (so that a massless-looking
 #: or a very thick body still reads as a link).
@@ -99,13 +102,39 @@ class Scene:
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def bounds(self) -> tuple[FloatArray, float]:
-        """The center of the box holding every body over every frame, and its size."""
-        p = self.positions.reshape(-1, 3)
-        lo, hi = p.min(axis=0), p.max(axis=0)
-        for shape in self.shapes:  # ground anchors are part of the picture too
-            if shape["body"] < 0:
+        """The center of the box holding every body's shapes over every frame, and its
+        largest side."""
+        reach = np.zeros(len(self.body_names))
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for shape in self.shapes:
+            if shape["body"] >= 0:
+                reach[shape["body"]] = max(reach[shape["body"]], shape_reach(shape))
+            else:  # ground anchors are part of the picture too
                 lo, hi = np.minimum(lo, shape["center"]), np.maximum(hi, shape["center"])
+        lo = np.minimum(lo, (self.positions - reach[:, None]).min(axis=(0, 1)))
+        hi = np.maximum(hi, (self.positions + reach[:, None]).max(axis=(0, 1)))
         return (lo + hi) / 2, float(max(np.max(hi - lo), 1e-9))
+
+
+def shape_reach(shape: dict[str, Any]) -> float:
+    """How far from its body's mass center a shape reaches, at most.
+
+    Parameters
+    ----------
+    shape
+        A shape of :attr:`Scene.shapes`.
+
+    Examples
+    --------
+    >>> shape_reach({"kind": "cylinder", "from": [0, 0, -1], "to": [0, 0, 2], "radius": 0.5})
+    2.5
+    """
+    if shape["kind"] == "cylinder":
+        ends = max(float(np.linalg.norm(shape["from"])), float(np.linalg.norm(shape["to"])))
+        return ends + shape["radius"]
+    extra = float(np.linalg.norm(shape["size"])) / 2 if shape["kind"] == "box" \
+        else shape["radius"]
+    return float(np.linalg.norm(shape["center"])) + extra
 
 
 def sampled(traj: Trajectory, frame_rate: float) -> Trajectory:
@@ -286,9 +315,10 @@ def multibody_scene(mb: Multibody, traj: Trajectory,
         x, R = body.pose(_columns(traj, body))
         positions[:, i] = x
         quaternions[:, i] = Rotation.from_matrix(R).as_quat()
-    centers = positions.reshape(-1, 3)
-    size = float(max(np.ptp(centers, axis=0).max(), 1e-3))
+    size = float(max(np.ptp(positions.reshape(-1, 3), axis=0).max(), 1e-3))
     shapes = [s for i, b in enumerate(bound.bodies) for s in _body_shapes(bound, i, b, size)]
+    # the picture's size: the centers' spread, or a body's own size if larger (a top)
+    size = max([size] + [2 * shape_reach(s) for s in shapes])
     joints, columns = _joints(bound, names, shapes, size)
     forces = None
     if joints and len(traj.constraint_names):
@@ -323,7 +353,8 @@ def _joints(mb: Multibody, names: list[str], shapes: list[dict[str, Any]],
             continue
         body, point, axis = side
         index = names.index(body.name)
-        radius = 1.4 * _largest_radius(shapes, index, 0.5 * POINT_SIZE * size)
+        radius = min(1.3 * _largest_radius(shapes, index, POINT_SIZE * size),
+                     JOINT_SIZE * size)
         joints.append({"name": joint.name, "body": index, "point": point.tolist(),
                        "axis": axis.tolist() if isinstance(joint, Revolute) else None,
                        "radius": radius})
@@ -332,7 +363,7 @@ def _joints(mb: Multibody, names: list[str], shapes: list[dict[str, Any]],
             if isinstance(other, Ground):
                 shapes.append({"body": -1, "kind": "box", "center":
                                np.asarray(where, dtype=float).tolist(),
-                               "size": [2 * radius] * 3, "rotation": [0.0, 0.0, 0.0, 1.0]})
+                               "size": [1.6 * radius] * 3, "rotation": [0.0, 0.0, 0.0, 1.0]})
     return joints, columns
 
 
