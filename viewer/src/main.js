@@ -449,6 +449,7 @@ function main() {
   window.dalembertViewer = {
     get time() { return state.time; },
     get frames() { return state.frames; },
+    get playing() { return state.playing; },
     setPlaying,
     show,
     ready: true,
