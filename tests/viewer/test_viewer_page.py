@@ -125,12 +125,12 @@ def test_bad_input_is_named(tmp_path):
     with pytest.raises(ValueError, match="energy must be one of"):
         view(traj, mb.system, tmp_path / "c.html", energy="heat")
     pendulum = load("pendulum")
-    with pytest.raises(ValueError, match="not one of this system.*link1_x"):
+    with pytest.raises(ValueError, match=r"not one of this system.*link1_x"):
         view(traj, pendulum.build(), tmp_path / "c.html")
     (phi,) = coordinates("phi")
     rotor = System([phi], kinetic=phi.diff()**2 / 2, potential=sp.Integer(0))
     spun = rotor.simulate((0, 1), {"phi": 0.0}, {"phi": 1.0}, t_eval=[0, 1])
-    with pytest.raises(ValueError, match="nothing to draw.*phi"):
+    with pytest.raises(ValueError, match=r"nothing to draw.*phi"):
         view(spun, rotor, tmp_path / "c.html")
 
 

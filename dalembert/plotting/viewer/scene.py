@@ -172,8 +172,8 @@ def sampled(traj: Trajectory, frame_rate: float) -> Trajectory:
 
 
 # -- multibody systems ---------------------------------------------------------------
-def _columns(traj: Trajectory, body: Body) -> FloatArray:
-    return np.column_stack([traj[c.name] for c in body.coordinates])
+def _columns(traj: Trajectory, index: dict[str, int], body: Body) -> FloatArray:
+    return traj.q[:, [index[c.name] for c in body.coordinates]]
 
 
 def _moving_side(joint: Joint) -> tuple[Body, FloatArray, FloatArray] | None:
@@ -185,16 +185,17 @@ def _moving_side(joint: Joint) -> tuple[Body, FloatArray, FloatArray] | None:
     return None
 
 
-def _body_points(mb: Multibody, body: Body) -> list[FloatArray]:
-    """The body's joint and spring points (body frame), the center excluded, no repeats."""
-    points: list[FloatArray] = []
+def _body_points(mb: Multibody) -> dict[str, list[FloatArray]]:
+    """Each body's joint and spring points (body frame), the center excluded, no repeats."""
+    points: dict[str, list[FloatArray]] = {b.name: [] for b in mb.bodies}
     pieces = [j for j in mb.joints if not isinstance(j, Rolling)] + list(mb.springs)
     for piece in pieces:
-        for other, point in ((piece.body_a, piece.point_a), (piece.body_b, piece.point_b)):
+        for body, point in ((piece.body_a, piece.point_a), (piece.body_b, piece.point_b)):
             p = np.asarray(point, dtype=float)
-            if other is body and np.linalg.norm(p) > 0 and \
-                    not any(np.allclose(p, q) for q in points):
-                points.append(p)
+            own = points.get(body.name)
+            if own is not None and np.linalg.norm(p) > 0 and \
+                    not any(np.allclose(p, q) for q in own):
+                own.append(p)
     return points
 
 
@@ -235,7 +236,8 @@ def _inertia_box(body: RigidBody | PlanarBody, size: float) -> dict[str, Any]:
             "rotation": Rotation.from_matrix(axes).as_quat().tolist()}
 
 
-def _body_shapes(mb: Multibody, index: int, body: Body, size: float) -> list[dict[str, Any]]:
+def _body_shapes(mb: Multibody, index: int, body: Body, points: list[FloatArray],
+                 size: float) -> list[dict[str, Any]]:
     if isinstance(body, Particle):
         return [{"body": index, "kind": "sphere", "center": [0.0, 0.0, 0.0],
                  "radius": POINT_SIZE * size}]
@@ -249,7 +251,6 @@ def _body_shapes(mb: Multibody, index: int, body: Body, size: float) -> list[dic
                                "radius": r})
             else:
                 shapes.append({"kind": "sphere", "center": [0.0, 0.0, 0.0], "radius": r})
-    points = _body_points(mb, body)
     if len(points) == 1:  # a link held at one end: as long again beyond its center
         shapes.append({"kind": "cylinder", "from": (-points[0]).tolist(),
                        "to": points[0].tolist(), "radius": _spoke_radius(body, points)})
@@ -311,12 +312,15 @@ def multibody_scene(mb: Multibody, traj: Trajectory,
     k = len(traj)
     positions = np.empty((k, len(names), 3))
     quaternions = np.empty((k, len(names), 4))
+    column = {name: i for i, name in enumerate(traj.coordinate_names)}
     for i, body in enumerate(bound.bodies):
-        x, R = body.pose(_columns(traj, body))
+        x, R = body.pose(_columns(traj, column, body))
         positions[:, i] = x
         quaternions[:, i] = Rotation.from_matrix(R).as_quat()
     size = float(max(np.ptp(positions.reshape(-1, 3), axis=0).max(), 1e-3))
-    shapes = [s for i, b in enumerate(bound.bodies) for s in _body_shapes(bound, i, b, size)]
+    points = _body_points(bound)
+    shapes = [s for i, b in enumerate(bound.bodies)
+              for s in _body_shapes(bound, i, b, points[b.name], size)]
     # the picture's size: the centers' spread, or a body's own size if larger (a top)
     size = max([size] + [2 * shape_reach(s) for s in shapes])
     joints, columns = _joints(bound, names, shapes, size)
