@@ -333,10 +333,11 @@ function main() {
   const camera = new THREE.PerspectiveCamera(40, 1, scene.extent * 1e-3, scene.extent * 100);
   camera.up.copy(up);
   const center = new THREE.Vector3(...scene.center);
-  // look along the horizontal direction most across the motion, from slightly above
-  const side = new THREE.Vector3(...scene.view).normalize();
-  camera.position.copy(center).addScaledVector(side, scene.extent * 1.9)
-    .addScaledVector(up, scene.extent * 0.5);
+  // look across the horizontal direction the motion spans least, turned a little and
+  // from slightly above so that depth shows
+  const side = new THREE.Vector3(...scene.view).normalize().applyAxisAngle(up, 0.45);
+  camera.position.copy(center).addScaledVector(side, scene.extent * 1.7)
+    .addScaledVector(up, scene.extent * 0.45);
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.copy(center);
   controls.update();
