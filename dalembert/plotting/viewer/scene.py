@@ -103,7 +103,18 @@ class Scene:
 
     def bounds(self) -> tuple[FloatArray, float]:
         """The center of the box holding every body's shapes over every frame, and its
-        largest side."""
+        largest side.
+
+        Examples
+        --------
+        >>> one = Scene(t=np.zeros(1), body_names=["p"], positions=np.zeros((1, 1, 3)),
+        ...             quaternions=np.array([[[0.0, 0.0, 0.0, 1.0]]]),
+        ...             shapes=[{"body": 0, "kind": "sphere", "center": [0, 0, 0],
+        ...                      "radius": 0.5}])
+        >>> center, size = one.bounds()
+        >>> center.tolist(), size
+        ([0.0, 0.0, 0.0], 1.0)
+        """
         reach = np.zeros(len(self.body_names))
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
         for shape in self.shapes:
