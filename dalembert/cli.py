@@ -2,7 +2,7 @@
 
     dalembert list
     dalembert run EXAMPLE|PATH.py [--t-end T] [--out DIR] [--points N] [--energy auto|energy|jacobi]
-                  [--no-animation] [--html]
+                  [--no-animation] [--html [PAGE.html]]
     dalembert equations EXAMPLE [--latex]
     dalembert equilibrium EXAMPLE [--out DIR]
     dalembert modes EXAMPLE [--out DIR] [--count K]
@@ -33,6 +33,7 @@ from .errors import DalembertError
 from .report import DEFAULT_POINTS, GALLERY_POINTS, GALLERY_T_END
 
 if TYPE_CHECKING:
+    from .report import ExampleRun
     from .statics import Equilibrium, Linearization
     from .system import System
 
@@ -153,8 +154,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "auto, the Jacobi integral when T has terms linear in the velocities)")
     p.add_argument("--no-animation", dest="animation", action="store_false",
                    help="do not write animation.gif")
-    p.add_argument("--html", action="store_true",
-                   help="also write animation.html (a page with play controls)")
+    p.add_argument("--html", nargs="?", const="", default=None, metavar="PAGE.html",
+                   help="also write the 3D viewer: one page to open in a browser "
+                        "(default: OUT/viewer.html)")
     p.set_defaults(handler=cmd_run)
 
     p = sub.add_parser("equations", help="print an example's equations of motion")
@@ -216,8 +218,11 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     _load(args.example)
     out = args.out if args.out is not None else f"out/{Path(args.example).stem}"
+    page = _viewer_page(args.html, out)
     run = run_example(args.example, out, t_end=args.t_end, points=args.points,
-                      energy=args.energy, animation=args.animation, html=args.html)
+                      energy=args.energy, animation=args.animation)
+    if page is not None:
+        run.files.append(_write_view(run, page))
     print(f"{args.example}: {run.title}")
     print(run.trajectory.summary())
     print(f"equations and code in {run.setup_seconds:.2f} s, simulated in {run.seconds:.2f} s")
@@ -302,6 +307,27 @@ def cmd_gallery(args: argparse.Namespace) -> int:
 
 
 # -- helpers -------------------------------------------------------------------------
+def _viewer_page(html: str | None, out: str) -> Path | None:
+    """Where ``--html`` writes the 3D viewer (checked before simulating), or ``None``."""
+    if html is None:
+        return None
+    page = Path(html) if html else Path(out) / "viewer.html"
+    if page.suffix.lower() != ".html":
+        raise _CommandError(f"--html {html}: the viewer writes an .html page; give a path "
+                            "ending in .html, or no path for OUT/viewer.html")
+    return page
+
+
+def _write_view(run: ExampleRun, page: Path) -> Path:
+    from .plotting import view
+
+    try:
+        return view(run.trajectory, run.system, page, title=f"{run.name}: {run.title}",
+                    energy=run.energy)
+    except ValueError as exc:  # nothing to draw: the other files are written
+        raise _CommandError(f"no 3D view of {run.name!r}: {exc}") from exc
+
+
 def _load(name: str) -> ModuleType:
     if examples.is_path(name):
         try:

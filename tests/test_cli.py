@@ -70,9 +70,8 @@ def test_run_pendulum_writes_files_and_prints_checks(tmp_path, capsys):
 def test_run_html_and_no_animation(tmp_path, capsys):
     assert cli.main(["run", "heavy-top", *SHORT, "--out", str(tmp_path / "a"),
                      "--html"]) == 0
-    page = (tmp_path / "a" / "animation.html").read_text()
-    assert page.startswith("<!DOCTYPE html>") and "<script>" in page
-    assert page.count("data:image/png;base64") == 26
+    page = (tmp_path / "a" / "viewer.html").read_text()  # the 3D viewer (tests/viewer)
+    assert page.startswith("<!DOCTYPE html>") and "dalembert-scene" in page
     assert (tmp_path / "a" / "animation.gif").exists()
     assert cli.main(["run", "pendulum", *SHORT, "--out", str(tmp_path / "b"),
                      "--no-animation"]) == 0

@@ -384,22 +384,36 @@ def joint_reactions(
     mb = mb.bound(traj.parameters, parameters) if mb.parameters else mb
     names = system.constraint_names
     k = len(traj)
-    Q_all = {j.name: np.zeros((k, num.n)) for j in mb.joints}
-    rows = {j.name: [names.index(c) for c in j.constraint_names] for j in mb.joints}
+    coord_index = {c: system.coordinate_names.index(c) for c in system.coordinate_names}
+    # A_J^T lambda_J on the columns of the joint's own moving bodies only (all columns of
+    # every joint would be joints x outputs x coordinates numbers: 1 GB for 256 links),
+    # blocks of one shape gathered together (one NumPy call per shape and output)
+    blocks: dict[tuple[int, int], list[tuple[tuple[str, str], list[int], list[int]]]] = {}
+    for j in mb.joints:
+        rows = [names.index(c) for c in j.constraint_names]
+        for body in j.bodies:
+            if not isinstance(body, Ground):
+                cols = [coord_index[c.name] for c in body.coordinates]
+                blocks.setdefault((len(rows), len(cols)), []).append(
+                    ((j.name, body.name), rows, cols))
+    gathers = {shape: (np.array([rows for _, rows, _ in group]),
+                       np.array([cols for _, _, cols in group])) for shape, group in blocks.items()}
+    Q_blocks = {shape: np.empty((k, len(group), shape[1])) for shape, group in blocks.items()}
     for i in range(k):
         A, _ = num.velocity_constraint(traj.t[i], traj.q[i])
-        for j in mb.joints:
-            r = rows[j.name]
-            Q_all[j.name][i] = A[r].T @ traj.multipliers[i, r]
-    coord_index = {c: system.coordinate_names.index(c) for c in system.coordinate_names}
+        lam = traj.multipliers[i]
+        for shape, (R, C) in gathers.items():
+            Q_blocks[shape][i] = np.einsum("bmn,bm->bn", A[R[:, :, None], C[:, None, :]], lam[R])
+    Q_joint = {key: Q_blocks[shape][:, g] for shape, group in blocks.items()
+               for g, (key, _, _) in enumerate(group)}
     out: dict[str, dict[str, JointReaction]] = {}
     for j in mb.joints:
         sides = {}
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if not isinstance(body, Ground):
-                idx = [coord_index[c.name] for c in body.coordinates]
                 P = _application_points(mb, traj, j, body, point)
-                sides[body.name] = _reaction(mb, traj, j.name, body, P, Q_all[j.name][:, idx])
+                sides[body.name] = _reaction(mb, traj, j.name, body, P,
+                                             Q_joint[j.name, body.name])
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if isinstance(body, Ground):
                 other = next(iter(sides.values()))

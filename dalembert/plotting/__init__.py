@@ -1,5 +1,6 @@
 """Off-screen (Agg) PNG plots of trajectories: coordinates, energy drift, residuals,
-multipliers and 2D paths; drawings of a mechanism at rest and of its mode shapes.
+multipliers and 2D paths; drawings of a mechanism at rest and of its mode shapes;
+:func:`view`, a 3D page of a trajectory for the browser.
 Figures are matplotlib ``Figure`` objects saved directly, never pyplot: no backend is
 selected or needed."""
 
@@ -14,6 +15,7 @@ from .trajectory_plots import (
     plot_residuals,
     relative_drift,
 )
+from .viewer import view
 
 __all__ = [
     "animate",
@@ -26,4 +28,5 @@ __all__ = [
     "plot_path",
     "plot_residuals",
     "relative_drift",
+    "view",
 ]
