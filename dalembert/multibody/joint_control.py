@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import scipy.linalg
@@ -228,7 +228,7 @@ def linearize_joints(
             raise ModelError(
                 f"joint {joint.name!r} ({type(joint).__name__}) is not a hinge or a slide: "
                 "linearize in joint coordinates takes Revolute and Prismatic joints")
-    lin = linearize(mb.system, q_eq, **options)
+    lin = linearize(mb.system, cast(Any, q_eq), **options)
     parameters = {**_equilibrium_parameters(q_eq), **(options.get("parameters") or {})}
     names, J = joint_jacobian(mb, lin.q, joints=chosen, parameters=parameters or None)
     return lin.in_coordinates(J, names)

@@ -151,7 +151,7 @@ def test_ball_joint_angular_velocity_against_differences(balls):
     w = joint_velocities(mb, q, qd, joints=["joint2"])
     assert w.names == ("joint2.wx", "joint2.wy", "joint2.wz")
     assert np.abs(w.array - expected).max() < 1e-8 * np.abs(expected).max()
-    names, J = joint_jacobian(mb, q, joints=["joint2"])
+    _, J = joint_jacobian(mb, q, joints=["joint2"])
     qd_ = np.array([qd[n] for n in mb.system.coordinate_names])
     np.testing.assert_allclose(J @ qd_, w.array, atol=1e-12)
 
