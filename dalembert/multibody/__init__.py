@@ -20,7 +20,17 @@ from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
 from .joint_control import JointEfforts, inverse_dynamics, linearize_joints
 from .joint_space import JointValues, joint_jacobian, joint_positions, joint_velocities
-from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
+from .joints import (
+    Distance,
+    Fixed,
+    Free,
+    Joint,
+    PointOnPlane,
+    Prismatic,
+    Revolute,
+    Spherical,
+    Universal,
+)
 from .loads import Force, SpringDamper, Torque
 from .outputs import (
     JointReaction,
@@ -53,6 +63,7 @@ __all__ = [
     "E_matrix",
     "Fixed",
     "Force",
+    "Free",
     "G_matrix",
     "Ground",
     "Joint",

@@ -12,6 +12,8 @@ Revolute   angle ``<j>``             its rate ``<j>``                        rad
 Prismatic  travel ``<j>``            its rate ``<j>``                        m, m/s
 Spherical  rotation ``<j>.rx .ry     relative angular velocity ``<j>.wx      rad, rad/s
            .rz`` (or ``<j>.qw ...``) .wy .wz``
+Free       travel ``<j>.x .y .z``,   their rates ``<j>.x .y .z``, the        m, rad;
+           rotation as Spherical     relative angular velocity as Spherical  m/s, rad/s
 =========  ========================  ======================================  =========
 
 - The hinge angle turns ``u_b`` from ``u_a`` about ``w`` (``atan2(v_a . u_b, u_a . u_b)``,
@@ -26,6 +28,8 @@ Spherical  rotation ``<j>.rx .ry     relative angular velocity ``<j>.wx      rad
   :mod:`~dalembert.multibody.rotations` (``rotations="quaternion"``; ``qw >= 0`` at
   one state, sign-continuous along a trajectory). With the default frames (``w = z``,
   ``u = x`` on both sides) ``R_rel = R_a^T R_b``.
+- A free joint's travel is ``d`` (point ``a`` to point ``b``) in components of ``a``'s
+  joint frame, its rates those of these components (as seen turning with ``a``).
 - The relative angular velocity ``w_b - w_a`` is given in components of ``a``'s joint
   frame; it is not the rate of the rotation vector (``R_rel' R_rel^T = [w]x``).
 
@@ -51,7 +55,7 @@ from ..model.values import CoordinateValues, coordinate_values
 from ..trajectory import Trajectory
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody
-from .joints import Joint, Prismatic, Revolute, Spherical
+from .joints import Free, Joint, Prismatic, Revolute, Spherical
 from .rotations import G_matrix, quaternion_from_matrix
 from .types import FloatArray
 
@@ -104,7 +108,7 @@ def has_coordinates(joint: Joint) -> bool:
     """Whether :func:`joint_positions` measures ``joint`` (see the module docstring)."""
     if isinstance(joint, Revolute | Prismatic):
         return True
-    return isinstance(joint, Spherical) and not any(isinstance(b, Particle)
+    return isinstance(joint, Spherical | Free) and not any(isinstance(b, Particle)
                                                     for b in joint.bodies)
 
 
@@ -136,8 +140,8 @@ def selected_joints(mb: Multibody, joints: Sequence[Joint | str] | None) -> list
         except KeyError as exc:
             raise KeyError(exc.args[0]) from None
         if not has_coordinates(joint):
-            kinds = ("Revolute, Prismatic, or Spherical between bodies that turn (not "
-                     "a particle)")
+            kinds = ("Revolute, Prismatic, and Spherical or Free between bodies that turn "
+                     "(not a particle)")
             raise ModelError(f"joint {name!r} ({type(joint).__name__}) has no joint "
                              f"coordinates here; those are measured for {kinds}")
         out.append(joint)
@@ -163,6 +167,8 @@ def position_names(joint: Joint, rotations: Rotations = "vector") -> list[str]:
     if isinstance(joint, Revolute | Prismatic):
         return [joint.name]
     parts = ("rx", "ry", "rz") if rotations == "vector" else ("qw", "qx", "qy", "qz")
+    if isinstance(joint, Free):
+        parts = ("x", "y", "z", *parts)
     return [f"{joint.name}.{p}" for p in parts]
 
 
@@ -182,7 +188,8 @@ def velocity_names(joint: Joint) -> list[str]:
     """
     if isinstance(joint, Revolute | Prismatic):
         return [joint.name]
-    return [f"{joint.name}.{p}" for p in ("wx", "wy", "wz")]
+    parts = ("x", "y", "z", "wx", "wy", "wz") if isinstance(joint, Free) else ("wx", "wy", "wz")
+    return [f"{joint.name}.{p}" for p in parts]
 
 
 # -- the state ---------------------------------------------------------------------------
@@ -289,7 +296,12 @@ def _joint_positions(joint: Joint, poses: _Poses, rotations: Rotations,
     b = quaternion_from_matrix(_relative_rotation(joint, poses))
     if not single:
         b = _continuous(b)
-    return b if rotations == "quaternion" else _rotation_vector(b)
+    rotation = b if rotations == "quaternion" else _rotation_vector(b)
+    if not isinstance(joint, Free):
+        return rotation
+    Pa, Pb = _points(joint, poses)
+    Fa = _world_frames(joint, poses)[0]
+    return np.hstack([np.einsum("kji,kj->ki", Fa, Pb - Pa), rotation])
 
 
 def _joint_velocities(joint: Joint, poses: _Poses) -> FloatArray:
@@ -306,7 +318,14 @@ def _joint_velocities(joint: Joint, poses: _Poses) -> FloatArray:
         # d/dt (w_a . d): the axis turns with body a
         return (np.einsum("ki,ki->k", axis, vpb - vpa)
                 + np.einsum("ki,ki->k", np.cross(wa_, axis), Pb - Pa))[:, None]
-    return np.einsum("kji,kj->ki", Fa, relative)
+    angular = np.einsum("kji,kj->ki", Fa, relative)
+    if not isinstance(joint, Free):
+        return angular
+    Pa, Pb = _points(joint, poses)
+    vpa, vpb = va + np.cross(wa_, Pa - xa), vb + np.cross(wb_, Pb - xb)
+    # the rates of d's components in the turning frame a: d' - w_a x d
+    travel = vpb - vpa - np.cross(wa_, Pb - Pa)
+    return np.hstack([np.einsum("kji,kj->ki", Fa, travel), angular])
 
 
 def joint_positions(
@@ -512,4 +531,10 @@ def _joint_rows(joint: Joint, poses: _Poses, n: int) -> FloatArray:
             cols, _, W = maps["a"]
             row[cols] += np.cross(Fa[:, 2], Pb - Pa) @ W
         return row[None]
-    return Fa.T @ out_w
+    if not isinstance(joint, Free):
+        return Fa.T @ out_w
+    if "a" in maps:  # - w_a x d = d x w_a
+        cols, _, W = maps["a"]
+        d = Pb - Pa
+        out_v[:, cols] += np.array([[0, -d[2], d[1]], [d[2], 0, -d[0]], [-d[1], d[0], 0]]) @ W
+    return np.vstack([Fa.T @ out_v, Fa.T @ out_w])

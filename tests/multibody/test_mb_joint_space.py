@@ -174,3 +174,41 @@ def test_a_joint_without_coordinates_is_refused():
     assert joint_positions(mb, {"bob_z": -1.0}).names == ()
     with pytest.raises(ModelError, match="joint 'rod' \\(Distance\\) has no joint coordinates"):
         joint_positions(mb, {"bob_z": -1.0}, joints=["rod"])
+
+
+def test_free_joint_travel_and_rotation_against_differences():
+    """A free joint between two turning bodies: the travel in the parent's frame and the
+    relative rotation from SciPy's rotations of the bodies' quaternions, the rates by
+    central differences along a straight line in the coordinates."""
+    from dalembert.multibody import Free, Multibody, RigidBody
+
+    a, b = RigidBody("a", 1.0, (1, 2, 3)), RigidBody("b", 2.0, (1, 1, 1))
+    pa, pb = np.array([0.3, -0.2, 0.1]), np.array([0.0, 0.5, -0.4])
+    mb = Multibody([a, b], [Free("float", a, b, pa, pb)])
+    rng = np.random.default_rng(7)
+    q, qd = rng.normal(size=14), rng.normal(size=14)
+    for s in (slice(3, 7), slice(10, 14)):
+        q[s] /= np.linalg.norm(q[s])
+
+    def measured(q_: np.ndarray) -> tuple[np.ndarray, Rotation]:
+        Ra = _scipy_rotation(q_[3:7] / np.linalg.norm(q_[3:7]))
+        Rb = _scipy_rotation(q_[10:14] / np.linalg.norm(q_[10:14]))
+        d = q_[7:10] + Rb.apply(pb) - q_[:3] - Ra.apply(pa)
+        return Ra.inv().apply(d), Ra.inv() * Rb
+
+    travel, relative = measured(q)
+    values = joint_positions(mb, q)
+    assert values.names == tuple(f"float.{c}" for c in ("x", "y", "z", "rx", "ry", "rz"))
+    np.testing.assert_allclose(values.array[:3], travel, atol=1e-12)
+    np.testing.assert_allclose(values.array[3:], relative.as_rotvec(), atol=1e-12)
+    h = 1e-6
+    (t_plus, r_plus), (t_minus, r_minus) = measured(q + h * qd), measured(q - h * qd)
+    rate = (t_plus - t_minus) / (2 * h)
+    spin = (r_plus.as_matrix() - r_minus.as_matrix()) / (2 * h) @ relative.as_matrix().T
+    w = np.array([spin[2, 1], spin[0, 2], spin[1, 0]])
+    speeds = joint_velocities(mb, q, qd)
+    assert speeds.names[:3] == ("float.x", "float.y", "float.z")
+    assert speeds.names[3:] == ("float.wx", "float.wy", "float.wz")
+    assert np.abs(speeds.array - np.concatenate([rate, w])).max() < 1e-8
+    _, J = joint_jacobian(mb, q)
+    np.testing.assert_allclose(J @ qd, speeds.array, atol=1e-12)
