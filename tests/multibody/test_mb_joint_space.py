@@ -60,7 +60,7 @@ def test_double_pendulum_angles_by_hand(pendulum):
     assert angles.names == ("joint1", "joint2")
     phi1, phi2 = _hand_angles(traj)
     assert abs(phi1[-1] - phi1[0]) > 2 * np.pi  # it goes over the top: unwrapping matters
-    assert np.abs(angles["joint1"] - phi1).max() < 1e-12  # measured 4.4e-16 after 3 s
+    assert np.abs(angles["joint1"] - phi1).max() < 1e-12  # measured 2.5e-14 after 3 s
     relative = angles["joint2"] - (phi2 - phi1)
     assert np.abs(relative - 2 * np.pi * np.round(relative[0] / (2 * np.pi))).max() < 1e-12
 
@@ -70,7 +70,8 @@ def test_velocities_are_the_rates_of_the_positions(pendulum):
     angles = joint_positions(mb, traj).array
     rates = joint_velocities(mb, traj).array
     differences = (angles[at + 1] - angles[at - 1]) / (2 * h)
-    assert np.abs(differences - rates[at]).max() < 1e-6 * np.abs(rates).max()
+    # the differences' own error is ~h^2 |theta'''| / 6: measured 3.7e-7 relative
+    assert np.abs(differences - rates[at]).max() < 1e-5 * np.abs(rates).max()
 
 
 def test_jacobian_maps_rates_to_joint_velocities(pendulum):
@@ -94,7 +95,7 @@ def test_slider_crank_against_the_closed_form():
         return float(np.abs(np.angle(np.exp(1j * a))).max())
 
     assert wrapped(coords["J1"] - theta) < 1e-12
-    assert wrapped(coords["J2"] - (phi - theta)) < 1e-9  # measured 1.3e-15
+    assert wrapped(coords["J2"] - (phi - theta)) < 1e-9  # measured 7.1e-15
     assert wrapped(coords["J3"] + phi) < 1e-9
     assert np.abs(coords["guide"] - slider_crank.piston_position(coords["J1"])).max() < 1e-9
     speeds = joint_velocities(mb, traj)
