@@ -40,8 +40,8 @@ def test_joint_without_coordinates():
 
 
 def test_linearize_with_too_few_coordinates(cart):
-    with pytest.raises(ValueError, match="2 degrees of freedom: give 2 coordinates .* got 1 "
-                                         "\\(hinge\\)"):
+    with pytest.raises(ValueError, match=r"2 degrees of freedom: give 2 coordinates .* got 1 "
+                                         r"\(hinge\)"):
         linearize_joints(cart, cart_pole.UPRIGHT, ["hinge"])
 
 
@@ -70,8 +70,8 @@ def test_an_input_the_model_lacks(cart):
 
 def test_a_motion_the_actuators_cannot_produce(cart):
     q = np.array([0.0, 0.0, 0.0, *cart_pole.tilted(0.3).values()])  # tilted, at rest
-    with pytest.raises(ValueError, match="the actuated joints rail cannot produce this "
-                                         "motion: a generalized force of .* on pole_"):
+    with pytest.raises(ValueError, match=r"the actuated joints rail cannot produce this "
+                                         r"motion: a generalized force of .* on pole_"):
         inverse_dynamics(cart, 0.0, q, None, np.zeros(6))
     # the least-squares torque on request, with what is left over
     need = inverse_dynamics(cart, 0.0, q, None, np.zeros(6), tol=None)
