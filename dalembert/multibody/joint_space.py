@@ -55,6 +55,7 @@ from ..model.values import CoordinateValues, coordinate_values
 from ..trajectory import Trajectory
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody
+from .drivers import coordinate_values as joint_coordinate_values
 from .joints import Free, Joint, Prismatic, Revolute, Spherical
 from .rotations import G_matrix, quaternion_from_matrix
 from .types import FloatArray
@@ -135,10 +136,7 @@ def selected_joints(mb: Multibody, joints: Sequence[Joint | str] | None) -> list
     out = []
     for key in joints:
         name = key.name if isinstance(key, Joint) else str(key)
-        try:
-            joint = mb.joint(name)
-        except KeyError as exc:
-            raise KeyError(exc.args[0]) from None
+        joint = mb.joint(name)  # a KeyError lists the joints
         if not has_coordinates(joint):
             kinds = ("Revolute, Prismatic, and Spherical or Free between bodies that turn "
                      "(not a particle)")
@@ -283,16 +281,11 @@ def _rotation_vector(b: FloatArray) -> FloatArray:
 
 def _joint_positions(joint: Joint, poses: _Poses, rotations: Rotations,
                      single: bool) -> FloatArray:
-    if isinstance(joint, Revolute):
-        Fa, Fb = _world_frames(joint, poses)
-        ub = Fb[:, :, 0]
-        angle = np.arctan2(np.einsum("ki,ki->k", Fa[:, :, 1], ub),
-                           np.einsum("ki,ki->k", Fa[:, :, 0], ub))
-        return (angle if single else np.unwrap(angle))[:, None]
-    if isinstance(joint, Prismatic):
-        Pa, Pb = _points(joint, poses)
-        wa = _world_frames(joint, poses)[0][:, :, 2]
-        return np.einsum("ki,ki->k", wa, Pb - Pa)[:, None]
+    if isinstance(joint, Revolute | Prismatic):  # measured as drivers and springs do
+        value = joint_coordinate_values(joint, {name: (v[0], v[1])
+                                                for name, v in poses.values.items()})
+        unwrap = isinstance(joint, Revolute) and not single
+        return (np.unwrap(value) if unwrap else value)[:, None]
     b = quaternion_from_matrix(_relative_rotation(joint, poses))
     if not single:
         b = _continuous(b)

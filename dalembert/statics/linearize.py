@@ -368,12 +368,19 @@ def _input_values(sm: StaticSystem, inputs: Mapping[Any, float] | None) -> Array
     """The inputs' values at the equilibrium, in the model's order (0 if left out)."""
     names = sm.num.compiled.input_names
     values = np.zeros(len(names))
+    if inputs is not None and not isinstance(inputs, Mapping):
+        raise InputError(f"linearize takes the inputs' values at the equilibrium as a dict "
+                         f"{{input: number}}, got {inputs!r}")
     for key, value in (inputs or {}).items():
         name = key_name(key)
         if name not in names:
             raise InputError(f"{name!r} is not an input of the model; its inputs are "
                              f"{', '.join(names) or 'none'}")
-        number = float(value)
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise InputError(f"the value of input {name!r} at the equilibrium must be a "
+                             f"number, got {value!r}") from None
         if not np.isfinite(number):
             raise InputError(f"the value of input {name!r} is {number}, not finite")
         values[names.index(name)] = number

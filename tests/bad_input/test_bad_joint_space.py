@@ -66,6 +66,11 @@ def test_an_input_the_model_lacks(cart):
     with pytest.raises(InputError, match="'force' is not an input of the model; its inputs "
                                          "are u"):
         linearize_joints(cart, cart_pole.UPRIGHT, ["rail", "hinge"], inputs={"force": 1.0})
+    with pytest.raises(InputError, match="the value of input 'u' at the equilibrium must be "
+                                         "a number, got 'x'"):
+        linearize_joints(cart, cart_pole.UPRIGHT, ["rail", "hinge"], inputs={"u": "x"})
+    with pytest.raises(InputError, match="as a dict"):
+        linearize_joints(cart, cart_pole.UPRIGHT, ["rail", "hinge"], inputs=2.0)
 
 
 def test_a_motion_the_actuators_cannot_produce(cart):
