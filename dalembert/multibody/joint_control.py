@@ -26,18 +26,19 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import ModelError
 from ..model.values import CoordinateValues, coordinate_values
-from ..statics import Equilibrium, StateSpace, linearize
 from .builder import Multibody
 from .joint_space import JointValues, joint_jacobian, selected_joints
 from .joints import Joint, Prismatic, Revolute
 from .types import FloatArray
+
+if TYPE_CHECKING:  # statics (scipy.optimize) is imported when a linearization is made
+    from ..statics import Equilibrium, StateSpace
 
 #: ``Z^T B`` counts as rank-deficient below this singular value, relative to the largest.
 RANK_RTOL = 1e-10
@@ -138,6 +139,8 @@ def inverse_dynamics(
     >>> round(need.torques["joint1"], 12)
     9.81
     """
+    import scipy.linalg
+
     system = mb.system
     names = system.coordinate_names
     joints = _actuated(mb, actuated)
@@ -222,6 +225,8 @@ def linearize_joints(
     >>> ss.state_names, ss.A.round(9).tolist(), ss.B.round(9).tolist()
     (('pin', 'pin_dot'), [[0.0, 1.0], [-14.715, 0.0]], [[0.0], [1.0]])
     """
+    from ..statics import linearize
+
     chosen = selected_joints(mb, coordinates)
     for joint in chosen:
         if not isinstance(joint, Revolute | Prismatic):
@@ -236,4 +241,4 @@ def linearize_joints(
 
 def _equilibrium_parameters(q_eq: object) -> dict[str, float]:
     """The parameter values an Equilibrium was found with (none for a configuration)."""
-    return dict(q_eq.parameter_values) if isinstance(q_eq, Equilibrium) else {}
+    return dict(getattr(q_eq, "parameter_values", None) or {})
