@@ -50,6 +50,7 @@ EXAMPLES: dict[str, str] = {
     "slider-crank": "slider_crank",
     "crank-press": "crank_press",
     "spacecraft": "spacecraft",
+    "cart-pole": "cart_pole",
     "chain-frequencies": "chain_frequencies",
     "closed-chain": "closed_chain",
     "n-four-bar": "n_four_bar",

@@ -8,15 +8,29 @@ kind of body and joint (:mod:`~dalembert.multibody.parts`). See
 :mod:`~dalembert.multibody.rotations` for the quaternion convention,
 :mod:`~dalembert.multibody.bodies` for why the singular rotational mass block is
 harmless, :mod:`~dalembert.multibody.joints` for the joint equations,
-:mod:`~dalembert.multibody.rolling` for rolling contact and
-:mod:`~dalembert.multibody.outputs` for reactions, momenta and energy.
+:mod:`~dalembert.multibody.rolling` for rolling contact,
+:mod:`~dalembert.multibody.outputs` for reactions, momenta and energy, and
+:mod:`~dalembert.multibody.joint_space` / :mod:`~dalembert.multibody.joint_control` for
+joint angles, actuator torques and linearizations in joint coordinates.
 """
 
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
-from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
+from .joint_control import JointEfforts, inverse_dynamics, linearize_joints
+from .joint_space import JointValues, joint_jacobian, joint_positions, joint_velocities
+from .joints import (
+    Distance,
+    Fixed,
+    Free,
+    Joint,
+    PointOnPlane,
+    Prismatic,
+    Revolute,
+    Spherical,
+    Universal,
+)
 from .loads import Force, SpringDamper, Torque
 from .outputs import (
     JointReaction,
@@ -49,12 +63,15 @@ __all__ = [
     "E_matrix",
     "Fixed",
     "Force",
+    "Free",
     "G_matrix",
     "Ground",
     "Joint",
+    "JointEfforts",
     "JointPointWarning",
     "JointReaction",
     "JointSpring",
+    "JointValues",
     "Multibody",
     "Particle",
     "PlanarBody",
@@ -74,9 +91,14 @@ __all__ = [
     "energy",
     "euler_angles",
     "euler_from_matrix",
+    "inverse_dynamics",
+    "joint_jacobian",
+    "joint_positions",
     "joint_reactions",
+    "joint_velocities",
     "kinetic_energy",
     "linear_momentum",
+    "linearize_joints",
     "matrix_from_euler",
     "multibody_of",
     "point_positions",

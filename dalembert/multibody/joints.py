@@ -16,6 +16,7 @@ Prismatic     5      ``u_a . w_b = v_a . w_b = u_a . v_b = 0``, ``u_a . d = v_a 
 Fixed         6      ``d = 0``, ``u_a . w_b = v_a . w_b = u_a . v_b = 0``
 Distance      1      ``d . d - length^2 = 0`` (massless rod)
 PointOnPlane  1      ``n_a . d = 0`` (point ``b`` on the plane through ``a``)
+Free          0      none (names a free motion, which joint coordinates measure)
 ============  =====  ===========================================================
 
 ``Prismatic`` and ``Fixed`` lock the two joint frames parallel, so give each
@@ -562,5 +563,40 @@ class PointOnPlane(Joint):
     def equations(self) -> list[sp.Expr]:
         n = self.frame("a")[2]
         return [dot(n, self.separation())]
+
+    planar_equations = equations
+
+
+class Free(Joint):
+    """No constraint: body ``b`` moves freely relative to body ``a`` (0 equations).
+
+    It constrains nothing; it names a free motion (a floating base, MJCF's ``free``
+    joint) so that :func:`~dalembert.multibody.joint_positions` measures it: the travel
+    of point ``b`` from point ``a`` and the rotation of ``b``'s joint frame, both in
+    ``a``'s joint frame (see :mod:`~dalembert.multibody.joint_space`).
+
+    Parameters
+    ----------
+    name, body_a, body_b
+        As for every joint (see :class:`Spherical`); ``body_a`` is usually the ground.
+    point_a, point_b
+        The points whose separation is measured, each in its body's frame.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, RigidBody
+    >>> Free("base", Ground(), RigidBody("torso", 10.0, (1, 1, 1))).constraints()
+    []
+    """
+
+    n_equations = 0
+    planar_rows = 0
+
+    def __init__(self, name: str, body_a: Body, body_b: Body, point_a: Vector = (0, 0, 0),
+                 point_b: Vector = (0, 0, 0)) -> None:
+        super().__init__(name, body_a, body_b, point_a, point_b)
+
+    def equations(self) -> list[sp.Expr]:
+        return []
 
     planar_equations = equations

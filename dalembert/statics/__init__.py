@@ -14,12 +14,13 @@ from .extremum import (
     extremum,
     stationarity_conditions,
 )
-from .linearize import Linearization, linearize
+from .linearize import Linearization, StateSpace, linearize
 
 __all__ = [
     "Equilibrium",
     "Extremum",
     "Linearization",
+    "StateSpace",
     "StationarityConditions",
     "all_extrema",
     "equilibrium",

@@ -19,8 +19,9 @@ although gravity is uniform. ``lambda*`` is computed at ``q*`` (least squares of
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, cast
 
 import numpy as np
@@ -28,12 +29,14 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..errors import (
+    InputError,
     NonholonomicLinearizationError,
     NotAnEquilibriumError,
     SingularSystemError,
 )
+from ..model.coordinates import key_name
 from ..model.values import CoordinateValues, coordinate_values, free_mask
-from ..options import FIXED, PARAMETER_VALUES
+from ..options import FIXED, INPUT_VALUES, PARAMETER_VALUES
 from ..rules import NONE, FiniteNumber, PositiveNumber, checked_keywords
 from .equilibrium import (
     ON_MARGINAL,
@@ -47,10 +50,15 @@ from .static_system import StaticsModel, StaticSystem, static_system
 
 __all__ = [
     "Linearization",
+    "StateSpace",
     "linearize",
 ]
 
 Array = NDArray[np.float64]
+
+#: The step of the central differences by an input, relative to ``max(1, |u|)`` (two
+#: of them, combined by Richardson's rule: exact for forces affine in the inputs).
+_INPUT_STEP = 1e-3
 
 #: Relative asymmetry of Kr above which the general (non-symmetric) eigenproblem is used.
 _SYMMETRY_RTOL = 1e-10
@@ -91,6 +99,12 @@ class Linearization:
         From the eigenvalues of ``Kr`` as :attr:`Equilibrium.stability`.
     coordinate_names : tuple of str
     t : float
+    input_names : tuple of str
+        The model's inputs (``System(inputs=...)``).
+    input_forces : numpy.ndarray
+        ``n x p``: the generalized forces per unit of each input, ``df/du`` at the
+        equilibrium (the inputs at the values ``linearize`` was given);
+        :attr:`B_inputs` is the state-space input matrix.
     """
 
     q: Array
@@ -110,10 +124,15 @@ class Linearization:
     stability: str
     coordinate_names: tuple[str, ...]
     t: float = 0.0
+    input_names: tuple[str, ...] = ()
+    input_forces: Array = field(default_factory=lambda: np.zeros((0, 0)))
 
     def __post_init__(self) -> None:
+        if not np.size(self.input_forces):
+            object.__setattr__(self, "input_forces",
+                               np.zeros((len(self.coordinate_names), len(self.input_names))))
         for name in ("q", "multipliers", "M", "K", "C", "Z", "Mr", "Kr", "Cr", "omega_squared",
-                     "natural_frequencies", "mode_shapes", "A_ss", "B_ss"):
+                     "natural_frequencies", "mode_shapes", "A_ss", "B_ss", "input_forces"):
             array = np.array(getattr(self, name))
             array.setflags(write=False)
             object.__setattr__(self, name, array)
@@ -144,6 +163,82 @@ class Linearization:
         out[n:, r:] = self.Z
         return out
 
+    @property
+    def B_inputs(self) -> Array:
+        """``2r x p``: ``x' = A_ss x + B_inputs du`` for changes ``du`` of the inputs
+        (``B_ss @ input_forces``)."""
+        return np.asarray(self.B_ss @ self.input_forces, dtype=np.float64)
+
+    def in_coordinates(self, jacobian: Sequence[Sequence[float]] | Array | Sequence[str],
+                       names: Sequence[str] | None = None) -> StateSpace:
+        """The state space in ``r`` coordinates of one's choosing, ``y - y* = J (q - q*)``
+        to first order, with the state ``(y - y*, y')`` and the model's inputs.
+
+        With ``T = J Z`` (``r x r``, invertible when the chosen coordinates fix the
+        motion near the equilibrium) ``eta = T^-1 (y - y*)``, so
+        ``A = S A_ss S^-1`` and ``B = S B_inputs`` with ``S = diag(T, T)``: the same
+        dynamics, ready for :mod:`scipy.signal` or an LQR design
+        (``scipy.linalg.solve_continuous_are``).
+
+        Parameters
+        ----------
+        jacobian
+            ``J``, ``r x n`` (the chosen coordinates' derivatives by the model's), or
+            ``r`` of the model's coordinate names.
+        names
+            The chosen coordinates' names (default the coordinate names given, else
+            ``y1, y2, ...``); the rates are named ``<name>_dot``.
+
+        Returns
+        -------
+        StateSpace
+
+        Raises
+        ------
+        ValueError
+            ``J`` has not ``r`` rows of ``n`` columns, or ``J Z`` is singular (the
+            coordinates do not fix the motion; the message names them).
+
+        Examples
+        --------
+        The Cartesian pendulum hanging at rest, in its coordinate ``x``: ``x'' = -g/l x``:
+
+        >>> from dalembert.examples import cartesian_pendulum
+        >>> lin = linearize(cartesian_pendulum.build(), {"x": 0.0, "y": -1.0})
+        >>> ss = lin.in_coordinates(["x"])
+        >>> ss.state_names, ss.A.round(12).tolist()
+        (('x', 'x_dot'), [[0.0, 1.0], [-9.81, 0.0]])
+        """
+        n, r = self.Z.shape
+        if len(jacobian) and all(isinstance(v, str) for v in jacobian):
+            chosen = [str(v) for v in jacobian]
+            J = np.zeros((len(chosen), n))
+            for i, name in enumerate(chosen):
+                if name not in self.coordinate_names:
+                    raise ValueError(f"{name!r} is not a coordinate; the coordinates are "
+                                     f"{', '.join(self.coordinate_names)}")
+                J[i, self.coordinate_names.index(name)] = 1.0
+            names = chosen if names is None else names
+        else:
+            J = np.asarray(jacobian, dtype=float)
+        names = [f"y{i + 1}" for i in range(len(J))] if names is None else list(names)
+        if J.shape != (r, n) or len(names) != r:
+            raise ValueError(f"the linearization has {r} degrees of freedom: give {r} "
+                             f"coordinates (a {r} x {n} Jacobian), got {len(names)} "
+                             f"({', '.join(names)}) and shape {J.shape}")
+        T = J @ self.Z
+        singular = np.linalg.svd(T, compute_uv=False) if r else np.ones(1)
+        if r and not singular[-1] > 1e-9 * max(singular[0], 1e-300):
+            raise ValueError(
+                f"the coordinates {', '.join(names)} do not fix the motion near the "
+                "equilibrium (J Z is singular there): some small motion leaves them all "
+                "unchanged; choose coordinates that describe every degree of freedom")
+        S = np.zeros((2 * r, 2 * r))
+        S[:r, :r] = S[r:, r:] = T
+        A = S @ self.A_ss @ np.linalg.inv(S)
+        return StateSpace(A, S @ self.B_inputs, (*names, *(f"{v}_dot" for v in names)),
+                          self.input_names)
+
     def mode(self, k: int) -> dict[str, float]:
         """Mode shape ``k`` by coordinate name."""
         return {n: float(v) for n, v in zip(self.coordinate_names, self.mode_shapes[:, k])}
@@ -164,9 +259,30 @@ class Linearization:
         ])
 
 
+@dataclass(frozen=True, eq=False)
+class StateSpace:
+    """``x' = A x + B u``: a linearization in chosen coordinates
+    (:meth:`Linearization.in_coordinates`).
+
+    Attributes
+    ----------
+    A, B : numpy.ndarray
+        ``2r x 2r`` and ``2r x p``.
+    state_names : tuple of str
+        The state: the ``r`` coordinates' changes from the equilibrium, then their rates.
+    input_names : tuple of str
+        The inputs (``u``: their changes from the values at the equilibrium).
+    """
+
+    A: Array
+    B: Array
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+
+
 @checked_keywords({
     "parameters": PARAMETER_VALUES, "t": [FiniteNumber(), NONE], "fixed": FIXED,
-    "tol": [PositiveNumber()], "on_marginal": ON_MARGINAL,
+    "tol": [PositiveNumber()], "on_marginal": ON_MARGINAL, "inputs": INPUT_VALUES,
 })
 def linearize(
     system: StaticsModel,
@@ -177,6 +293,7 @@ def linearize(
     fixed: Sequence[object] | None = None,
     tol: float = 1e-8,
     on_marginal: str = "report",
+    inputs: Mapping[Any, float] | None = None,
 ) -> Linearization:
     """Linearize ``system`` about the equilibrium ``q_eq``.
 
@@ -198,6 +315,10 @@ def linearize(
         in equilibrium.
     on_marginal : {"report", "raise"}
         What to do when ``Kr`` is singular.
+    inputs : mapping, optional
+        The values of the model's inputs at the equilibrium, by input (symbol or
+        name; left out: 0). The linearization's :attr:`~Linearization.B_inputs` maps
+        changes of them.
 
     Returns
     -------
@@ -229,9 +350,62 @@ def linearize(
     t = float(given.t if given and t is None else t or 0.0)
     fixed = given.fixed if given and fixed is None else fixed
     free = free_mask(fixed, sm.coordinate_names)
+    u0 = _input_values(sm, inputs)
+    if len(u0):
+        num = sm.num.for_run()
+        num.set_inputs(u0)
+        sm = dataclasses.replace(sm, num=num)
     _check_on_constraints(sm, t, q, tol)
     lam = _static_multipliers(sm, t, q, free, tol)
-    return _linearization(sm, t, q, lam, free, on_marginal)
+    lin = _linearization(sm, t, q, lam, free, on_marginal)
+    if not len(u0):
+        return lin
+    return dataclasses.replace(lin, input_names=sm.num.compiled.input_names,
+                               input_forces=_input_forces(sm, t, q, u0))
+
+
+def _input_values(sm: StaticSystem, inputs: Mapping[Any, float] | None) -> Array:
+    """The inputs' values at the equilibrium, in the model's order (0 if left out)."""
+    names = sm.num.compiled.input_names
+    values = np.zeros(len(names))
+    if inputs is not None and not isinstance(inputs, Mapping):
+        raise InputError(f"linearize takes the inputs' values at the equilibrium as a dict "
+                         f"{{input: number}}, got {inputs!r}")
+    for key, value in (inputs or {}).items():
+        name = key_name(key)
+        if name not in names:
+            raise InputError(f"{name!r} is not an input of the model; its inputs are "
+                             f"{', '.join(names) or 'none'}")
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise InputError(f"the value of input {name!r} at the equilibrium must be a "
+                             f"number, got {value!r}") from None
+        if not np.isfinite(number):
+            raise InputError(f"the value of input {name!r} is {number}, not finite")
+        values[names.index(name)] = number
+    return values
+
+
+def _input_forces(sm: StaticSystem, t: float, q: Array, u0: Array) -> Array:
+    """``df/du`` at ``(q, qd = 0, u0)`` by central differences at two steps, combined
+    by Richardson's rule (exact to rounding for forces affine in the inputs)."""
+    num = sm.num
+
+    def forces(k: int, step: float) -> Array:
+        u = u0.copy()
+        u[k] += step
+        num.set_inputs(u)
+        return num.forces_at_rest(t, q)
+
+    columns = []
+    for k in range(len(u0)):
+        h = _INPUT_STEP * max(1.0, abs(u0[k]))
+        wide = (forces(k, h) - forces(k, -h)) / (2 * h)
+        narrow = (forces(k, h / 2) - forces(k, -h / 2)) / h
+        columns.append((4 * narrow - wide) / 3)
+    num.set_inputs(u0)
+    return np.column_stack(columns)
 
 
 def _reject_pfaffian(sm: StaticSystem) -> None:

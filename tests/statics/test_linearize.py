@@ -216,3 +216,27 @@ def test_nonholonomic_is_rejected():
     )
     with pytest.raises(NonholonomicLinearizationError, match="holonomic constraints only"):
         linearize(system, [0.0, 0.0, 0.0])
+
+
+# ---------------------------------------------------------------- inputs, coordinates
+
+
+def test_inputs_and_a_chosen_coordinate():
+    """The Cartesian pendulum pushed sideways by ``sin(u)`` (a force not affine in its
+    input), in its coordinate ``x`` at the bottom: ``x'' = -g/l x + cos(u0)/m du``, the
+    rod's tension ``m g + m l w^2`` not mattering at rest."""
+    x, y = coordinates("x y")
+    u = sp.Symbol("u")
+    m, l, g = 2.0, 1.5, 9.81
+    system = System([x, y], kinetic=m / 2 * (x.diff() ** 2 + y.diff() ** 2),
+                    potential=m * g * y, constraints=[Holonomic(x**2 + y**2 - l**2)],
+                    generalized_forces={x: sp.sin(u)}, inputs=[u])
+    bottom = {"x": 0.0, "y": -l}
+    ss = system.linearize(bottom).in_coordinates(["x"])
+    assert ss.input_names == ("u",) and ss.state_names == ("x", "x_dot")
+    assert np.abs(ss.A - [[0.0, 1.0], [-g / l, 0.0]]).max() < 1e-12
+    assert np.abs(ss.B - [[0.0], [1.0 / m]]).max() < 1e-10  # measured 1.1e-15
+    # about a nonzero input (an equilibrium with x held fixed): df/du = cos(u0)
+    held = system.linearize(bottom, inputs={u: 0.7}, fixed=["x"])
+    assert held.input_forces.shape == (2, 1) and held.input_forces[1, 0] == 0.0
+    assert abs(held.input_forces[0, 0] - np.cos(0.7)) < 1e-10  # measured 1.6e-14
