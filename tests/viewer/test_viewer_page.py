@@ -10,8 +10,8 @@ import re
 import numpy as np
 import pytest
 import sympy as sp
-from conftest import LINK, swinging_chain
 from scipy.spatial.transform import Rotation
+from viewer_runs import LINK, swinging_chain
 
 from dalembert import Holonomic, System, cli
 from dalembert.examples import load
