@@ -8,6 +8,7 @@ code generated once per System however often it is simulated.
 from __future__ import annotations
 
 import dataclasses
+import time
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from functools import cached_property, partial
@@ -561,6 +562,7 @@ class System:
         native: bool | None = None,
         inputs: object = None,
         sample_time: float | None = None,
+        timeout: float | None = None,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
 
@@ -633,6 +635,13 @@ class System:
         sample_time
             Hold the inputs between samples taken every ``sample_time`` (a digital
             controller's zero-order hold); the integration restarts at each sample.
+        timeout
+            Seconds on the wall clock the integration may take (default: no limit),
+            checked between steps (between the C loop's stretches of steps, a
+            fraction of a second each): a run past it stops with status
+            ``"timeout"`` and an :class:`~dalembert.errors.IntegrationWarning`,
+            returning what it computed. A function of yours (an input, an event)
+            that itself never returns is not stopped.
 
         Returns
         -------
@@ -850,6 +859,8 @@ class System:
         from .solvers.running.segments import Schedule, run_segments
 
         signal, options = plan.options.inputs, plan.options
+        if options.timeout is not None:  # one deadline for every segment of the run
+            plan = dataclasses.replace(plan, deadline=time.monotonic() + options.timeout)
         schedule = Schedule.none()
         if signal is not None and signal.sample_time is not None:
             schedule = sampled_schedule(signal, options.t_span, len(self.coordinate_names))

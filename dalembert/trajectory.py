@@ -47,7 +47,7 @@ class Trajectory:
     coordinate_names, constraint_names
         Column names.
     status, message
-        ``"finished"``, ``"event"``, ``"failed"`` or ``"interrupted"``, and why.
+        ``"finished"``, ``"event"``, ``"failed"``, ``"interrupted"`` or ``"timeout"``, and why.
     stats
         Evaluations, steps, projections.
     initialization

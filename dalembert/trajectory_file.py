@@ -52,7 +52,7 @@ ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_en
 #: versions) and the times near a singular configuration (written where there are some).
 OPTIONAL_ARRAYS = ("inputs", "near_singular")
 #: How a trajectory can end (its ``status``).
-STATUSES = ("finished", "event", "failed", "interrupted")
+STATUSES = ("finished", "event", "failed", "interrupted", "timeout")
 #: The metadata fields and their JSON types.
 METADATA: dict[str, type] = {"coordinate_names": list, "constraint_names": list,
                              "status": str, "message": str, "stats": dict,

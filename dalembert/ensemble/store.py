@@ -499,7 +499,9 @@ def _ours(folder: Path) -> bool:
     except (OSError, ValueError):
         return False
     return ((folder / ".zgroup").is_file() and isinstance(attributes, dict)
-            and attributes.get("flag_meanings") == " ".join(STATUSES))
+            # an earlier version's store names the first seven statuses (before "timeout")
+            and attributes.get("flag_meanings") in (" ".join(STATUSES[:7]),
+                                                    " ".join(STATUSES)))
 
 
 def _remove(path: Path) -> None:

@@ -120,6 +120,9 @@ class SimulationPlan:
     runaway: Runaway | None = field(repr=False, default=None)
     parameters: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     num: NumericModel | None = field(repr=False, default=None)
+    #: When the run must stop (``time.monotonic()``; set by ``System.run`` from the
+    #: options' ``timeout``), or ``None``.
+    deadline: float | None = field(repr=False, default=None)
 
     @property
     def y0(self) -> np.ndarray:
@@ -136,7 +139,7 @@ class SimulationPlan:
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=out.progress, stretches=self.stretches, diagnose=self.diagnose,
             singular=self.singular, careful=self.careful, runaway=self.runaway,
-            **self.solver_options)
+            deadline=self.deadline, **self.solver_options)
 
 
 def plan_simulation(num: NumericModel, initial: InitializationReport,
