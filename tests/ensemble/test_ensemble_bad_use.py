@@ -156,11 +156,31 @@ def test_a_damaged_zarr_chunk_is_named_and_a_retry_of_its_cases_repairs_it(pend,
         assert str(info.value).startswith(expected), str(info.value)
         assert str(info.value).endswith("; result.retry(cases=[0, 1]) runs those cases again "
                                         "and rewrites it")
+    for read in (lambda: result.dataset["q"].values, lambda: result.dataset.compute(),
+                 lambda: result.dataset["q"].sel(case=0, time=0.5).values):
+        with pytest.raises(EnsembleError) as info:
+            read()
+        assert str(info.value).startswith(expected), str(info.value)
+    assert np.array_equal(result.dataset["q"].sel(case=2).values, good[2])  # another chunk
     with pytest.raises(EnsembleError, match="the chunk of 'q' holding cases 0 to 1 is damaged"):
         result.retry(cases=[1])  # the other case of the chunk must be read to keep it
     repaired = result.retry(cases=[0, 1])
     assert np.array_equal(repaired.dataset["q"].values, good)
     assert np.isfinite(repaired.mean("q").values).all()
+
+
+def test_a_stored_dataset_reads_what_xarray_reads_from_the_store(pend, tmp_path):
+    import xarray as xr
+
+    store = tmp_path / "run.zarr"
+    result = run(pend, grid(l=[1.0, 2.0, 3.0]), store=store, batch_size=2)
+    plain = xr.open_zarr(store).load()
+    read = result.dataset.load()
+    assert set(read.variables) == set(plain.variables)
+    for name in plain.variables:
+        assert read[name].dtype == plain[name].dtype, name
+        assert read[name].equals(plain[name]), name
+        assert read[name].attrs == plain[name].attrs, name
 
 
 # -- a full disk under a store ---------------------------------------------------------------------
