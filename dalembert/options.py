@@ -399,6 +399,8 @@ def _check_tolerance_sizes(tolerances: Mapping[str, object], size: int) -> None:
 
 
 def _time_span(t_span: Sequence[float]) -> tuple[float, float]:
+    if isinstance(t_span, (str, bytes)):  # "10" would be read as (1.0, 0.0)
+        raise ValueError(f"t_span must be two numbers (t0, tf), got the string {t_span!r}")
     try:
         t0, tf = (float(v) for v in t_span)
     except (TypeError, ValueError) as exc:
