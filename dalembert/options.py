@@ -137,6 +137,8 @@ class SimulationOptions:
     velocity_projection: VelocityProjection = "kinetic-energy"
     #: The inputs' values along the run (:mod:`dalembert.inputs`), or ``None``.
     inputs: InputSignal | None = None
+    #: Seconds (wall clock) the integration may run, or ``None``: no limit.
+    timeout: float | None = None
 
 
 # --------------------------------------------------------------------------- the table
@@ -173,6 +175,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "events": [Callables()],
     "t_eval": [Times(), NONE],
     "sample_time": [PositiveNumber(), NONE],
+    "timeout": [PositiveNumber(), NONE],
 }
 
 #: The keywords of :func:`simulation_options`: ``simulate``'s run options and what the
@@ -229,6 +232,7 @@ def simulation_options(
     progress: bool = False,
     inputs: object = None,
     sample_time: float | None = None,
+    timeout: float | None = None,
     state_size: int | None = None,
     input_names: Sequence[str] = (),
 ) -> SimulationOptions:
@@ -259,6 +263,12 @@ def simulation_options(
     inputs, sample_time
         The values of the model's inputs and the period of their zero-order hold
         (:func:`dalembert.inputs.input_signal`).
+    timeout
+        Seconds on the wall clock the integration may run (``None``: no limit). It is
+        checked between steps (in the C loop between its stretches of steps, a
+        fraction of a second each): a run past it stops there with status
+        ``"timeout"``, returning what it computed. A user's function (an input, an
+        event) that itself never returns is not stopped.
     state_size
         The length of the state ``[q, qd]`` (twice the coordinates), when known: an
         array of tolerances must have one entry per state entry.
@@ -302,6 +312,7 @@ def simulation_options(
         velocity_projection=velocity_projection,
         inputs=input_signal(inputs, input_names,
                             None if sample_time is None else float(sample_time), span),
+        timeout=None if timeout is None else float(timeout),
     )
 
 
@@ -388,6 +399,8 @@ def _check_tolerance_sizes(tolerances: Mapping[str, object], size: int) -> None:
 
 
 def _time_span(t_span: Sequence[float]) -> tuple[float, float]:
+    if isinstance(t_span, (str, bytes)):  # "10" would be read as (1.0, 0.0)
+        raise ValueError(f"t_span must be two numbers (t0, tf), got the string {t_span!r}")
     try:
         t0, tf = (float(v) for v in t_span)
     except (TypeError, ValueError) as exc:

@@ -279,8 +279,11 @@ def checked_keywords(table: Table, *, caller: str | None = None,
 
         @functools.wraps(function)
         def checked(*args: Any, **kwargs: Any) -> Any:
-            check_parameters({k: v for k, v in kwargs.items() if k in rules}, rules, name,
-                             error)
+            try:  # a long array (a t_eval of 1e7 times) takes a while to check
+                check_parameters({k: v for k, v in kwargs.items() if k in rules}, rules,
+                                 name, error)
+            except KeyboardInterrupt:
+                raise KeyboardInterrupt(before_running(name)) from None
             return function(*args, **kwargs)
 
         checked.parameter_table = rules  # type: ignore[attr-defined]
@@ -288,6 +291,24 @@ def checked_keywords(table: Table, *, caller: str | None = None,
         return checked  # type: ignore[return-value]
 
     return bind
+
+
+def before_running(name: str, doing: str = "its arguments were checked") -> str:
+    """What a Ctrl-C landing in ``name`` before it ran anything says.
+
+    Parameters
+    ----------
+    name
+        The function (``simulate``...).
+    doing
+        What it was doing.
+
+    Examples
+    --------
+    >>> before_running("simulate")
+    'simulate was interrupted while its arguments were checked, before it ran: nothing was lost'
+    """
+    return f"{name} was interrupted while {doing}, before it ran: nothing was lost"
 
 
 def unchecked(function: Callable[..., Any]) -> Callable[..., Any]:

@@ -48,7 +48,15 @@ from .options import (
     run_options,
     simulation_options,
 )
-from .rules import NONE, CheckedWhereUsed, FiniteNumber, Rule, checked_keywords, unchecked
+from .rules import (
+    NONE,
+    CheckedWhereUsed,
+    FiniteNumber,
+    Rule,
+    before_running,
+    checked_keywords,
+    unchecked,
+)
 from .solvers.initialization import InitializationReport, consistent_state
 from .solvers.state import InverseDynamics, accelerations_at, inverse_dynamics_at
 from .trajectory import Trajectory
@@ -559,6 +567,7 @@ class System:
         native: bool | None = None,
         inputs: object = None,
         sample_time: float | None = None,
+        timeout: float | None = None,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
 
@@ -631,6 +640,13 @@ class System:
         sample_time
             Hold the inputs between samples taken every ``sample_time`` (a digital
             controller's zero-order hold); the integration restarts at each sample.
+        timeout
+            Seconds on the wall clock the integration may take (default: no limit),
+            checked between steps (between the C loop's stretches of steps, a
+            fraction of a second each): a run past it stops with status
+            ``"timeout"`` and an :class:`~dalembert.errors.IntegrationWarning`,
+            returning what it computed. A function of yours (an input, an event)
+            that itself never returns is not stopped.
 
         Returns
         -------
@@ -648,8 +664,15 @@ class System:
         """
         # The run options are this call's parameters named in the table (every one of
         # them, checked at import): passed on as they are, checked already at the door.
-        options = self._options(t_span, run_options(locals()), unchecked(simulation_options))
-        return self._run(self._plan(options, q0, qd0, parameters, fixed))
+        try:  # a Ctrl-C here (a t_eval of 1e7 times being checked) has lost nothing
+            options = self._options(t_span, run_options(locals()),
+                                    unchecked(simulation_options))
+            plan = self._plan(options, q0, qd0, parameters, fixed)
+        except KeyboardInterrupt:
+            raise KeyboardInterrupt(before_running(
+                "simulate", "its arguments were checked and its initial state made "
+                "consistent")) from None
+        return self._run(plan)
 
     def simulate_many(self, t_span: Sequence[float], cases: Any, **options: Any) -> Any:
         """Simulate this System once per case (an ensemble): serially, on threads or on

@@ -47,7 +47,7 @@ class Trajectory:
     coordinate_names, constraint_names
         Column names.
     status, message
-        ``"finished"``, ``"event"``, ``"failed"`` or ``"interrupted"``, and why.
+        ``"finished"``, ``"event"``, ``"failed"``, ``"interrupted"`` or ``"timeout"``, and why.
     stats
         Evaluations, steps, projections.
     initialization
@@ -236,7 +236,7 @@ class Trajectory:
         >>> bool((again.q == traj.q).all()), again.constraint_names
         (True, ('rod',))
         """
-        path = Path(path)
+        path = trajectory_file.file_path(path, "Trajectory.save")
         meta: dict[str, Any] = {"coordinate_names": list(self.coordinate_names),
             "constraint_names": list(self.constraint_names), "status": self.status,
             "message": self.message, "stats": self.stats, "initialization": self.initialization,
@@ -283,7 +283,8 @@ class Trajectory:
         FileNotFoundError, PermissionError
             The file is not there or cannot be read.
         """
-        return cls(**trajectory_file.read(Path(path), max_bytes))
+        return cls(**trajectory_file.read(trajectory_file.file_path(path, "Trajectory.load"),
+                                          max_bytes))
 
     def to_dataframe(self):
         """A pandas DataFrame indexed by time: coordinates, velocities, multipliers, checks."""

@@ -52,7 +52,7 @@ ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_en
 #: versions) and the times near a singular configuration (written where there are some).
 OPTIONAL_ARRAYS = ("inputs", "near_singular")
 #: How a trajectory can end (its ``status``).
-STATUSES = ("finished", "event", "failed", "interrupted")
+STATUSES = ("finished", "event", "failed", "interrupted", "timeout")
 #: The metadata fields and their JSON types.
 METADATA: dict[str, type] = {"coordinate_names": list, "constraint_names": list,
                              "status": str, "message": str, "stats": dict,
@@ -114,8 +114,13 @@ def write(path: Path, arrays: dict[str, Any], metadata: dict[str, Any]) -> None:
         raise TrajectoryFileError(
             f"Trajectory.save writes NumPy .npz files only; {str(path)!r} has {got}. Give a "
             "path ending in .npz (for a table: traj.to_dataframe().to_csv(path))")
-    _remove_abandoned(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f"{path.name}.", suffix=".tmp")
+    try:
+        _remove_abandoned(path)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f"{path.name}.", suffix=".tmp")
+    except OSError as exc:  # said of the file asked for, not of the temporary one
+        why = "the folder does not exist (create it first)" if not path.parent.is_dir() \
+            else (exc.strerror or str(exc))
+        raise type(exc)(exc.errno, f"cannot save {path}: {why}", str(path.parent)) from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)  # held until closed: the file is in use
         # mkstemp makes the file 0600; a saved result gets the mode a plain open()
@@ -162,6 +167,29 @@ def _remove_abandoned(path: Path) -> None:
             pass
         finally:
             os.close(fd)
+
+
+def file_path(path: object, caller: str) -> Path:
+    """``path`` as a ``Path``; a ``TypeError`` naming ``caller`` if it is not a path.
+
+    Parameters
+    ----------
+    path
+        What was given.
+    caller
+        ``Trajectory.save`` or ``Trajectory.load``.
+
+    Examples
+    --------
+    >>> file_path(None, "Trajectory.load")
+    Traceback (most recent call last):
+    ...
+    TypeError: Trajectory.load takes a path (a str or os.PathLike ending in .npz), got None ...
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{caller} takes a path (a str or os.PathLike ending in .npz), got "
+                        f"{path!r:.80} ({type(path).__name__})")
+    return Path(path)
 
 
 def read(path: Path, max_bytes: int | None = None) -> dict[str, Any]:

@@ -5,7 +5,9 @@ bad parameter value, a singular KKT matrix at its initial state) is recorded as
 ``"error"`` with its message; an integration that stops midway is ``"failed"``
 with the part computed; a case whose worker process died every time it was tried
 is ``"lost"``; a case the ensemble never reached, because it was interrupted, is
-``"not-run"``. :data:`SUCCESS` are the statuses that need no retry.
+``"not-run"``; a case whose simulation ran past its time limit (``timeout=``, checked
+between steps) is ``"timeout"``, with the part computed. :data:`SUCCESS` are the
+statuses that need no retry.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ import numpy as np
 
 #: Every status a case can have, in the order of their codes (the ``status``
 #: variable of a stored ensemble holds the code; its attributes name them).
-STATUSES = ("finished", "event", "failed", "interrupted", "error", "lost", "not-run")
+STATUSES = ("finished", "event", "failed", "interrupted", "error", "lost", "not-run",
+            "timeout")
 #: A case with one of these statuses ran to the end of its span (or a terminal event).
 SUCCESS = frozenset({"finished", "event"})
 CODE = {name: code for code, name in enumerate(STATUSES)}

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import EnsembleError
 from .faults import CODE, SUCCESS, CaseOutcome
 
 #: Bytes of one block of a reduction over all cases (the time axis is cut to fit).
@@ -124,6 +125,8 @@ class EnsembleResult:
             return compute()
         try:
             return compute()
+        except EnsembleError:  # a damaged chunk named where it was read (store.guarded)
+            raise
         except Exception as exc:  # the codec's or file's own error
             from .store import damaged_store
 

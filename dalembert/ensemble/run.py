@@ -212,7 +212,12 @@ def simulate_many(
         A progress bar (tqdm; it appears once the ensemble has run two seconds).
     options
         ``simulate``'s other keywords (``rtol``, ``method``, ``backend``...), checked
-        once here.
+        once here. ``timeout=`` is each case's limit in seconds: a case whose
+        simulation runs past it stops between two steps and is recorded with status
+        ``"timeout"`` and the part it computed; the others go on. A function of yours
+        that itself never returns (an input, an event, ``initial_state``) is not
+        stopped by it: on ``scheduler="serial"`` or ``"threads"`` it holds its
+        worker (and the ensemble's end) until it returns; on Dask, stop the workers.
 
     Returns
     -------

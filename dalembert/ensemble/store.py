@@ -363,7 +363,7 @@ class FileSink(Sink):
         if self.fallback is not None:
             return self._in_memory()
         if self.kind == "zarr":
-            return xr.open_zarr(self.path)
+            return guarded(xr.open_zarr(self.path), self.path)
         return xr.open_dataset(self.path, engine="h5netcdf", chunks={})
 
 
@@ -384,6 +384,41 @@ class FileSink(Sink):
             f"store is incomplete. Save them elsewhere: result.dataset.to_zarr(path)",
             EnsembleWarning, stacklevel=user_stacklevel())
         return fallback.dataset()
+
+
+def guarded(dataset: Any, path: Path) -> Any:
+    """``dataset`` (opened lazily from the Zarr store ``path``) whose variables read
+    their chunks through :class:`_GuardedChunks`: a damaged chunk, met however the
+    dataset is read (``.values``, ``.compute()``, a plot), raises
+    :func:`damaged_store`'s error naming the store, the variable and the chunk's cases,
+    not the codec's own. The values read are the store's, undecoded: its variables are
+    floats (NaN their fill value) and the status codes, which xarray does not decode."""
+    import dask.array as da
+    import zarr
+
+    group = zarr.open_group(str(path), mode="r")
+    for name, variable in dataset.data_vars.items():
+        if variable.chunks is None or name not in group:
+            continue
+        chunks = _GuardedChunks(group[name], path, str(name))
+        data = da.from_array(chunks, chunks=variable.chunks, asarray=False, name=False,
+                             meta=np.empty((0,) * chunks.ndim, chunks.dtype))
+        dataset[name] = variable.copy(data=data)
+    return dataset
+
+
+class _GuardedChunks:
+    """A Zarr array whose reads that fail raise :func:`damaged_store`'s error."""
+
+    def __init__(self, array: Any, path: Path, name: str) -> None:
+        self.array, self.path, self.name = array, path, name
+        self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        try:
+            return np.asarray(self.array[key])
+        except Exception as exc:  # a damaged chunk: the codec's or the file's own error
+            raise damaged_store(self.path, self.name, exc) from exc
 
 
 def damaged_store(path: Path, variable: str, exc: BaseException) -> EnsembleError:
@@ -499,7 +534,9 @@ def _ours(folder: Path) -> bool:
     except (OSError, ValueError):
         return False
     return ((folder / ".zgroup").is_file() and isinstance(attributes, dict)
-            and attributes.get("flag_meanings") == " ".join(STATUSES))
+            # an earlier version's store names the first seven statuses (before "timeout")
+            and attributes.get("flag_meanings") in (" ".join(STATUSES[:7]),
+                                                    " ".join(STATUSES)))
 
 
 def _remove(path: Path) -> None:

@@ -8,7 +8,7 @@ energy is block-diagonal and each joint's equations involve only its two bodies.
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from functools import cached_property
 from typing import Any, Literal, TypeVar
 
@@ -109,8 +109,8 @@ class Multibody:
         actuators: Sequence[Actuator] = (),
         inputs: Sequence[sp.Symbol] = (),
     ) -> None:
-        self.bodies = tuple(bodies)
-        self.joints = tuple(joints)
+        self.bodies = _pieces(bodies, "bodies", "Particle, RigidBody or PlanarBody objects")
+        self.joints = _pieces(joints, "joints", "Joint objects")
         self.forces = tuple(forces)
         self.torques = tuple(torques)
         self.springs = tuple(springs)
@@ -185,6 +185,7 @@ class Multibody:
         (3.0, 8.0)
         """
         if not self.parameters:
+            resolve_parameters((), {}, *values)  # a name it does not have is said, not dropped
             return self
         return self._bound_at(resolve_parameters(self.parameters, self.defaults, *values))
 
@@ -293,10 +294,11 @@ class Multibody:
             if body.name in names:
                 raise ModelError(f"two bodies are named {body.name!r}; names must be distinct")
             names.add(body.name)
-        joint_names = [j.name for j in self.joints]
         for j in self.joints:
             if not isinstance(j, Joint):
                 raise ModelError(f"joints must be Joint objects, got {j!r}")
+        joint_names = [j.name for j in self.joints]
+        for j in self.joints:
             if joint_names.count(j.name) > 1:
                 raise ModelError(f"two joints are named {j.name!r}; names must be distinct")
             self._check_members(j.bodies, f"joint {j.name!r}")
@@ -454,8 +456,12 @@ class Multibody:
             return key
         return self.body(str(key))
 
-    def _by_name(self, values: ByBody[_V] | None) -> dict[str, _V]:
-        """``values`` keyed by body name (a body not in this system raises)."""
+    def _by_name(self, values: ByBody[_V] | None, what: str) -> dict[str, _V]:
+        """``values`` (the argument ``what``) keyed by body name (a body not in this
+        system raises)."""
+        if values is not None and not isinstance(values, Mapping):
+            raise InitialConditionError(
+                f"{what} must be a dict {{body or body name: value}}, got {values!r:.80}")
         return {self._resolve(key).name: value for key, value in (values or {}).items()}
 
     # -- initial state ---------------------------------------------------------------
@@ -506,9 +512,11 @@ class Multibody:
         """
         if angular_velocity_frame not in ("world", "body"):
             raise ValueError("angular_velocity_frame must be 'world' or 'body'")
-        q, qd = bodies_state(self.bodies, angular_velocity_frame, self._by_name(positions),
-                             self._by_name(orientations), self._by_name(velocities),
-                             self._by_name(angular_velocities))
+        q, qd = bodies_state(self.bodies, angular_velocity_frame,
+                             self._by_name(positions, "positions"),
+                             self._by_name(orientations, "orientations"),
+                             self._by_name(velocities, "velocities"),
+                             self._by_name(angular_velocities, "angular_velocities"))
         # the joints' points as numbers: the mechanism's own where no joint depends on
         # the parameters, else bound to their defaults (without values, no check)
         numbers = self if self._body_values is not None else self._with_defaults()
@@ -623,6 +631,14 @@ def _with_joint(spring: _Load, joint: Joint) -> _Load:
     out = copy.copy(spring)
     out.joint = joint
     return out
+
+
+def _pieces(values: object, what: str, kind: str) -> tuple:
+    """``values`` as a tuple; a ``ModelError`` if it is not a sequence (``None``, a
+    string: its letters would be taken for bodies)."""
+    if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise ModelError(f"{what} must be a sequence of {kind}, got {values!r:.80}")
+    return tuple(values)
 
 
 def chain(

@@ -122,11 +122,17 @@ def test_a_sample_time_must_be_finite_and_positive(value):
     refused("sample_time", value)
 
 
+@FAST
+@given(value=st.one_of(NOT_NUMBERS.filter(lambda v: v is not None), NOT_POSITIVE))
+def test_a_time_limit_must_be_finite_and_positive(value):
+    refused("timeout", value)
+
+
 def test_every_option_of_the_table_is_exercised_here():
     covered = {"first_step", "baumgarte_gain", "max_step", "rtol", "atol", "method",
                "step_control", "backend", "redundant_constraints", "velocity_projection",
                "stabilization", "dense_output", "progress", "native", "events", "t_eval",
-               "sample_time"}
+               "sample_time", "timeout"}
     assert set(SIMULATE_PARAMETERS) == covered
 
 

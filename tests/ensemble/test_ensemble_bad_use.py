@@ -156,11 +156,31 @@ def test_a_damaged_zarr_chunk_is_named_and_a_retry_of_its_cases_repairs_it(pend,
         assert str(info.value).startswith(expected), str(info.value)
         assert str(info.value).endswith("; result.retry(cases=[0, 1]) runs those cases again "
                                         "and rewrites it")
+    for read in (lambda: result.dataset["q"].values, lambda: result.dataset.compute(),
+                 lambda: result.dataset["q"].sel(case=0, time=0.5).values):
+        with pytest.raises(EnsembleError) as info:
+            read()
+        assert str(info.value).startswith(expected), str(info.value)
+    assert np.array_equal(result.dataset["q"].sel(case=2).values, good[2])  # another chunk
     with pytest.raises(EnsembleError, match="the chunk of 'q' holding cases 0 to 1 is damaged"):
         result.retry(cases=[1])  # the other case of the chunk must be read to keep it
     repaired = result.retry(cases=[0, 1])
     assert np.array_equal(repaired.dataset["q"].values, good)
     assert np.isfinite(repaired.mean("q").values).all()
+
+
+def test_a_stored_dataset_reads_what_xarray_reads_from_the_store(pend, tmp_path):
+    import xarray as xr
+
+    store = tmp_path / "run.zarr"
+    result = run(pend, grid(l=[1.0, 2.0, 3.0]), store=store, batch_size=2)
+    plain = xr.open_zarr(store).load()
+    read = result.dataset.load()
+    assert set(read.variables) == set(plain.variables)
+    for name in plain.variables:
+        assert read[name].dtype == plain[name].dtype, name
+        assert read[name].equals(plain[name]), name
+        assert read[name].attrs == plain[name].attrs, name
 
 
 # -- a full disk under a store ---------------------------------------------------------------------
@@ -197,3 +217,40 @@ def test_a_full_disk_keeps_every_computed_case_in_memory(pend, tmp_path, monkeyp
     got, want = result.dataset["q"].values, memory.dataset["q"].values
     assert np.array_equal(got, want), (np.isnan(got).sum(axis=(1, 2)), np.nanmax(abs(got - want)))
     assert np.array_equal(result.dataset["status"].values, memory.dataset["status"].values)
+
+
+# -- a time limit per case -------------------------------------------------------------------------
+def under_the_pivot(t, q, qd):
+    """x = 0 crossed leftwards: a released case ends at its first quarter swing; one
+    hanging at rest never crosses (x stays 0)."""
+    return q[0]
+
+
+under_the_pivot.terminal = True
+under_the_pivot.direction = -1
+
+
+@pytest.mark.parametrize("scheduler", ["serial", "threads"])
+def test_a_case_past_its_time_limit_is_marked_and_the_others_kept(pend, scheduler):
+    """Case 1 hangs at rest: with steps of at most 0.01 s its span of 1e7 s would take
+    1e9 steps; the limit stops it between two steps, the released cases end at their
+    event (the quarter period, checked against the small-swing law loosely: theta = 0.5)."""
+    with pytest.warns(EnsembleWarning, match=r"1 of 3 cases did not succeed \(1 timeout\); the "
+                                             r"first, case 1: stopped at t=\S+: the run's "
+                                             r"time limit \(timeout=\) passed"):
+        result = pend.simulate_many(
+            (0.0, 1e7), grid(theta=[0.5, 0.0, 0.5], l=[1.0]), initial_state=released,
+            t_eval=np.linspace(0.0, 1e7, 3), events=[under_the_pivot], max_step=0.01,
+            timeout=1.0, scheduler=scheduler, workers=2, progress=False)
+    summary = result.summary
+    assert summary["status"].tolist() == ["event", "timeout", "event"]
+    assert result.failed == [1]
+    quarter = np.pi / 2 / np.sqrt(9.81)
+    assert np.allclose(summary.loc[[0, 2], "t_event_under_the_pivot"], quarter, rtol=0.02)
+    stopped = float(summary.loc[1, "message"].split("stopped at t=")[1].split(":")[0])
+    assert 0.0 < stopped < 1e7
+
+
+def test_the_time_limit_is_checked_at_the_door(pend):
+    with pytest.raises(ValueError, match="The 'timeout' parameter of simulate must be"):
+        run(pend, grid(l=[1.0]), timeout=-1.0)

@@ -11,6 +11,7 @@ start evaluates the model). It checks nothing: its arguments come from
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -42,6 +43,7 @@ def integrate(
     singular: Singularity | None = None,
     careful: CarefulSteps | None = None,
     runaway: Runaway | None = None,
+    deadline: float | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -73,6 +75,10 @@ def integrate(
         ``runaway(t, y)``: what in the model grew most since the start, or ``""``;
         steps that keep shrinking toward a time the run would take hours to reach
         end it naming that (:meth:`~dalembert.solvers.singular.watch.StepCollapse.runaway`).
+    deadline
+        A ``time.monotonic()`` past which the run stops, status ``"timeout"``,
+        keeping what it computed; checked after each unit of the loop's work (a
+        step, or a stretch of C steps of a fraction of a second), or ``None``.
     solver_options
         Passed to ``method``.
 
@@ -111,6 +117,10 @@ def integrate(
                 if bar is not None:
                     bar.update(abs(loop.t_reached - bar.n_t))
                     bar.n_t = loop.t_reached
+                if deadline is not None and loop.status is None and \
+                        time.monotonic() > deadline:
+                    loop.stop("timeout", f"stopped at t={loop.t_reached:.6g}: the run's "
+                              "time limit (timeout=) passed")
         except KeyboardInterrupt:
             if loop is None:
                 return _not_started(t0, y0, times, "interrupted", "interrupted by the user "

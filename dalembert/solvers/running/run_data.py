@@ -22,6 +22,7 @@ segment holds and the careful steps' passages carry from one segment to the next
 from __future__ import annotations
 
 import inspect
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial, update_wrapper
@@ -73,6 +74,9 @@ class RunData:
     diagnose, singular, runaway, careful
         What the loops are given to name the cause of a failing run and to step
         through singular configurations (:func:`~.integrate.integrate`).
+    deadline
+        The ``time.monotonic()`` past which the run stops (the options' ``timeout``
+        from the run's start, shared by its segments), or ``None``.
     """
 
     plan: SimulationPlan
@@ -88,6 +92,7 @@ class RunData:
     singular: Singularity | None
     runaway: Runaway | None
     careful: CarefulSteps | None
+    deadline: float | None = None
 
     def hold_inputs(self, values: np.ndarray) -> None:
         """Hold the inputs at ``values`` for the evaluations from now on (a sampled
@@ -118,7 +123,7 @@ class RunData:
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=progress, stretches=self.plan.stretches, diagnose=self.diagnose,
             singular=self.singular, careful=self.careful, runaway=self.runaway,
-            **self.solver_options)
+            deadline=self.deadline, **self.solver_options)
 
     def passages(self) -> str:
         """The warning naming the singular configurations the run passed (empty if none)."""
@@ -203,6 +208,7 @@ def start_run(plan: SimulationPlan) -> RunData:
     if careful is not None:
         outputs = careful.outputs(outputs, signal)
     t0, y0 = options.t_span[0], plan.y0
+    deadline = None if options.timeout is None else time.monotonic() + options.timeout
     return RunData(
         plan=plan, num=num, native=native, careful_model=careful, rhs=rhs,
         project=project, outputs=outputs,
@@ -210,7 +216,8 @@ def start_run(plan: SimulationPlan) -> RunData:
                      for e in options.output.events), solver_options=solver_options,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
-        runaway=runaway_diagnosis(num, rows, initial.names, t0, y0), careful=steps)
+        runaway=runaway_diagnosis(num, rows, initial.names, t0, y0), careful=steps,
+        deadline=deadline)
 
 
 def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulModel | None,
