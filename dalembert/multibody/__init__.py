@@ -16,6 +16,7 @@ from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
+from .importing import from_mjcf, from_urdf, mujoco_state
 from .joints import Distance, Fixed, Joint, PointOnPlane, Prismatic, Revolute, Spherical, Universal
 from .loads import Force, SpringDamper, Torque
 from .outputs import (
@@ -74,11 +75,14 @@ __all__ = [
     "energy",
     "euler_angles",
     "euler_from_matrix",
+    "from_mjcf",
+    "from_urdf",
     "joint_reactions",
     "kinetic_energy",
     "linear_momentum",
     "matrix_from_euler",
     "multibody_of",
+    "mujoco_state",
     "point_positions",
     "potential_energy",
     "quaternion_from_matrix",
