@@ -31,13 +31,6 @@ class ImportedActuators:
     unsupported: list[str] = field(default_factory=list)
 
 
-def actuated_joints(pose: ReferencePose) -> set[int]:
-    """The ids of the joints an actuator acts in."""
-    model = pose.model
-    return {int(model.actuator_trnid[a, 0]) for a in range(model.nu)
-            if model.actuator_trntype[a] == JOINT_TRANSMISSION}
-
-
 def read_actuators(pose: ReferencePose, joints: dict[int, Joint], taken: set[str],
                    disabled: bool) -> ImportedActuators:
     """Every motor in a hinge or a slide, as an actuator of an input.
@@ -63,8 +56,8 @@ def read_actuators(pose: ReferencePose, joints: dict[int, Joint], taken: set[str
             continue
         j = int(model.actuator_trnid[a, 0])
         if not (model.actuator_trntype[a] == JOINT_TRANSMISSION and j in joints):
-            out.unsupported.append(f"{what} (acts through a tendon, a site, a body or a "
-                                   "joint that is not a hinge or a slide)")
+            out.unsupported.append(f"{what} (acts through a tendon, a site, a body, or a "
+                                   "joint that is not one hinge or one slide)")
             continue
         if (model.actuator_gaintype[a] != FIXED_GAIN or model.actuator_biastype[a] != NO_BIAS
                 or model.actuator_dyntype[a] != NO_DYNAMICS):

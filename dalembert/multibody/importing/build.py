@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
-from ...errors import ModelError, ModelFileError
+from ...errors import JointPointWarning, ModelError, ModelFileError
 from ..builder import Multibody
-from .actuators import actuated_joints, read_actuators
+from .actuators import read_actuators
 from .bodies import reference_pose
 from .equalities import read_equalities
 from .geometry import read_shapes
@@ -34,15 +35,24 @@ def build_multibody(model: Any, label: str, name: str) -> Multibody:
     pose = reference_pose(model, label)
     taken = {b.name for b in pose.bodies.values()}
     try:
-        joints = read_joints(pose, actuated_joints(pose), taken,
-                             _disabled(model, "mjDSBL_SPRING"), _disabled(model, "mjDSBL_DAMPER"))
+        joints = read_joints(pose, taken, _disabled(model, "mjDSBL_SPRING"),
+                             _disabled(model, "mjDSBL_DAMPER"))
         loops = read_equalities(pose, taken)
         motors = read_actuators(pose, joints.by_id, taken, _disabled(model, "mjDSBL_ACTUATION"))
         gravity = np.zeros(3) if _disabled(model, "mjDSBL_GRAVITY") else model.opt.gravity.copy()
         moving = [b for k, b in pose.bodies.items() if k != 0]
-        mb = Multibody(moving, [*joints.joints, *loops.joints], gravity=tuple(gravity),
-                       name=name, joint_springs=joints.springs, actuators=motors.actuators,
-                       inputs=motors.inputs)
+        if not moving:
+            raise ModelFileError(
+                f"{label}: no body moves (every body is welded to the world: it has no "
+                "joint, and neither has any body between it and the world; MuJoCo fixes a "
+                "URDF's root link to the world)")
+        with warnings.catch_warnings():
+            # the joint points come from the file, in the right frames by construction: the
+            # heuristic against hand-given points in the wrong frame does not apply
+            warnings.simplefilter("ignore", JointPointWarning)
+            mb = Multibody(moving, [*joints.joints, *loops.joints], gravity=tuple(gravity),
+                           name=name, joint_springs=joints.springs,
+                           actuators=motors.actuators, inputs=motors.inputs)
     except ModelFileError:
         raise
     except ModelError as exc:

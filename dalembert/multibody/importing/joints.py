@@ -13,8 +13,9 @@ hinges and slides become :class:`~dalembert.multibody.JointSpring` loads, rest a
 A body with two hinges at one anchor with perpendicular axes is a
 :class:`~dalembert.multibody.Universal` joint (the first axis turns with the parent, the
 second with the body, as in MuJoCo), three hinges at one anchor with independent axes a
-:class:`~dalembert.multibody.Spherical` one, when none of them has a spring, a damper or
-an actuator (their angles are MuJoCo's, not dalembert's).
+:class:`~dalembert.multibody.Spherical` one; the springs, dampers and actuators of such
+hinges (on MuJoCo's angles, which dalembert's joint does not have) are left out and
+listed in the warning.
 """
 
 from __future__ import annotations
@@ -61,16 +62,14 @@ def perpendicular(w: FloatArray) -> FloatArray:
     return u / np.linalg.norm(u)
 
 
-def read_joints(pose: ReferencePose, actuated: set[int], taken: set[str],
-                disabled_springs: bool, disabled_dampers: bool) -> ImportedJoints:
+def read_joints(pose: ReferencePose, taken: set[str], disabled_springs: bool,
+                disabled_dampers: bool) -> ImportedJoints:
     """Every joint of the model, body by body.
 
     Parameters
     ----------
     pose
         The model at its reference pose, with its dalembert bodies.
-    actuated
-        The ids of the joints an actuator acts in.
     taken
         Names already given (joints are added).
     disabled_springs, disabled_dampers
@@ -95,16 +94,20 @@ def read_joints(pose: ReferencePose, actuated: set[int], taken: set[str],
             _one_joint(pose, out, ids[0], k, parent, anchors[0], axes[0], taken,
                        disabled_springs, disabled_dampers)
             continue
-        joint = _combined(pose, ids, kinds, k, parent, anchors, axes, actuated, taken)
+        joint = _combined(pose, ids, kinds, k, parent, anchors, axes, taken)
         if joint is None:
             raise ModelFileError(
                 f"{pose.label}: body {model.body(k).name!r} has {len(ids)} joints ({label}, "
                 f"{', '.join(KINDS[c] for c in kinds)}); dalembert imports one joint per "
                 "body, or two hinges at one point with perpendicular axes (a universal "
-                "joint), or three hinges at one point (a ball joint), without springs, "
-                "dampers or actuators; split the body into bodies of one joint each, "
-                "each with its own mass")
+                "joint), or three hinges at one point (a ball joint); split the body into "
+                "bodies of one joint each, each with its own mass")
         out.joints.append(joint)
+        loaded = [j for j in ids if (model.jnt_stiffness[j] and not disabled_springs)
+                  or (model.dof_damping[model.jnt_dofadr[j]] and not disabled_dampers)]
+        if loaded:
+            out.unsupported.append(f"springs and dampers of hinges {label} (made one "
+                                   f"{type(joint).__name__} joint)")
         for j in ids:
             out.names[model.joint(j).name or f"joint{j}"] = joint.name
     return out
@@ -150,16 +153,13 @@ def _one_joint(pose: ReferencePose, out: ImportedJoints, j: int, k: int, parent:
 
 
 def _combined(pose: ReferencePose, ids: Sequence[int], kinds: Sequence[int], k: int,
-              parent: int, anchors: FloatArray, axes: FloatArray, actuated: set[int],
+              parent: int, anchors: FloatArray, axes: FloatArray,
               taken: set[str]) -> Joint | None:
     """Two or three hinges at one point as one joint, or ``None`` if they are not."""
     model = pose.model
     if any(c != HINGE for c in kinds) or len(ids) > 3:
         return None
     if np.ptp(anchors, axis=0).max() > 1e-9 * max(1.0, float(np.abs(anchors).max())):
-        return None
-    if any(j in actuated or model.jnt_stiffness[j] or model.dof_damping[model.jnt_dofadr[j]]
-           for j in ids):
         return None
     name = identifier("_".join(model.joint(j).name for j in ids), f"joint{ids[0]}", taken)
     a, b = pose.body_of(parent), pose.body_of(k)

@@ -68,11 +68,52 @@ def compile_model(source: str | os.PathLike[str], kind: str) -> tuple[Any, Any, 
         spec = read()
     except Exception as exc:  # MuJoCo's parse errors are ValueErrors with its message
         raise ModelFileError(f"cannot read {label}: MuJoCo says: {_message(exc)}") from None
+    if not is_xml_text(source):
+        resolve_packages(spec, Path(source))
     try:
         model = spec.compile()
     except Exception as exc:
         raise ModelFileError(f"cannot compile {label}: MuJoCo says: {_message(exc)}") from None
     return spec, model, label
+
+
+def resolve_packages(spec: Any, path: Path) -> None:
+    """Point the ``package://NAME/...`` mesh files of a ROS description at the folder
+    ``NAME`` found above the file (as ROS would, for a package laid out in one tree);
+    MuJoCo does not resolve them. A mesh not found that way is left as it is (MuJoCo's
+    error then names it).
+
+    Parameters
+    ----------
+    spec
+        The parsed ``MjSpec`` (its meshes are changed in place).
+    path
+        The model file.
+
+    Examples
+    --------
+    >>> import mujoco, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     mesh = Path(folder, "my_robot", "meshes", "link.stl")
+    ...     mesh.parent.mkdir(parents=True)
+    ...     _ = mesh.write_text("")
+    ...     spec = mujoco.MjSpec()
+    ...     _ = spec.add_mesh(file="package://my_robot/meshes/link.stl")
+    ...     resolve_packages(spec, Path(folder, "my_robot", "urdf", "robot.urdf"))
+    ...     Path(spec.meshes[0].file).relative_to(folder).as_posix()
+    'my_robot/meshes/link.stl'
+    """
+    prefix = "package://"
+    for mesh in spec.meshes:
+        if not mesh.file.startswith(prefix):
+            continue
+        package, _, rest = mesh.file[len(prefix):].partition("/")
+        for folder in path.resolve().parents:
+            candidates = [folder / package / rest, *([folder / rest] * (folder.name == package))]
+            found = next((c for c in candidates if c.is_file()), None)
+            if found is not None:
+                mesh.file = str(found)
+                break
 
 
 def _message(exc: Exception) -> str:
