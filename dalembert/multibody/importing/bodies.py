@@ -25,6 +25,18 @@ from .model import ImportedBody
 MIN_MASS = 1e-15
 
 
+def body_label(model: Any, k: int) -> str:
+    """MuJoCo body ``k``'s name for messages (``body<k>`` if it has none).
+
+    Examples
+    --------
+    >>> import mujoco
+    >>> body_label(mujoco.MjModel.from_xml_string("<mujoco/>"), 0)
+    'world'
+    """
+    return model.body(k).name or f"body{k}"
+
+
 def identifier(name: str, fallback: str, taken: set[str]) -> str:
     """``name`` as a Python identifier not in ``taken`` (then added to it).
 
@@ -40,8 +52,8 @@ def identifier(name: str, fallback: str, taken: set[str]) -> str:
     Examples
     --------
     >>> taken = set()
-    >>> identifier("link-1", "b", taken), identifier("link_1", "b", taken), identifier("", "b", taken)
-    ('link_1', 'link_1_2', 'b')
+    >>> [identifier(name, "b", taken) for name in ("link-1", "link_1", "")]
+    ['link_1', 'link_1_2', 'b']
     """
     base = re.sub(r"\W", "_", name) or fallback
     if not base.isidentifier():
@@ -66,6 +78,8 @@ class ReferencePose:
     group: FloatArray
     #: The dalembert body of every group root (``Ground`` for 0).
     bodies: dict[int, Body]
+    #: The moving ones, in model order.
+    moving: list[RigidBody]
     #: Each group's mass center (world) and frame (its root's orientation).
     center: dict[int, FloatArray]
     imported: dict[str, ImportedBody]
@@ -122,6 +136,7 @@ def reference_pose(model: Any, label: str) -> ReferencePose:
     group[np.asarray(model.body_mocapid) >= 0] = 0  # moved by the user: not simulated here
     taken = {"ground"}
     bodies: dict[int, Body] = {0: Ground()}
+    moving: list[RigidBody] = []
     center: dict[int, FloatArray] = {}
     imported: dict[str, ImportedBody] = {}
     for root in sorted({int(g) for g in group if g != 0}):
@@ -132,9 +147,9 @@ def reference_pose(model: Any, label: str) -> ReferencePose:
         name = identifier(mujoco_name, f"body{root}", taken)
         if not mass > MIN_MASS:
             raise ModelFileError(
-                f"{label}: body {mujoco_name or name!r} moves but has no mass (MuJoCo allows "
-                "a massless body between two joints; in dalembert's absolute coordinates "
-                "every moving body needs its own mass and inertia): give it an <inertial>")
+                f"{label}: body {name!r} moves but has no mass (in dalembert's absolute "
+                "coordinates every moving body needs its own mass and inertia): give it an "
+                "<inertial>")
         c = (masses[:, None] * xipos[members]).sum(axis=0) / mass
         inertia_world = np.zeros((3, 3))
         for k, m in zip(members, masses):
@@ -144,11 +159,16 @@ def reference_pose(model: Any, label: str) -> ReferencePose:
         R = xmat[root]
         inertia = R.T @ inertia_world @ R
         try:
-            bodies[root] = RigidBody(name, mass, (inertia + inertia.T) / 2)
+            bodies[root] = body = RigidBody(name, mass, (inertia + inertia.T) / 2)
         except ModelError as exc:
-            raise ModelFileError(f"{label}: body {mujoco_name or name!r}: {exc}") from None
+            raise ModelFileError(f"{label}: body {name!r}: {exc}") from None
         center[root] = c
+        moving.append(body)
         imported[name] = ImportedBody(
             name, root, mujoco_name, tuple(model.body(k).name for k in members),
-            tuple(float(v) for v in R.T @ (xpos[root] - c)))
-    return ReferencePose(model, label, xpos, xmat, group, bodies, center, imported)
+            _triple(R.T @ (xpos[root] - c)))
+    return ReferencePose(model, label, xpos, xmat, group, bodies, moving, center, imported)
+
+
+def _triple(v: FloatArray) -> tuple[float, float, float]:
+    return float(v[0]), float(v[1]), float(v[2])

@@ -40,7 +40,7 @@ def build_multibody(model: Any, label: str, name: str) -> Multibody:
         loops = read_equalities(pose, taken)
         motors = read_actuators(pose, joints.by_id, taken, _disabled(model, "mjDSBL_ACTUATION"))
         gravity = np.zeros(3) if _disabled(model, "mjDSBL_GRAVITY") else model.opt.gravity.copy()
-        moving = [b for k, b in pose.bodies.items() if k != 0]
+        moving = pose.moving
         if not moving:
             raise ModelFileError(
                 f"{label}: no body moves (every body is welded to the world: it has no "

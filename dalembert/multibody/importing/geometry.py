@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..rotations import quaternion_from_matrix, rotation_matrix
@@ -45,5 +47,6 @@ def read_shapes(pose: ReferencePose) -> tuple[Shape, ...]:
     return tuple(shapes)
 
 
-def _floats(values: FloatArray, n: int) -> tuple:  # type: ignore[type-arg]
+def _floats(values: FloatArray, n: int) -> Any:
+    """The first ``n`` values as a tuple of floats."""
     return tuple(float(v) for v in np.asarray(values, dtype=float)[:n])

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -30,7 +29,7 @@ from ...errors import ModelFileError
 from ..drivers import JointSpring
 from ..joints import Joint, Prismatic, Revolute, Spherical, Universal
 from ..types import FloatArray
-from .bodies import ReferencePose, identifier
+from .bodies import ReferencePose, body_label, identifier
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3
 KINDS = {FREE: "free", BALL: "ball", SLIDE: "slide", HINGE: "hinge"}
@@ -97,7 +96,7 @@ def read_joints(pose: ReferencePose, taken: set[str], disabled_springs: bool,
         joint = _combined(pose, ids, kinds, k, parent, anchors, axes, taken)
         if joint is None:
             raise ModelFileError(
-                f"{pose.label}: body {model.body(k).name!r} has {len(ids)} joints ({label}, "
+                f"{pose.label}: body {body_label(model, k)!r} has {len(ids)} joints ({label}, "
                 f"{', '.join(KINDS[c] for c in kinds)}); dalembert imports one joint per "
                 "body, or two hinges at one point with perpendicular axes (a universal "
                 "joint), or three hinges at one point (a ball joint); split the body into "

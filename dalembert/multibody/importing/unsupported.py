@@ -4,7 +4,7 @@ model and listed in one :class:`~dalembert.UnsupportedModelFeatureWarning`."""
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -12,7 +12,7 @@ import numpy as np
 from ...errors import UnsupportedModelFeatureWarning, user_stacklevel
 
 
-def _names(model: Any, kind: str, ids: Sequence[int]) -> str:
+def _names(model: Any, kind: str, ids: Iterable[int]) -> str:
     """``'a', 'b', 'c'`` and how many more."""
     names = [repr(getattr(model, kind)(int(i)).name or f"{kind}{int(i)}") for i in ids]
     shown = ", ".join(names[:4])
@@ -45,7 +45,8 @@ def contact_possible(model: Any) -> bool:
             a, b = int(bodies[g]), int(bodies[h])
             if a == b or not (contype[g] & affinity[h] or contype[h] & affinity[g]):
                 continue
-            if filter_parent and (parent[a] == b or parent[b] == a):
+            # MuJoCo filters parent and child, but never the world's geoms
+            if filter_parent and a and b and (parent[a] == b or parent[b] == a):
                 continue
             if (min(a, b) << 16) + max(a, b) in excluded:
                 continue

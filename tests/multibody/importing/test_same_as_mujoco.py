@@ -152,7 +152,8 @@ WELDED = """<mujoco><option><flag contact="disable"/></option><worldbody>
     <geom type="capsule" fromto="0 0 0 0.6 0 0" size="0.03"/>
     {tip}
   </body>{free}</worldbody>{equality}</mujoco>"""
-TIP = '<body name="tip" pos="0.6 0 0.1" euler="20 30 0">{joint}<geom type="box" size="0.1 0.05 0.02"/></body>'
+TIP = ('<body name="tip" pos="0.6 0 0.1" euler="20 30 0">{joint}'
+       '<geom type="box" size="0.1 0.05 0.02"/></body>')
 
 
 def test_weld_equality_holds_like_a_rigid_attachment():
