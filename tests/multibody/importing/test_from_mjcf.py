@@ -132,11 +132,11 @@ def test_bad_models_give_clear_errors(source, expected):
 
 
 def test_bad_files_are_named(tmp_path):
-    with pytest.raises(ModelFileError, match="MJCF file '.*missing.xml': no such file"):
+    with pytest.raises(ModelFileError, match=r"MJCF file '.*missing\.xml': no such file"):
         from_mjcf(tmp_path / "missing.xml")
     broken = tmp_path / "broken.urdf"
     broken.write_text("<robot name='r'><link name='a'>")
-    with pytest.raises(ModelFileError, match="cannot read URDF file '.*broken.urdf': MuJoCo"):
+    with pytest.raises(ModelFileError, match=r"cannot read URDF file '.*broken\.urdf': MuJoCo"):
         from_urdf(broken)
     with pytest.raises(ModelFileError, match="from_urdf reads a file"):
         from_urdf("<robot/>")
