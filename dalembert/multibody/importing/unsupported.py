@@ -69,7 +69,7 @@ def model_features(model: Any) -> list[str]:
     ...     "<mujoco><worldbody><body><joint limited='true' range='-1 1'/>"
     ...     "<geom size='.1'/></body></worldbody></mujoco>")
     >>> model_features(model)
-    ["joint limits (MJCF range) on 'joint0'"]
+    ["joint limits (range) on 'joint0'"]
     """
     out = []
     if contact_possible(model):
@@ -78,7 +78,7 @@ def model_features(model: Any) -> list[str]:
     if model.ntendon:
         out.append(f"tendons {_names(model, 'tendon', range(model.ntendon))}")
     checks = [
-        ("jnt_limited", "joint limits (MJCF range)", "joint", "mjDSBL_LIMIT"),
+        ("jnt_limited", "joint limits (range)", "joint", "mjDSBL_LIMIT"),
         ("dof_armature", "armature (rotor inertia)", "dof", None),
         ("dof_frictionloss", "friction loss", "dof", "mjDSBL_FRICTIONLOSS"),
     ]
