@@ -12,6 +12,7 @@ attached rigidly (no equality at all).
 
 from __future__ import annotations
 
+import copy
 import warnings
 from pathlib import Path
 
@@ -25,16 +26,20 @@ from dalembert.errors import RedundantConstraintsWarning, UnsupportedModelFeatur
 from dalembert.multibody import from_mjcf, from_urdf, mujoco_state
 
 FILES = Path(__file__).parent / "files"
+# example-robot-data installs its robots in cmeel's prefix beside the packages
+ROBOTS = Path(mujoco.__file__).parents[1] / "cmeel.prefix" / "share" / "example-robot-data" \
+    / "robots"
 #: Body origins (m) and rotation matrix entries agree to this over 1 s (measured: 1e-13
 #: to 3e-12, RK4's error at 1e-4 s and dalembert's tolerances rtol 1e-11, atol 1e-13).
 TOLERANCE = 1e-10
 
 
-def _imported(path: Path, read=from_mjcf):
+def _imported(path: Path, read=from_mjcf, compiled=True):
+    """The mechanism and MuJoCo's own model of the file (``compiled``), set tight."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnsupportedModelFeatureWarning)  # tested elsewhere
         mb = read(path)
-    return mb, tight(mujoco.MjModel.from_xml_path(str(path)))
+    return mb, tight(mujoco.MjModel.from_xml_path(str(path))) if compiled else None
 
 
 def test_double_pendulum_with_spring_damper_and_reference_angle():
@@ -94,12 +99,15 @@ def test_urdf_chain_from_pybullet_data():
 
 
 @pytest.mark.validation
-def test_urdf_arm_kuka_iiwa_from_pybullet_data():
-    mb, model = _imported(Path(pybullet_data.getDataPath(), "kuka_iiwa", "model.urdf"),
-                          from_urdf)
-    assert len(mb.bodies) == 7
-    error, _ = compare(mb, model, 0.3 * np.sin(np.arange(7) + 1.0),
-                       0.5 * np.cos(np.arange(7)), 1.0)
+def test_urdf_arm_ur5_from_example_robot_data():
+    """A 6-joint arm whose meshes are named ``package://...``: MuJoCo runs the model the
+    importer compiled (the meshes resolved; the URDF's inertials are the file's)."""
+    path = ROBOTS / "ur_description" / "urdf" / "ur5_robot.urdf"
+    mb, _ = _imported(path, from_urdf, compiled=False)
+    model = tight(copy.deepcopy(mb.imported.model))
+    assert len(mb.bodies) == 6
+    error, _ = compare(mb, model, 0.3 * np.sin(np.arange(6) + 1.0),
+                       0.5 * np.cos(np.arange(6)), 1.0)
     assert error < TOLERANCE
 
 
