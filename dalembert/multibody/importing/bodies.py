@@ -133,7 +133,10 @@ def reference_pose(model: Any, label: str) -> ReferencePose:
     xpos, xmat = data.xpos.copy(), data.xmat.reshape(-1, 3, 3).copy()
     xipos, ximat = data.xipos.copy(), data.ximat.reshape(-1, 3, 3).copy()
     group = np.asarray(model.body_weldid, dtype=int).copy()
-    group[np.asarray(model.body_mocapid) >= 0] = 0  # moved by the user: not simulated here
+    # a mocap body is moved by the user, not simulated: it and what is welded to it are
+    # held fixed, with the ground (listed in the warning)
+    mocap = np.flatnonzero(np.asarray(model.body_mocapid) >= 0)
+    group[np.isin(group, mocap)] = 0
     taken = {"ground"}
     bodies: dict[int, Body] = {0: Ground()}
     moving: list[RigidBody] = []

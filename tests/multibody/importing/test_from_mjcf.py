@@ -149,3 +149,18 @@ def test_mujoco_state_needs_an_imported_mechanism():
     mb = _quiet(FILES / "cart_pole.xml")
     with pytest.raises(dalembert.InitialConditionError, match="qpos must be 2 finite"):
         mujoco_state(mb, qpos=[0.0])
+
+
+def test_mocap_bodies_are_held_with_the_ground():
+    xml = """<mujoco><option><flag contact="disable"/></option><worldbody>
+      <body name="handle" mocap="true"><geom size="0.1"/>
+        <body name="hook" pos="0 0 -1"><geom size="0.05"/></body></body>
+      <body name="swing"><joint axis="0 1 0"/><geom size="0.1" pos="0 0 -1"/></body>
+      </worldbody>
+      <equality><connect body1="swing" body2="hook" anchor="0 0 -1"/></equality></mujoco>"""
+    with pytest.warns(UnsupportedModelFeatureWarning, match="mocap bodies 'handle'"):
+        mb = from_mjcf(xml)
+    assert [b.name for b in mb.bodies] == ["swing"]
+    loop = mb.joints[-1]
+    assert loop.body_b.name == "ground"
+    np.testing.assert_allclose(loop.point_b, (0.0, 0.0, -1.0), atol=1e-12)  # the hook, world
