@@ -164,3 +164,18 @@ def test_mocap_bodies_are_held_with_the_ground():
     loop = mb.joints[-1]
     assert loop.body_b.name == "ground"
     np.testing.assert_allclose(loop.point_b, (0.0, 0.0, -1.0), atol=1e-12)  # the hook, world
+
+
+def test_connect_between_sites_is_the_connect_between_their_bodies():
+    xml = """<mujoco><option><flag contact="disable"/></option><worldbody>
+      <body name="a"><joint axis="0 1 0"/><geom size=".1" pos="0 0 -1"/>
+        <site name="sa" pos="0.2 0 -1"/>
+        <body name="b" pos="0 0 -1"><joint axis="0 1 0"/><geom size=".1" pos="0 0 -1"/>
+          <site name="sb" pos="0.2 0 0"/></body></body></worldbody>
+      <equality>{}</equality></mujoco>"""
+    by_body = _quiet(xml.format('<connect body1="a" body2="b" anchor="0.2 0 -1"/>'))
+    by_site = _quiet(xml.format('<connect site1="sa" site2="sb"/>'))
+    for joint in (by_body.joints[-1], by_site.joints[-1]):
+        # the anchor (0.2, 0, -1) from each mass center: a's at (0, 0, -1), b's at (0, 0, -2)
+        np.testing.assert_allclose(joint.point_a, (0.2, 0.0, 0.0), atol=1e-12)
+        np.testing.assert_allclose(joint.point_b, (0.2, 0.0, 1.0), atol=1e-12)
