@@ -28,6 +28,7 @@ from .errors import (  # every error and warning (errors.__all__)
     MarginalStabilityError,
     MissingParameterError,
     ModelError,
+    ModelFileError,
     NativeUnavailableWarning,
     NonholonomicLinearizationError,
     NotAnEquilibriumError,
@@ -40,6 +41,7 @@ from .errors import (  # every error and warning (errors.__all__)
     TooManyConstraintsError,
     TrajectoryFileError,
     UnsafeCacheError,
+    UnsupportedModelFeatureWarning,
 )
 from .model.constraints import Holonomic, Pfaffian
 from .model.coordinates import coordinates, t
@@ -95,6 +97,7 @@ __all__ = [
     "MarginalStabilityError",
     "MissingParameterError",
     "ModelError",
+    "ModelFileError",
     "NativeUnavailableWarning",
     "NonholonomicLinearizationError",
     "NotAnEquilibriumError",
@@ -112,6 +115,7 @@ __all__ = [
     "Trajectory",
     "TrajectoryFileError",
     "UnsafeCacheError",
+    "UnsupportedModelFeatureWarning",
     "all_extrema",
     "coordinates",
     "extremum",

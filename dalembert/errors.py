@@ -86,6 +86,11 @@ class UnsafeCacheError(CompileError):
     library planted there could run as you; it is not used."""
 
 
+class ModelFileError(ModelError):
+    """A model file (MJCF or URDF) that cannot be read or compiled, or that describes
+    what dalembert cannot model (the message names the file and the problem)."""
+
+
 class TrajectoryFileError(DalembertError, ValueError):
     """A file is not a trajectory ``Trajectory.load`` can read (or ``save`` cannot write it)."""
 
@@ -151,6 +156,11 @@ class JointPointWarning(DalembertWarning):
     """A joint point looks as if it were given in the wrong frame."""
 
 
+class UnsupportedModelFeatureWarning(DalembertWarning):
+    """An imported model (MJCF or URDF) uses features dalembert does not model (contact,
+    tendons, joint limits...): one warning lists them all, none is dropped silently."""
+
+
 class NativeUnavailableWarning(DalembertWarning):
     """The C runtime or a model's C code is unavailable, so a slower path is taken."""
 
@@ -186,6 +196,7 @@ __all__ = [
     "MarginalStabilityError",
     "MissingParameterError",
     "ModelError",
+    "ModelFileError",
     "NativeUnavailableWarning",
     "NonholonomicLinearizationError",
     "NotAnEquilibriumError",
@@ -198,6 +209,7 @@ __all__ = [
     "TooManyConstraintsError",
     "TrajectoryFileError",
     "UnsafeCacheError",
+    "UnsupportedModelFeatureWarning",
 ]
 
 

@@ -54,6 +54,7 @@ EXAMPLES: dict[str, str] = {
     "chain-frequencies": "chain_frequencies",
     "closed-chain": "closed_chain",
     "n-four-bar": "n_four_bar",
+    "imported-linkage": "imported_linkage",
 }
 
 

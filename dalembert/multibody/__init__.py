@@ -18,6 +18,7 @@ from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
+from .importing import from_mjcf, from_urdf, mujoco_state
 from .joint_control import JointEfforts, inverse_dynamics, linearize_joints
 from .joint_space import JointValues, joint_jacobian, joint_positions, joint_velocities
 from .joints import (
@@ -91,6 +92,8 @@ __all__ = [
     "energy",
     "euler_angles",
     "euler_from_matrix",
+    "from_mjcf",
+    "from_urdf",
     "inverse_dynamics",
     "joint_jacobian",
     "joint_positions",
@@ -100,6 +103,7 @@ __all__ = [
     "linear_momentum",
     "linearize_joints",
     "matrix_from_euler",
+    "mujoco_state",
     "multibody_of",
     "point_positions",
     "potential_energy",

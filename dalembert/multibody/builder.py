@@ -10,7 +10,7 @@ from __future__ import annotations
 import copy
 from collections.abc import Iterable, Mapping, Sequence
 from functools import cached_property
-from typing import Any, Literal, TypeVar
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
 import sympy as sp
@@ -44,6 +44,9 @@ from .parametric import (
 from .parts import gravity_potential
 from .system import MultibodyDefinition
 from .types import ByBody, FloatArray, Frame, Numbers, Orientation, Vector
+
+if TYPE_CHECKING:
+    from .importing.model import ImportedModel
 
 _V = TypeVar("_V")
 
@@ -127,6 +130,9 @@ class Multibody:
         self._check()
 
     PARAMETRIC = ("gravity",)
+    #: What :func:`~dalembert.multibody.from_mjcf` or ``from_urdf`` read (shapes to draw,
+    #: MuJoCo's bodies and model), for an imported mechanism; ``None`` otherwise.
+    imported: ImportedModel | None = None
 
     # -- parameters ------------------------------------------------------------------
     def _with_defaults(self) -> Multibody | None:
