@@ -8,9 +8,10 @@ coordinates:
   so a chain shows as its links, and a ground joint point as a single point;
 - a rolling joint: center -> contact point, and a disk's rim;
 - every spring: a line between its two points;
-- every rigid body: its body axes through the mass center, each of half-length
-  the body's radius of gyration (so the rotation is visible);
-- a particle: a single point.
+- with ``body_axes=True``, every rigid body's body axes through the mass center,
+  each of half-length the body's radius of gyration (they show a spin that the links
+  do not, as a top's, but clutter a chain's links, so they are drawn only on request);
+- a particle, and a rigid body drawn without its axes: its mass center as a point.
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ def _rim(joint: Rolling, x: FloatArray, R: FloatArray) -> FloatArray:
     return x + joint.radius * (np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2))
 
 
-def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
+def stick_figure(mb: Multibody, q: Numbers, *, body_axes: bool = False) -> list[FloatArray]:
     """Polylines ``(k, 3)`` (world) of ``mb`` at the configuration ``q``.
 
     Parameters
@@ -69,6 +70,8 @@ def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
         The mechanism.
     q
         Its configuration, in the order of ``mb.system.coordinate_names``.
+    body_axes
+        Also draw each rigid body's axes through its mass center.
 
     Examples
     --------
@@ -99,7 +102,7 @@ def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
                                _point(poses, s.body_b, s.point_b)]))
     for body in mb.bodies:
         x, R = poses[body.name]
-        if not isinstance(body, TurningBody):
+        if not (body_axes and isinstance(body, TurningBody)):
             lines.append(x[None].copy())
             continue
         k = radius_of_gyration(body)
