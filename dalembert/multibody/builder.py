@@ -551,7 +551,7 @@ class Multibody:
             self._explain_immobility(q0, t_span, kwargs.get("parameters"), exc)
             raise
 
-    def stick_figure(self, q: Numbers, *, body_axes: bool = False) -> list[FloatArray]:
+    def stick_figure(self, q: Numbers, *, body_axes: bool | None = None) -> list[FloatArray]:
         """Polylines ``(k, 3)`` drawing the system at ``q`` (see
         :func:`dalembert.multibody.drawing.stick_figure`, which has an example); used by
         :func:`dalembert.plotting.animate`.
@@ -561,7 +561,8 @@ class Multibody:
         q
             The configuration, in the order of ``self.system.coordinate_names``.
         body_axes
-            Also draw each rigid body's axes (three lines through its mass center).
+            Draw each rigid body's axes (three lines through its mass center), none,
+            or (``None``) those of the bodies that no joint or spring holds.
 
         Examples
         --------

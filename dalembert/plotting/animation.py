@@ -9,6 +9,8 @@ The mechanism is drawn as polylines at each frame's configuration ``q``:
   :class:`dalembert.multibody.Multibody` (or the ``Multibody`` itself), else one point
   per particle of a system whose coordinates name points (``x1, y1, x2, y2, ...``).
 
+A drawing of points alone (particles) shows each point with its path so far.
+
 The frame is fitted to the mechanism: the bounds of every drawn point over the whole
 motion with a small margin, equal scales on every axis, the figure's shape following
 the mechanism's (a 2D drawing) and a default width of :data:`DEFAULT_WIDTH` pixels.
@@ -53,6 +55,8 @@ MARGIN = 0.04
 #: The height of a 2D animation over its width stays in these bounds (a hanging chain
 #: that hardly swings still gets a frame one can read).
 ASPECT_RANGE = (0.5, 1.6)
+#: Drawings of more polylines than this are drawn in one colour, not the colour cycle.
+CYCLED_LINES = 10
 _DPI = 100
 #: Pixels above the drawing for the title and the time.
 _TITLE_PX = 30
@@ -153,9 +157,12 @@ def _figure(all_lines: list[Lines], plane: Plane | None, width: int,
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_axes((left / width, bottom / height, inner / width,
                        (height - bottom - _TITLE_PX) / height))
-    ax.set_xlim(*bounds[0])
-    ax.set_ylim(*bounds[1])
-    ax.set_aspect("equal", adjustable="datalim")   # widens the shorter side to fit
+    # equal scales: the side with room to spare is widened about its middle
+    box = np.array([inner, height - bottom - _TITLE_PX], dtype=float)
+    scale = float((span / box).max())
+    middle = bounds.mean(axis=1)
+    ax.set_xlim(middle[0] - scale * box[0] / 2, middle[0] + scale * box[0] / 2)
+    ax.set_ylim(middle[1] - scale * box[1] / 2, middle[1] + scale * box[1] / 2)
     ax.tick_params(labelsize="small")
     if axes:
         labels = plane or "xy"
@@ -187,7 +194,7 @@ def _figure_3d(bounds: NDArray[np.float64], points: NDArray[np.float64], width: 
     # the zoom (about the box's center, the axes' center) that brings the farthest one
     # to the edge. Measured against the figure's area below the title, not the axes'
     # bbox: a 3D axes keeps itself square, so the mechanism is drawn unclipped (animate).
-    probe = ax.plot(*points.T, ls="none")[0]
+    probe = ax.plot(*points.T, ls="none", color="k")[0]   # a colour: the cycle stays
     for measure in ("height", "zoom"):
         canvas.draw()
         xy = probe.get_transform().transform(np.asarray(probe.get_xydata()))
@@ -271,27 +278,41 @@ def animate(
     dim = dims.pop()
     fig, canvas, ax = _figure(all_lines, plane, width, axes)
     n_lines = max(len(lines) for lines in all_lines)
-    # the default drawing in one colour (a link's two halves are two polylines); a
-    # draw function's parts in the colour cycle. Unclipped: a 3D axes is square and
-    # smaller than a tall or wide mechanism's frame.
-    style: dict[str, Any] = {"color": "C0"} if draw is None else {}
-    artists = [ax.plot(*([[]] * dim), "o-", lw=2, ms=3, clip_on=False, **style)[0]
-               for _ in range(n_lines)]
+    # points alone (particles) are drawn large, each with its path so far: a point on
+    # its own shows no motion
+    points_only = all(len(p) == 1 for lines in all_lines for p in lines) and \
+        len({len(lines) for lines in all_lines}) == 1
+    # a few parts (a top's axes, a four-bar's links) in the colour cycle, many (a chain,
+    # whose link halves are two polylines each) in one colour. Unclipped: a 3D axes is
+    # square and smaller than a tall or wide mechanism's frame.
+    style: dict[str, Any] = {"color": "C0"} if n_lines > CYCLED_LINES else {}
+    artists = [ax.plot(*([[]] * dim), "o-", lw=2, ms=8 if points_only else 3, clip_on=False,
+                       **style)[0] for _ in range(n_lines)]
+    trails = [ax.plot(*([[]] * dim), "-", lw=1, alpha=0.5, clip_on=False,
+                      color=artist.get_color())[0]
+              for artist in (artists if points_only else [])]
     label = fig.text(0.5, 1.0 - 6 / fig.bbox.height, "", ha="center", va="top")
 
     def update(k: int) -> list[Artist]:
         lines = all_lines[k]
         for j, artist in enumerate(artists):
             _set_points(artist, lines[j] if j < len(lines) else np.empty((0, dim)))
+        for j, trail in enumerate(trails):
+            _set_points(trail, np.vstack([frame[j] for frame in all_lines[:k + 1]]))
         label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}")
-        return [*artists, label]
+        return [*trails, *artists, label]
 
-    images = _render(fig, canvas, [*artists, label], update, len(idx))
+    images = _render(fig, canvas, [*trails, *artists, label], update, len(idx))
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
-        # one palette, from the first frame, for all: quantizing each frame anew is
-        # most of the time of a GIF
-        palette = images[0].quantize(colors=128)
+        # one palette for all frames, from the first, middle and last stacked (colours
+        # that appear later, such as a path drawn so far, are in it): quantizing each
+        # frame anew is most of the time of a GIF
+        chosen = [images[0], images[len(images) // 2], images[-1]]
+        stack = Image.new("RGB", (images[0].width, images[0].height * 3))
+        for k, image in enumerate(chosen):
+            stack.paste(image, (0, k * image.height))
+        palette = stack.quantize(colors=128)
         frames_p = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
         frames_p[0].save(path, save_all=True, append_images=frames_p[1:], loop=0,
                          duration=round(1000.0 / fps))
