@@ -396,7 +396,8 @@ def _plot_grouped(t: NDArray[np.float64], values: NDArray[np.float64], names: Se
     shown = [g for g in groups if g in chosen]
     columns = min(PANEL_COLUMNS, len(shown))
     rows = -(-len(shown) // columns)
-    fig = Figure(figsize=(3.9 * columns, 0.9 + 2.0 * rows), dpi=_DPI, layout="constrained")
+    size = (3.9 * columns, 0.9 + 2.0 * rows) if len(shown) > 1 else (7.0, 4.2)
+    fig = Figure(figsize=size, dpi=_DPI, layout="constrained")
     axes = fig.subplots(rows, columns, sharex=True, squeeze=False).ravel()
     for ax, group in zip(axes, shown):
         members = groups[group]
