@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import html
 import os
-import re
 import time
 import warnings
 from collections.abc import Callable
@@ -31,9 +30,7 @@ import numpy as np
 import sympy as sp
 
 from . import examples
-from .errors import DalembertError
 from .model.coordinates import t as time_symbol
-from .multibody.builder import multibody_of
 from .system import System
 from .trajectory import Trajectory
 
@@ -108,32 +105,12 @@ def path_coordinates(module: ModuleType, system: System) -> tuple[str, str] | No
     return ("x", "y") if "x" in names and "y" in names else None
 
 
-def particle_points(names: tuple[str, ...] | list[str]) -> list[tuple[int, ...]]:
-    """Indices ``(ix, iy)`` or ``(ix, iy, iz)`` of each particle among coordinate names.
-
-    A particle is a set ``x<s>``, ``y<s>`` (and ``z<s>``) with a common suffix ``<s>``;
-    other coordinates (angles) are ignored.
-
-    >>> particle_points(["x1", "y1", "x2", "y2", "theta"])
-    [(0, 1), (2, 3)]
-    >>> particle_points(["x", "y", "z", "psi"])
-    [(0, 1, 2)]
-    """
-    groups: dict[str, dict[str, int]] = {}
-    for i, name in enumerate(names):
-        match = re.fullmatch(r"([xyz])(.*)", name)
-        if match:
-            groups.setdefault(match.group(2), {})[match.group(1)] = i
-    return [tuple(g[a] for a in "xyz" if a in g)
-            for g in groups.values() if "x" in g and "y" in g]
-
-
 def mechanism_drawer(module: ModuleType, system: System) -> tuple[Callable | None, str]:
     """``(draw, how)``: what the animation draws, or ``(None, why not)``.
 
-    In order: the example's ``draw(system, q)``; the stick figure of a system built
-    by :class:`dalembert.multibody.Multibody`; one point per particle of
-    :func:`particle_points` (in 3D if any particle has a ``z``).
+    The example's ``draw(system, q)``, else what :func:`dalembert.plotting.animate`
+    draws of the system (:func:`~dalembert.plotting.drawers.default_drawer`: the
+    multibody stick figure, or one point per particle named by the coordinates).
 
     >>> from types import SimpleNamespace
     >>> draw, how = mechanism_drawer(SimpleNamespace(),
@@ -141,25 +118,13 @@ def mechanism_drawer(module: ModuleType, system: System) -> tuple[Callable | Non
     >>> how, [p.tolist() for p in draw(None, np.array([1.0, 2.0, 3.0]))]
     ('the particles as points', [[[1.0, 2.0]]])
     """
+    from .plotting.drawers import default_drawer
+
     draw = getattr(module, "draw", None)
     if draw is not None:
         return draw, "the example's draw(system, q)"
-    try:
-        mb = multibody_of(system)
-    except DalembertError:
-        mb = None
-    if mb is not None:
-        return (lambda s, q: mb.stick_figure(q)), "the multibody stick figure"
-    particles = particle_points(list(system.coordinate_names))
-    if not particles:
-        return None, ("no animation: the example has no draw(system, q), is not a multibody "
-                      "system and has no x, y (z) coordinates of a particle")
-    dim = max(len(p) for p in particles)
-
-    def draw_points(_system: object, q: np.ndarray) -> list[np.ndarray]:
-        return [np.array([[*q[list(p)], *[0.0] * (dim - len(p))]]) for p in particles]
-
-    return draw_points, "the particles as points"
+    draw, how = default_drawer(system)
+    return draw, how if draw is not None else f"no animation: {how}"
 
 
 def write_animation(run: ExampleRun, module: ModuleType, out: Path, *, html: bool = False,

@@ -11,11 +11,45 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import trajectory_file
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: A trajectory's repr lists its coordinates when there are at most this many, else
+#: :func:`name_list` condenses them.
+REPR_NAMES = 8
+#: Names :func:`name_list` shows at the start and at the end of a long list.
+HEAD_NAMES, TAIL_NAMES = 4, 2
+
+
+def name_list(names: tuple[str, ...] | list[str], what: str) -> str:
+    """``"<count> <what>: a, b, c, d, ..., y, z"``: a list of names, condensed when long.
+
+    Parameters
+    ----------
+    names
+        The names.
+    what
+        What they are, in the plural (``"coordinates"``; one name drops the ``s``).
+
+    Examples
+    --------
+    >>> name_list([f"x{i}" for i in range(1, 49)], "coordinates")
+    '48 coordinates: x1, x2, x3, x4, ..., x47, x48'
+    >>> name_list(["rod"], "constraints")
+    '1 constraint: rod'
+    """
+    shown = list(names)
+    if len(shown) > HEAD_NAMES + TAIL_NAMES + 1:
+        shown = [*shown[:HEAD_NAMES], "...", *shown[-TAIL_NAMES:]]
+    if len(names) == 1:
+        what = what.removesuffix("s")
+    return f"{len(names)} {what}: {', '.join(shown)}"
 
 
 @dataclass(eq=False)
@@ -166,8 +200,10 @@ class Trajectory:
 
     def __repr__(self) -> str:
         span = f"t={self.t[0]:.4g}..{self.t[-1]:.4g}" if len(self.t) else "empty"
-        return (f"Trajectory({len(self.t)} points, {span}, status={self.status!r}, "
-                f"coordinates={list(self.coordinate_names)})")
+        names = self.coordinate_names
+        listed = (f"coordinates={list(names)}" if len(names) <= REPR_NAMES
+                  else name_list(names, "coordinates"))
+        return f"Trajectory({len(self.t)} points, {span}, status={self.status!r}, {listed})"
 
     def summary(self) -> str:
         """A few lines with the measured drift and the change of energy ``T + V``: an
@@ -182,6 +218,8 @@ class Trajectory:
           relative change of T + V ...e-1... (an error where energy is conserved)
         """
         lines = [repr(self), f"  {self.message}"]
+        if self.constraint_names:
+            lines.append(f"  {name_list(self.constraint_names, 'constraints')}")
         if len(self.t):
             lines.append(f"  max position residual {self.position_residual.max():.2e}, "
                          f"max velocity residual {self.velocity_residual.max():.2e}")
@@ -286,8 +324,49 @@ class Trajectory:
         return cls(**trajectory_file.read(trajectory_file.file_path(path, "Trajectory.load"),
                                           max_bytes))
 
-    def to_dataframe(self):
-        """A pandas DataFrame indexed by time: coordinates, velocities, multipliers, checks."""
+    def to_dataframe(self) -> pd.DataFrame:
+        """A pandas DataFrame indexed by time ``t``, one column per quantity.
+
+        The columns, in this order (``x`` a coordinate, ``rod`` a constraint, ``u`` an
+        input):
+
+        ========================= ==================================================
+        ``x``, ``x_dot``,         the coordinate, its velocity and acceleration
+        ``x_ddot``
+        ``lambda[rod]``           the constraint's Lagrange multiplier
+        ``constraint_force[x]``   the generalized constraint force on ``x``, the
+                                  column ``x`` of ``A^T lambda`` (in ``M qdd = f +
+                                  A^T lambda``; :attr:`constraint_forces`)
+        ``kinetic_energy``,       ``T`` and ``V``
+        ``potential_energy``
+        ``energy``                ``T + V`` (:attr:`energy`)
+        ``jacobi_integral``       ``h = qd . dL/dqd - L``
+        ``position_residual``,    the largest ``|psi|`` and ``|A qd + b|``
+        ``velocity_residual``
+        ``input[u]``              the input's value
+        ========================= ==================================================
+
+        Returns
+        -------
+        pandas.DataFrame
+            The table (``to_csv``, ``to_parquet``, ``plot`` as for any other).
+
+        Raises
+        ------
+        ImportError
+            pandas is not installed (``pip install 'dalembert[pandas]'``).
+
+        Examples
+        --------
+        >>> from dalembert.examples import load
+        >>> traj = load("pendulum").build().simulate((0, 1), {"x": 1.0, "y": 0.0},
+        ...                                          t_eval=[0.0, 0.5, 1.0])
+        >>> df = traj.to_dataframe()
+        >>> list(df.columns[6:10])
+        ['lambda[rod]', 'constraint_force[x]', 'constraint_force[y]', 'kinetic_energy']
+        >>> bool((df["energy"] == traj.energy).all())
+        True
+        """
         try:
             import pandas as pd
         except ImportError as exc:
@@ -301,9 +380,15 @@ class Trajectory:
             columns[f"{name}_ddot"] = self.qdd[:, i]
         for i, name in enumerate(self.constraint_names):
             columns[f"lambda[{name}]"] = self.multipliers[:, i]
-        for name in ("kinetic_energy", "potential_energy", "jacobi_integral",
-                     "position_residual", "velocity_residual"):
+        for i, name in enumerate(self.coordinate_names):
+            columns[f"constraint_force[{name}]"] = self.constraint_forces[:, i]
+        columns["kinetic_energy"] = self.kinetic_energy
+        columns["potential_energy"] = self.potential_energy
+        columns["energy"] = self.energy
+        for name in ("jacobi_integral", "position_residual", "velocity_residual"):
             columns[name] = getattr(self, name)
+        for i, name in enumerate(self.input_names):
+            columns[f"input[{name}]"] = self.inputs[:, i]
         return pd.DataFrame(columns, index=pd.Index(self.t, name="t"))
 
 

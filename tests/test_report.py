@@ -14,12 +14,13 @@ from PIL import Image
 from dalembert import System, coordinates, report
 from dalembert.examples import heavy_top, whirled_string
 from dalembert.plotting.animation import mechanism_frames
+from dalembert.plotting.drawers import particle_points
 
 
 def test_particle_points_groups_by_suffix_and_ignores_angles():
     names = ["x1", "y1", "z1", "x2", "y2", "z2", "theta", "xi"]
-    assert report.particle_points(names) == [(0, 1, 2), (3, 4, 5)]
-    assert report.particle_points(["psi", "phi"]) == []
+    assert particle_points(names) == [(0, 1, 2), (3, 4, 5)]
+    assert particle_points(["psi", "phi"]) == []
 
 
 def test_point_fallback_draws_the_particle_where_the_trajectory_is():
@@ -55,7 +56,7 @@ def test_example_with_nothing_to_draw_gets_a_note_and_no_animation(monkeypatch, 
     monkeypatch.setattr(report.examples, "load", lambda name: angle_pendulum())
     run = report.run_example("angle", tmp_path, points=11)
     assert not (tmp_path / "animation.gif").exists()
-    assert any(n.startswith("no animation: the example has no draw") for n in run.notes)
+    assert any(n.startswith("no animation: nothing to draw") for n in run.notes)
     assert "no animation" in report.format_run(run)
     assert (tmp_path / "coordinates.png").exists()
 

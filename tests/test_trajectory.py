@@ -137,6 +137,27 @@ def test_to_dataframe(traj):
     assert {"x", "y", "x_ddot", "jacobi_integral", "position_residual"} <= set(df.columns)
 
 
+def test_to_dataframe_constraint_forces_energies_and_inputs(traj):
+    """The rod x^2 + y^2 = l^2 has A = [2x, 2y]: the force columns are A^T lambda, and also
+    M qdd - f with m = 1 and f = (0, -g); T, V and T + V from q and qd (m = 1, g = 9.81)."""
+    df = traj.to_dataframe()
+    x_, y_, lam = df["x"].to_numpy(), df["y"].to_numpy(), df["lambda[rod]"].to_numpy()
+    force = df[["constraint_force[x]", "constraint_force[y]"]].to_numpy()
+    np.testing.assert_allclose(force, np.column_stack([2 * x_ * lam, 2 * y_ * lam]),
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(force, np.column_stack([df["x_ddot"], df["y_ddot"] + 9.81]),
+                               rtol=1e-9, atol=1e-9)
+    T = 0.5 * (df["x_dot"] ** 2 + df["y_dot"] ** 2).to_numpy()
+    V = 9.81 * y_
+    np.testing.assert_allclose(df["kinetic_energy"], T, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(df["potential_energy"], V, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(df["energy"], T + V, rtol=1e-13, atol=1e-13)
+    assert {"position_residual", "velocity_residual"} <= set(df.columns)
+    driven = Trajectory(**{**vars(traj), "inputs": np.arange(len(traj.t))[:, None] * 0.5,
+                           "input_names": ("u",)})
+    np.testing.assert_array_equal(driven.to_dataframe()["input[u]"], 0.5 * np.arange(len(traj)))
+
+
 def test_summary_and_repr(traj):
     assert repr(traj).startswith(f"Trajectory({len(traj)} points, t=0..2, status='finished'")
     text = traj.summary()

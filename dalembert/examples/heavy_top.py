@@ -85,8 +85,8 @@ INITIAL = steady_state()
 
 
 def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
-    """Pivot -> mass center line and the top's axes (3D polylines)."""
-    return multibody_of(system).stick_figure(q)
+    """Pivot -> mass center line and the top's axes, which show its spin (3D polylines)."""
+    return multibody_of(system).stick_figure(q, body_axes=True)
 
 
 def checks(system: System, traj: Trajectory) -> dict[str, float]:

@@ -62,7 +62,7 @@ INITIAL = bent_state(model())
 
 
 def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
-    """The links (center -> joint points) and their axes (3D polylines)."""
+    """The links (center -> joint points) and their mass centers (3D polylines)."""
     return multibody_of(system).stick_figure(q)
 
 

@@ -50,8 +50,8 @@ INITIAL = _initial()
 
 
 def draw(system: System, q: np.ndarray) -> list[np.ndarray]:
-    """The body's axes through its mass center (3D polylines)."""
-    return multibody_of(system).stick_figure(q)
+    """The body's axes through its mass center, which show its tumbling (3D polylines)."""
+    return multibody_of(system).stick_figure(q, body_axes=True)
 
 
 def checks(system: System, traj: Trajectory) -> dict[str, float]:

@@ -565,7 +565,7 @@ class Multibody:
             self._explain_immobility(q0, t_span, kwargs.get("parameters"), exc)
             raise
 
-    def stick_figure(self, q: Numbers) -> list[FloatArray]:
+    def stick_figure(self, q: Numbers, *, body_axes: bool | None = None) -> list[FloatArray]:
         """Polylines ``(k, 3)`` drawing the system at ``q`` (see
         :func:`dalembert.multibody.drawing.stick_figure`, which has an example); used by
         :func:`dalembert.plotting.animate`.
@@ -574,18 +574,25 @@ class Multibody:
         ----------
         q
             The configuration, in the order of ``self.system.coordinate_names``.
+        body_axes
+            Draw each rigid body's axes (three lines through its mass center), none,
+            or (``None``) those of the bodies that no joint or spring holds.
 
         Examples
         --------
-        A link hanging from the origin: its axes, and the line from its center to each
-        joint point (the ground's a single point):
+        A link hanging from the origin: the ground's joint point, the line from its
+        center to its joint point and its center; with its axes instead of the center:
 
         >>> mb = chain(1, 1.0, 1.0, 0.1)
         >>> q0, _ = mb.initial_state(positions={"link1": (0, 0, -0.5)})
-        >>> [len(line) for line in mb.stick_figure([q0[n] for n in mb.system.coordinate_names])]
+        >>> q = [q0[n] for n in mb.system.coordinate_names]
+        >>> [len(line) for line in mb.stick_figure(q)]
+        [1, 2, 1]
+        >>> [len(line) for line in mb.stick_figure(q, body_axes=True)]
         [1, 2, 2, 2, 2]
         """
-        return stick_figure(self._with_defaults() or self.bound(), np.asarray(q, dtype=float))
+        return stick_figure(self._with_defaults() or self.bound(), np.asarray(q, dtype=float),
+                            body_axes=body_axes)
 
     def _explain_immobility(self, q0: CoordinateValues, t_span: Sequence[float],
                             parameters: Mapping[Any, object] | None,

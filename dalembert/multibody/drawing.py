@@ -8,9 +8,11 @@ coordinates:
   so a chain shows as its links, and a ground joint point as a single point;
 - a rolling joint: center -> contact point, and a disk's rim;
 - every spring: a line between its two points;
-- every rigid body: its body axes through the mass center, each of half-length
-  the body's radius of gyration (so the rotation is visible);
-- a particle: a single point.
+- the axes through the mass center, each of half-length the body's radius of
+  gyration, of every rigid body that no joint or spring holds (nothing else shows
+  how it turns), or of every rigid body with ``body_axes=True`` (they show a spin
+  that the links do not, as a top's, but clutter a chain's links);
+- a particle, and a rigid body drawn without its axes: its mass center as a point.
 """
 
 from __future__ import annotations
@@ -60,7 +62,8 @@ def _rim(joint: Rolling, x: FloatArray, R: FloatArray) -> FloatArray:
     return x + joint.radius * (np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2))
 
 
-def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
+def stick_figure(mb: Multibody, q: Numbers, *,
+                 body_axes: bool | None = None) -> list[FloatArray]:
     """Polylines ``(k, 3)`` (world) of ``mb`` at the configuration ``q``.
 
     Parameters
@@ -69,6 +72,9 @@ def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
         The mechanism.
     q
         Its configuration, in the order of ``mb.system.coordinate_names``.
+    body_axes
+        Draw each rigid body's axes through its mass center (``True``), no body's
+        (``False``), or those of the bodies that no joint or spring holds (``None``).
 
     Examples
     --------
@@ -97,9 +103,12 @@ def stick_figure(mb: Multibody, q: Numbers) -> list[FloatArray]:
     for s in mb.springs:
         lines.append(np.array([_point(poses, s.body_a, s.point_a),
                                _point(poses, s.body_b, s.point_b)]))
+    held = {b.name for j in mb.joints for b in (j.body_a, j.body_b)}
+    held |= {b.name for s in mb.springs for b in (s.body_a, s.body_b)}
     for body in mb.bodies:
         x, R = poses[body.name]
-        if not isinstance(body, TurningBody):
+        axes = body.name not in held if body_axes is None else body_axes
+        if not (axes and isinstance(body, TurningBody)):
             lines.append(x[None].copy())
             continue
         k = radius_of_gyration(body)

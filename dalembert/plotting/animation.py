@@ -4,17 +4,25 @@ The mechanism is drawn as polylines at each frame's configuration ``q``:
 
 - ``draw(system, q)``, when given (the gallery examples define one): a list of
   ``(k, 2)`` or ``(k, 3)`` arrays;
-- otherwise, for a system built by :class:`dalembert.multibody.Multibody` (or the
-  ``Multibody`` itself), its stick figure: links from mass centers to joint
-  points, rolling contacts, springs and body axes (3D).
+- otherwise what :func:`~dalembert.plotting.drawers.default_drawer` finds, as
+  ``dalembert run`` does: the stick figure of a system built by
+  :class:`dalembert.multibody.Multibody` (or the ``Multibody`` itself), else one point
+  per particle of a system whose coordinates name points (``x1, y1, x2, y2, ...``).
 
-3D drawings are shown in a 3D axes, or projected on a coordinate plane with
+A drawing of points alone (particles) shows each point with its path so far.
+
+The frame is fitted to the mechanism: the bounds of every drawn point over the whole
+motion with a small margin, equal scales on every axis, the figure's shape following
+the mechanism's (a 2D drawing) and a default width of :data:`DEFAULT_WIDTH` pixels.
+2D drawings have a thin frame with ticks for the scale; 3D drawings (orthographic,
+zoomed to the mechanism) no axes at all; ``axes=True`` adds the grid, the axis
+labels and the 3D panes. 3D drawings can be projected on a coordinate plane with
 ``plane="xz"`` (``"xy"``, ``"yz"``). The file type follows the suffix: ``.gif``
 (written by Pillow) or ``.html`` (a self-contained page of PNG frames with play,
 pause and a slider). Figures are plain :class:`matplotlib.figure.Figure` objects
-on an Agg canvas: no pyplot, no backend switching, no screen. The axes, grid and
-labels are drawn once and only the mechanism and the time are redrawn per frame
-(blitting): about ten times faster than redrawing the figure.
+on an Agg canvas: no pyplot, no backend switching, no screen. The axes are drawn
+once and only the mechanism and the time are redrawn per frame (blitting): about
+ten times faster than redrawing the figure.
 """
 
 from __future__ import annotations
@@ -36,9 +44,22 @@ from numpy.typing import ArrayLike, NDArray
 from PIL import Image
 
 from ..trajectory import Trajectory
+from .drawers import default_drawer
 from .modes import PLANES, Plane
 
 SUFFIXES = (".gif", ".html")
+#: The width of an animation in pixels unless asked otherwise.
+DEFAULT_WIDTH = 640
+#: The margin around the mechanism, a fraction of its largest extent over the motion.
+MARGIN = 0.04
+#: The height of a 2D animation over its width stays in these bounds (a hanging chain
+#: that hardly swings still gets a frame one can read).
+ASPECT_RANGE = (0.5, 1.6)
+#: Drawings of more polylines than this are drawn in one colour, not the colour cycle.
+CYCLED_LINES = 10
+_DPI = 100
+#: Pixels above the drawing for the title and the time.
+_TITLE_PX = 30
 #: ``draw(system, q)``: the polylines of the mechanism at ``q`` (in coordinate order),
 #: each a ``(k, 2)`` or ``(k, 3)`` array; ``system`` is what :func:`animate` was given.
 AnimationDraw = Callable[[Any, NDArray[np.float64]], Sequence[ArrayLike]]
@@ -68,18 +89,12 @@ def frame_indices(n_points: int, frames: int) -> NDArray[np.intp]:
 
 def _drawer(system: object,
             draw: AnimationDraw | None) -> Callable[[NDArray[np.float64]], Sequence[ArrayLike]]:
-    if draw is not None:
-        return lambda q: draw(system, q)
-    from ..multibody.builder import Multibody  # only a multibody draws itself
-
-    mb = system if isinstance(system, Multibody) else \
-        getattr(getattr(system, "definition", None), "multibody", None)
-    if not isinstance(mb, Multibody):
-        raise ValueError(
-            "nothing to draw: give draw=draw(system, q) returning polylines, or a system "
-            "built by dalembert.multibody.Multibody (or the Multibody itself)"
-        )
-    return mb.stick_figure
+    if draw is None:
+        draw, why = default_drawer(system)
+        if draw is None:
+            raise ValueError(f"{why}; give draw=draw(system, q) returning polylines")
+    found = draw
+    return lambda q: found(system, q)
 
 
 def mechanism_frames(traj: Trajectory, system: object = None, draw: AnimationDraw | None = None,
@@ -115,37 +130,83 @@ def mechanism_frames(traj: Trajectory, system: object = None, draw: AnimationDra
     return idx, out
 
 
-def _limits(all_lines: list[Lines]) -> NDArray[np.float64]:
-    pts = np.vstack([p for lines in all_lines for p in lines])
+def _bounds(pts: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``[[lo, hi], ...]`` per axis: every point drawn, with a margin of :data:`MARGIN`
+    of the largest extent (a mechanism that does not move, or a single point, gets a
+    unit box)."""
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    half = max(float((hi - lo).max()) / 2, 1e-9) * 1.1
-    mid = (lo + hi) / 2
-    return np.column_stack([mid - half, mid + half])   # equal scale on every axis
+    size = float((hi - lo).max())
+    pad = MARGIN * size if size > 0 else 0.5
+    return np.column_stack([lo - pad, hi + pad])
 
 
-def _figure(dim: int, limits: NDArray[np.float64],
-            plane: Plane | None) -> tuple[Figure, FigureCanvasAgg, Axes]:
-    """The figure, its Agg canvas and its axes (3D axes when ``dim`` is 3)."""
-    fig = Figure(figsize=(4.8, 4.8), dpi=80)
+def _figure(all_lines: list[Lines], plane: Plane | None, width: int,
+            axes: bool) -> tuple[Figure, FigureCanvasAgg, Axes]:
+    """The figure, its Agg canvas and its axes, fitted to the drawn points."""
+    points = np.vstack([p for lines in all_lines for p in lines])
+    bounds = _bounds(points)
+    if points.shape[1] == 3:
+        return _figure_3d(bounds, points, width, axes)
+    span = bounds[:, 1] - bounds[:, 0]
+    aspect = float(np.clip(span[1] / span[0], *ASPECT_RANGE))
+    # pixel margins: tick labels left and below, the title above
+    left, right, bottom = (52, 12, 44) if axes else (44, 12, 24)
+    inner = width - left - right
+    height = round(inner * aspect) + bottom + _TITLE_PX
+    fig = Figure(figsize=(width / _DPI, height / _DPI), dpi=_DPI)
     canvas = FigureCanvasAgg(fig)
-    if dim == 3:
-        ax = fig.add_subplot(projection="3d")
-        ax.set_xlim(*limits[0])
-        ax.set_ylim(*limits[1])
-        ax.set_zlim(*limits[2])
-        ax.set_xlabel("x")
-        ax.set_ylabel("y")
-        ax.set_zlabel("z")
-    else:
-        ax = fig.add_subplot()
-        ax.set_xlim(*limits[0])
-        ax.set_ylim(*limits[1])
-        ax.set_aspect("equal")
-        fig.subplots_adjust(left=0.16)   # room for the y label
+    ax = fig.add_axes((left / width, bottom / height, inner / width,
+                       (height - bottom - _TITLE_PX) / height))
+    # equal scales: the side with room to spare is widened about its middle
+    box = np.array([inner, height - bottom - _TITLE_PX], dtype=float)
+    scale = float((span / box).max())
+    middle = bounds.mean(axis=1)
+    ax.set_xlim(middle[0] - scale * box[0] / 2, middle[0] + scale * box[0] / 2)
+    ax.set_ylim(middle[1] - scale * box[1] / 2, middle[1] + scale * box[1] / 2)
+    ax.tick_params(labelsize="small")
+    if axes:
         labels = plane or "xy"
         ax.set_xlabel(labels[0])
         ax.set_ylabel(labels[1])
         ax.grid(True, alpha=0.3)
+    return fig, canvas, ax
+
+
+def _figure_3d(bounds: NDArray[np.float64], points: NDArray[np.float64], width: int,
+               axes: bool) -> tuple[Figure, FigureCanvasAgg, Axes]:
+    """A 3D axes (orthographic, equal scales) zoomed until ``points`` fill it."""
+    fig = Figure(figsize=(width / _DPI, width / _DPI), dpi=_DPI)
+    canvas = FigureCanvasAgg(fig)
+    ax: Any = fig.add_subplot(projection="3d")
+    ax.set_proj_type("ortho")
+    ax.set_xlim(*bounds[0])
+    ax.set_ylim(*bounds[1])
+    ax.set_zlim(*bounds[2])
+    span = tuple(bounds[:, 1] - bounds[:, 0])
+    ax.set_box_aspect(span)
+    if axes:
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_zlabel("z")
+    else:
+        ax.set_axis_off()
+    # every drawn point, as projected, measured twice: for the figure's height, then for
+    # the zoom (about the box's center, the axes' center) that brings the farthest one
+    # to the edge. Measured against the figure's area below the title, not the axes'
+    # bbox: a 3D axes keeps itself square, so the mechanism is drawn unclipped (animate).
+    probe = ax.plot(*points.T, ls="none", color="k")[0]   # a colour: the cycle stays
+    for measure in ("height", "zoom"):
+        canvas.draw()
+        xy = probe.get_transform().transform(np.asarray(probe.get_xydata()))
+        reach = np.abs(xy - np.asarray(ax.bbox.corners()).mean(axis=0)).max(axis=0) * 2
+        if measure == "height":
+            aspect = float(np.clip(reach[1] / reach[0], *ASPECT_RANGE))
+            height = round(width * aspect) + _TITLE_PX
+            fig.set_size_inches(width / _DPI, height / _DPI)
+            ax.set_position((0.0, 0.0, 1.0, 1.0 - _TITLE_PX / height))
+    zoom = min(width / reach[0], (height - _TITLE_PX) / reach[1]) / (1 + 2 * MARGIN)
+    ax.set_box_aspect(span, zoom=zoom * (0.75 if axes else 1.0))   # room for tick labels
+    probe.remove()
     return fig, canvas, ax
 
 
@@ -159,6 +220,8 @@ def animate(
     fps: float = 15.0,
     plane: Plane | None = None,
     title: str | None = None,
+    width: int = DEFAULT_WIDTH,
+    axes: bool = False,
 ) -> Path:
     """Write an animation of the mechanism along ``traj`` to ``path`` (``.gif``/``.html``).
 
@@ -172,13 +235,19 @@ def animate(
         The :class:`~dalembert.System` (passed to ``draw``), or a ``Multibody``.
     draw
         ``draw(system, q) -> list of (k, 2) or (k, 3) arrays``; default: the
-        multibody stick figure.
+        multibody stick figure, or the points that the coordinates name
+        (:func:`~dalembert.plotting.drawers.default_drawer`).
     frames, fps
         At most ``frames`` evenly spread outputs, played at ``fps``.
     plane
         Project 3D drawings on ``"xy"``, ``"xz"`` or ``"yz"`` (default: 3D axes).
     title
         Figure title (the time is appended).
+    width
+        The width of the frames in pixels (their height follows the mechanism's shape).
+    axes
+        Draw the grid, the axis labels and (3D) the panes; by default a 2D drawing
+        has a frame with ticks only and a 3D drawing no axes.
 
     Returns
     -------
@@ -197,6 +266,8 @@ def animate(
     True
     """
     path = Path(path)
+    if width < 64:
+        raise ValueError(f"width must be at least 64 pixels, got {width}")
     if path.suffix.lower() not in SUFFIXES:
         raise ValueError(f"{path}: the animation is written as .gif or .html, "
                          f"not {path.suffix or 'no suffix'!r}")
@@ -205,24 +276,43 @@ def animate(
     if not dims <= {2, 3} or len(dims) != 1:
         raise ValueError(f"draw must return polylines with 2 or 3 columns, all alike; got {dims}")
     dim = dims.pop()
-    fig, canvas, ax = _figure(dim, _limits(all_lines), plane)
+    fig, canvas, ax = _figure(all_lines, plane, width, axes)
     n_lines = max(len(lines) for lines in all_lines)
-    artists = [ax.plot(*([[]] * dim), "o-", lw=2, ms=3)[0] for _ in range(n_lines)]
-    label = ax.set_title("")
+    # points alone (particles) are drawn large, each with its path so far: a point on
+    # its own shows no motion
+    points_only = all(len(p) == 1 for lines in all_lines for p in lines) and \
+        len({len(lines) for lines in all_lines}) == 1
+    # a few parts (a top's axes, a four-bar's links) in the colour cycle, many (a chain,
+    # whose link halves are two polylines each) in one colour. Unclipped: a 3D axes is
+    # square and smaller than a tall or wide mechanism's frame.
+    style: dict[str, Any] = {"color": "C0"} if n_lines > CYCLED_LINES else {}
+    artists = [ax.plot(*([[]] * dim), "o-", lw=2, ms=8 if points_only else 3, clip_on=False,
+                       **style)[0] for _ in range(n_lines)]
+    trails = [ax.plot(*([[]] * dim), "-", lw=1, alpha=0.5, clip_on=False,
+                      color=artist.get_color())[0]
+              for artist in (artists if points_only else [])]
+    label = fig.text(0.5, 1.0 - 6 / fig.bbox.height, "", ha="center", va="top")
 
     def update(k: int) -> list[Artist]:
         lines = all_lines[k]
         for j, artist in enumerate(artists):
             _set_points(artist, lines[j] if j < len(lines) else np.empty((0, dim)))
+        for j, trail in enumerate(trails):
+            _set_points(trail, np.vstack([frame[j] for frame in all_lines[:k + 1]]))
         label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}")
-        return [*artists, label]
+        return [*trails, *artists, label]
 
-    images = _render(fig, canvas, [*artists, label], update, len(idx))
+    images = _render(fig, canvas, [*trails, *artists, label], update, len(idx))
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
-        # one palette, from the first frame, for all: quantizing each frame anew is
-        # most of the time of a GIF
-        palette = images[0].quantize(colors=128)
+        # one palette for all frames, from the first, middle and last stacked (colours
+        # that appear later, such as a path drawn so far, are in it): quantizing each
+        # frame anew is most of the time of a GIF
+        chosen = [images[0], images[len(images) // 2], images[-1]]
+        stack = Image.new("RGB", (images[0].width, images[0].height * 3))
+        for k, image in enumerate(chosen):
+            stack.paste(image, (0, k * image.height))
+        palette = stack.quantize(colors=128)
         frames_p = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
         frames_p[0].save(path, save_all=True, append_images=frames_p[1:], loop=0,
                          duration=round(1000.0 / fps))

@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InitialConditionError
-from .trajectory_plots import _save
+from .trajectory_plots import _legend_outside, _save
 
 if TYPE_CHECKING:
     from ..statics import Equilibrium, Linearization
@@ -233,7 +233,8 @@ def _draw_lines(ax: Axes, lines: list[NDArray[np.float64]], *, label: str,
 
 
 def _figure() -> tuple[Figure, Axes]:
-    fig = Figure(figsize=(6.0, 5.0), dpi=_DPI)
+    # constrained layout: room for the legend beside the axes
+    fig = Figure(figsize=(7.0, 5.0), dpi=_DPI, layout="constrained")
     return fig, fig.add_subplot()
 
 
@@ -243,4 +244,4 @@ def _finish(ax: Axes, title: str, labels: str) -> None:
     ax.set_ylabel(labels[1])
     ax.set_title(title, fontsize="medium")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    _legend_outside(ax)

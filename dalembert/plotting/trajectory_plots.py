@@ -9,7 +9,7 @@ leaks nothing.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,7 +18,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
-from ..trajectory import Trajectory
+from ..trajectory import Trajectory, name_list
+from .drawers import multibody_or_none
+from .groups import Groups, constraint_groups, coordinate_groups
 
 if TYPE_CHECKING:
     from ..system import System
@@ -27,6 +29,12 @@ if TYPE_CHECKING:
 LOG_FLOOR = 1e-18
 #: What :func:`plot_energy_error` can show: ``T + V`` or the Jacobi integral.
 ENERGY_QUANTITIES = ("energy", "jacobi")
+#: Curves on one axes at most: more are drawn as small multiples, one panel per body or
+#: joint (or group of names), each with at most this many curves.
+PANEL_LINES = 8
+#: Panels at most (the groups with the largest curves; the others are named in a note).
+MAX_PANELS = 9
+PANEL_COLUMNS = 3
 _DPI = 110
 
 
@@ -34,7 +42,13 @@ def plot_coordinates(
     traj: Trajectory, path: str | os.PathLike, *, system: System | None = None,
     title: str | None = None,
 ) -> Path:
-    """Every coordinate against time, one line each.
+    """Every coordinate against time, one line each, the legend beside the axes.
+
+    More than :data:`PANEL_LINES` coordinates are drawn as small multiples, one panel
+    per body of a multibody ``system`` (else per group of names,
+    :func:`~dalembert.plotting.groups.coordinate_groups`): the :data:`MAX_PANELS`
+    bodies that move most, each with its :data:`PANEL_LINES` coordinates of largest
+    range, and a note naming the others.
 
     Parameters
     ----------
@@ -43,7 +57,7 @@ def plot_coordinates(
     path
         The PNG to write (parent folders are created).
     system
-        Optional :class:`~dalembert.System`, used for the default title.
+        Optional :class:`~dalembert.System`, for the default title and the bodies.
     title
         Figure title (default: the system's name).
 
@@ -64,13 +78,11 @@ def plot_coordinates(
     ...     png.name, png.stat().st_size > 0
     ('q.png', True)
     """
-    fig, ax = _figure()
-    for i, name in enumerate(traj.coordinate_names):
-        ax.plot(traj.t, traj.q[:, i], label=name)
-    ax.set_xlabel("t")
-    ax.set_ylabel("q")
-    _finish(ax, _title(title, system, "coordinates"), legend=bool(traj.coordinate_names))
-    return _save(fig, path)
+    return _plot_grouped(
+        traj.t, traj.q, traj.coordinate_names, coordinate_groups(traj.coordinate_names, system),
+        path, title=_title(title, system, "coordinates"), ylabel="q",
+        rank=np.ptp, ranked_by="smaller range", what="bodies" if _is_multibody(system)
+        else "groups")
 
 
 def relative_drift(values: ArrayLike) -> NDArray[np.float64]:
@@ -200,6 +212,12 @@ def plot_multipliers(
 ) -> Path:
     """Each constraint's Lagrange multiplier against time, labelled by constraint name.
 
+    More than :data:`PANEL_LINES` multipliers are drawn as small multiples, one panel
+    per joint of a multibody ``system`` (its bodies' unit-quaternion rows in one more;
+    else per group of names, :func:`~dalembert.plotting.groups.constraint_groups`):
+    the :data:`MAX_PANELS` joints with the largest multipliers and a note naming the
+    others.
+
     Parameters
     ----------
     traj
@@ -207,7 +225,7 @@ def plot_multipliers(
     path
         The PNG to write (parent folders are created).
     system
-        Optional :class:`~dalembert.System`, used for the default title.
+        Optional :class:`~dalembert.System`, for the default title and the joints.
     title
         Figure title (default: the system's name).
 
@@ -228,16 +246,19 @@ def plot_multipliers(
     ...     png.stat().st_size > 0
     True
     """
-    fig, ax = _figure()
-    for name in traj.constraint_names:
-        ax.plot(traj.t, traj.multiplier(name), label=f"lambda[{name}]")
     if not traj.constraint_names:
+        fig, ax = _figure()
         _note(ax, "no constraints, no multipliers")
-    ax.set_xlabel("t")
-    ax.set_ylabel("lambda")
-    _finish(ax, _title(title, system, "Lagrange multipliers"),
-            legend=bool(traj.constraint_names))
-    return _save(fig, path)
+        ax.set_xlabel("t")
+        ax.set_ylabel("lambda")
+        _finish(ax, _title(title, system, "Lagrange multipliers"), legend=False)
+        return _save(fig, path)
+    return _plot_grouped(
+        traj.t, traj.multipliers, traj.constraint_names,
+        constraint_groups(traj.constraint_names, system), path,
+        title=_title(title, system, "Lagrange multipliers"), ylabel="lambda",
+        rank=lambda v: np.abs(v).max(initial=0.0), ranked_by="smaller peak",
+        what="joints" if _is_multibody(system) else "groups", label="lambda[{}]")
 
 
 def plot_path(
@@ -338,11 +359,68 @@ def plot_all(
 
 
 # -- helpers -------------------------------------------------------------------------
-def _figure() -> tuple[Figure, Axes]:
-    fig = Figure(figsize=(7.0, 4.2), dpi=_DPI)
-    # fixed margins (room for 1e-15 tick labels): tight_layout would draw twice
-    fig.subplots_adjust(left=0.13, right=0.97, bottom=0.12, top=0.91)
+def _figure(size: tuple[float, float] = (7.0, 4.2)) -> tuple[Figure, Axes]:
+    # constrained layout: it makes room for the legends outside the axes
+    fig = Figure(figsize=size, dpi=_DPI, layout="constrained")
     return fig, fig.add_subplot()
+
+
+def _legend_outside(ax: Axes, title: str | None = None) -> None:
+    """The legend right of the axes, where it covers no curve."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+              fontsize="small", title=title, title_fontsize="small")
+
+
+def _plot_grouped(t: NDArray[np.float64], values: NDArray[np.float64], names: Sequence[str],
+                  groups: Groups, path: str | os.PathLike, *, title: str, ylabel: str,
+                  rank: Callable[[NDArray[np.float64]], float], ranked_by: str, what: str,
+                  label: str = "{}") -> Path:
+    """The columns of ``values`` against ``t``: on one axes when there are at most
+    :data:`PANEL_LINES` of them, else one panel per group (the :data:`MAX_PANELS`
+    groups that rank highest, each with its :data:`PANEL_LINES` highest curves, the
+    others named in a note)."""
+    if len(names) <= PANEL_LINES:
+        fig, ax = _figure()
+        for i, name in enumerate(names):
+            ax.plot(t, values[:, i], label=label.format(name))
+        ax.set_xlabel("t")
+        ax.set_ylabel(ylabel)
+        _finish(ax, title, legend=bool(names))
+        return _save(fig, path)
+
+    def score(column: int) -> float:
+        return float(np.nan_to_num(rank(values[:, column])))
+
+    best = {g: max(score(i) for i, _ in members) for g, members in groups.items()}
+    chosen = set(sorted(groups, key=lambda g: -best[g])[:MAX_PANELS])
+    shown = [g for g in groups if g in chosen]
+    columns = min(PANEL_COLUMNS, len(shown))
+    rows = -(-len(shown) // columns)
+    size = (3.9 * columns, 0.9 + 2.0 * rows) if len(shown) > 1 else (7.0, 4.2)
+    fig = Figure(figsize=size, dpi=_DPI, layout="constrained")
+    axes = fig.subplots(rows, columns, sharex=True, squeeze=False).ravel()
+    for ax, group in zip(axes, shown):
+        members = groups[group]
+        kept = set(sorted(members, key=lambda m: -score(m[0]))[:PANEL_LINES])
+        for i, name in members:
+            if (i, name) in kept:
+                ax.plot(t, values[:, i], label=name)
+        ax.set_title(group, fontsize="medium")
+        ax.grid(True, alpha=0.3)
+        more = len(members) - len(kept)
+        _legend_outside(ax, f"+{more} more ({ranked_by})" if more else None)
+    for ax in axes[len(shown):]:
+        ax.remove()
+    hidden = [g for g in groups if g not in chosen]
+    note = f"\nnot shown ({ranked_by}): {name_list(hidden, what)}" if hidden else ""
+    fig.supxlabel("t" + note, fontsize="medium")
+    fig.supylabel(ylabel)
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+def _is_multibody(system: object) -> bool:
+    return multibody_or_none(system) is not None
 
 
 def _title(title: str | None, system: System | None, what: str) -> str:
@@ -358,7 +436,7 @@ def _finish(ax: Axes, title: str, *, legend: bool) -> None:
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     if legend:
-        ax.legend(loc="best", fontsize="small")
+        _legend_outside(ax)
 
 
 def _has_holonomic(system: System | None) -> bool:
