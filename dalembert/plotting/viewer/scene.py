@@ -24,7 +24,6 @@ points. Two kinds of systems give one:
 from __future__ import annotations
 
 import dataclasses
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -40,6 +39,7 @@ from ...multibody.outputs import joint_reactions
 from ...multibody.rolling import Rolling
 from ...multibody.types import FloatArray
 from ...trajectory import Trajectory
+from ..drawers import particle_points
 
 #: Traced points chosen when none are named.
 DEFAULT_TRACES = 4
@@ -384,10 +384,8 @@ def _joints(mb: Multibody, names: list[str], shapes: list[dict[str, Any]],
 
 # -- systems of points ---------------------------------------------------------------
 def point_columns(names: Sequence[str]) -> dict[str, list[int]]:
-    """The points among coordinate names: ``{x-name: [ix, iy(, iz)]}``.
-
-    A point is a set ``x<s>``, ``y<s>`` (and ``z<s>``) with a common suffix ``<s>``;
-    other coordinates (angles) are ignored.
+    """The points among coordinate names: ``{x-name: [ix, iy(, iz)]}`` (the points of
+    :func:`~dalembert.plotting.drawers.particle_points`, by their ``x`` coordinate).
 
     Parameters
     ----------
@@ -399,13 +397,7 @@ def point_columns(names: Sequence[str]) -> dict[str, list[int]]:
     >>> point_columns(["x1", "y1", "x2", "y2", "theta"])
     {'x1': [0, 1], 'x2': [2, 3]}
     """
-    groups: dict[str, dict[str, int]] = {}
-    for i, name in enumerate(names):
-        match = re.fullmatch(r"([xyz])(.*)", name)
-        if match:
-            groups.setdefault(match.group(2), {})[match.group(1)] = i
-    return {f"x{s}": [g[a] for a in "xyz" if a in g]
-            for s, g in groups.items() if "x" in g and "y" in g}
+    return {names[point[0]]: list(point) for point in particle_points(names)}
 
 
 def _sticks(system: Any, points: dict[str, list[int]],
