@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.values import CoordinateValues, coordinate_values
+from ..numerics.rank import RANK_RTOL, min_norm_multipliers
 from .builder import Multibody
 from .joint_space import JointValues, joint_jacobian, selected_joints
 from .joints import Joint, Prismatic, Revolute
@@ -39,10 +40,6 @@ from .types import FloatArray
 
 if TYPE_CHECKING:  # statics (scipy.optimize) is imported when a linearization is made
     from ..statics import Equilibrium, StateSpace
-
-#: ``Z^T B`` counts as rank-deficient below this singular value, relative to the largest.
-RANK_RTOL = 1e-10
-
 
 @dataclass(frozen=True)
 class JointEfforts:
@@ -168,7 +165,7 @@ def inverse_dynamics(
             f"motion: a generalized force of {residual[worst]:.3g} on {names[worst]} is "
             "left that neither they nor the constraints supply; actuate more joints, give "
             "a motion they can produce, or pass tol=None for the least-squares torques")
-    lam = np.linalg.lstsq(A.T, left, rcond=None)[0] if A.size else np.zeros(0)
+    lam = min_norm_multipliers(A, left) if A.size else np.zeros(0)
     return JointEfforts(JointValues(labels, tau), lam, residual)
 
 

@@ -108,8 +108,8 @@ class Schedule:
 
 
 class Segment(Protocol):
-    """One smooth segment, as :func:`run_segments` uses it (a
-    :class:`~dalembert.solvers.running.plan.SimulationPlan` is one)."""
+    """One smooth segment, as :func:`run_segments` uses it (a run's
+    :class:`~dalembert.solvers.running.run_data.RunSegment` is one)."""
 
     def run(self) -> IntegrationResult:
         ...
