@@ -9,6 +9,7 @@ from .ensemble.run import simulate_many as _simulate_many
 from .errors import (  # every error and warning (errors.__all__)
     BadCacheEntryWarning,
     CompileError,
+    ContactError,
     ConstraintError,
     DalembertError,
     DalembertWarning,
@@ -43,7 +44,7 @@ from .errors import (  # every error and warning (errors.__all__)
     UnsafeCacheError,
     UnsupportedModelFeatureWarning,
 )
-from .model.constraints import Holonomic, Pfaffian
+from .model.constraints import Holonomic, Pfaffian, Unilateral
 from .model.coordinates import coordinates, t
 from .model.forces import PointForce
 from .model.parameters import ParameterSet
@@ -77,6 +78,7 @@ def __dir__() -> list[str]:
 __all__ = [
     "BadCacheEntryWarning",
     "CompileError",
+    "ContactError",
     "ConstraintError",
     "DalembertError",
     "DalembertWarning",
@@ -88,6 +90,7 @@ __all__ = [
     "ExtremumConvergenceError",
     "GuessError",
     "Holonomic",
+    "Unilateral",
     "InconsistentConstraintsError",
     "InitialConditionError",
     "InitialConditionsAdjusted",

@@ -77,6 +77,11 @@ class SingularSystemError(DalembertError, RuntimeError):
     """The KKT matrix [[M, A^T], [A, 0]] is singular, so accelerations are not determined."""
 
 
+class ContactError(DalembertError, RuntimeError):
+    """Contacts that cannot go on: an impact or a set of closed contacts with no solution
+    meeting the contact laws, an endless cascade of switches at one instant."""
+
+
 class CompileError(DalembertError, RuntimeError):
     """The C route is unavailable for these expressions (unsupported function, no compiler)."""
 
@@ -177,6 +182,7 @@ class EnsembleWarning(DalembertWarning):
 __all__ = [
     "BadCacheEntryWarning",
     "CompileError",
+    "ContactError",
     "ConstraintError",
     "DalembertError",
     "DalembertWarning",

@@ -60,11 +60,14 @@ Backend = Literal["auto", "c", "python"]
 StepController = Literal["PI", "scipy"]
 RedundantConstraints = Literal["minimum-norm", "error"]
 VelocityProjection = Literal["kinetic-energy", "least-change"]
+#: How an impact on several touching contacts is resolved (dalembert.solvers.contact.laws).
+ImpactLaw = Literal["sequential", "simultaneous"]
 
 BACKENDS: tuple[Backend, ...] = ("auto", "c", "python")
 STEP_CONTROLS: tuple[StepController, ...] = ("PI", "scipy")
 REDUNDANT_MODES: tuple[RedundantConstraints, ...] = ("minimum-norm", "error")
 VELOCITY_PROJECTIONS: tuple[VelocityProjection, ...] = ("kinetic-energy", "least-change")
+IMPACT_LAWS: tuple[ImpactLaw, ...] = ("sequential", "simultaneous")
 STABILIZATIONS = ("projection", "baumgarte", None)
 #: The Baumgarte gain when ``stabilization="baumgarte"`` is given without one.
 DEFAULT_BAUMGARTE_GAIN = 10.0
@@ -139,6 +142,8 @@ class SimulationOptions:
     inputs: InputSignal | None = None
     #: Seconds (wall clock) the integration may run, or ``None``: no limit.
     timeout: float | None = None
+    #: How impacts on several touching contacts are resolved (unilateral constraints).
+    impact_law: ImpactLaw = "sequential"
 
 
 # --------------------------------------------------------------------------- the table
@@ -176,6 +181,7 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "t_eval": [Times(), NONE],
     "sample_time": [PositiveNumber(), NONE],
     "timeout": [PositiveNumber(), NONE],
+    "impact_law": [OneOf(IMPACT_LAWS)],
 }
 
 #: The keywords of :func:`simulation_options`: ``simulate``'s run options and what the
@@ -233,6 +239,7 @@ def simulation_options(
     inputs: object = None,
     sample_time: float | None = None,
     timeout: float | None = None,
+    impact_law: ImpactLaw = "sequential",
     state_size: int | None = None,
     input_names: Sequence[str] = (),
 ) -> SimulationOptions:
@@ -269,6 +276,9 @@ def simulation_options(
         fraction of a second each): a run past it stops there with status
         ``"timeout"``, returning what it computed. A user's function (an input, an
         event) that itself never returns is not stopped.
+    impact_law
+        How an impact on several touching unilateral constraints is resolved:
+        ``"sequential"`` or ``"simultaneous"`` (:mod:`dalembert.solvers.contact.laws`).
     state_size
         The length of the state ``[q, qd]`` (twice the coordinates), when known: an
         array of tolerances must have one entry per state entry.
@@ -313,6 +323,7 @@ def simulation_options(
         inputs=input_signal(inputs, input_names,
                             None if sample_time is None else float(sample_time), span),
         timeout=None if timeout is None else float(timeout),
+        impact_law=impact_law,
     )
 
 

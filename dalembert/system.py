@@ -8,6 +8,7 @@ code generated once per System however often it is simulated.
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
@@ -19,6 +20,7 @@ from .codegen.compiled import CompiledEquations, NumericModel
 from .definition import Definition, SymbolicDefinition
 from .equations.lagrange import Equations
 from .errors import (
+    ConstraintError,
     InitialConditionsAdjusted,
     InputError,
     IntegrationWarning,
@@ -29,6 +31,7 @@ from .errors import (
 )
 from .inputs import InputSignal
 from .model.forces import PointForce
+from .model.constraints import UnilateralRow, with_gaps
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
 from .model.sympy_mechanics import from_lagranges_method, is_sympy_method
@@ -41,6 +44,7 @@ from .options import (
     REDUNDANT_CONSTRAINTS,
     SIMULATE_PARAMETERS,
     Backend,
+    ImpactLaw,
     RedundantConstraints,
     SimulationOptions,
     StepController,
@@ -67,6 +71,7 @@ if TYPE_CHECKING:  # imported on first use: statics pulls in scipy.optimize, the
 
     from .solvers.running.integrate import IntegrationResult
     from .solvers.running.plan import SimulationPlan
+    from .solvers.running.run_data import RunData
     from .statics import Equilibrium, Linearization
 
 #: A piece of the model (energies, constraints, forces...): build_model checks each.
@@ -235,6 +240,8 @@ class System:
               redundant_constraints: RedundantConstraints) -> None:
         self._definition = definition
         self.redundant_constraints = redundant_constraints
+        #: Made by :meth:`with_gaps_closed`: contacts may hold it still (no freedom left).
+        self._closed_contacts = False
         self.parameter_values = parameter_values(
             definition.parameters, parameters, coordinates=definition.coordinate_names,
             inputs=[u.name for u in definition.inputs])
@@ -346,6 +353,58 @@ class System:
     def describe_constraint(self, i: int) -> str:
         """Constraint ``i`` for a message: its name, kind and equation."""
         return self._definition.describe_constraint(i)
+
+    @property
+    def unilateral_names(self) -> tuple[str, ...]:
+        """The unilateral constraints' names (:class:`~dalembert.Unilateral`), apart
+        from :attr:`constraint_names` (the rows that always hold)."""
+        return tuple(u.name for u in self._unilateral)
+
+    @property
+    def _unilateral(self) -> tuple[UnilateralRow, ...]:
+        definition = self._definition
+        if not isinstance(definition, SymbolicDefinition):
+            return ()
+        return definition.model.constraints.unilateral
+
+    def with_gaps_closed(self, closed: Sequence[str] | None = None) -> System:
+        """This System with unilateral constraints closed: each a holonomic row after
+        the others (the equations while those contacts hold).
+
+        Parameters
+        ----------
+        closed
+            The names of the unilateral constraints to close (default: all).
+
+        Examples
+        --------
+        >>> from dalembert import System, Unilateral, coordinates
+        >>> x, y = coordinates("x y")
+        >>> ball = System([x, y], kinetic=(x.diff()**2 + y.diff()**2) / 2, potential=9.81 * y,
+        ...               constraints=[Unilateral(y, name="floor", restitution=0.5)])
+        >>> ball.constraint_names, ball.unilateral_names, ball.with_gaps_closed().constraint_names
+        ((), ('floor',), ('floor',))
+        """
+        names = self.unilateral_names
+        wanted = names if closed is None else tuple(closed)
+        unknown = [c for c in wanted if c not in names]
+        if unknown:
+            raise ConstraintError(f"{unknown[0]!r} is not a unilateral constraint of "
+                                  f"{self.name!r}; they are {', '.join(names) or 'none'}")
+        which = tuple(k for k, name in enumerate(names) if name in wanted)
+        made = self.__dict__.setdefault("_closed_systems", {})
+        if which not in made:
+            definition = self._definition
+            assert isinstance(definition, SymbolicDefinition)
+            model = definition.model
+            closed_model = replace(model, constraints=with_gaps(model.constraints, which))
+            system = System.from_definition(
+                SymbolicDefinition(closed_model, definition.kinetic_energy),
+                parameters=self.parameter_values,
+                redundant_constraints=self.redundant_constraints)
+            system._closed_contacts = bool(which)
+            made[which] = system
+        return made[which]
 
     def __repr__(self) -> str:
         return (f"System({self.name!r}, coordinates={list(self.coordinate_names)}, "
@@ -537,7 +596,7 @@ class System:
                                 constraint_names=self.constraint_names,
                                 redundant_constraints=redundant_constraints,
                                 velocity_projection=velocity_projection,
-                                driven=self.rheonomic,
+                                driven=self.rheonomic or self._closed_contacts,
                                 kinetic_energy=self._definition.kinetic_energy)
 
     @checked_keywords(SIMULATE)
@@ -568,6 +627,7 @@ class System:
         inputs: object = None,
         sample_time: float | None = None,
         timeout: float | None = None,
+        impact_law: ImpactLaw = "sequential",
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
 
@@ -647,11 +707,19 @@ class System:
             ``"timeout"`` and an :class:`~dalembert.errors.IntegrationWarning`,
             returning what it computed. A function of yours (an input, an event)
             that itself never returns is not stopped.
+        impact_law
+            With unilateral constraints (:class:`~dalembert.Unilateral`), how an impact
+            on several touching ones is resolved: ``"sequential"`` (default: the
+            approaching contacts first, then those the impulse makes approach, as a
+            wave; Newton's cradle gives its physical outcome) or ``"simultaneous"``
+            (one complementarity problem over all of them); see
+            :mod:`dalembert.solvers.contact.laws`.
 
         Returns
         -------
         Trajectory
-            A failure or Ctrl-C returns the part computed so far with
+            With unilateral constraints, ``traj.contacts`` holds the impacts and the
+            closed contacts over time. A failure or Ctrl-C returns the part computed so far with
             ``success=False`` and an :class:`~dalembert.errors.IntegrationWarning`.
 
         Examples
@@ -867,6 +935,8 @@ class System:
         """:meth:`run`; without ``dynamics`` the trajectory's ``qdd``, multipliers and
         constraint forces may be left uncomputed (NaN), for a caller that keeps none of
         them."""
+        if self._unilateral:
+            return self._run_contacts(plan, dynamics)
         from .solvers.running.execute import execute
 
         done = execute(plan, dynamics)
@@ -881,6 +951,51 @@ class System:
             warning.__cause__ = result.error  # an event function's exception, chained
             warnings.warn(warning, stacklevel=user_stacklevel())  # the user's call
         return self._trajectory(result, plan, done.run.derived, done.run.inputs)
+
+    def _run_contacts(self, plan: SimulationPlan, dynamics: bool = True) -> Trajectory:
+        """:meth:`_run` with unilateral constraints: the event-driven contact mode
+        (:mod:`dalembert.solvers.contact.driver`), each set of closed gaps run as the
+        System with those gaps closed."""
+        from .solvers.contact.driver import run_contacts
+        from .solvers.contact.gaps import Gaps
+
+        options = plan.options
+        t0, tf = options.t_span
+        if tf < t0:
+            raise ValueError("a System with unilateral constraints runs forward in time "
+                             f"only (impacts lose energy): got t_span ({t0}, {tf})")
+        if options.inputs is not None and options.inputs.sample_time is not None:
+            raise ValueError("sample_time is not supported with unilateral constraints yet")
+        parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
+        every = self.with_gaps_closed()
+        full = every.numeric(parameters)
+        rows = self._unilateral
+        gaps = Gaps(self.unilateral_names, len(self.constraint_names),
+                    np.array([u.restitution for u in rows]),
+                    np.array([u.rest_speed for u in rows]))
+        names = self.unilateral_names
+        user = options.output.events
+
+        def start(closed: tuple[int, ...], t: float, y: np.ndarray,
+                  events: tuple[Callable, ...]) -> RunData:
+            system = self.with_gaps_closed([names[k] for k in closed])
+            output = replace(options.output, events=user + events)
+            segment = replace(options, t_span=(t, tf), output=output)
+            layout = StateLayout(len(self.coordinate_names))
+            return system._plan(segment, *layout.split(y), parameters, None).start()
+
+        done = run_contacts(full, gaps, start, (t0, tf), plan.y0, options.output.t_eval,
+                            options.impact_law, len(user), dynamics)
+        result = done.run.result
+        if not result.success:
+            reached = result.t[-1] if len(result.t) else t0
+            warnings.warn(IntegrationWarning(f"{result.message}; returning the trajectory "
+                                             f"up to t={reached:.6g}"),
+                          stacklevel=user_stacklevel())
+        traj = every._trajectory(result, plan, done.run.derived, done.run.inputs)
+        return replace(traj, contacts=done.history,
+                       energy_conserved=traj.energy_conserved
+                       and not any(i.energy_lost for i in done.history.impacts))
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:

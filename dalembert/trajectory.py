@@ -20,6 +20,8 @@ from . import trajectory_file
 if TYPE_CHECKING:
     import pandas as pd
 
+    from .solvers.contact.driver import ContactHistory
+
 #: A trajectory's repr lists its coordinates when there are at most this many, else
 #: :func:`name_list` condenses them.
 REPR_NAMES = 8
@@ -105,6 +107,11 @@ class Trajectory:
         Whether the model conserves ``T + V`` (no applied force, input or moving
         constraint; ``None``: not known), set by the System: :meth:`summary` calls a
         change of ``T + V`` an error only where it is conserved.
+    contacts
+        With unilateral constraints: the impacts (time, impulse on each contact,
+        energy lost, velocities before and after) and the contacts closed over time
+        (:class:`~dalembert.solvers.contact.driver.ContactHistory`; ``closed_at(t)``);
+        ``multipliers`` then have a column per unilateral constraint too (0 while open).
 
     Examples
     --------
@@ -142,6 +149,7 @@ class Trajectory:
     near_singular: np.ndarray | None = None
     sol: Any = None
     energy_conserved: bool | None = None
+    contacts: ContactHistory | None = None
 
     @property
     def success(self) -> bool:

@@ -1,14 +1,20 @@
-"""Holonomic and Pfaffian constraints.
+"""Holonomic, Pfaffian and unilateral constraints.
 
 A holonomic constraint ``psi(q, t) = 0`` is differentiated once into Pfaffian
 form ``A(q, t) qdot + b(q, t) = 0`` with ``A = dpsi/dq`` and ``b = dpsi/dt``; a
 Pfaffian (possibly nonholonomic) constraint is given in that form directly.
 Both kinds then share one constraint matrix ``A`` whose rows keep the user's order.
+
+A unilateral constraint ``g(q, t) >= 0`` (a contact, a string that can go slack) is
+kept apart (:attr:`ConstraintSet.unilateral`): it is a row only while it is closed, and
+a run decides when (:mod:`dalembert.solvers.contact`). :func:`with_gaps` gives the
+constraint set in which some gaps are closed, as holonomic rows after the others.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import sympy as sp
 
@@ -52,6 +58,57 @@ class Pfaffian:
 
 
 @dataclass(frozen=True)
+class Unilateral:
+    """A unilateral constraint ``gap(q, t) >= 0``: it acts only when closed, and only by
+    pushing (its multiplier ``lambda >= 0``, the force ``A^T lambda`` opening the gap).
+
+    Parameters
+    ----------
+    gap
+        ``g(q, t)``, positive while open (a height above a floor; ``l - |r|`` for a
+        string of length ``l``, slack while positive).
+    name
+        Its name (messages, ``traj.multiplier(name)``).
+    restitution
+        Newton's coefficient ``e`` in ``[0, 1]``: at an impact the gap's rate after is
+        ``-e`` times the rate before (0: plastic, it stays closed; 1: elastic).
+    rest_speed
+        An impact closing slower than this (in the gap's units per second) is plastic
+        whatever ``e``: the contact then stays closed (a bouncing ball comes to rest
+        instead of bouncing infinitely often; the energy it loses is in the impacts'
+        record). Default ``1e-6``.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> y = sp.Symbol("y")
+    >>> Unilateral(y, name="floor", restitution=0.8)
+    Unilateral(y >= 0, name='floor', restitution=0.8)
+    """
+
+    gap: object
+    name: str | None = None
+    restitution: float = 0.0
+    rest_speed: float = 1e-6
+
+    def __repr__(self) -> str:
+        return f"Unilateral({self.gap} >= 0, name={self.name!r}, restitution={self.restitution})"
+
+
+@dataclass(frozen=True)
+class UnilateralRow:
+    """A checked :class:`Unilateral`: its name, its gap in plain symbols, its ``A`` row
+    and ``b`` (``g' = A qd + b``), its restitution and rest speed."""
+
+    name: str
+    gap: sp.Expr
+    A: tuple[sp.Expr, ...]
+    b: sp.Expr
+    restitution: float
+    rest_speed: float
+
+
+@dataclass(frozen=True)
 class ConstraintSet:
     """All constraints of a model in plain symbols, rows in the user's order.
 
@@ -66,6 +123,8 @@ class ConstraintSet:
     A: sp.Matrix
     b: sp.Matrix
     holonomic_rows: tuple[int, ...]
+    #: The unilateral constraints, apart from the rows (see the module docstring).
+    unilateral: tuple[UnilateralRow, ...] = ()
 
     @property
     def m(self) -> int:
@@ -83,16 +142,21 @@ class ConstraintSet:
 
 def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet:
     """Check each constraint and assemble the Pfaffian matrices ``A`` and ``b``."""
-    if isinstance(constraints, (Holonomic, Pfaffian)):
+    if isinstance(constraints, (Holonomic, Pfaffian, Unilateral)):
         constraints = [constraints]
     items = listed(constraints or (), "constraints",
-                   "dalembert.Holonomic(expr) or dalembert.Pfaffian(expr)", ConstraintError)
+                   "dalembert.Holonomic(expr), dalembert.Pfaffian(expr) or "
+                   "dalembert.Unilateral(gap)", ConstraintError)
     names, kinds, exprs, rows_A, rows_b, holonomic = [], [], [], [], [], []
+    unilateral: list[UnilateralRow] = []
     for i, c in enumerate(items):
+        if isinstance(c, Unilateral):
+            unilateral.append(_unilateral_row(c, i, coords))
+            continue
         if not isinstance(c, (Holonomic, Pfaffian)):
             raise ConstraintError(
-                f"constraint {i} is {c!r}; wrap it as dalembert.Holonomic(expr) "
-                "or dalembert.Pfaffian(expr)"
+                f"constraint {i} is {c!r}; wrap it as dalembert.Holonomic(expr), "
+                "dalembert.Pfaffian(expr) or dalembert.Unilateral(gap)"
             )
         kind = "holonomic" if isinstance(c, Holonomic) else "Pfaffian"
         if c.name is not None and not isinstance(c.name, str):
@@ -109,8 +173,9 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
         exprs.append(expr)
         rows_A.append(row_A)
         rows_b.append(row_b)
-    if len(set(names)) != len(names):
-        dup = next(n for n in names if names.count(n) > 1)
+    every = names + [u.name for u in unilateral]
+    if len(set(every)) != len(every):
+        dup = next(n for n in every if every.count(n) > 1)
         raise ConstraintError(f"two constraints are named {dup!r}; give them distinct names")
     A = sp.Matrix(rows_A) if rows_A else sp.zeros(0, coords.n)
     return ConstraintSet(
@@ -120,7 +185,58 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
         A,
         sp.Matrix(len(rows_b), 1, rows_b),
         tuple(holonomic),
+        tuple(unilateral),
     )
+
+
+def with_gaps(cons: ConstraintSet, closed: tuple[int, ...]) -> ConstraintSet:
+    """The constraint set with the unilateral constraints ``closed`` (indices into
+    ``cons.unilateral``) as holonomic rows after the others (kind ``"unilateral"``),
+    and no unilateral constraint left apart: the equations while those gaps are closed.
+
+    Parameters
+    ----------
+    cons
+        A constraint set with unilateral constraints.
+    closed
+        Which of them are closed, in increasing order.
+
+    Examples
+    --------
+    >>> from dalembert.model.coordinates import build_coordinates, coordinates
+    >>> x, y = coordinates("x y")
+    >>> cons = build_constraints([Unilateral(y, name="floor")], build_coordinates([x, y]))
+    >>> cons.m, with_gaps(cons, (0,)).names, with_gaps(cons, (0,)).holonomic_rows
+    (0, ('floor',), (0,))
+    """
+    rows = [cons.unilateral[i] for i in closed]
+    m = cons.m
+    A = cons.A.col_join(sp.Matrix([list(u.A) for u in rows])) if rows else cons.A
+    return replace(
+        cons, names=cons.names + tuple(u.name for u in rows),
+        kinds=cons.kinds + ("unilateral",) * len(rows),
+        exprs=cons.exprs + tuple(u.gap for u in rows), A=A,
+        b=cons.b.col_join(sp.Matrix(len(rows), 1, [u.b for u in rows])),
+        holonomic_rows=cons.holonomic_rows + tuple(range(m, m + len(rows))), unilateral=())
+
+
+def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow:
+    """A unilateral constraint checked: its name, numbers and gap (a holonomic row)."""
+    if c.name is not None and not isinstance(c.name, str):
+        raise ConstraintError(f"the name of constraint {i} must be a string, got {c.name!r}")
+    name = c.name or f"unilateral_{i}"
+    for what, value, low, high in (("restitution", c.restitution, 0.0, 1.0),
+                                   ("rest_speed", c.rest_speed, 0.0, math.inf)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not low <= value < math.inf or value > high \
+                or (what == "rest_speed" and value <= 0):
+            span = "in [0, 1]" if what == "restitution" else "a finite positive number"
+            raise ConstraintError(
+                f"the {what} of unilateral constraint {name!r} must be {span}, got {value!r}")
+    gap = coords.to_plain(c.gap, f"constraint {name!r}")
+    row, b = _differentiate_holonomic(gap, name, coords)
+    return UnilateralRow(name, gap, tuple(row), b, float(c.restitution),
+                         float(c.rest_speed))
 
 
 def _differentiate_holonomic(

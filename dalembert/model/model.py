@@ -140,7 +140,9 @@ def check_inputs(inputs: Sequence[object], coords: Coordinates, L: sp.Expr,
         if u in out:
             raise ModelError(f"the input {u.name!r} is declared twice")
         where = ("the Lagrangian (T or V)" if u in L.free_symbols else
-                 next((f"constraint {cons.names[i]!r}" for i, e in enumerate(cons.exprs)
+                 next((f"constraint {name!r}" for name, e in
+                       [*zip(cons.names, cons.exprs),
+                        *((g.name, g.gap) for g in cons.unilateral)]
                        if u in sp.sympify(e).free_symbols), None))
         if where is not None:
             raise ModelError(
@@ -227,7 +229,7 @@ def _generalized_forces(
 def _parameters(
     coords: Coordinates, L: sp.Expr, Q: sp.Matrix, cons: ConstraintSet
 ) -> tuple[sp.Symbol, ...]:
-    exprs = [L, *Q, *cons.exprs]
+    exprs = [L, *Q, *cons.exprs, *(u.gap for u in cons.unilateral)]
     free = set().union(*(e.free_symbols for e in exprs))
     free -= {t, *coords.q, *coords.qd}
     return tuple(sorted(free, key=lambda s: s.name))

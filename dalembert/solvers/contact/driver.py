@@ -1,0 +1,275 @@
+"""The event-driven contact mode: smooth segments between switches.
+
+A run with unilateral constraints goes segment by segment. Each segment integrates the
+model with the gaps closed at its start as holonomic rows (its own plan, made once per
+set of closed gaps met), and watches, as terminal events located to rounding,
+
+- each open gap ``g(q, t)`` reaching 0 while closing;
+- each closed gap's multiplier reaching 0 while falling (it would start to pull).
+
+At such a switch the driver resolves the impact, if gaps close while approaching
+(:func:`~dalembert.solvers.contact.laws.resolve_impact`), then finds the gaps closed
+from there (:func:`~dalembert.solvers.contact.laws.closed_gaps`), and starts the next
+segment from the post-switch state. The segments' points are joined as
+:mod:`~dalembert.solvers.running.segments` joins a sampled run's (the state recorded at
+a switch is the one after it), the multipliers by row of the model with every gap (0
+where a gap is open), and the impacts and the closed gaps over time are recorded
+(:class:`ContactHistory`).
+
+Each gap starts a segment touching if it has just closed or opened: its event is
+taken positive at the segment's start (a gap that opens at rounding level does not
+fire again at once). A cascade of switches at one instant (contacts chattering) ends
+the run with a :class:`~dalembert.errors.ContactError` after :data:`MAX_SWITCHES_AT_ONCE`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...codegen.compiled import NumericModel
+from ...errors import ContactError
+from ...options import ImpactLaw
+from ..running.integrate import IntegrationResult
+from ..running.run_data import RunData, RunSegment
+from ..running.segments import SegmentedRun, SegmentState, _Record
+from .gaps import Gaps
+from .laws import closed_gaps, resolve_impact
+
+#: Switches within rounding of one instant before the run is called a chattering cascade.
+MAX_SWITCHES_AT_ONCE = 100
+#: A value an event takes at its segment's start instead of one at or below 0 (see the
+#: module docstring): positive, below any value that matters.
+STARTS_OPEN = 1e-300
+
+
+@dataclass(frozen=True)
+class ImpactRecord:
+    """One impact.
+
+    Attributes
+    ----------
+    t
+        Its instant.
+    impulses
+        The impulse on each gap (0 where it did not act).
+    energy_lost
+        ``T- - T+``.
+    qd_before, qd_after
+        The velocities before and after.
+    """
+
+    t: float
+    impulses: np.ndarray
+    energy_lost: float
+    qd_before: np.ndarray
+    qd_after: np.ndarray
+
+
+@dataclass
+class ContactHistory:
+    """The impacts of a run and its closed gaps over time.
+
+    Attributes
+    ----------
+    names
+        The unilateral constraints' names.
+    impacts
+        Every impact, in time order.
+    switches
+        ``(t, closed)`` at the start and at every switch: the gaps closed from ``t``.
+    """
+
+    names: tuple[str, ...]
+    impacts: list[ImpactRecord] = field(default_factory=list)
+    switches: list[tuple[float, tuple[int, ...]]] = field(default_factory=list)
+
+    def closed_at(self, t: np.ndarray) -> np.ndarray:
+        """Which gaps are closed at each time (the set after a switch at its instant),
+        shape ``(len(t), len(names))``."""
+        starts = np.array([s for s, _ in self.switches])
+        where = np.searchsorted(starts, np.asarray(t, dtype=float), "right") - 1
+        out = np.zeros((len(t), len(self.names)), dtype=bool)
+        for i, k in enumerate(np.clip(where, 0, len(starts) - 1)):
+            out[i, list(self.switches[k][1])] = True
+        return out
+
+
+@dataclass(frozen=True)
+class ContactRun:
+    """A run with unilateral constraints: the joined segments and the contact history."""
+
+    run: SegmentedRun
+    history: ContactHistory
+
+
+@dataclass
+class SegmentStart:
+    """The current segment's start time, which the gap events read (they are made once
+    per set of closed gaps and serve every segment with that set)."""
+
+    t: float = np.nan
+
+
+#: ``start(closed, t, y, events)``: the data of a run of the model with the gaps
+#: ``closed`` closed, from ``(t, y)``, watching ``events`` after the user's.
+StartSegments = Callable[[tuple[int, ...], float, np.ndarray, tuple[Callable, ...]], RunData]
+
+
+def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
+                 t_span: tuple[float, float], y0: np.ndarray, t_eval: np.ndarray | None,
+                 law: ImpactLaw, user_events: int, dynamics: bool = True) -> ContactRun:
+    """Run ``t_span`` in the event-driven contact mode (see the module docstring).
+
+    Parameters
+    ----------
+    full
+        The model with every gap a row (after the bilateral ones).
+    gaps
+        Where its gaps are and their laws.
+    start
+        Makes the run data of the model with a set of gaps closed (once per set).
+    t_span, y0, t_eval
+        The run's span, its initial state (consistent with the bilateral rows) and its
+        output times (``None``: every step).
+    law
+        The impact law.
+    user_events
+        How many of the events each segment watches are the user's (the gaps' follow).
+    dynamics
+        ``False``: the outputs' solves may be left out (NaN).
+
+    Raises
+    ------
+    ContactError
+        A gap is open below 0 at the start (penetrating).
+    """
+    t0, tf = t_span
+    n = full.n
+    t, y = float(t0), np.asarray(y0, dtype=float)
+    q = y[:n]
+    g = gaps.values(full, t, q)
+    bad = np.flatnonzero(g < -1e-9 * (1.0 + np.abs(q).max(initial=0.0)))
+    if len(bad):
+        k = int(bad[0])
+        raise ContactError(
+            f"the unilateral constraint {gaps.names[k]!r} is violated at the start "
+            f"(gap {g[k]:.6g} < 0): start with every gap >= 0")
+    history = ContactHistory(gaps.names)
+    segment_start = SegmentStart()
+    made: dict[tuple[int, ...], RunData] = {}
+    record = _Record()
+    y, closed = _switch(full, gaps, history, t, y, law, opening=None)
+    history.switches.append((t, closed))
+    at_once, last_switch = 0, t
+    while True:
+        data = made.get(closed)
+        if data is None:
+            data = made[closed] = start(closed, t, y, _gap_events(gaps, closed, full,
+                                                                  segment_start))
+        segment_start.t = t
+        asked = None if t_eval is None else t_eval[(t_eval >= t) & (t_eval <= tf)]
+        segment = data.segment((t, tf), y, asked, False)
+        result = segment.run()
+        fired = _gap_fired(result, user_events)
+        keep = np.arange(len(result.t)) if fired is None else \
+            np.flatnonzero(result.t < fired[0])
+        shown = result.t[keep]
+        record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
+                   _outputs(full.m, gaps, closed, dynamics))
+        record.segments.append(result)
+        if fired is None or record.interrupted:
+            break
+        te, ye, k = fired
+        at_once = at_once + 1 if te - last_switch <= 1e-12 * (1.0 + abs(te)) else 0
+        if at_once > MAX_SWITCHES_AT_ONCE:
+            result.status, result.message = "failed", (
+                f"the contacts switched {at_once} times at t={te:.6g} (chattering): last "
+                f"{gaps.names[k]!r}")
+            break
+        opening = k if k in closed else None
+        y, closed = _switch(full, gaps, history, te, ye, law, opening)
+        history.switches.append((te, closed))
+        t, last_switch = te, te
+    joined = record.joined(len(y0), t0)
+    joined.result.t_events = joined.result.t_events[:user_events]
+    joined.result.y_events = joined.result.y_events[:user_events]
+    joined.result.stats["n_impacts"] = len(history.impacts)
+    return ContactRun(joined, history)
+
+
+def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
+            y: np.ndarray, law: ImpactLaw, opening: int | None
+            ) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The state after a switch at ``t`` and the gaps closed from there: the impact of
+    the touching gaps (if any approaches), then the closed set (``opening``: the gap
+    whose multiplier reached 0, left open)."""
+    n = full.n
+    q, qd = y[:n], y[n:]
+    touching = gaps.touching(full, t, q)
+    outcome = resolve_impact(full, gaps, t, q, qd, touching, law)
+    if outcome.stages:
+        history.impacts.append(ImpactRecord(t, outcome.impulses, outcome.energy_lost,
+                                            qd.copy(), outcome.qd))
+        qd = outcome.qd
+    closed = closed_gaps(full, gaps, t, q, qd, touching,
+                         () if opening is None else (opening,))
+    return np.concatenate([q, qd]), closed
+
+
+def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,
+                start: SegmentStart) -> tuple[Callable, ...]:
+    """One terminal event per gap: an open one's value, a closed one's multiplier (its
+    place among the rows of the model with ``closed`` closed), each falling through 0."""
+    first = gaps.first
+    events: list[Callable] = []
+    for k in range(gaps.count):
+        if k in closed:
+            row = first + closed.index(k)
+
+            def event(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
+                      row: int = row) -> float:
+                return _open_at_start(start, t, float(lam[row]))
+        else:
+            def event(t: float, q: np.ndarray, qd: np.ndarray, *,  # type: ignore[misc]
+                      k: int = k) -> float:
+                return _open_at_start(start, t, float(gaps.values(full, t, q)[k]))
+        event.__name__ = f"{gaps.names[k]} {'separating' if k in closed else 'closing'}"
+        event.terminal = True  # type: ignore[attr-defined]
+        event.direction = -1  # type: ignore[attr-defined]
+        events.append(event)
+    return tuple(events)
+
+
+def _open_at_start(start: SegmentStart, t: float, value: float) -> float:
+    return STARTS_OPEN if t == start.t and value <= 0.0 else value
+
+
+def _gap_fired(result: IntegrationResult, user_events: int
+               ) -> tuple[float, np.ndarray, int] | None:
+    """``(t, y, gap)`` of the gap event that ended the segment, or ``None``."""
+    if result.status != "event":
+        return None
+    times = [(float(te[-1]), k) for k, te in enumerate(result.t_events) if len(te)]
+    t_end, k = max(times)
+    if k < user_events:
+        return None
+    return t_end, result.y_events[k][-1], k - user_events
+
+
+def _outputs(m: int, gaps: Gaps, closed: tuple[int, ...], dynamics: bool
+             ) -> Callable[[RunSegment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
+    """The outputs of a segment, its multipliers placed by row of the model with every
+    gap (0 on the open gaps)."""
+    rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(closed, dtype=int)])
+
+    def outputs(segment: RunSegment, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+        out = dict(segment.outputs(t, y, dynamics=dynamics))
+        lam = np.zeros((len(t), m))
+        lam[:, rows.astype(int)] = out["multipliers"]
+        out["multipliers"] = lam
+        return out
+
+    return outputs

@@ -1,0 +1,73 @@
+"""The unilateral rows of a model with every gap closed, and their values at a state.
+
+The contact layer works on the model whose constraint rows are the bilateral ones
+followed by every gap (``System`` builds it): :class:`Gaps` says where the gaps are
+and what their laws are; the functions here read their values, rates and
+accelerations from that model's generated functions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...codegen.compiled import NumericModel
+from ..kkt.sparse import matvec
+
+#: A gap (or rate) within this much of 0, relative to ``1 + max |q|`` (to the rates'
+#: scale), touches (has stopped): rounding, not a motion.
+TOUCH_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Gaps:
+    """The gaps of a model whose last rows are every unilateral constraint.
+
+    Attributes
+    ----------
+    names
+        The unilateral constraints' names.
+    first
+        The row of the first gap (the number of bilateral rows).
+    restitution, rest_speed
+        Newton's coefficient and the rest speed of each gap
+        (:class:`~dalembert.Unilateral`).
+
+    Examples
+    --------
+    >>> gaps = Gaps(("floor",), 0, np.array([0.8]), np.array([1e-6]))
+    >>> gaps.count, gaps.rows.tolist()
+    (1, [0])
+    """
+
+    names: tuple[str, ...]
+    first: int
+    restitution: np.ndarray
+    rest_speed: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return len(self.names)
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The gaps' rows in the model."""
+        return np.arange(self.first, self.first + self.count)
+
+    def values(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:
+        """``g(q, t)``, one per gap (the last entries of the model's ``psi``)."""
+        return full.position_constraint(t, q)[-self.count:]
+
+    def rates(self, full: NumericModel, t: float, q: np.ndarray,
+              qd: np.ndarray) -> np.ndarray:
+        """``g' = A qd + b``, one per gap."""
+        pattern = full.pattern
+        Av, b = full.velocity_sparse(t, q)
+        rate = matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b
+        return rate[self.first:]
+
+    def touching(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:
+        """Which gaps are 0 to rounding (a boolean mask)."""
+        g = self.values(full, t, q)
+        return np.abs(g) <= TOUCH_RTOL * (1.0 + np.abs(q).max(initial=0.0))

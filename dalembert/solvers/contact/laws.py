@@ -1,0 +1,284 @@
+"""Impact laws and the contacts that stay closed, on the model with every gap a row.
+
+**Impacts.** At an instant where gaps touch, the velocities jump by impulses
+``Lambda >= 0`` on the gaps (and any impulse on the bilateral rows, which hold), each
+gap's rate after set by Newton's law ``g+ = -e g-`` where it acts, and left free to
+open (``g+ >= -e min(g-, 0)``) where it does not: a linear complementarity problem
+over the touching gaps. Each candidate set of acting gaps is one solve of the KKT
+matrix on those rows (:func:`~dalembert.solvers.impact.impact`); the set is found by
+a pivoting search (drop the gap pulling most, else add the gap violated most) and, if
+that cycles, by enumerating the sets (exact, for the few contacts of this mode).
+
+Two laws (:data:`IMPACT_LAWS`):
+
+- ``"sequential"`` (default): the approaching gaps are resolved first, then the gaps
+  the impulse makes approach, stage by stage, as a wave runs through a chain of
+  contacts (in the spirit of Han and Gilmore's algorithm). Newton's cradle gives the
+  physical outcome (the last ball leaves, the others stop) and a body landing flat on
+  two contacts at once lands symmetrically (they approach together: one stage).
+- ``"simultaneous"``: every touching gap in one complementarity problem (what
+  Siconos, Pinocchio's ``impulseDynamics`` and a QP/LCP over all contacts give): the
+  cradle of three balls ends at ``[-1/3, 2/3, 2/3]`` times the first ball's speed.
+
+An impact slower than a gap's ``rest_speed`` is plastic (``e = 0``): the contact then
+stays closed instead of bouncing infinitely often in a finite time.
+
+**Closed contacts.** After a switch, the gaps that stay closed are those of the
+complementarity problem at the acceleration level: among the touching gaps at rest,
+each closed one pushes (``lambda >= 0``) and each open one does not accelerate into
+its obstacle (``g'' >= 0``).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+import numpy as np
+
+from ...codegen.compiled import NumericModel
+from ...errors import ContactError
+from ...options import IMPACT_LAWS, ImpactLaw
+from ..impact import Impact, impact
+from ..kkt.factorization import kkt_factorization
+from ..kkt.sparse import matvec
+from .gaps import TOUCH_RTOL, Gaps
+
+__all__ = ["IMPACT_LAWS", "ImpactLaw", "ImpactOutcome", "closed_gaps", "resolve_impact"]
+#: Stages of a sequential impact before it is called endless.
+MAX_STAGES = 10_000
+#: Largest number of candidate gaps whose sets are enumerated when pivoting cycles.
+MAX_ENUMERATED = 12
+
+
+@dataclass(frozen=True)
+class ImpactOutcome:
+    """What an impact did.
+
+    Attributes
+    ----------
+    qd
+        The velocities after.
+    impulses
+        The impulse on each gap (0 where it did not act).
+    generalized_impulse
+        ``M (qd+ - qd-)``, by coordinate.
+    energy_lost
+        ``T- - T+``.
+    stages
+        The stages of a sequential impact (1 for a simultaneous one).
+    """
+
+    qd: np.ndarray
+    impulses: np.ndarray
+    generalized_impulse: np.ndarray
+    energy_lost: float
+    stages: int
+
+
+def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                   qd: np.ndarray, touching: np.ndarray,
+                   law: ImpactLaw = "sequential") -> ImpactOutcome:
+    """The velocities after an impact on the touching gaps, by ``law``.
+
+    Parameters
+    ----------
+    full
+        The model with every gap a row (:mod:`~dalembert.solvers.contact.gaps`).
+    gaps
+        Where its gaps are, their restitution and rest speed.
+    t, q, qd
+        The instant and the state before.
+    touching
+        Which gaps touch (a boolean mask over the gaps).
+    law
+        ``"sequential"`` or ``"simultaneous"`` (see the module docstring).
+
+    Raises
+    ------
+    ContactError
+        A sequential impact that does not end in :data:`MAX_STAGES` stages, or no set
+        of acting gaps meeting the complementarity conditions.
+
+    Examples
+    --------
+    Three unit balls on a line touching, the first arriving at 1 (Newton's cradle,
+    ``e = 1``):
+
+    >>> from dalembert import Holonomic, System, Unilateral, coordinates
+    >>> a, b, c = coordinates("a b c")
+    >>> balls = System([a, b, c], kinetic=sum(x.diff()**2 for x in (a, b, c)) / 2,
+    ...                constraints=[Unilateral(b - a, "ab", 1.0), Unilateral(c - b, "bc", 1.0)])
+    >>> full = balls.with_gaps_closed().numeric()
+    >>> gaps = Gaps(("ab", "bc"), 0, np.ones(2), np.full(2, 1e-6))
+    >>> touching = np.array([True, True])
+    >>> for law in IMPACT_LAWS:
+    ...     after = resolve_impact(full, gaps, 0.0, np.zeros(3), np.array([1.0, 0, 0]),
+    ...                            touching, law)
+    ...     print(law, np.round(after.qd, 12) + 0.0)
+    sequential [0. 0. 1.]
+    simultaneous [-0.33333333  0.66666667  0.66666667]
+    """
+    v = np.asarray(qd, dtype=float)
+    total = np.zeros(gaps.count)
+    stages = 0
+    while True:
+        before = gaps.rates(full, t, q, v)
+        scale = TOUCH_RTOL * (1.0 + np.abs(before).max(initial=0.0))
+        approaching = touching & (before < -scale)
+        if not approaching.any():
+            break
+        if stages >= (1 if law == "simultaneous" else MAX_STAGES):
+            raise ContactError(
+                f"an impact at t={t:.6g} did not end after {stages} stages of the "
+                f"sequential law (gaps {_named(gaps, approaching)} still closing): try "
+                "impact_law='simultaneous'")
+        candidates = touching if law == "simultaneous" else approaching
+        # Newton's law on the approaching gaps; a slow one is plastic (see rest_speed)
+        e = np.where(approaching & (-before >= gaps.rest_speed), gaps.restitution, 0.0)
+        after = _complementary(full, gaps, t, q, v, before, np.flatnonzero(candidates), e)
+        v = after.qd
+        total += after.impulses[gaps.first:]
+        stages += 1
+    lost = float(full.energies(t, q, qd)[0] - full.energies(t, q, v)[0])
+    return ImpactOutcome(v, total, _momentum_change(full, t, q, qd, v), lost, stages)
+
+
+def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                qd: np.ndarray, touching: np.ndarray,
+                exclude: Iterable[int] = ()) -> tuple[int, ...]:
+    """The gaps that are closed from ``(t, q, qd)`` on: among the touching gaps at rest
+    (rate 0 to rounding; ``exclude`` left open), a set whose multipliers push and whose
+    others do not accelerate into their obstacles.
+
+    Parameters
+    ----------
+    full, gaps
+        As for :func:`resolve_impact`.
+    t, q, qd
+        The state (after any impact).
+    touching
+        Which gaps touch.
+    exclude
+        Gaps to leave open (one that is separating at this instant).
+
+    Raises
+    ------
+    ContactError
+        No such set exists (a contact problem with no solution, such as Painleve's).
+
+    Examples
+    --------
+    A unit ball resting on a floor under gravity stays on it:
+
+    >>> import sympy as sp
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> (y,) = coordinates("y")
+    >>> ball = System([y], kinetic=y.diff()**2 / 2, potential=9.81 * y,
+    ...               constraints=[Unilateral(y, "floor")])
+    >>> gaps = Gaps(("floor",), 0, np.zeros(1), np.full(1, 1e-6))
+    >>> closed_gaps(ball.with_gaps_closed().numeric(), gaps, 0.0, np.zeros(1),
+    ...             np.zeros(1), np.array([True]))
+    (0,)
+    """
+    rates = gaps.rates(full, t, q, qd)
+    resting = touching & (np.abs(rates) <= TOUCH_RTOL * (1.0 + np.abs(rates).max(initial=0.0)))
+    for k in exclude:
+        resting[k] = False
+    candidates = np.flatnonzero(resting)
+    if not len(candidates):
+        return ()
+    Mv, f, Av, c = full.kkt_sparse(t, q, qd)
+    kkt = kkt_factorization(full.pattern)
+    pattern = full.pattern
+
+    def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each candidate's violation (positive: wrong) with ``chosen`` closed: a
+        closed gap pulling, an open one accelerating into its obstacle."""
+        mask = np.ones(full.m, dtype=bool)
+        mask[gaps.rows] = False
+        mask[gaps.first + chosen] = True
+        kkt.factor(np.concatenate([Mv, Av]), mask)
+        qdd, lam = kkt.solve(np.concatenate([f, c]))
+        accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
+        force, gap_accel = lam[gaps.first:], accel[gaps.first:]
+        scale = TOUCH_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(force).max(initial=0.0))
+        wrong = np.where(np.isin(np.arange(gaps.count), chosen), -force, -gap_accel)
+        return wrong[candidates], np.full(len(candidates), scale)
+
+    found = _search(candidates, check)
+    if found is None:
+        raise ContactError(
+            f"at t={t:.6g} no set of the touching gaps {_named(gaps, resting)} can stay "
+            "closed: each choice pulls on a contact or moves one into its obstacle (a "
+            "contact problem without a solution at this state)")
+    return tuple(int(k) for k in found)
+
+
+def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                   v: np.ndarray, before: np.ndarray, candidates: np.ndarray,
+                   e: np.ndarray) -> Impact:
+    """The impact on a set of the ``candidates`` (gap indices) meeting the
+    complementarity conditions (see the module docstring)."""
+    restitution = np.zeros(full.m)
+    restitution[gaps.first:] = e
+    outcome: dict[bytes, Impact] = {}
+
+    def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        acting = np.ones(full.m, dtype=bool)
+        acting[gaps.rows] = False
+        acting[gaps.first + chosen] = True
+        after = impact(full, t, q, v, acting, restitution)
+        outcome[chosen.tobytes()] = after
+        rates = gaps.rates(full, t, q, after.qd)
+        impulses = after.impulses[gaps.first:]
+        scale = TOUCH_RTOL * (1.0 + np.abs(impulses).max(initial=0.0)
+                              + np.abs(before).max(initial=0.0))
+        floor = -e * np.minimum(before, 0.0)  # an open gap's least rate after
+        wrong = np.where(np.isin(np.arange(gaps.count), chosen), -impulses, floor - rates)
+        return wrong[candidates], np.full(len(candidates), scale)
+
+    start = candidates[before[candidates] < 0]
+    found = _search(candidates, check, start)
+    if found is None:
+        raise ContactError(
+            f"the impact at t={t:.6g} on the gaps {_named(gaps, np.isin(np.arange(gaps.count), candidates))} "
+            "has no solution with every impulse pushing")
+    return outcome[np.asarray(found, dtype=candidates.dtype).tobytes()]
+
+
+def _search(candidates: np.ndarray,
+            check: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+            start: np.ndarray | None = None) -> np.ndarray | None:
+    """A subset of ``candidates`` whose ``check`` shows no violation: pivoting from
+    ``start`` (default all) one candidate at a time, then enumeration if that cycles."""
+    chosen = np.array(sorted(candidates if start is None else start), dtype=candidates.dtype)
+    seen: set[bytes] = set()
+    while chosen.tobytes() not in seen:
+        seen.add(chosen.tobytes())
+        wrong, scale = check(chosen)
+        if (wrong <= scale).all():
+            return chosen
+        worst = candidates[int(np.argmax(wrong - scale))]
+        chosen = np.array(sorted(set(chosen.tolist()) ^ {int(worst)}), dtype=candidates.dtype)
+    if len(candidates) > MAX_ENUMERATED:
+        return None
+    for size in range(len(candidates), -1, -1):
+        for subset in itertools.combinations(candidates.tolist(), size):
+            chosen = np.array(subset, dtype=candidates.dtype)
+            wrong, scale = check(chosen)
+            if (wrong <= scale).all():
+                return chosen
+    return None
+
+
+def _momentum_change(full: NumericModel, t: float, q: np.ndarray, before: np.ndarray,
+                     after: np.ndarray) -> np.ndarray:
+    """``M (after - before)``."""
+    Mv = full.kkt_sparse(t, q, before)[0]
+    pattern = full.pattern
+    return matvec(pattern.M_rows, pattern.M_cols, Mv, after - before, full.n)
+
+
+def _named(gaps: Gaps, mask: np.ndarray) -> str:
+    return ", ".join(repr(gaps.names[k]) for k in np.flatnonzero(mask))
