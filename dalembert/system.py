@@ -968,7 +968,7 @@ class System:
             raise ValueError("sample_time is not supported with unilateral constraints yet")
         parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
         every = self.with_gaps_closed()
-        full = every.numeric(parameters)
+        full = every.numeric(parameters).for_run()  # the run's inputs are written in it
         rows = self._unilateral
         gaps = Gaps(self.unilateral_names, len(self.constraint_names),
                     np.array([u.restitution for u in rows]),
@@ -985,7 +985,7 @@ class System:
             return system._plan(segment, *layout.split(y), parameters, None).start()
 
         done = run_contacts(full, gaps, start, (t0, tf), plan.y0, options.output.t_eval,
-                            options.impact_law, len(user), dynamics)
+                            options.impact_law, len(user), options.inputs, dynamics)
         result = done.run.result
         if not result.success:
             reached = result.t[-1] if len(result.t) else t0

@@ -18,8 +18,12 @@ where a gap is open), and the impacts and the closed gaps over time are recorded
 
 Each gap starts a segment touching if it has just closed or opened: its event is
 taken positive at the segment's start (a gap that opens at rounding level does not
-fire again at once). A cascade of switches at one instant (contacts chattering) ends
-the run with a :class:`~dalembert.errors.ContactError` after :data:`MAX_SWITCHES_AT_ONCE`.
+fire again at once), and wherever it is exactly 0 (see :func:`_open_at_start`).
+
+A run that cannot go on ends with status ``"failed"``, what it computed kept, and a
+message naming the contacts: a switch with no solution (a
+:class:`~dalembert.errors.ContactError`, chained), or a cascade of
+:data:`MAX_SWITCHES_AT_ONCE` switches at one instant (contacts chattering).
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...errors import ContactError
+from ...inputs import InputSignal
 from ...options import ImpactLaw
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
@@ -120,13 +125,15 @@ StartSegments = Callable[[tuple[int, ...], float, np.ndarray, tuple[Callable, ..
 
 def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                  t_span: tuple[float, float], y0: np.ndarray, t_eval: np.ndarray | None,
-                 law: ImpactLaw, user_events: int, dynamics: bool = True) -> ContactRun:
+                 law: ImpactLaw, user_events: int, signal: InputSignal | None = None,
+                 dynamics: bool = True) -> ContactRun:
     """Run ``t_span`` in the event-driven contact mode (see the module docstring).
 
     Parameters
     ----------
     full
-        The model with every gap a row (after the bilateral ones).
+        The model with every gap a row (after the bilateral ones), with its own
+        parameter vector (the inputs are written into it at each switch).
     gaps
         Where its gaps are and their laws.
     start
@@ -138,6 +145,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         The impact law.
     user_events
         How many of the events each segment watches are the user's (the gaps' follow).
+    signal
+        The inputs at each state, or ``None`` (which contacts stay closed depends on
+        the forces).
     dynamics
         ``False``: the outputs' solves may be left out (NaN).
 
@@ -161,7 +171,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     segment_start = SegmentStart()
     made: dict[tuple[int, ...], RunData] = {}
     record = _Record()
-    y, closed = _switch(full, gaps, history, t, y, law, opening=None)
+    y, closed = _switch(full, gaps, history, t, y, law, signal, opening=None)
     history.switches.append((t, closed))
     at_once, last_switch = 0, t
     while True:
@@ -190,7 +200,11 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                 f"{gaps.names[k]!r}")
             break
         opening = k if k in closed else None
-        y, closed = _switch(full, gaps, history, te, ye, law, opening)
+        try:
+            y, closed = _switch(full, gaps, history, te, ye, law, signal, opening)
+        except ContactError as exc:
+            result.status, result.message, result.error = "failed", str(exc), exc
+            break
         history.switches.append((te, closed))
         t, last_switch = te, te
     joined = record.joined(len(y0), t0)
@@ -201,13 +215,15 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
 
 
 def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
-            y: np.ndarray, law: ImpactLaw, opening: int | None
-            ) -> tuple[np.ndarray, tuple[int, ...]]:
+            y: np.ndarray, law: ImpactLaw, signal: InputSignal | None,
+            opening: int | None) -> tuple[np.ndarray, tuple[int, ...]]:
     """The state after a switch at ``t`` and the gaps closed from there: the impact of
     the touching gaps (if any approaches), then the closed set (``opening``: the gap
     whose multiplier reached 0, left open)."""
     n = full.n
     q, qd = y[:n], y[n:]
+    if signal is not None:
+        full.set_inputs(signal(t, q, qd))
     touching = gaps.touching(full, t, q)
     outcome = resolve_impact(full, gaps, t, q, qd, touching, law)
     if outcome.stages:
@@ -244,7 +260,11 @@ def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,
 
 
 def _open_at_start(start: SegmentStart, t: float, value: float) -> float:
-    return STARTS_OPEN if t == start.t and value <= 0.0 else value
+    """An event's value, positive where it is exactly 0 (two bodies at rest touching:
+    their gap stays 0 and must not close again at every step; a contact pushing with
+    no force must not open at every step) and at its segment's start (it has just
+    switched)."""
+    return STARTS_OPEN if value == 0.0 or (t == start.t and value < 0.0) else value
 
 
 def _gap_fired(result: IntegrationResult, user_events: int
@@ -262,7 +282,7 @@ def _gap_fired(result: IntegrationResult, user_events: int
 def _outputs(m: int, gaps: Gaps, closed: tuple[int, ...], dynamics: bool
              ) -> Callable[[RunSegment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
     """The outputs of a segment, its multipliers placed by row of the model with every
-    gap (0 on the open gaps)."""
+    gap (0 on the open gaps), the same arrays for every segment."""
     rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(closed, dtype=int)])
 
     def outputs(segment: RunSegment, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
@@ -270,6 +290,8 @@ def _outputs(m: int, gaps: Gaps, closed: tuple[int, ...], dynamics: bool
         lam = np.zeros((len(t), m))
         lam[:, rows.astype(int)] = out["multipliers"]
         out["multipliers"] = lam
+        # the mark of near-singular configurations, which a segment without rows lacks
+        out.setdefault("near_singular", np.zeros(len(t), dtype=bool))
         return out
 
     return outputs

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...errors import ContactError
+from ...errors import ContactError, SingularSystemError
 from ...options import IMPACT_LAWS, ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.factorization import kkt_factorization
@@ -46,7 +46,7 @@ from .gaps import TOUCH_RTOL, Gaps
 
 __all__ = ["IMPACT_LAWS", "ImpactLaw", "ImpactOutcome", "closed_gaps", "resolve_impact"]
 #: Stages of a sequential impact before it is called endless.
-MAX_STAGES = 10_000
+MAX_STAGES = 1000
 #: Largest number of candidate gaps whose sets are enumerated when pivoting cycles.
 MAX_ENUMERATED = 12
 
@@ -198,7 +198,10 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         mask = np.ones(full.m, dtype=bool)
         mask[gaps.rows] = False
         mask[gaps.first + chosen] = True
-        kkt.factor(np.concatenate([Mv, Av]), mask)
+        try:
+            kkt.factor(np.concatenate([Mv, Av]), mask)
+        except SingularSystemError:  # dependent contact rows: another set will do
+            return np.full(len(candidates), np.inf), np.zeros(len(candidates))
         qdd, lam = kkt.solve(np.concatenate([f, c]))
         accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
         force, gap_accel = lam[gaps.first:], accel[gaps.first:]
@@ -228,7 +231,10 @@ def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         acting = np.ones(full.m, dtype=bool)
         acting[gaps.rows] = False
         acting[gaps.first + chosen] = True
-        after = impact(full, t, q, v, acting, restitution)
+        try:
+            after = impact(full, t, q, v, acting, restitution)
+        except SingularSystemError:  # dependent contact rows: another set will do
+            return np.full(len(candidates), np.inf), np.zeros(len(candidates))
         outcome[chosen.tobytes()] = after
         rates = gaps.rates(full, t, q, after.qd)
         impulses = after.impulses[gaps.first:]
