@@ -182,8 +182,8 @@ class EnsembleWarning(DalembertWarning):
 __all__ = [
     "BadCacheEntryWarning",
     "CompileError",
-    "ContactError",
     "ConstraintError",
+    "ContactError",
     "DalembertError",
     "DalembertWarning",
     "DependentConstraintsError",

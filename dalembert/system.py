@@ -8,8 +8,8 @@ code generated once per System however often it is simulated.
 from __future__ import annotations
 
 import warnings
-from dataclasses import replace
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -30,8 +30,8 @@ from .errors import (
     user_stacklevel,
 )
 from .inputs import InputSignal
-from .model.forces import PointForce
 from .model.constraints import UnilateralRow, with_gaps
+from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
 from .model.sympy_mechanics import from_lagranges_method, is_sympy_method
@@ -1066,14 +1066,14 @@ class System:
                     applied: np.ndarray | None = None) -> Trajectory:
         layout = StateLayout(len(self.coordinate_names))
         signal = plan.options.inputs
-        derived = dict(derived)
-        energies = derived.pop("energies")
+        arrays: dict[str, Any] = dict(derived)  # by Trajectory field
+        energies = arrays.pop("energies")
         if applied is None and signal is not None:  # the inputs at the points recorded
             applied = np.array([_or_nan(signal, t, *layout.split(y), len(signal.names))
                                 for t, y in zip(result.t, result.y)])
             applied = applied.reshape(len(result.t), len(signal.names))
         return Trajectory(
-            t=result.t, q=layout.rows_q(result.y), qd=layout.rows_qd(result.y), **derived,
+            t=result.t, q=layout.rows_q(result.y), qd=layout.rows_qd(result.y), **arrays,
             kinetic_energy=energies[:, 0], potential_energy=energies[:, 1],
             jacobi_integral=energies[:, 2], coordinate_names=self.coordinate_names,
             constraint_names=self.constraint_names, status=result.status,

@@ -39,7 +39,7 @@ from ...inputs import InputSignal
 from ...options import ImpactLaw
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
-from ..running.segments import SegmentedRun, SegmentState, _Record
+from ..running.segments import Segment, SegmentedRun, SegmentState, _Record
 from .gaps import Gaps
 from .laws import closed_gaps, resolve_impact
 
@@ -280,12 +280,13 @@ def _gap_fired(result: IntegrationResult, user_events: int
 
 
 def _outputs(m: int, gaps: Gaps, closed: tuple[int, ...], dynamics: bool
-             ) -> Callable[[RunSegment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
+             ) -> Callable[[Segment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
     """The outputs of a segment, its multipliers placed by row of the model with every
     gap (0 on the open gaps), the same arrays for every segment."""
     rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(closed, dtype=int)])
 
-    def outputs(segment: RunSegment, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+    def outputs(segment: Segment, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+        assert isinstance(segment, RunSegment)  # the driver makes every segment
         out = dict(segment.outputs(t, y, dynamics=dynamics))
         lam = np.zeros((len(t), m))
         lam[:, rows.astype(int)] = out["multipliers"]

@@ -34,6 +34,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+
 import numpy as np
 
 from ...codegen.compiled import NumericModel
@@ -247,9 +248,10 @@ def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     start = candidates[before[candidates] < 0]
     found = _search(candidates, check, start)
     if found is None:
-        raise ContactError(
-            f"the impact at t={t:.6g} on the gaps {_named(gaps, np.isin(np.arange(gaps.count), candidates))} "
-            "has no solution with every impulse pushing")
+        named = _named(gaps, np.isin(np.arange(gaps.count), candidates))
+        raise ContactError(f"the impact at t={t:.6g} on the gaps {named} has no solution "
+                           "with every impulse pushing and Newton's law met (try the "
+                           "other impact_law)")
     return outcome[np.asarray(found, dtype=candidates.dtype).tobytes()]
 
 
