@@ -55,6 +55,9 @@ EXAMPLES: dict[str, str] = {
     "closed-chain": "closed_chain",
     "n-four-bar": "n_four_bar",
     "imported-linkage": "imported_linkage",
+    "bouncing-ball": "bouncing_ball",
+    "slack-string": "slack_string",
+    "newtons-cradle": "newtons_cradle",
 }
 
 

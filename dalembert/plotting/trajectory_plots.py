@@ -82,7 +82,7 @@ def plot_coordinates(
         traj.t, traj.q, traj.coordinate_names, coordinate_groups(traj.coordinate_names, system),
         path, title=_title(title, system, "coordinates"), ylabel="q",
         rank=np.ptp, ranked_by="smaller range", what="bodies" if _is_multibody(system)
-        else "groups")
+        else "groups", traj=traj)
 
 
 def relative_drift(values: ArrayLike) -> NDArray[np.float64]:
@@ -143,11 +143,15 @@ def plot_energy_error(
         raise ValueError(f"quantity must be one of {ENERGY_QUANTITIES}, not {quantity!r}")
     values = traj.energy if quantity == "energy" else traj.jacobi_integral
     label = "T + V" if quantity == "energy" else "Jacobi integral"
+    if traj.contacts is not None and traj.contacts.impacts:  # what the impacts took, added
+        values = values + traj.contacts.energy_lost_by(traj.t)
+        label += " + lost in impacts"
     fig, ax = _figure()
     if len(values) and np.all(np.isfinite(values)):
         ax.semilogy(traj.t, _floored(relative_drift(values)), label=label)
     else:
         _note(ax, f"{label} is not available for this model (NaN)")
+    _mark_impacts(ax, traj)
     ax.set_xlabel("t")
     ax.set_ylabel(f"relative change of {label}")
     _finish(ax, _title(title, system, f"relative change of {label}"), legend=False)
@@ -258,7 +262,8 @@ def plot_multipliers(
         constraint_groups(traj.constraint_names, system), path,
         title=_title(title, system, "Lagrange multipliers"), ylabel="lambda",
         rank=lambda v: np.abs(v).max(initial=0.0), ranked_by="smaller peak",
-        what="joints" if _is_multibody(system) else "groups", label="lambda[{}]")
+        what="joints" if _is_multibody(system) else "groups", label="lambda[{}]",
+        traj=traj)
 
 
 def plot_path(
@@ -374,13 +379,14 @@ def _legend_outside(ax: Axes, title: str | None = None) -> None:
 def _plot_grouped(t: NDArray[np.float64], values: NDArray[np.float64], names: Sequence[str],
                   groups: Groups, path: str | os.PathLike, *, title: str, ylabel: str,
                   rank: Callable[[NDArray[np.float64]], float], ranked_by: str, what: str,
-                  label: str = "{}") -> Path:
+                  label: str = "{}", traj: Trajectory | None = None) -> Path:
     """The columns of ``values`` against ``t``: on one axes when there are at most
     :data:`PANEL_LINES` of them, else one panel per group (the :data:`MAX_PANELS`
     groups that rank highest, each with its :data:`PANEL_LINES` highest curves, the
-    others named in a note)."""
+    others named in a note); the impacts of ``traj`` marked."""
     if len(names) <= PANEL_LINES:
         fig, ax = _figure()
+        _mark_impacts(ax, traj)
         for i, name in enumerate(names):
             ax.plot(t, values[:, i], label=label.format(name))
         ax.set_xlabel("t")
@@ -400,6 +406,7 @@ def _plot_grouped(t: NDArray[np.float64], values: NDArray[np.float64], names: Se
     fig = Figure(figsize=size, dpi=_DPI, layout="constrained")
     axes = fig.subplots(rows, columns, sharex=True, squeeze=False).ravel()
     for ax, group in zip(axes, shown):
+        _mark_impacts(ax, traj)
         members = groups[group]
         kept = set(sorted(members, key=lambda m: -score(m[0]))[:PANEL_LINES])
         for i, name in members:
@@ -417,6 +424,15 @@ def _plot_grouped(t: NDArray[np.float64], values: NDArray[np.float64], names: Se
     fig.supylabel(ylabel)
     fig.suptitle(title)
     return _save(fig, path)
+
+
+def _mark_impacts(ax: Axes, traj: Trajectory | None) -> None:
+    """A thin vertical line at each impact of a run with unilateral constraints."""
+    if traj is None or traj.contacts is None:
+        return
+    for k, t in enumerate(traj.contacts.impact_times):
+        ax.axvline(t, color="0.6", linewidth=0.6, linestyle=":",
+                   label="impacts" if k == 0 else None)
 
 
 def _is_multibody(system: object) -> bool:

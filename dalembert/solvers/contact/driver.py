@@ -5,7 +5,9 @@ model with the gaps closed at its start as holonomic rows (its own plan, made on
 set of closed gaps met), and watches, as terminal events located to rounding,
 
 - each open gap ``g(q, t)`` reaching 0 while closing;
-- each closed gap's multiplier reaching 0 while falling (it would start to pull).
+- each closed gap's multiplier reaching 0 while falling (it would start to pull; 0
+  to within :data:`~dalembert.solvers.contact.gaps.FORCE_RTOL`, so that a contact
+  pushing with no force does not open at every step).
 
 At such a switch the driver resolves the impact, if gaps close while approaching
 (:func:`~dalembert.solvers.contact.laws.resolve_impact`), then finds the gaps closed
@@ -40,7 +42,7 @@ from ...options import ImpactLaw
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.segments import Segment, SegmentedRun, SegmentState, _Record
-from .gaps import Gaps
+from .gaps import FORCE_RTOL, Gaps
 from .laws import closed_gaps, resolve_impact
 
 #: Switches within rounding of one instant before the run is called a chattering cascade.
@@ -73,6 +75,26 @@ class ImpactRecord:
     qd_after: np.ndarray
 
 
+@dataclass(frozen=True)
+class Switch:
+    """A change of the closed contacts (or the run's start).
+
+    Attributes
+    ----------
+    t
+        Its instant.
+    closed
+        The gaps closed from ``t`` on (indices in the unilateral constraints' order).
+    q, qd
+        The state there (after any impact).
+    """
+
+    t: float
+    closed: tuple[int, ...]
+    q: np.ndarray
+    qd: np.ndarray
+
+
 @dataclass
 class ContactHistory:
     """The impacts of a run and its closed gaps over time.
@@ -84,21 +106,33 @@ class ContactHistory:
     impacts
         Every impact, in time order.
     switches
-        ``(t, closed)`` at the start and at every switch: the gaps closed from ``t``.
+        The start and every switch (:class:`Switch`): the gaps closed from then on.
     """
 
     names: tuple[str, ...]
     impacts: list[ImpactRecord] = field(default_factory=list)
-    switches: list[tuple[float, tuple[int, ...]]] = field(default_factory=list)
+    switches: list[Switch] = field(default_factory=list)
+
+    @property
+    def impact_times(self) -> np.ndarray:
+        """The instants of the impacts."""
+        return np.array([i.t for i in self.impacts])
+
+    def energy_lost_by(self, t: np.ndarray) -> np.ndarray:
+        """The kinetic energy the impacts took up to each time (an impact at a time
+        counted: the state recorded there is the one after it): ``T + V`` plus this is
+        what the run conserves when nothing else does work."""
+        lost = np.cumsum([0.0] + [i.energy_lost for i in self.impacts])
+        return lost[np.searchsorted(self.impact_times, np.asarray(t, dtype=float), "right")]
 
     def closed_at(self, t: np.ndarray) -> np.ndarray:
         """Which gaps are closed at each time (the set after a switch at its instant),
         shape ``(len(t), len(names))``."""
-        starts = np.array([s for s, _ in self.switches])
+        starts = np.array([s.t for s in self.switches])
         where = np.searchsorted(starts, np.asarray(t, dtype=float), "right") - 1
         out = np.zeros((len(t), len(self.names)), dtype=bool)
         for i, k in enumerate(np.clip(where, 0, len(starts) - 1)):
-            out[i, list(self.switches[k][1])] = True
+            out[i, list(self.switches[k].closed)] = True
         return out
 
 
@@ -172,7 +206,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     made: dict[tuple[int, ...], RunData] = {}
     record = _Record()
     y, closed = _switch(full, gaps, history, t, y, law, signal, opening=None)
-    history.switches.append((t, closed))
+    history.switches.append(Switch(t, closed, y[:n].copy(), y[n:].copy()))
     at_once, last_switch = 0, t
     while True:
         data = made.get(closed)
@@ -205,7 +239,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         except ContactError as exc:
             result.status, result.message, result.error = "failed", str(exc), exc
             break
-        history.switches.append((te, closed))
+        history.switches.append(Switch(te, closed, y[:n].copy(), y[n:].copy()))
         t, last_switch = te, te
     joined = record.joined(len(y0), t0)
     joined.result.t_events = joined.result.t_events[:user_events]
@@ -247,7 +281,9 @@ def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,
 
             def event(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
                       row: int = row) -> float:
-                return _open_at_start(start, t, float(lam[row]))
+                # below 0 by more than rounding: a contact pushing with no force stays
+                band = FORCE_RTOL * (1.0 + np.abs(lam).max())
+                return _open_at_start(start, t, float(lam[row]) + band)
         else:
             def event(t: float, q: np.ndarray, qd: np.ndarray, *,  # type: ignore[misc]
                       k: int = k) -> float:

@@ -18,6 +18,10 @@ from ..kkt.sparse import matvec
 #: A gap (or rate) within this much of 0, relative to ``1 + max |q|`` (to the rates'
 #: scale), touches (has stopped): rounding, not a motion.
 TOUCH_RTOL = 1e-9
+#: A contact force within this much of 0, relative to ``1 +`` the largest multiplier
+#: (or force) at the state, is 0: a contact that pushes with no force (balls at rest
+#: touching) neither pulls nor opens (a fresh KKT solve has rounding errors far below).
+FORCE_RTOL = 1e-12
 
 
 @dataclass(frozen=True)

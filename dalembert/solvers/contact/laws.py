@@ -43,7 +43,7 @@ from ...options import IMPACT_LAWS, ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.factorization import kkt_factorization
 from ..kkt.sparse import matvec
-from .gaps import TOUCH_RTOL, Gaps
+from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps
 
 __all__ = ["IMPACT_LAWS", "ImpactLaw", "ImpactOutcome", "closed_gaps", "resolve_impact"]
 #: Stages of a sequential impact before it is called endless.
@@ -206,7 +206,7 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         qdd, lam = kkt.solve(np.concatenate([f, c]))
         accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
         force, gap_accel = lam[gaps.first:], accel[gaps.first:]
-        scale = TOUCH_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(force).max(initial=0.0))
+        scale = FORCE_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(lam).max(initial=0.0))
         wrong = np.where(np.isin(np.arange(gaps.count), chosen), -force, -gap_accel)
         return wrong[candidates], np.full(len(candidates), scale)
 

@@ -48,7 +48,7 @@ def test_bouncing_ball_impacts_apexes_and_rest(backend):
         assert abs(i.impulses[0] - (1 + e) * -i.qd_before[0]) < 1e-12
     # at rest from t_inf on (the last bounces below rest_speed become plastic)
     rest = traj.contacts.switches[-1]
-    assert rest[1] == (0,) and abs(rest[0] - t_inf) < 1e-5
+    assert rest.closed == (0,) and abs(rest.t - t_inf) < 1e-5
     assert abs(traj.q[-1, 0]) < 1e-15 and abs(traj.multiplier("floor")[-1] - g) < 1e-12
     assert traj.contacts.closed_at(np.array([t_inf + 0.5])).tolist() == [[True]]
 
@@ -93,7 +93,7 @@ def test_slack_string_leaves_the_circle_and_is_caught():
                     constraints=[Unilateral(l - sp.sqrt(X**2 + Z**2), name="string")])
     traj = string.simulate((0.0, 1.5), {"x": 0.0, "z": -l}, {"x": v0}, dense_output=True)
     assert traj.success
-    slack_t, caught = traj.contacts.switches[1][0], traj.contacts.impacts[0]
+    slack_t, caught = traj.contacts.switches[1].t, traj.contacts.impacts[0]
     # slack where the tension vanishes (theta from the bottom)
     theta = np.arccos((2 * g * l - v0**2) / (3 * g * l))
     x, z = traj.sol(slack_t)[:2]
@@ -108,7 +108,8 @@ def test_slack_string_leaves_the_circle_and_is_caught():
     vel = np.array([vx, vz - g * flight])
     radial = vel @ pos / l
     assert abs(caught.energy_lost - m * radial**2 / 2) < 1e-8
-    assert traj.contacts.switches[2][1] == (0,)  # taut again (e = 0)
+    assert traj.contacts.switches[2].closed == (0,)  # taut again (e = 0)
+    assert np.abs(traj.contacts.switches[1].q - traj.sol(slack_t)[:2]).max() < 1e-12
 
 
 def test_unilateral_bad_input_is_named():
