@@ -21,6 +21,7 @@ from .definition import Definition, SymbolicDefinition
 from .equations.lagrange import Equations
 from .errors import (
     ConstraintError,
+    ParameterError,
     InitialConditionsAdjusted,
     InputError,
     IntegrationWarning,
@@ -971,7 +972,7 @@ class System:
         full = every.numeric(parameters).for_run()  # the run's inputs are written in it
         rows = self._unilateral
         gaps = Gaps(self.unilateral_names, len(self.constraint_names),
-                    np.array([u.restitution for u in rows]),
+                    np.array([_restitution(u, parameters) for u in rows]),
                     np.array([u.rest_speed for u in rows]))
         names = self.unilateral_names
         user = options.output.events
@@ -1084,6 +1085,19 @@ class System:
             t_events=result.t_events, y_events=result.y_events, sol=result.sol,
             energy_conserved=self.conserves_energy,
         )
+
+
+def _restitution(row: UnilateralRow, parameters: Mapping[str, float]) -> float:
+    """A unilateral constraint's restitution: its number, or its parameter's value
+    (checked here, where the values are known)."""
+    if not isinstance(row.restitution, sp.Symbol):
+        return row.restitution
+    value = parameters[row.restitution.name]
+    if not 0.0 <= value <= 1.0:
+        raise ParameterError(f"the restitution of unilateral constraint {row.name!r}, the "
+                             f"parameter {row.restitution.name!r}, must be in [0, 1]; got "
+                             f"{value!r}")
+    return value
 
 
 def _or_nan(signal: InputSignal, t: float, q: np.ndarray, qd: np.ndarray,

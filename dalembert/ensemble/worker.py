@@ -312,6 +312,11 @@ def _numbers(traj: Trajectory, arrays: dict[str, np.ndarray],
     """The case's line of the summary: where it ended, its errors, its final values."""
     numbers: dict[str, float] = {"t_end": float(traj.t[-1]) if len(traj.t) else np.nan}
     e = traj.energy
+    if traj.contacts is not None:  # what the impacts took counts as kept
+        e = e + traj.contacts.energy_lost_by(traj.t)
+        impacts = traj.contacts.impact_times
+        numbers["n_impacts"] = float(len(impacts))
+        numbers["t_first_impact"] = float(impacts[0]) if len(impacts) else np.nan
     finite = len(e) and np.all(np.isfinite(e))
     numbers["energy_error"] = (float(np.abs(e - e[0]).max() / max(abs(e[0]), 1e-300))
                                if finite else np.nan)

@@ -71,7 +71,8 @@ class Unilateral:
         Its name (messages, ``traj.multiplier(name)``).
     restitution
         Newton's coefficient ``e`` in ``[0, 1]``: at an impact the gap's rate after is
-        ``-e`` times the rate before (0: plastic, it stays closed; 1: elastic).
+        ``-e`` times the rate before (0: plastic, it stays closed; 1: elastic). A SymPy
+        symbol makes it a parameter of the model (a sweep over it runs one model).
     rest_speed
         An impact closing slower than this (in the gap's units per second) is plastic
         whatever ``e``: the contact then stays closed (a bouncing ball comes to rest
@@ -88,7 +89,7 @@ class Unilateral:
 
     gap: object
     name: str | None = None
-    restitution: float = 0.0
+    restitution: float | sp.Symbol = 0.0
     rest_speed: float = 1e-6
 
     def __repr__(self) -> str:
@@ -104,7 +105,7 @@ class UnilateralRow:
     gap: sp.Expr
     A: tuple[sp.Expr, ...]
     b: sp.Expr
-    restitution: float
+    restitution: float | sp.Symbol
     rest_speed: float
 
 
@@ -225,8 +226,11 @@ def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow
     if c.name is not None and not isinstance(c.name, str):
         raise ConstraintError(f"the name of constraint {i} must be a string, got {c.name!r}")
     name = c.name or f"unilateral_{i}"
-    for what, value, low, high in (("restitution", c.restitution, 0.0, 1.0),
-                                   ("rest_speed", c.rest_speed, 0.0, math.inf)):
+    symbolic = isinstance(c.restitution, sp.Symbol)
+    checked = [("rest_speed", c.rest_speed, 0.0, math.inf)]
+    if not symbolic:
+        checked.insert(0, ("restitution", c.restitution, 0.0, 1.0))
+    for what, value, low, high in checked:
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not low <= value < math.inf or value > high \
                 or (what == "rest_speed" and value <= 0):
@@ -235,8 +239,8 @@ def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow
                 f"the {what} of unilateral constraint {name!r} must be {span}, got {value!r}")
     gap = coords.to_plain(c.gap, f"constraint {name!r}")
     row, b = _differentiate_holonomic(gap, name, coords)
-    return UnilateralRow(name, gap, tuple(row), b, float(c.restitution),
-                         float(c.rest_speed))
+    restitution = c.restitution if symbolic else float(c.restitution)
+    return UnilateralRow(name, gap, tuple(row), b, restitution, float(c.rest_speed))
 
 
 def _differentiate_holonomic(

@@ -229,7 +229,8 @@ def _generalized_forces(
 def _parameters(
     coords: Coordinates, L: sp.Expr, Q: sp.Matrix, cons: ConstraintSet
 ) -> tuple[sp.Symbol, ...]:
-    exprs = [L, *Q, *cons.exprs, *(u.gap for u in cons.unilateral)]
+    exprs = [L, *Q, *cons.exprs, *(u.gap for u in cons.unilateral),
+             *(sp.sympify(u.restitution) for u in cons.unilateral)]
     free = set().union(*(e.free_symbols for e in exprs))
     free -= {t, *coords.q, *coords.qd}
     return tuple(sorted(free, key=lambda s: s.name))

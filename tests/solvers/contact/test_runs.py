@@ -138,3 +138,23 @@ def test_user_events_are_kept_apart_from_the_contacts():
     t1 = np.sqrt(2 * h0 / g)
     expected = t1 + 0.5 * g * t1 / g  # the first apex after the first bounce
     assert abs(traj.t_events[0][0] - expected) < 1e-10
+
+
+def test_restitution_as_a_parameter_swept_by_an_ensemble():
+    e = sp.Symbol("e")
+    system = System([Y], kinetic=Y.diff() ** 2 / 2, potential=g * Y, parameters={e: 0.5},
+                    constraints=[Unilateral(Y, name="floor", restitution=e)])
+    values = [0.3, 0.6, 0.9]
+    table = system.simulate_many((0.0, 2.0), {"e": values}, q0={"y": h0},
+                                 t_eval=np.linspace(0.0, 2.0, 11)).summary
+    t1 = np.sqrt(2 * h0 / g)
+    for value, row in zip(values, table.itertuples()):
+        times = t1 + 2 * t1 * np.cumsum(np.r_[0.0, value ** np.arange(1, 200)])
+        rest = t1 * (1 + value) / (1 - value)
+        if rest > 2.0:  # still bouncing at the end: every closed-form impact before it
+            assert row.n_impacts == np.count_nonzero(times <= 2.0)
+        assert abs(row.t_first_impact - t1) < 1e-12
+        assert row.energy_error < 1e-12  # T + V plus what the impacts took
+    with pytest.raises(Exception, match="restitution of unilateral constraint 'floor', "
+                                        "the parameter 'e', must be in"):
+        system.simulate((0.0, 1.0), {"y": h0}, parameters={"e": 1.5})
