@@ -10,6 +10,7 @@ message needs of a model comes through these few members.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cached_property
 from typing import Protocol
 
@@ -19,6 +20,7 @@ import sympy as sp
 from .codegen import compiled as codegen
 from .codegen.compiled import CompiledEquations
 from .equations.lagrange import Equations, derive_equations
+from .model.constraints import UnilateralRow, with_gaps
 from .model.coordinates import t as time_symbol
 from .model.model import Model
 
@@ -71,6 +73,27 @@ class Definition(Protocol):
     def check_values(self, p: np.ndarray) -> None:
         """Raise if the model cannot be simulated at the parameter values ``p`` (the
         array of :attr:`parameters`): a mass that comes out negative..."""
+
+    @property
+    def unilateral(self) -> tuple[UnilateralLaw, ...]:
+        """The unilateral constraints (contacts), apart from the rows."""
+
+    def with_gaps_closed(self, closed: tuple[int, ...]) -> Definition:
+        """The definition with the unilateral constraints ``closed`` (indices) as rows
+        after the others, and none left apart."""
+
+
+class UnilateralLaw(Protocol):
+    """What a run reads of a unilateral constraint: its name and its impact law."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def restitution(self) -> float | sp.Symbol: ...
+
+    @property
+    def rest_speed(self) -> float: ...
 
 
 class SymbolicDefinition:
@@ -144,3 +167,13 @@ class SymbolicDefinition:
     def check_values(self, p: np.ndarray) -> None:
         """Nothing to check: any finite values make a model (a singular one is found by
         the run, where it shows)."""
+
+    @property
+    def unilateral(self) -> tuple[UnilateralRow, ...]:
+        return self.model.constraints.unilateral
+
+    def with_gaps_closed(self, closed: tuple[int, ...]) -> SymbolicDefinition:
+        model = self.model
+        return SymbolicDefinition(replace(model, constraints=with_gaps(model.constraints,
+                                                                       closed)),
+                                  self.kinetic_energy)

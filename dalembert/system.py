@@ -17,7 +17,7 @@ import numpy as np
 import sympy as sp
 
 from .codegen.compiled import CompiledEquations, NumericModel
-from .definition import Definition, SymbolicDefinition
+from .definition import Definition, SymbolicDefinition, UnilateralLaw
 from .equations.lagrange import Equations
 from .errors import (
     ConstraintError,
@@ -31,7 +31,6 @@ from .errors import (
     user_stacklevel,
 )
 from .inputs import InputSignal
-from .model.constraints import UnilateralRow, with_gaps
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
@@ -362,11 +361,8 @@ class System:
         return tuple(u.name for u in self._unilateral)
 
     @property
-    def _unilateral(self) -> tuple[UnilateralRow, ...]:
-        definition = self._definition
-        if not isinstance(definition, SymbolicDefinition):
-            return ()
-        return definition.model.constraints.unilateral
+    def _unilateral(self) -> tuple[UnilateralLaw, ...]:
+        return self._definition.unilateral
 
     def with_gaps_closed(self, closed: Sequence[str] | None = None) -> System:
         """This System with unilateral constraints closed: each a holonomic row after
@@ -395,13 +391,8 @@ class System:
         which = tuple(k for k, name in enumerate(names) if name in wanted)
         made = self.__dict__.setdefault("_closed_systems", {})
         if which not in made:
-            definition = self._definition
-            assert isinstance(definition, SymbolicDefinition)
-            model = definition.model
-            closed_model = replace(model, constraints=with_gaps(model.constraints, which))
             system = System.from_definition(
-                SymbolicDefinition(closed_model, definition.kinetic_energy),
-                parameters=self.parameter_values,
+                self._definition.with_gaps_closed(which), parameters=self.parameter_values,
                 redundant_constraints=self.redundant_constraints)
             system._closed_contacts = bool(which)
             made[which] = system
@@ -1087,7 +1078,7 @@ class System:
         )
 
 
-def _restitution(row: UnilateralRow, parameters: Mapping[str, float]) -> float:
+def _restitution(row: UnilateralLaw, parameters: Mapping[str, float]) -> float:
     """A unilateral constraint's restitution: its number, or its parameter's value
     (checked here, where the values are known)."""
     if not isinstance(row.restitution, sp.Symbol):

@@ -16,6 +16,7 @@ joint angles, actuator torques and linearizations in joint coordinates.
 
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
+from .contacts import Contact, plane_contact, sphere_contact
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
 from .importing import from_mjcf, from_urdf, mujoco_state
@@ -57,6 +58,9 @@ from .rotations import (
 )
 
 __all__ = [
+    "Contact",
+    "plane_contact",
+    "sphere_contact",
     "Actuator",
     "Body",
     "Distance",

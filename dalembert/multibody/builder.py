@@ -24,6 +24,7 @@ from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
+from .contacts import Contact
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies, check_inertias
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
@@ -79,6 +80,10 @@ class Multibody:
     inputs
         Input symbols (``sympy.Symbol``) that forces, torques and actuators may hold;
         their values come with ``simulate(inputs=...)`` (see :mod:`dalembert.inputs`).
+    contacts
+        :mod:`dalembert.multibody.contacts` between listed bodies or ground (a sphere on
+        a floor, two spheres): unilateral constraints, closed and opened by the run
+        (:mod:`dalembert.solvers.contact`).
     name
         The system's name (in titles and messages).
     parameters
@@ -111,6 +116,7 @@ class Multibody:
         joint_springs: Sequence[JointSpring] = (),
         actuators: Sequence[Actuator] = (),
         inputs: Sequence[sp.Symbol] = (),
+        contacts: Sequence[Contact] = (),
     ) -> None:
         self.bodies = _pieces(bodies, "bodies", "Particle, RigidBody or PlanarBody objects")
         self.joints = _pieces(joints, "joints", "Joint objects")
@@ -120,6 +126,8 @@ class Multibody:
         self.joint_springs = tuple(joint_springs)
         self.actuators = tuple(actuators)
         self.inputs = tuple(inputs)
+        self.contacts = _pieces(contacts, "contacts", "Contact objects "
+                                "(dalembert.multibody.plane_contact, sphere_contact)")
         self.name = name
         self.gravity = array(gravity, (3,), "gravity (world components)")
         self.defaults = dict(parameters or {})
@@ -152,6 +160,7 @@ class Multibody:
             found |= parametric_symbols(piece)
         for joint in self.joints:
             found |= joint.parameter_symbols()
+        found |= {c.restitution for c in self.contacts if isinstance(c.restitution, sp.Symbol)}
         loads = [*(c for f in self.forces for c in f.force),
                  *(c for tq in self.torques for c in tq.torque),
                  *(a.value for a in self.actuators)]
@@ -316,6 +325,14 @@ class Multibody:
                     f"driver {d.name!r} drives joint {d.driven.name!r}, which is not in this "
                     f"system's joints ({', '.join(joint_names)}): a driver prescribes the "
                     "joint's angle or travel only; add the joint to the joints list too")
+        for c in self.contacts:
+            if not isinstance(c, Contact):
+                raise ModelError(f"contacts must be Contact objects (plane_contact, "
+                                 f"sphere_contact), got {c!r}")
+            if c.name in joint_names or [d.name for d in self.contacts].count(c.name) > 1:
+                raise ModelError(f"two joints or contacts are named {c.name!r}; names must "
+                                 "be distinct")
+            self._check_members(c.bodies, f"contact {c.name!r}")
         coordinate_loads: list[JointSpring | Actuator] = [*self.joint_springs, *self.actuators]
         for js in coordinate_loads:
             if not any(js.joint is j for j in self.joints):
@@ -411,6 +428,31 @@ class Multibody:
         (:mod:`dalembert.multibody.parts`); its symbolic equations are made on request.
         """
         return System.from_definition(MultibodyDefinition(self), parameters=self.defaults)
+
+    def with_contacts_closed(self, closed: tuple[int, ...]) -> Multibody:
+        """This mechanism with the contacts ``closed`` (indices) as joints after its own,
+        and no contact left apart: the mechanism while they hold.
+
+        Parameters
+        ----------
+        closed
+            Indices into :attr:`contacts`.
+
+        Examples
+        --------
+        >>> from dalembert.multibody import Ground, Particle, plane_contact
+        >>> ball = Particle("ball", 1.0)
+        >>> mb = Multibody([ball], contacts=[plane_contact("floor", Ground(), ball)])
+        >>> [j.name for j in mb.with_contacts_closed((0,)).joints]
+        ['floor']
+        """
+        closed_mb = copy.copy(self)
+        closed_mb.__dict__ = {k: v for k, v in self.__dict__.items()
+                              if not isinstance(getattr(type(self), k, None), cached_property)}
+        closed_mb.joints = (*self.joints, *(self.contacts[k].joint for k in closed))
+        closed_mb.contacts = ()
+        closed_mb._bound = {}
+        return closed_mb
 
     def body(self, name: str) -> MovingBody:
         """The body called ``name``.

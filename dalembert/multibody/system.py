@@ -23,6 +23,7 @@ from ..model.model import Model, build_model
 from .parts import multibody_parts
 
 if TYPE_CHECKING:
+    from .contacts import Contact
     from .builder import Multibody
 
 
@@ -81,6 +82,15 @@ class MultibodyDefinition:
         symbolic model built): no force, torque, actuator or input, no damping in a
         spring, no driver."""
         return self.multibody.conserves_energy
+
+    @property
+    def unilateral(self) -> tuple[Contact, ...]:
+        """The Multibody's contacts (its unilateral constraints)."""
+        return self.multibody.contacts
+
+    def with_gaps_closed(self, closed: tuple[int, ...]) -> MultibodyDefinition:
+        """The definition of the Multibody with the contacts ``closed`` as joints."""
+        return MultibodyDefinition(self.multibody.with_contacts_closed(closed))
 
     @property
     def model(self) -> Model:
