@@ -21,11 +21,11 @@ from .definition import Definition, SymbolicDefinition, UnilateralLaw
 from .equations.lagrange import Equations
 from .errors import (
     ConstraintError,
-    ParameterError,
     InitialConditionsAdjusted,
     InputError,
     IntegrationWarning,
     ModelError,
+    ParameterError,
     RedundantConstraintsWarning,
     SingularConfigurationWarning,
     user_stacklevel,

@@ -58,11 +58,9 @@ from .rotations import (
 )
 
 __all__ = [
-    "Contact",
-    "plane_contact",
-    "sphere_contact",
     "Actuator",
     "Body",
+    "Contact",
     "Distance",
     "Driver",
     "E_matrix",
@@ -109,6 +107,7 @@ __all__ = [
     "matrix_from_euler",
     "mujoco_state",
     "multibody_of",
+    "plane_contact",
     "point_positions",
     "potential_energy",
     "quaternion_from_matrix",
@@ -116,4 +115,5 @@ __all__ = [
     "ring_state",
     "rotation_matrices",
     "rotation_matrix",
+    "sphere_contact",
 ]

@@ -24,8 +24,8 @@ from ..model.parameters import resolve_parameters
 from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
-from .contacts import Contact
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies, check_inertias
+from .contacts import Contact
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .drivers import Actuator, Driver, JointSpring

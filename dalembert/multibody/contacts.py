@@ -144,7 +144,7 @@ def _contact(name: str, joint: Joint, restitution: float | sp.Symbol,
 
 def _length(value: object, name: str, what: str, zero: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
-            or not (0.0 <= value if zero else 0.0 < value) or not math.isfinite(value):
+            or not (value >= 0.0 if zero else value > 0.0) or not math.isfinite(value):
         raise ModelError(f"contact {name!r}: the {what} must be a finite "
                          f"{'non-negative' if zero else 'positive'} number, got {value!r}")
     return float(value)

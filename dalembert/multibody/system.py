@@ -23,8 +23,8 @@ from ..model.model import Model, build_model
 from .parts import multibody_parts
 
 if TYPE_CHECKING:
-    from .contacts import Contact
     from .builder import Multibody
+    from .contacts import Contact
 
 
 class MultibodyDefinition:
