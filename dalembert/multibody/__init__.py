@@ -16,7 +16,7 @@ joint angles, actuator torques and linearizations in joint coordinates.
 
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
-from .contacts import Contact, plane_contact, sphere_contact
+from .contacts import Contact, JointStop, joint_limit, plane_contact, sphere_contact
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
 from .importing import from_mjcf, from_urdf, mujoco_state
@@ -74,6 +74,7 @@ __all__ = [
     "JointPointWarning",
     "JointReaction",
     "JointSpring",
+    "JointStop",
     "JointValues",
     "Multibody",
     "Particle",
@@ -98,6 +99,7 @@ __all__ = [
     "from_urdf",
     "inverse_dynamics",
     "joint_jacobian",
+    "joint_limit",
     "joint_positions",
     "joint_reactions",
     "joint_velocities",

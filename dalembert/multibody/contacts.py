@@ -1,12 +1,13 @@
-"""Contacts between bodies: unilateral constraints of a Multibody.
+"""Contacts between bodies and joint limits: unilateral constraints of a Multibody.
 
 A contact is a gap between two bodies that acts only when closed and only by pushing
 (:class:`~dalembert.Unilateral` for a hand-written System). While it is closed it is a
 joint of the mechanism: a point on a plane (:class:`~.joints.PointOnPlane`, the plane
-moved along its normal by a sphere's radius) or two points at a distance
-(:class:`~.joints.Distance`, the sum of two spheres' radii). A run switches it on and
-off (:mod:`dalembert.solvers.contact`): the Multibody with the contacts closed then is
-the Multibody with these joints added after its own.
+moved along its normal by a sphere's radius), two points at a distance
+(:class:`~.joints.Distance`, the sum of two spheres' radii), or a joint at the end of
+its range (:class:`JointStop`). A run switches it on and off
+(:mod:`dalembert.solvers.contact`): the Multibody with the contacts closed then is the
+Multibody with these joints added after its own.
 """
 
 from __future__ import annotations
@@ -18,8 +19,11 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
+from ..model.constraints import Holonomic, Pfaffian
 from .bodies import Body
-from .joints import Distance, Joint, PointOnPlane, _unit
+from .drivers import _angle_terms
+from .joints import Distance, Joint, PointOnPlane, Prismatic, Revolute, _unit
+from .rotations import dot
 from .types import Vector
 
 
@@ -148,3 +152,91 @@ def _length(value: object, name: str, what: str, zero: bool = False) -> float:
         raise ModelError(f"contact {name!r}: the {what} must be a finite "
                          f"{'non-negative' if zero else 'positive'} number, got {value!r}")
     return float(value)
+
+
+class JointStop(Joint):
+    """The range of a revolute joint's angle or a prismatic joint's travel as one gap,
+    positive inside the range, 0 at either end (1 equation while closed).
+
+    Revolute, the range ``[lower, upper]`` (less than a turn) about its middle ``m``
+    and half-width ``w``: ``cos(theta - m) - cos(w)``, smooth at both ends and blind to
+    whole turns. Prismatic: ``w^2 - (d - m)^2``.
+
+    Parameters
+    ----------
+    name
+        Its name.
+    joint
+        The ``Revolute`` or ``Prismatic`` joint it limits (in the mechanism's joints).
+    lower, upper
+        The range's ends (rad or length), ``lower < upper``.
+    """
+
+    n_equations = 1
+    planar_rows = 1
+
+    def __init__(self, name: str, joint: Joint, lower: float, upper: float) -> None:
+        if not isinstance(joint, Revolute | Prismatic):
+            raise ModelError(f"joint limit {name!r}: a limit bounds a Revolute or Prismatic "
+                             f"joint, got {joint!r}")
+        for what, value in (("lower", lower), ("upper", upper)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value):
+                raise ModelError(f"joint limit {name!r}: {what} must be a finite number, "
+                                 f"got {value!r}")
+        turn = isinstance(joint, Revolute)
+        if not lower < upper or (turn and upper - lower >= 2 * math.pi):
+            raise ModelError(f"joint limit {name!r}: the range [{lower}, {upper}] must have "
+                             f"lower < upper{' and span less than a turn' if turn else ''}")
+        if not isinstance(name, str) or not name.isidentifier():
+            raise ModelError(f"a joint name must be an identifier-like string, got {name!r}")
+        # the limited joint's bodies and geometry (which the joint checked), as a Driver
+        vars(self).update({k: v for k, v in vars(joint).items()
+                           if k not in ("name", "n_equations")})
+        self.name, self.joint_kind, self.limited = name, type(joint).__name__, joint
+        self.middle, self.half = (lower + upper) / 2, (upper - lower) / 2
+        self.uses_orientation = turn
+        self.n_equations = 1
+
+    def equations(self) -> list[sp.Expr]:
+        m, w = self.middle, self.half
+        if self.joint_kind == "Revolute":
+            cos_like, sin_like = _angle_terms(self)  # type: ignore[arg-type]
+            return [cos_like * math.cos(m) + sin_like * math.sin(m) - math.cos(w)]
+        travel = dot(self.frame("a")[2], self.separation())
+        return [w**2 - (travel - m) ** 2]
+
+    planar_equations = equations
+
+    def _check_planar(self) -> None:
+        pass  # the limited joint fits the plane: it checked that
+
+    def constraints(self) -> list[Holonomic | Pfaffian]:
+        return [Holonomic(self.equations()[0], name=f"{self.name}_1")]
+
+
+def joint_limit(name: str, joint: Joint, lower: float, upper: float, *,
+                restitution: float | sp.Symbol = 0.0, rest_speed: float = 1e-6) -> Contact:
+    """A revolute joint's angle or a prismatic joint's travel kept in ``[lower, upper]``
+    by a stop at each end (:class:`JointStop`): a unilateral constraint.
+
+    Parameters
+    ----------
+    name
+        The limit's name.
+    joint
+        The ``Revolute`` or ``Prismatic`` joint (in the mechanism's joints).
+    lower, upper
+        The range (rad for a revolute joint, less than a turn; length for a prismatic).
+    restitution, rest_speed
+        As for :class:`~dalembert.Unilateral`.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, RigidBody, Revolute
+    >>> link = RigidBody("link", 1.0, (0.1, 0.1, 0.1))
+    >>> hinge = Revolute("hinge", Ground(), link, axis_a=(0, 1, 0), axis_b=(0, 1, 0))
+    >>> joint_limit("stop", hinge, -0.5, 0.5).joint.half
+    0.5
+    """
+    return _contact(name, JointStop(name, joint, lower, upper), restitution, rest_speed)

@@ -128,11 +128,17 @@ def test_a_time_limit_must_be_finite_and_positive(value):
     refused("timeout", value)
 
 
+@FAST
+@given(value=st.one_of(NOT_NUMBERS, st.sampled_from(["Sequential", "both", "lcp"])))
+def test_an_impact_law_must_be_one_of_the_laws(value):
+    refused("impact_law", value)
+
+
 def test_every_option_of_the_table_is_exercised_here():
     covered = {"first_step", "baumgarte_gain", "max_step", "rtol", "atol", "method",
                "step_control", "backend", "redundant_constraints", "velocity_projection",
                "stabilization", "dense_output", "progress", "native", "events", "t_eval",
-               "sample_time", "timeout"}
+               "sample_time", "timeout", "impact_law"}
     assert set(SIMULATE_PARAMETERS) == covered
 
 

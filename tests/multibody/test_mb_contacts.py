@@ -102,3 +102,47 @@ def test_contact_bad_input_is_named():
     mb = Multibody([ball], contacts=[plane_contact("floor", Ground(), ball, restitution=e)],
                    parameters={e: 0.5})
     assert e in mb.parameters
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5])
+def test_pendulum_against_a_joint_limit(e):
+    """A link on a hinge released at ``theta0`` swings down onto its lower stop (above
+    the hanging position): it arrives with the energy's rate
+    ``w^2 = 2 m g d (cos(lower) - cos(theta0)) / I_hinge`` and leaves at ``-e`` times
+    it; plastic (e = 0), it rests on the stop, gravity pressing it there."""
+    from dalembert.multibody import Revolute, joint_limit, joint_positions, joint_velocities
+
+    m, d, theta0, lower = 1.5, 0.4, 1.0, 0.3
+    inertia = 0.02  # about the centre, for the hinge's axis
+    link = RigidBody("link", m, (inertia, inertia, inertia))
+    hinge = Revolute("hinge", Ground(), link, (0, 0, 0), (0, 0, d), axis_a=(0, 1, 0))
+    stop = joint_limit("stop", hinge, lower, 1.2, restitution=e)
+    mb = Multibody([link], [hinge], contacts=[stop], gravity=(0, 0, -g))
+    c, s = np.cos(theta0), np.sin(theta0)
+    R = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])  # turned by theta0 about y
+    q0, qd0 = mb.initial_state(positions={"link": R @ (0, 0, -d)}, orientations={"link": R})
+    traj = mb.simulate((0.0, 1.5), q0, qd0)
+    assert traj.success, traj.message
+    first = traj.contacts.impacts[0]
+    names = traj.coordinate_names
+    angle = joint_positions(mb, dict(zip(names, traj.q[0])), joints=["hinge"])
+    assert abs(angle.array[0] - theta0) < 1e-12  # the angle is measured as we set it
+    # at the impact: on the stop, the closed-form rate before, -e times it after
+    before = joint_velocities(mb, _state(names, traj, first.t), dict(zip(names, first.qd_before)),
+                              joints=["hinge"]).array[0]
+    after = joint_velocities(mb, _state(names, traj, first.t), dict(zip(names, first.qd_after)),
+                             joints=["hinge"]).array[0]
+    rate = np.sqrt(2 * m * g * d * (np.cos(lower) - np.cos(theta0)) / (inertia + m * d**2))
+    assert abs(before + rate) < 1e-9 and abs(after - e * rate) < 1e-9
+    final = joint_positions(mb, dict(zip(names, traj.q[-1])), joints=["hinge"]).array[0]
+    if e == 0.0:  # at rest on the stop from the impact on
+        assert [s.closed for s in traj.contacts.switches] == [(), (0,)]
+        assert abs(final - lower) < 1e-12
+    else:  # bounced (and at rest on the stop after the bounces below rest_speed)
+        assert lower - 1e-12 < final < 1.2
+
+
+def _state(names, traj, t):
+    """The positions at ``t`` (unchanged through an impact): the switch recorded there."""
+    switch = next(s for s in traj.contacts.switches if s.t == t)
+    return dict(zip(names, switch.q))
