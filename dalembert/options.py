@@ -62,12 +62,17 @@ RedundantConstraints = Literal["minimum-norm", "error"]
 VelocityProjection = Literal["kinetic-energy", "least-change"]
 #: How an impact on several touching contacts is resolved (dalembert.solvers.contact.laws).
 ImpactLaw = Literal["sequential", "simultaneous"]
+#: How a run with unilateral constraints goes (dalembert.solvers.contact).
+ContactMode = Literal["event-driven", "time-stepping"]
 
 BACKENDS: tuple[Backend, ...] = ("auto", "c", "python")
 STEP_CONTROLS: tuple[StepController, ...] = ("PI", "scipy")
 REDUNDANT_MODES: tuple[RedundantConstraints, ...] = ("minimum-norm", "error")
 VELOCITY_PROJECTIONS: tuple[VelocityProjection, ...] = ("kinetic-energy", "least-change")
 IMPACT_LAWS: tuple[ImpactLaw, ...] = ("sequential", "simultaneous")
+CONTACT_MODES: tuple[ContactMode, ...] = ("event-driven", "time-stepping")
+#: The time-stepping contact mode's step when none is given.
+DEFAULT_CONTACT_STEP = 1e-3
 STABILIZATIONS = ("projection", "baumgarte", None)
 #: The Baumgarte gain when ``stabilization="baumgarte"`` is given without one.
 DEFAULT_BAUMGARTE_GAIN = 10.0
@@ -144,6 +149,10 @@ class SimulationOptions:
     timeout: float | None = None
     #: How impacts on several touching contacts are resolved (unilateral constraints).
     impact_law: ImpactLaw = "sequential"
+    #: Event-driven (exact) or time-stepping (Moreau-Jean, for many contacts).
+    contact_mode: ContactMode = "event-driven"
+    #: The time-stepping mode's step.
+    contact_step: float = DEFAULT_CONTACT_STEP
 
 
 # --------------------------------------------------------------------------- the table
@@ -182,6 +191,8 @@ SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "sample_time": [PositiveNumber(), NONE],
     "timeout": [PositiveNumber(), NONE],
     "impact_law": [OneOf(IMPACT_LAWS)],
+    "contact_mode": [OneOf(CONTACT_MODES)],
+    "contact_step": [PositiveNumber(), NONE],
 }
 
 #: The keywords of :func:`simulation_options`: ``simulate``'s run options and what the
@@ -240,6 +251,8 @@ def simulation_options(
     sample_time: float | None = None,
     timeout: float | None = None,
     impact_law: ImpactLaw = "sequential",
+    contact_mode: ContactMode = "event-driven",
+    contact_step: float | None = None,
     state_size: int | None = None,
     input_names: Sequence[str] = (),
 ) -> SimulationOptions:
@@ -279,6 +292,11 @@ def simulation_options(
     impact_law
         How an impact on several touching unilateral constraints is resolved:
         ``"sequential"`` or ``"simultaneous"`` (:mod:`dalembert.solvers.contact.laws`).
+    contact_mode, contact_step
+        ``"event-driven"`` (exact: every impact located and resolved) or
+        ``"time-stepping"`` (Moreau-Jean steps of ``contact_step``, default 1e-3: for
+        many contacts; :mod:`dalembert.solvers.contact.time_stepping`). A step without
+        the time-stepping mode is an error.
     state_size
         The length of the state ``[q, qd]`` (twice the coordinates), when known: an
         array of tolerances must have one entry per state entry.
@@ -308,6 +326,12 @@ def simulation_options(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
             "stiff problems, or stabilization='baumgarte'"
         )
+    if contact_step is not None and contact_mode != "time-stepping":
+        raise ValueError(f"contact_step={contact_step!r} is the time-stepping contact "
+                         "mode's step; give contact_mode='time-stepping' with it, or leave "
+                         "it None")
+    if contact_step is not None and contact_step > abs(span[1] - span[0]):
+        raise ValueError(f"contact_step={contact_step!r} is longer than t_span {span}")
     stabilized = _stabilization(stabilization, baumgarte_gain)
     _warn_stiff_gain(stabilized, solver, span)
     return SimulationOptions(
@@ -324,6 +348,8 @@ def simulation_options(
                             None if sample_time is None else float(sample_time), span),
         timeout=None if timeout is None else float(timeout),
         impact_law=impact_law,
+        contact_mode=contact_mode,
+        contact_step=DEFAULT_CONTACT_STEP if contact_step is None else float(contact_step),
     )
 
 

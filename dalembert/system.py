@@ -44,6 +44,7 @@ from .options import (
     REDUNDANT_CONSTRAINTS,
     SIMULATE_PARAMETERS,
     Backend,
+    ContactMode,
     ImpactLaw,
     RedundantConstraints,
     SimulationOptions,
@@ -620,6 +621,8 @@ class System:
         sample_time: float | None = None,
         timeout: float | None = None,
         impact_law: ImpactLaw = "sequential",
+        contact_mode: ContactMode = "event-driven",
+        contact_step: float | None = None,
     ) -> Trajectory:
         """Integrate the constrained equations of motion over ``t_span``.
 
@@ -706,6 +709,12 @@ class System:
             wave; Newton's cradle gives its physical outcome) or ``"simultaneous"``
             (one complementarity problem over all of them); see
             :mod:`dalembert.solvers.contact.laws`.
+        contact_mode, contact_step
+            With unilateral constraints: ``"event-driven"`` (default: each impact
+            located to rounding and resolved exactly) or ``"time-stepping"``
+            (Moreau-Jean steps of ``contact_step``, default 1e-3, first order: for many
+            contacts, a chain falling on a table; see
+            :mod:`dalembert.solvers.contact.time_stepping`).
 
         Returns
         -------
@@ -976,18 +985,27 @@ class System:
             layout = StateLayout(len(self.coordinate_names))
             return system._plan(segment, *layout.split(y), parameters, None).start()
 
-        done = run_contacts(full, gaps, start, (t0, tf), plan.y0, options.output.t_eval,
-                            options.impact_law, len(user), options.inputs, dynamics)
-        result = done.run.result
+        if options.contact_mode == "time-stepping":
+            from .solvers.contact.time_stepping import run_time_stepping
+
+            stepped = run_time_stepping(full, gaps, (t0, tf), plan.y0, options.contact_step,
+                                        options.output.t_eval, options.inputs)
+            result, derived, history = stepped.result, stepped.derived, stepped.history
+            applied = None
+        else:
+            done = run_contacts(full, gaps, start, (t0, tf), plan.y0, options.output.t_eval,
+                                options.impact_law, len(user), options.inputs, dynamics)
+            result, derived, history = done.run.result, done.run.derived, done.history
+            applied = done.run.inputs
         if not result.success:
             reached = result.t[-1] if len(result.t) else t0
             warnings.warn(IntegrationWarning(f"{result.message}; returning the trajectory "
                                              f"up to t={reached:.6g}"),
                           stacklevel=user_stacklevel())
-        traj = every._trajectory(result, plan, done.run.derived, done.run.inputs)
-        return replace(traj, contacts=done.history,
+        traj = every._trajectory(result, plan, derived, applied)
+        return replace(traj, contacts=history,
                        energy_conserved=traj.energy_conserved
-                       and not any(i.energy_lost for i in done.history.impacts))
+                       and not any(i.energy_lost for i in history.impacts))
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:

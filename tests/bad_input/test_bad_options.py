@@ -134,11 +134,30 @@ def test_an_impact_law_must_be_one_of_the_laws(value):
     refused("impact_law", value)
 
 
+@FAST
+@given(value=st.one_of(NOT_NUMBERS, st.sampled_from(["events", "stepping", "moreau"])))
+def test_a_contact_mode_must_be_one_of_the_modes(value):
+    refused("contact_mode", value)
+
+
+@FAST
+@given(value=st.one_of(NOT_NUMBERS.filter(lambda v: v is not None), NOT_POSITIVE))
+def test_a_contact_step_must_be_finite_and_positive(value):
+    refused("contact_step", value, contact_mode="time-stepping")
+
+
+def test_a_contact_step_needs_the_time_stepping_mode():
+    with pytest.raises(ValueError, match="contact_step=0.01 is the time-stepping contact"):
+        simulation_options((0.0, 1.0), contact_step=0.01)
+    with pytest.raises(ValueError, match="contact_step=2.0 is longer than t_span"):
+        simulation_options((0.0, 1.0), contact_step=2.0, contact_mode="time-stepping")
+
+
 def test_every_option_of_the_table_is_exercised_here():
     covered = {"first_step", "baumgarte_gain", "max_step", "rtol", "atol", "method",
                "step_control", "backend", "redundant_constraints", "velocity_projection",
                "stabilization", "dense_output", "progress", "native", "events", "t_eval",
-               "sample_time", "timeout", "impact_law"}
+               "sample_time", "timeout", "impact_law", "contact_mode", "contact_step"}
     assert set(SIMULATE_PARAMETERS) == covered
 
 

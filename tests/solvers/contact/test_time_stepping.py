@@ -1,0 +1,83 @@
+"""The time-stepping contact mode (``solvers/contact/time_stepping.py``).
+
+References: the bouncing ball's closed form (impact times and apex heights, against
+which the scheme is first order: its errors halve with the step); a chain of rods
+dropped onto a table (no penetration, the rods' lengths held, the energy never
+rising, the chain at rest on the table at the end); the LCP on small matrices solved
+by hand.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from dalembert import Holonomic, System, Unilateral, coordinates
+from dalembert.solvers.contact.time_stepping import solve_lcp
+
+g, e, h0 = 9.81, 0.8, 1.0
+(Y,) = coordinates("y")
+BALL = System([Y], kinetic=Y.diff() ** 2 / 2, potential=g * Y,
+              constraints=[Unilateral(Y, name="floor", restitution=e)])
+
+
+def test_lcp_by_hand():
+    W = np.array([[2.0, 1.0], [1.0, 2.0]])
+    # both pushing: W P = -q
+    assert np.allclose(solve_lcp(W, np.array([-3.0, -3.0])), [1.0, 1.0], atol=1e-15)
+    # the second opens: P2 = 0, w2 = P1 + 1 >= 0
+    assert np.allclose(solve_lcp(W, np.array([-3.0, 1.0])), [1.5, 0.0], atol=1e-15)
+    assert np.array_equal(solve_lcp(W, np.array([1.0, 1.0])), [0.0, 0.0])  # none
+
+
+def test_bouncing_ball_is_first_order_in_the_step():
+    """The impact lands in the step that closes the gap, so the speed it reverses is
+    off by at most ``g h`` and the apex after it by ``2 g h / v1`` relative at most."""
+    t1 = np.sqrt(2 * h0 / g)
+    impacts = t1 + 2 * t1 * np.cumsum(np.r_[0.0, e ** np.arange(1, 4)])
+    for h in (2e-3, 7e-4):
+        traj = BALL.simulate((0.0, 1.2), {"y": h0}, contact_mode="time-stepping",
+                             contact_step=h)
+        assert traj.success and traj.q.min() >= 0.0  # projected: never below the floor
+        first = traj.contacts.impact_times[0]
+        assert impacts[0] <= first <= impacts[0] + 2 * h  # the step that closes it
+        apex = traj.q[(traj.t > impacts[0]) & (traj.t < impacts[1]), 0].max()
+        assert abs(apex / (e**2 * h0) - 1) <= 2 * g * h / (g * t1)
+
+
+def test_chain_dropped_on_a_table_comes_to_rest_on_it():
+    count, link = 6, 0.2
+    xs = coordinates(" ".join(f"x{k}" for k in range(count)))
+    ys = coordinates(" ".join(f"y{k}" for k in range(count)))
+    rods = [Holonomic((xs[k + 1] - xs[k]) ** 2 + (ys[k + 1] - ys[k]) ** 2 - link**2,
+                      name=f"rod{k}") for k in range(count - 1)]
+    table = [Unilateral(y, name=f"table{k}") for k, y in enumerate(ys)]
+    chain = System([*xs, *ys], kinetic=sum(c.diff() ** 2 for c in (*xs, *ys)) / 2,
+                   potential=g * sum(ys), constraints=rods + table)
+    angle = 0.3  # tilted: one end lands first, the others follow
+    q0 = {f"x{k}": k * link * np.cos(angle) for k in range(count)}
+    q0.update({f"y{k}": 0.3 + k * link * np.sin(angle) for k in range(count)})
+    traj = chain.simulate((0.0, 1.5), q0, contact_mode="time-stepping", contact_step=2e-3)
+    assert traj.success, traj.message
+    heights = traj.q[:, count:]
+    assert heights.min() >= -1e-12  # nothing below the table
+    assert traj.position_residual.max() < 1e-10  # the rods' lengths
+    energy = traj.energy
+    # plastic: the energy falls, but for the potential energy a landing step's position
+    # projection adds (lifting what went below the table within the step: at most
+    # m g v h per mass, v about 3.3 m/s here)
+    assert np.diff(energy).max() <= count * g * 3.5 * 2e-3
+    assert energy[-1] < 0.3 * energy[0]
+    assert np.abs(heights[-1]).max() < 1e-9  # flat on the table
+    assert np.abs(traj.qd[-1, count:]).max() < 1e-9
+    assert len(traj.contacts.impacts) >= 2  # landed in a cascade, not all at once
+    closed = traj.contacts.closed_at(traj.t[-1:])[0]
+    assert closed.all()
+    # on the table each mass's weight is carried by its table contact (the mean force)
+    assert np.abs(traj.multipliers[-1, count - 1:] - g).max() < 1e-6
+
+
+def test_time_stepping_refuses_a_step_without_its_mode():
+    with pytest.raises(ValueError, match="contact_step=0.01 is the time-stepping"):
+        BALL.simulate((0.0, 1.0), {"y": h0}, contact_step=0.01)
