@@ -147,9 +147,9 @@ def test_a_contact_step_must_be_finite_and_positive(value):
 
 
 def test_a_contact_step_needs_the_time_stepping_mode():
-    with pytest.raises(ValueError, match="contact_step=0.01 is the time-stepping contact"):
+    with pytest.raises(ValueError, match=r"contact_step=0\.01 is the time-stepping contact"):
         simulation_options((0.0, 1.0), contact_step=0.01)
-    with pytest.raises(ValueError, match="contact_step=2.0 is longer than t_span"):
+    with pytest.raises(ValueError, match=r"contact_step=2\.0 is longer than t_span"):
         simulation_options((0.0, 1.0), contact_step=2.0, contact_mode="time-stepping")
 
 

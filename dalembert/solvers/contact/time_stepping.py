@@ -86,7 +86,7 @@ def solve_lcp(W: np.ndarray, q: np.ndarray) -> np.ndarray:
             sub = W[np.ix_(chosen, chosen)]
             P[chosen] = np.linalg.lstsq(sub, -q[chosen], rcond=None)[0]
         w = W @ P + q
-        wrong = np.where(chosen, P < -scale, w < -scale)
+        wrong = np.where(chosen, -scale > P, w < -scale)
         if not wrong.any():
             return np.maximum(P, 0.0)
         first = int(np.argmax(wrong))

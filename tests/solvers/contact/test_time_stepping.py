@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import sympy as sp
 
 from dalembert import Holonomic, System, Unilateral, coordinates
 from dalembert.solvers.contact.time_stepping import solve_lcp
@@ -79,5 +78,5 @@ def test_chain_dropped_on_a_table_comes_to_rest_on_it():
 
 
 def test_time_stepping_refuses_a_step_without_its_mode():
-    with pytest.raises(ValueError, match="contact_step=0.01 is the time-stepping"):
+    with pytest.raises(ValueError, match=r"contact_step=0\.01 is the time-stepping"):
         BALL.simulate((0.0, 1.0), {"y": h0}, contact_step=0.01)
