@@ -299,7 +299,8 @@ def animate(
             _set_points(artist, lines[j] if j < len(lines) else np.empty((0, dim)))
         for j, trail in enumerate(trails):
             _set_points(trail, np.vstack([frame[j] for frame in all_lines[:k + 1]]))
-        label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}")
+        label.set_text(f"{title + '   ' if title else ''}t = {traj.t[idx[k]]:.3f}"
+                       f"{_impacts_since(traj, idx, k)}")
         return [*trails, *artists, label]
 
     images = _render(fig, canvas, [*trails, *artists, label], update, len(idx))
@@ -319,6 +320,16 @@ def animate(
     else:
         path.write_text(_html_player(images, fps, title or "animation"), encoding="utf-8")
     return path
+
+
+def _impacts_since(traj: Trajectory, idx: NDArray[np.intp], k: int) -> str:
+    """``"   impact"`` (or ``"   3 impacts"``) when the run's contacts struck since the
+    frame before ``k``, else empty."""
+    if traj.contacts is None or k == 0:
+        return ""
+    times = traj.contacts.impact_times
+    count = int(np.count_nonzero((times > traj.t[idx[k - 1]]) & (times <= traj.t[idx[k]])))
+    return "" if not count else "   impact" if count == 1 else f"   {count} impacts"
 
 
 def _set_points(line: Line2D, p: NDArray[np.float64]) -> None:
