@@ -268,7 +268,9 @@ def simulation_options(
         checked between steps (in the C loop between its stretches of steps, a
         fraction of a second each): a run past it stops there with status
         ``"timeout"``, returning what it computed. A user's function (an input, an
-        event) that itself never returns is not stopped.
+        event) that itself never returns is stopped half a second after the limit
+        (:mod:`~dalembert.solvers.running.watchdog`), unless it is blocked in a C call
+        (``time.sleep``): then when that call returns.
     state_size
         The length of the state ``[q, qd]`` (twice the coordinates), when known: an
         array of tolerances must have one entry per state entry.

@@ -646,7 +646,9 @@ class System:
             fraction of a second each): a run past it stops with status
             ``"timeout"`` and an :class:`~dalembert.errors.IntegrationWarning`,
             returning what it computed. A function of yours (an input, an event)
-            that itself never returns is not stopped.
+            that itself never returns is stopped half a second after the limit, the
+            run ending the same way (unless the function is blocked in a C call such
+            as ``time.sleep``: then when that call returns).
 
         Returns
         -------
