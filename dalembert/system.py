@@ -54,6 +54,7 @@ from .rules import (
     FiniteNumber,
     Rule,
     before_running,
+    check_parameters,
     checked_keywords,
     unchecked,
 )
@@ -451,6 +452,7 @@ class System:
         >>> [round(float(v), 12) + 0.0 for v in need.applied]
         [0.0, 9.81]
         """
+        check_parameters({"t": t}, {"t": [FiniteNumber()]}, "inverse_dynamics")
         num = self.numeric(parameters)
         q_, qd_ = self._state(q, qd)
         qdd_ = coordinate_values(qdd, self.coordinate_names, "qdd")
