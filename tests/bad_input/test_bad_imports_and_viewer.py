@@ -152,3 +152,30 @@ def test_positions_that_are_not_finite(pendulum, tmp_path):
     with pytest.raises(ValueError, match=r"the trajectory's positions are not finite at "
                                          r"t=0.25 \(2 of 3 output times\): nothing to draw"):
         view(dataclasses.replace(traj, q=q), system, tmp_path / "a.html")
+
+
+FREE = ('<mujoco><worldbody><body pos="0 0 1"><freejoint name="base"/><geom size=".1"/>'
+        '</body></worldbody></mujoco>')
+
+
+@pytest.mark.parametrize("qpos", ["a", {"base": 1.0}, [0.0, 0.0, 1.0]])
+def test_a_mujoco_state_that_is_not_numbers(qpos):
+    from dalembert.errors import InitialConditionError
+    from dalembert.multibody import mujoco_state
+
+    with pytest.raises(InitialConditionError, match=r"^qpos must be 7 finite numbers for the "
+                                                    r"MJCF string \(MuJoCo's order\), got "):
+        mujoco_state(from_mjcf(FREE), qpos=qpos)
+
+
+def test_a_zero_quaternion_in_a_mujoco_state():
+    """MuJoCo takes it as no rotation, without a word."""
+    from dalembert.errors import InitialConditionError
+    from dalembert.multibody import mujoco_state
+
+    with pytest.raises(InitialConditionError, match=r"the quaternion of joint 'base' "
+                                                    r"\(qpos\[3:7\]\) is zero; it has no "
+                                                    r"direction"):
+        mujoco_state(from_mjcf(FREE), qpos=[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0])
+    q0, _ = mujoco_state(from_mjcf(FREE), qpos=[0.0, 0.0, 2.0, 0.0, 1.0, 0.0, 0.0])
+    assert q0["body1_z"] == 2.0 and abs(abs(q0["body1_b1"]) - 1.0) < 1e-12
