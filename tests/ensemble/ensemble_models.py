@@ -165,3 +165,11 @@ def spinning_output(system: System, traj) -> np.ndarray:
     if traj.parameters.get("l", 1.0) > 1.2:
         spin()
     return traj["y"]
+
+
+def spinning_crossing(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+    """An event (the bob passing under the pivot) that never returns from t = 0.3 on for
+    a pendulum longer than 1.2 (its length read from the state: x^2 + y^2 = l^2)."""
+    if t > 0.3 and np.hypot(q[0], q[1]) > 1.2:
+        spin()
+    return q[0]

@@ -22,6 +22,7 @@ from ensemble_models import (
     pendulum,
     pushed_bead,
     released,
+    spinning_crossing,
     spinning_damper,
     spinning_initial_state,
     spinning_output,
@@ -66,6 +67,31 @@ def test_a_controller_that_never_returns_times_its_case_out(scheduler):
             t_eval=T_EVAL, keep=("q", "qd"), timeout=0.5, scheduler=scheduler, workers=2,
             progress=False)
     check_bead(result, cases, 1)
+
+
+@pytest.mark.parametrize("scheduler", ["serial", "threads"])
+def test_an_event_that_never_returns_times_its_case_out(scheduler):
+    """In the Python loop (events), which keeps its thread's turn throughout."""
+    cases = grid(l=[1.0, 1.5, 0.8])
+    with pytest.warns(EnsembleWarning, match=r"1 of 3 cases did not succeed \(1 timeout\)"):
+        result = pendulum().simulate_many(
+            (0.0, 1.5), cases, initial_state=released, t_eval=T_EVAL,
+            events=[spinning_crossing], timeout=0.5, scheduler=scheduler, workers=2,
+            progress=False)
+    summary = result.summary
+    assert summary["status"].tolist() == ["finished", "timeout", "finished"]
+    assert "while a function of yours, spin (ensemble_models.py:" in summary.loc[1, "message"]
+    q = result.dataset["q"].values
+    reached = ~np.isnan(q[1, :, 0])
+    assert reached.sum() >= 3 and T_EVAL[reached].max() <= 0.3
+    for i in range(3):  # the rod's length holds where each case reached
+        ok = ~np.isnan(q[i, :, 0])
+        np.testing.assert_allclose(np.hypot(q[i, ok, 0], q[i, ok, 1]), cases["l"][i],
+                                   rtol=1e-10)
+    # the others cross under the pivot at the quarter period (small-swing law, loosely)
+    quarter = np.pi / 2 * np.sqrt(cases["l"][[0, 2]].to_numpy() / 9.81)
+    np.testing.assert_allclose(summary.loc[[0, 2], "t_event_spinning_crossing"], quarter,
+                               rtol=0.05)
 
 
 @pytest.mark.parametrize("scheduler", ["serial", "threads"])
