@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import TimeLimitExceeded
 from ..inputs import input_signal
 from ..options import SimulationOptions
-from ..solvers.native.turns import python_turn
+from ..solvers.native.turns import outside_python, python_turn
 from ..solvers.outputs import SOLVED
 from ..solvers.running.watchdog import Watchdog, where_stopped
 from ..system import System
@@ -267,14 +267,16 @@ def _limited(settings: CaseSettings, what: str) -> Iterator[None]:
     """Run a function of the user's for a case within the case's time limit
     (``timeout=``, each such function its own): past it (and the watchdog's grace) it
     is stopped (:mod:`~dalembert.solvers.running.watchdog`), raising :class:`_TimedOut`
-    naming ``what``."""
+    naming ``what``. On threads it runs outside the thread's turn for Python
+    (:mod:`~dalembert.solvers.native.turns`): while it does not return, the other
+    threads' cases go on, their own time limits running (they timed out with it)."""
     limit = settings.options.timeout
     if limit is None:
         yield
         return
     dog = Watchdog(time.monotonic() + limit)
     try:
-        with dog.armed():
+        with outside_python(), dog.armed():  # (disarmed before the turn is taken back)
             yield
     except TimeLimitExceeded as exc:
         dog.disarm()
