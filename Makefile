@@ -7,6 +7,8 @@
 #               esbuild, versions pinned in viewer/package-lock.json; needs node and npm)
 #   make bench  the benchmark suite against SymPy, MuJoCo and Exudyn (JSON + PNG in bench/results)
 #   make bench-quick  the same at small n with short caps (under 5 minutes)
+#   make soak   ten million steps of a 16-link chain in C: flat memory, residuals (about
+#               10 minutes; fails if either drifts; not in CI)
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -14,7 +16,7 @@ STAMP := $(VENV)/.installed
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: demo test lint bench bench-quick clean viewer-asset
+.PHONY: demo test lint bench bench-quick soak clean viewer-asset
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -54,6 +56,9 @@ $(BENCH_STAMP): $(STAMP)
 bench: $(BENCH_STAMP)
 	$(BIN)/python bench/suite.py
 	$(BIN)/python bench/plot.py bench/results/suite.json
+
+soak: $(STAMP)
+	$(BIN)/python bench/soak.py
 
 bench-quick: $(BENCH_STAMP)
 	$(BIN)/python bench/suite.py --quick --out bench/results/suite_quick.json

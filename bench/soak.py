@@ -18,7 +18,10 @@ It reports:
   (a leak would make it grow with the steps);
 - steps per second.
 
-It writes ``bench/results/soak.json`` and prints a line per leg. Usage:
+It writes ``bench/results/soak.json`` and prints a line per leg, and exits with status
+1 (saying why) if the memory grew by more than ``MAX_GROWTH_MB`` after the first tenth
+of the legs (flat memory: a leak of one byte per step would add 9 MB over 9e6 steps)
+or a constraint residual exceeded ``MAX_RESIDUAL``. Usage (``make soak``):
 ``python bench/soak.py [--steps N] [--spatial] [--out bench/results]``.
 """
 
@@ -43,6 +46,10 @@ from dalembert.multibody import chain
 N_LINKS, ANGLE = 16, np.radians(30.0)
 #: Steps per leg (about) and outputs per leg (evenly spaced, the leg's end included).
 LEG_STEPS, LEG_OUTPUTS = 100_000, 20
+#: What the run must keep: resident memory after the first tenth of the legs within
+#: this many MB of the end (the first legs load code and fill caches), and position and
+#: velocity residuals under this at every output.
+MAX_GROWTH_MB, MAX_RESIDUAL = 5.0, 1e-10
 
 
 def resident_mb() -> float:
@@ -117,6 +124,13 @@ def main() -> None:
         leg_s = leg_s * LEG_STEPS / max(traj.stats["n_steps"], 1)
     wall = time.perf_counter() - start
     after = resident_mb()
+    growth = after - legs[len(legs) // 10]["rss_mb"]
+    failures = ([f"the resident memory grew by {growth:.1f} MB after the first tenth of "
+                 f"the legs (at most {MAX_GROWTH_MB} allowed)"] if growth > MAX_GROWTH_MB
+                else []) + \
+        ([f"a constraint residual reached {max(residual, velocity_residual):.1e} (at most "
+          f"{MAX_RESIDUAL:g} allowed)"] if max(residual, velocity_residual) > MAX_RESIDUAL
+         else [])
 
     record = {
         "workload": f"multibody.chain({N_LINKS}, 1.0, 1.0, 0.05), "
@@ -132,6 +146,7 @@ def main() -> None:
         "final_relative_energy_drift": legs[-1]["relative_energy_drift"],
         "rss_mb_before": round(before, 1), "rss_mb_after": round(after, 1),
         "max_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e6, 1),
+        "rss_growth_mb_after_first_tenth": round(growth, 1), "passed": not failures,
         "machine": {"python": platform.python_version(), "platform": platform.platform(),
                     "cpus": os.cpu_count(), "dalembert": dalembert.__version__,
                     "numpy": np.__version__, "scipy": scipy.__version__,
@@ -144,6 +159,8 @@ def main() -> None:
     path = out / "soak.json"
     path.write_text(json.dumps(record, indent=2) + "\n")
     print(f"wrote {path}")
+    if failures:
+        raise SystemExit("soak failed: " + "; ".join(failures))
 
 
 if __name__ == "__main__":

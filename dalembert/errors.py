@@ -120,6 +120,14 @@ class NonholonomicLinearizationError(DalembertError, NotImplementedError):
     """``linearize`` handles holonomic constraints only."""
 
 
+class TimeLimitExceeded(BaseException):
+    """Raised asynchronously in the thread of a run whose function of yours (an input,
+    an event, an ensemble's output) has kept it past its time limit (``timeout=``)
+    (:mod:`dalembert.solvers.running.watchdog`). A ``BaseException`` like
+    ``KeyboardInterrupt``, so that a function's ``except Exception`` does not swallow
+    it; the run catches it and ends with status ``"timeout"``: it never reaches you."""
+
+
 # --------------------------------------------------------------------------- warnings
 
 
@@ -212,6 +220,7 @@ __all__ = [
     "SingularSystemError",
     "StiffStabilizationWarning",
     "SymbolicSolveError",
+    "TimeLimitExceeded",
     "TooManyConstraintsError",
     "TrajectoryFileError",
     "UnsafeCacheError",

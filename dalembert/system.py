@@ -59,6 +59,7 @@ from .rules import (
     FiniteNumber,
     Rule,
     before_running,
+    check_parameters,
     checked_keywords,
     unchecked,
 )
@@ -503,6 +504,7 @@ class System:
         >>> [round(float(v), 12) + 0.0 for v in need.applied]
         [0.0, 9.81]
         """
+        check_parameters({"t": t}, {"t": [FiniteNumber()]}, "inverse_dynamics")
         num = self.numeric(parameters)
         q_, qd_ = self._state(q, qd)
         qdd_ = coordinate_values(qdd, self.coordinate_names, "qdd")
@@ -701,7 +703,9 @@ class System:
             fraction of a second each): a run past it stops with status
             ``"timeout"`` and an :class:`~dalembert.errors.IntegrationWarning`,
             returning what it computed. A function of yours (an input, an event)
-            that itself never returns is not stopped.
+            that itself never returns is stopped half a second after the limit, the
+            run ending the same way (unless the function is blocked in a C call such
+            as ``time.sleep``: then when that call returns).
         impact_law
             With unilateral constraints (:class:`~dalembert.Unilateral`), how an impact
             on several touching ones is resolved: ``"sequential"`` (default: the

@@ -215,9 +215,11 @@ def simulate_many(
         once here. ``timeout=`` is each case's limit in seconds: a case whose
         simulation runs past it stops between two steps and is recorded with status
         ``"timeout"`` and the part it computed; the others go on. A function of yours
-        that itself never returns (an input, an event, ``initial_state``) is not
-        stopped by it: on ``scheduler="serial"`` or ``"threads"`` it holds its
-        worker (and the ensemble's end) until it returns; on Dask, stop the workers.
+        that itself never returns is stopped half a second after the limit, on every
+        scheduler: an input or an event as the simulation's limit, ``initial_state``,
+        ``case_inputs`` or an output function each after ``timeout`` seconds of its
+        own (the case ``"timeout"``, an output's values NaN). One blocked in a C call
+        (``time.sleep``, a read without a time limit) is stopped when that returns.
 
     Returns
     -------

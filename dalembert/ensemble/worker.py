@@ -16,17 +16,19 @@ import socket
 import threading
 import time
 import warnings
-from collections.abc import Callable, Mapping, Sequence
-from contextlib import nullcontext
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..errors import TimeLimitExceeded
 from ..inputs import input_signal
 from ..options import SimulationOptions
-from ..solvers.native.turns import python_turn
+from ..solvers.native.turns import outside_python, python_turn
 from ..solvers.outputs import SOLVED
+from ..solvers.running.watchdog import Watchdog, where_stopped
 from ..system import System
 from ..trajectory import Trajectory
 from .cases import CaseColumns
@@ -232,20 +234,56 @@ def run_case(system: System, settings: CaseSettings, index: int, case: dict[str,
             warnings.simplefilter("always")
             caught = got
         try:
-            q0, qd0, parameters = _inputs(system, settings, case)
+            with _limited(settings, "initial_state"):
+                q0, qd0, parameters = _inputs(system, settings, case)
+            with _limited(settings, "case_inputs"):
+                options = _options(settings, case)
             # simulate(...) with the options checked at the door
-            plan = system.plan_checked(_options(settings, case), q0, qd0,
-                                       parameters=parameters)
+            plan = system.plan_checked(options, q0, qd0, parameters=parameters)
             traj = system.run(plan, dynamics=settings.dynamics)
-            arrays = _kept(system, settings, traj)
+            arrays, stopped = _kept(system, settings, traj)
         except Exception as exc:  # any failure of one case is recorded, never raised
             return error_outcome(index, exc, time.perf_counter() - start, worker, started)
+        except _TimedOut as exc:  # initial_state or case_inputs did not return
+            return CaseOutcome(index, "timeout", str(exc), time.perf_counter() - start,
+                               worker, started=started)
     seconds = time.perf_counter() - start
     noted = dict.fromkeys(f"{w.category.__name__}: {str(w.message).splitlines()[0]}"
                           for w in caught)
-    return CaseOutcome(index, str(traj.status), traj.message, seconds, worker, arrays,
+    status, message = (str(traj.status), traj.message) if not stopped else \
+        ("timeout", stopped)
+    return CaseOutcome(index, status, message, seconds, worker, arrays,
                        _numbers(traj, arrays, settings), "\n".join(noted), plan.stretches,
                        started)
+
+
+class _TimedOut(BaseException):
+    """A case's function of the user's (outside its simulation, which stops its own) kept
+    it past ``timeout=``; the message names it."""
+
+
+@contextmanager
+def _limited(settings: CaseSettings, what: str) -> Iterator[None]:
+    """Run a function of the user's for a case within the case's time limit
+    (``timeout=``, each such function its own): past it (and the watchdog's grace) it
+    is stopped (:mod:`~dalembert.solvers.running.watchdog`), raising :class:`_TimedOut`
+    naming ``what``. On threads it runs outside the thread's turn for Python
+    (:mod:`~dalembert.solvers.native.turns`): while it does not return, the other
+    threads' cases go on, their own time limits running (they timed out with it)."""
+    limit = settings.options.timeout
+    if limit is None:
+        yield
+        return
+    dog = Watchdog(time.monotonic() + limit)
+    try:
+        with outside_python(), dog.armed():  # (disarmed before the turn is taken back)
+            yield
+    except TimeLimitExceeded as exc:
+        dog.disarm()
+        where = where_stopped(exc)
+        raise _TimedOut(f"{what} did not return within the case's time limit (timeout="
+                        f"{limit:g} s)" + (f": stopped in {where}" if where else "")) \
+            from None
 
 
 def _inputs(system: System, settings: CaseSettings,
@@ -291,20 +329,28 @@ def _options(settings: CaseSettings, case: dict[str, float]) -> SimulationOption
     return dataclasses.replace(options, inputs=signal)
 
 
-def _kept(system: System, settings: CaseSettings, traj: Trajectory) -> dict[str, np.ndarray]:
-    """The kept quantities at the output times ``traj`` reached (a prefix of ``t_eval``)."""
+def _kept(system: System, settings: CaseSettings, traj: Trajectory
+          ) -> tuple[dict[str, np.ndarray], str]:
+    """The kept quantities at the output times ``traj`` reached (a prefix of ``t_eval``),
+    and why an output function was stopped at the time limit (its values NaN), or ``""``."""
     k = len(traj.t)
     if not np.array_equal(traj.t, settings.t_eval[:k]):
         raise RuntimeError("the trajectory's times are not the ensemble's output times")
     # views where the trajectory has them (``q``, ``qd``): the batch's blocks copy them
     arrays = {name: np.asarray(getattr(traj, name), dtype=float) for name in settings.keep}
+    stopped = ""
     for name, fn in settings.outputs.items():
-        value = np.asarray(fn(system, traj), dtype=float) if k else np.zeros(0)
+        try:
+            with _limited(settings, f"the output {name!r}"):
+                value = np.asarray(fn(system, traj), dtype=float) if k else np.zeros(0)
+        except _TimedOut as exc:
+            stopped = f"{exc}; the trajectory is kept, the output's values are NaN"
+            value = np.full(k, np.nan)
         if value.shape != (k,):
             raise ValueError(f"the output {name!r} must give one number per output time "
                              f"({k}), got shape {value.shape}")
         arrays[name] = value
-    return arrays
+    return arrays, stopped
 
 
 def _numbers(traj: Trajectory, arrays: dict[str, np.ndarray],

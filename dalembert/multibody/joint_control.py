@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import ModelError
 from ..model.values import CoordinateValues, coordinate_values
 from ..numerics.rank import RANK_RTOL, min_norm_multipliers
+from ..rules import NONE, FiniteNumber, PositiveNumber, Table, check_parameters
 from .builder import Multibody
 from .joint_space import JointValues, joint_jacobian, selected_joints
 from .joints import Joint, Prismatic, Revolute
@@ -64,9 +65,19 @@ class JointEfforts:
     residual: FloatArray
 
 
+#: inverse_dynamics's time and tolerance (a NaN tolerance would let any residual pass).
+_CHECKED: Table = {"t": [FiniteNumber()], "tol": [PositiveNumber(), NONE]}
+
+
 def _actuated(mb: Multibody, actuated: Sequence[Joint | str] | None) -> list[Joint]:
     if actuated is not None:
-        return selected_joints(mb, actuated)
+        chosen = selected_joints(mb, actuated)
+        if not chosen:
+            raise ModelError("actuated=[] names no joint: name the joints whose torques you "
+                             "want (the joints with coordinates are "
+                             f"{', '.join(j.name for j in selected_joints(mb, None))}), or "
+                             "leave it out for those carrying an Actuator")
+        return chosen
     joints: list[Joint] = []
     for actuator in mb.actuators:
         if not any(actuator.joint is j for j in joints):
@@ -138,6 +149,7 @@ def inverse_dynamics(
     """
     import scipy.linalg
 
+    check_parameters({"t": t, "tol": tol}, _CHECKED, "inverse_dynamics")
     system = mb.system
     names = system.coordinate_names
     joints = _actuated(mb, actuated)

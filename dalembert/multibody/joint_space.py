@@ -45,7 +45,7 @@ ball joints on a particle have no coordinates here.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any, Literal
 
 import numpy as np
@@ -133,10 +133,16 @@ def selected_joints(mb: Multibody, joints: Sequence[Joint | str] | None) -> list
         return [j for j in mb.joints if has_coordinates(j)]
     if isinstance(joints, str | Joint):
         joints = [joints]
-    out = []
+    if not isinstance(joints, Iterable):
+        raise TypeError(f"joints must be joints or their names, got {joints!r:.80} "
+                        f"({type(joints).__name__}); the joints are "
+                        f"{', '.join(j.name for j in mb.joints)}")
+    out: list[Joint] = []
     for key in joints:
         name = key.name if isinstance(key, Joint) else str(key)
         joint = mb.joint(name)  # a KeyError lists the joints
+        if any(joint is j for j in out):
+            raise ValueError(f"joint {name!r} is named twice; name each joint once")
         if not has_coordinates(joint):
             kinds = ("Revolute, Prismatic, and Spherical or Free between bodies that turn "
                      "(not a particle)")
@@ -200,11 +206,13 @@ def _state(mb: Multibody, state: Trajectory | CoordinateValues, qd: CoordinateVa
         if qd is not None:
             raise ValueError("give qd with a single state q, not with a trajectory (it has "
                              "its own velocities)")
-        bound = mb.bound(state.parameters, parameters) if mb.parameters else mb
+        bound = mb.bound(state.parameters, parameters) if mb.parameters or parameters \
+            else mb
         return bound, np.asarray(state.q), np.asarray(state.qd), False
     q = coordinate_values(state, names, "q")
     qd_ = np.zeros(len(names)) if qd is None else coordinate_values(qd, names, "qd")
-    bound = mb.bound(parameters) if mb.parameters else mb
+    # (values for a mechanism without parameters: bound() says they name nothing)
+    bound = mb.bound(parameters) if mb.parameters or parameters else mb
     return bound, q[None], qd_[None], True
 
 

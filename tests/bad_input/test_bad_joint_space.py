@@ -81,3 +81,46 @@ def test_a_motion_the_actuators_cannot_produce(cart):
     # the least-squares torque on request, with what is left over
     need = inverse_dynamics(cart, 0.0, q, None, np.zeros(6), tol=None)
     assert np.abs(need.residual).max() > 0.1  # the weight's moment on the pole is unheld
+
+
+def test_joints_of_the_wrong_kind_or_named_twice(cart):
+    with pytest.raises(TypeError, match=r"joints must be joints or their names, got 3 \(int\); "
+                                        r"the joints are rail, hinge"):
+        joint_positions(cart, cart_pole.UPRIGHT, joints=3)
+    with pytest.raises(ValueError, match="joint 'rail' is named twice; name each joint once"):
+        inverse_dynamics(cart, 0.0, cart_pole.UPRIGHT, None, np.zeros(6),
+                         actuated=["rail", "rail"])
+    with pytest.raises(ValueError, match="joint 'hinge' is named twice"):
+        linearize_joints(cart, cart_pole.UPRIGHT, ["hinge", "hinge"])
+
+
+def test_no_joint_actuated(cart):
+    with pytest.raises(ModelError, match=r"actuated=\[\] names no joint: name the joints "
+                                         r"whose torques you want \(the joints with "
+                                         r"coordinates are rail, hinge\)"):
+        inverse_dynamics(cart, 0.0, cart_pole.UPRIGHT, None, np.zeros(6), actuated=[])
+
+
+@pytest.mark.parametrize(("name", "value"), [
+    ("t", float("nan")), ("t", "0"), ("tol", float("nan")), ("tol", -1.0), ("tol", "x")])
+def test_a_time_or_tolerance_that_is_not_a_number(cart, name, value):
+    """A NaN tolerance let any residual pass: torques for a motion the actuators cannot
+    produce, silently."""
+    q = np.array([0.0, 0.0, 0.0, *cart_pole.tilted(0.3).values()])  # tilted, at rest
+    t, tol = (value, 1e-8) if name == "t" else (0.0, value)
+    with pytest.raises(ValueError, match=f"The '{name}' parameter of inverse_dynamics must "
+                                         "be a finite"):
+        inverse_dynamics(cart, t, q, None, np.zeros(6), tol=tol)
+    if name == "t":
+        with pytest.raises(ValueError, match="The 't' parameter of inverse_dynamics must "
+                                             "be a finite number"):
+            cart.system.inverse_dynamics(t, q, None, np.zeros(6))
+
+
+def test_parameters_a_mechanism_without_parameters_lacks(cart):
+    """They were dropped without a word (the answer of the mechanism's own values)."""
+    from dalembert.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"'zz' is not a parameter of this model \(its "
+                                             r"parameters: none\)"):
+        joint_positions(cart, cart_pole.UPRIGHT, parameters={"zz": 1.0})

@@ -131,3 +131,45 @@ def damper(case: dict[str, float]) -> dict:
     """``case_inputs``: the bead braked along y by ``v = -c y'`` with the case's ``c``."""
     c = case["c"]
     return {"v": lambda t, q, qd: -c * qd[1]}
+
+
+def spin() -> None:
+    """A function of the user's that never returns."""
+    while True:
+        pass
+
+
+def spinning_damper(case: dict[str, float]) -> dict:
+    """``case_inputs``: :func:`damper`, whose controller never returns from t = 0.5 on in
+    the case marked ``victim``."""
+    c, victim = case["c"], case.get("victim", 0.0) == 1.0
+
+    def v(t, q, qd):
+        if victim and t > 0.5:
+            spin()
+        return -c * qd[1]
+
+    return {"v": v}
+
+
+def spinning_initial_state(case: dict[str, float]):
+    """``initial_state``: :func:`released`, never returning for the case marked
+    ``victim``."""
+    if case.get("victim", 0.0) == 1.0:
+        spin()
+    return released(case)
+
+
+def spinning_output(system: System, traj) -> np.ndarray:
+    """An output (the height ``y``) that never returns for a pendulum longer than 1.2."""
+    if traj.parameters.get("l", 1.0) > 1.2:
+        spin()
+    return traj["y"]
+
+
+def spinning_crossing(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+    """An event (the bob passing under the pivot) that never returns from t = 0.3 on for
+    a pendulum longer than 1.2 (its length read from the state: x^2 + y^2 = l^2)."""
+    if t > 0.3 and np.hypot(q[0], q[1]) > 1.2:
+        spin()
+    return q[0]

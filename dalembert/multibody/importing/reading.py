@@ -59,10 +59,8 @@ def compile_model(source: str | os.PathLike[str], kind: str) -> tuple[Any, Any, 
         label = f"the {kind} string"
         read = lambda: mujoco.MjSpec.from_string(str(source))  # noqa: E731
     else:
-        path = Path(source)
+        path = _path(source, kind)
         label = f"{kind} file {str(path)!r}"
-        if not path.is_file():
-            raise ModelFileError(f"cannot read {label}: no such file")
         read = lambda: mujoco.MjSpec.from_file(str(path))  # noqa: E731
     try:
         spec = read()
@@ -75,6 +73,31 @@ def compile_model(source: str | os.PathLike[str], kind: str) -> tuple[Any, Any, 
     except Exception as exc:
         raise ModelFileError(f"cannot compile {label}: MuJoCo says: {_message(exc)}") from None
     return spec, model, label
+
+
+def _path(source: object, kind: str) -> Path:
+    """The model file ``source`` names, checked to be one (a clear error for anything else:
+    not a path, an empty name, a folder, a FIFO, which MuJoCo would wait on forever)."""
+    what = "a path to the file" + (" or the XML text" if kind == "MJCF" else "")
+    if isinstance(source, bytes):
+        raise ModelFileError(f"the {kind} source is bytes: give {what} as a str "
+                             "(e.g. data.decode())")
+    try:
+        path = Path(source)  # type: ignore[arg-type]
+    except TypeError:
+        raise ModelFileError(f"the {kind} source must be {what}, got {source!r:.80} "
+                             f"({type(source).__name__})") from None
+    if not str(source).strip():
+        raise ModelFileError(f"the {kind} source is an empty string: give {what}")
+    label = f"{kind} file {str(path)!r}"
+    if path.is_dir():
+        raise ModelFileError(f"cannot read {label}: it is a folder, not a file")
+    if path.exists() and not path.is_file():
+        raise ModelFileError(f"cannot read {label}: it is not a regular file (a FIFO, a "
+                             "device or a socket)")
+    if not path.is_file():
+        raise ModelFileError(f"cannot read {label}: no such file")
+    return path
 
 
 def resolve_packages(spec: Any, path: Path) -> None:

@@ -47,7 +47,7 @@ def mujoco_state(mb: Multibody, qpos: Numbers | None = None,
     """
     import mujoco
 
-    imported = mb.imported
+    imported = getattr(mb, "imported", None)
     if imported is None:
         raise ModelError(f"{mb!r} was not imported from a model file: give its initial state "
                          "with mb.initial_state(...)")
@@ -57,10 +57,16 @@ def mujoco_state(mb: Multibody, qpos: Numbers | None = None,
                                        (qvel, model.nv, "qvel", data.qvel)):
         if values is None:
             continue
-        array = np.asarray(values, dtype=float).ravel()
+        try:
+            array = np.asarray(values, dtype=float).ravel()
+        except (TypeError, ValueError):  # not numbers (a dict, a string)
+            array = np.full(0, np.nan)
         if array.shape != (size,) or not np.isfinite(array).all():
             raise InitialConditionError(f"{what} must be {size} finite numbers for "
-                                        f"{imported.source}, got {values!r}")
+                                        f"{imported.source} (MuJoCo's order), got "
+                                        f"{values!r:.200}")
+        if what == "qpos":
+            _check_quaternions(model, array, imported.source)
         target[:] = array
     mujoco.mj_forward(model, data)
     positions: dict[str, Any] = {}
@@ -80,3 +86,22 @@ def mujoco_state(mb: Multibody, qpos: Numbers | None = None,
         spins[name] = omega
     return mb.initial_state(positions=positions, orientations=orientations,
                             velocities=velocities, angular_velocities=spins)
+
+
+def _check_quaternions(model: Any, qpos: np.ndarray, source: str) -> None:
+    """A ball or free joint's quaternion in ``qpos`` must have a direction: MuJoCo would
+    take a zero one as no rotation, without a word."""
+    import mujoco
+
+    ball, free = int(mujoco.mjtJoint.mjJNT_BALL), int(mujoco.mjtJoint.mjJNT_FREE)
+    for j in range(model.njnt):
+        kind = int(model.jnt_type[j])  # (NumPy's integers do not equal MuJoCo's enum)
+        if kind not in (ball, free):
+            continue
+        at = int(model.jnt_qposadr[j]) + (3 if kind == free else 0)
+        if not np.linalg.norm(qpos[at:at + 4]) > 1e-12:
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+            named = repr(name) if name else f"{j} (unnamed)"
+            raise InitialConditionError(
+                f"qpos for {source}: the quaternion of joint {named} (qpos[{at}:{at + 4}]) "
+                "is zero; it has no direction (give w, x, y, z, e.g. 1, 0, 0, 0)")

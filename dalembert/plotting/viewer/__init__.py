@@ -10,9 +10,11 @@ it. The script is bundled into the page (:mod:`.page`): the page opens offline.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from ...trajectory import Trajectory
 from .page import page, scene_json
@@ -54,15 +56,31 @@ def scene_of(traj: Trajectory, system: object, *, frame_rate: float = FRAME_RATE
     >>> scene.body_names, [j["name"] for j in scene.joints], scene.forces.shape
     (['link1', 'link2', 'link3'], ['joint1', 'joint2', 'joint3'], (3, 3, 3))
     """
+    if not isinstance(traj, Trajectory):
+        raise TypeError(f"the viewer shows a Trajectory (what simulate returns, or "
+                        f"Trajectory.load), got {type(traj).__name__}")
     mb = _multibody(system)
     names = tuple(mb.system.coordinate_names if mb is not None else
                   getattr(system, "coordinate_names", ()))
+    if not names:
+        raise TypeError("the viewer draws the trajectory of a System or a Multibody: give "
+                        f"the one that made it, got {type(system).__name__}")
     if tuple(traj.coordinate_names) != names:
         raise ValueError(
             "the trajectory is not one of this system: its coordinates are "
             f"{', '.join(traj.coordinate_names)}; the system's are {', '.join(names)}")
     if len(traj) == 0:
         raise ValueError("the trajectory has no output times: nothing to show")
+    bad = ~np.all(np.isfinite(traj.q), axis=1)
+    if bad.any():
+        raise ValueError(f"the trajectory's positions are not finite at t={traj.t[bad][0]:.6g}"
+                         f" ({int(bad.sum())} of {len(traj)} output times): nothing to draw "
+                         "there; show the part before (traj.t < that time)")
+    if isinstance(traces, str):  # one name
+        traces = [traces]
+    elif traces is not None and not (isinstance(traces, Iterable) and
+                                     all(isinstance(n, str) for n in traces)):
+        raise TypeError(f"traces must be names of bodies (or points), got {traces!r:.80}")
     few = sampled(traj, frame_rate)
     if mb is not None:
         return multibody_scene(mb, few, traces)
@@ -125,13 +143,33 @@ def view(traj: Trajectory, system: object, path: str | os.PathLike, *,
     >>> 500_000 < len(text) < 1_000_000, "Three.js Authors" in text, '"link4"' in text
     (True, True, True)
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be the .html file to write, got {path!r:.80} "
+                        f"({type(path).__name__})")
     path = Path(path)
     if path.suffix.lower() != ".html":
         raise ValueError(f"{path}: the viewer writes an .html page; give a path ending in .html")
     if energy not in ENERGIES:
         raise ValueError(f"energy must be one of {ENERGIES}, not {energy!r}")
+    if _is_dir(path):
+        raise IsADirectoryError(f"cannot write the page {str(path)!r}: it is a folder")
     scene = scene_of(traj, system, frame_rate=frame_rate, traces=traces)
     name = title if title is not None else str(getattr(system, "name", "") or "trajectory")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(page(scene_json(scene, traj, energy, name)), encoding="utf-8")
+    text = page(scene_json(scene, traj, energy, name))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        reason = getattr(exc, "strerror", None) or str(exc)
+        where = "its folder " + repr(str(path.parent)) if not _is_dir(path.parent) else "it"
+        raise type(exc)(f"cannot write the page {str(path)!r}: {reason} (writing {where}); "
+                        "give another path") from None
     return path
+
+
+def _is_dir(path: Path) -> bool:
+    """Whether ``path`` is a folder (``False`` where asking fails: a name too long)."""
+    try:
+        return path.is_dir()
+    except (OSError, ValueError):
+        return False

@@ -168,8 +168,10 @@ def sampled(traj: Trajectory, frame_rate: float) -> Trajectory:
     >>> few.t[:3].round(12).tolist(), few.q.shape, few.multipliers.shape
     ([0.0, 0.1, 0.2], (21, 2), (21, 1))
     """
-    if not frame_rate > 0:
-        raise ValueError(f"frame_rate must be positive, got {frame_rate}")
+    if isinstance(frame_rate, bool) or not isinstance(frame_rate, (int, float, np.number)) \
+            or not 0 < frame_rate < np.inf:
+        raise ValueError(f"frame_rate must be a finite positive number (frames per "
+                         f"simulated second), got {frame_rate!r}")
     n = len(traj)
     span = float(traj.t[-1] - traj.t[0]) if n else 0.0
     frames = int(np.ceil(span * frame_rate)) + 1

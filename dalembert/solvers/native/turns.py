@@ -49,9 +49,12 @@ def python_turn(lock: threading.Lock) -> Iterator[None]:
     >>> held, released, turns.locked()
     (True, True, False)
     """
-    lock.acquire()
-    before, _held.lock = getattr(_held, "lock", None), lock
+    before = getattr(_held, "lock", None)
     try:
+        try:
+            lock.acquire()
+        finally:  # marked held at once: see outside_python
+            _held.lock = lock
         yield
     finally:
         held = _held.lock is lock  # not if taking it back was interrupted
@@ -79,5 +82,11 @@ def outside_python() -> Iterator[None]:
     try:
         yield
     finally:
-        lock.acquire()
-        _held.lock = lock
+        # An exception raised asynchronously in this thread (a run's watchdog,
+        # solvers/running/watchdog.py) lands when a call returns: right after acquire()
+        # it is raised inside this try, whose finally marks the lock held, so that
+        # python_turn releases it (else the other threads would wait for it forever).
+        try:
+            lock.acquire()
+        finally:
+            _held.lock = lock

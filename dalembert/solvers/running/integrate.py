@@ -13,16 +13,18 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from contextlib import nullcontext
 
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ...errors import DalembertError, InputError
+from ...errors import DalembertError, InputError, TimeLimitExceeded
 from ..singular.careful import CarefulSteps
 from ..singular.watch import Runaway, Singularity
 from ..steppers.scipy_ivp import CONTROLLED, ControlledSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
+from .watchdog import GRACE, Watchdog, where_stopped
 
 __all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate", "progress_bar"]
 
@@ -44,6 +46,7 @@ def integrate(
     careful: CarefulSteps | None = None,
     runaway: Runaway | None = None,
     deadline: float | None = None,
+    watchdog: Watchdog | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -79,6 +82,10 @@ def integrate(
         A ``time.monotonic()`` past which the run stops, status ``"timeout"``,
         keeping what it computed; checked after each unit of the loop's work (a
         step, or a stretch of C steps of a fraction of a second), or ``None``.
+    watchdog
+        The run's :class:`~.watchdog.Watchdog` (its deadline's), armed while the loop
+        runs: a function of the user's that never returns is stopped by it, the run
+        ending as at the deadline; or ``None``.
     solver_options
         Passed to ``method``.
 
@@ -101,31 +108,42 @@ def integrate(
     # warnings about them (from the model's code, from SciPy's norms) would only repeat it
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         try:
-            times = None if t_eval is None else np.asarray(t_eval, dtype=float)
-            # SciPy's solvers evaluate fun (and pick the first step) when made: the model
-            # may fail right there, and a Ctrl-C may land there too
-            solver = method(fun, t0, y0, tf, **solver_options)
-            if stretches and project is not None:
-                loop = StretchLoop(solver, times, project, diagnose, singular, careful,
-                                   runaway)
-            else:
-                loop = PythonLoop(solver, times, events, project, dense_output, diagnose,
-                                  singular, careful, runaway)
-            bar = progress_bar(t0, tf) if progress else None
-            while loop.status is None:
-                loop.advance()
-                if bar is not None:
-                    bar.update(abs(loop.t_reached - bar.n_t))
-                    bar.n_t = loop.t_reached
-                if deadline is not None and loop.status is None and \
-                        time.monotonic() > deadline:
-                    loop.stop("timeout", f"stopped at t={loop.t_reached:.6g}: the run's "
-                              "time limit (timeout=) passed")
+            with watchdog.armed() if watchdog is not None else nullcontext():
+                times = None if t_eval is None else np.asarray(t_eval, dtype=float)
+                # SciPy's solvers evaluate fun (and pick the first step) when made: the
+                # model may fail right there, and a Ctrl-C may land there too
+                solver = method(fun, t0, y0, tf, **solver_options)
+                if stretches and project is not None:
+                    loop = StretchLoop(solver, times, project, diagnose, singular, careful,
+                                       runaway)
+                else:
+                    loop = PythonLoop(solver, times, events, project, dense_output,
+                                      diagnose, singular, careful, runaway)
+                bar = progress_bar(t0, tf) if progress else None
+                while loop.status is None:
+                    loop.advance()
+                    if bar is not None:
+                        bar.update(abs(loop.t_reached - bar.n_t))
+                        bar.n_t = loop.t_reached
+                    if deadline is not None and loop.status is None and \
+                            time.monotonic() > deadline:
+                        loop.stop("timeout", f"stopped at t={loop.t_reached:.6g}: the "
+                                  "run's time limit (timeout=) passed")
         except KeyboardInterrupt:
             if loop is None:
                 return _not_started(t0, y0, times, "interrupted", "interrupted by the user "
                                     f"at t={t0:.6g}, before the first step")
             loop.interrupt()
+        except TimeLimitExceeded as exc:  # the watchdog: a function that did not return
+            assert watchdog is not None
+            watchdog.disarm()  # (raised again only after GRACE: this comes first)
+            if loop is None:
+                return _not_started(t0, y0, times, "timeout",
+                                    _stopped(t0, where_stopped(exc)))
+            loop.interrupt()  # back to the last complete unit of work
+            if loop.status == "interrupted":  # (not a run that had ended before)
+                loop.status = "timeout"
+                loop.message = _stopped(loop.t_reached, where_stopped(exc))
         except DalembertError as exc:
             if loop is not None:  # the loops stop on their own errors: this is not one
                 raise
@@ -143,6 +161,14 @@ def integrate(
     if "nfev" in result.stats:
         result.stats["nfev"] += getattr(jac, "evaluations", 0) - jac_before
     return result
+
+
+def _stopped(t: float, where: str) -> str:
+    """The message of a run the watchdog stopped at ``t`` in the function ``where``."""
+    inside = f"while a function of yours, {where}, had not returned" if where else \
+        "within a step"
+    return (f"stopped at t={t:.6g}: the run's time limit (timeout=) passed {inside}; it "
+            f"was stopped {GRACE:g} s later")
 
 
 def _not_started(t0: float, y0: np.ndarray, t_eval: np.ndarray | None, status: str,

@@ -44,6 +44,7 @@ from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_d
 from ..state import accelerations_at
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
+from .watchdog import Watchdog
 
 if TYPE_CHECKING:
     from .plan import SimulationPlan
@@ -77,6 +78,9 @@ class RunData:
     deadline
         The ``time.monotonic()`` past which the run stops (the options' ``timeout``
         from the run's start, shared by its segments), or ``None``.
+    watchdog
+        The deadline's :class:`~.watchdog.Watchdog` (armed while a segment integrates:
+        it stops a function of the user's that never returns), or ``None``.
     """
 
     plan: SimulationPlan
@@ -93,6 +97,7 @@ class RunData:
     runaway: Runaway | None
     careful: CarefulSteps | None
     deadline: float | None = None
+    watchdog: Watchdog | None = None
 
     def hold_inputs(self, values: np.ndarray) -> None:
         """Hold the inputs at ``values`` for the evaluations from now on (a sampled
@@ -123,7 +128,7 @@ class RunData:
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=progress, stretches=self.plan.stretches, diagnose=self.diagnose,
             singular=self.singular, careful=self.careful, runaway=self.runaway,
-            deadline=self.deadline, **self.solver_options)
+            deadline=self.deadline, watchdog=self.watchdog, **self.solver_options)
 
     def passages(self) -> str:
         """The warning naming the singular configurations the run passed (empty if none)."""
@@ -217,7 +222,7 @@ def start_run(plan: SimulationPlan) -> RunData:
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
         runaway=runaway_diagnosis(num, rows, initial.names, t0, y0), careful=steps,
-        deadline=deadline)
+        deadline=deadline, watchdog=None if deadline is None else Watchdog(deadline))
 
 
 def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulModel | None,
