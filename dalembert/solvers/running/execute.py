@@ -10,16 +10,20 @@ and held inputs, and the warning naming the singular configurations passed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from functools import partial
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from ...errors import InputError
 from .run_data import RunData, RunSegment
 from .sampled import sampled_schedule
-from .segments import Schedule, SegmentedRun, SegmentState, run_segments
+from .segments import Schedule, SegmentedRun, SegmentOutputs, SegmentState, run_segments
+from .watchdog import Watchdog
+
+T = TypeVar("T")
 
 if TYPE_CHECKING:
     from .plan import SimulationPlan
@@ -70,9 +74,12 @@ def execute(plan: SimulationPlan, dynamics: bool = True) -> Executed:
         assert signal is not None
         schedule = sampled_schedule(signal, options.t_span, len(plan.initial.q))
     data = plan.start()
-    joined = run_segments(partial(_segment, data), partial(_outputs, dynamics=dynamics),
-                          schedule, options.t_span, plan.y0, options.output.t_eval,
-                          options.output.progress)
+    outputs: SegmentOutputs = partial(_outputs, dynamics=dynamics)
+    if data.watchdog is not None:  # the time limit also in what runs between segments
+        schedule = replace(schedule, reset=_armed(data.watchdog, schedule.reset))
+        outputs = _armed(data.watchdog, outputs)
+    joined = run_segments(partial(_segment, data), outputs, schedule, options.t_span,
+                          plan.y0, options.output.t_eval, options.output.progress)
     if sampled:
         joined.result.stats["n_samples"] = joined.result.stats["n_segments"]
     return Executed(joined, data.passages())
@@ -89,6 +96,16 @@ def _segment(data: RunData, a: float, b: float, start: SegmentState,
     if start.inputs is not None:
         data.hold_inputs(start.inputs)
     return data.segment((a, b), start.y, t_eval, progress)
+
+
+def _armed(watchdog: Watchdog, function: Callable[..., T]) -> Callable[..., T]:
+    """``function`` run with the run's watchdog armed: a sampled input or an input of
+    the outputs that never returns is stopped as one inside a segment is."""
+    def armed(*args: object) -> T:
+        with watchdog.armed():
+            return function(*args)
+
+    return armed
 
 
 def _outputs(segment: RunSegment, times: np.ndarray, states: np.ndarray,

@@ -26,7 +26,9 @@ every segment explicitly. :func:`run_segments` guarantees
   ``t0 + k * dt``), and is recorded with the time it was asked at; without output
   times, every step is, an instant once;
 - a terminal event, a failure or an interruption in a segment ends the whole run
-  (its status and message are the run's); the events' times and states are
+  (its status and message are the run's), as does a reset that fails (an
+  :class:`~dalembert.errors.InputError`) or passes the run's time limit (a
+  :class:`~dalembert.errors.TimeLimitExceeded`): the points before are kept; the events' times and states are
   concatenated, the statistics summed (``n_segments`` counts the segments run), one
   progress bar covers the span, and with dense output ``sol`` answers each time from
   the segment holding it (at an instant, the segment that starts there).
@@ -45,6 +47,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ...errors import InputError, TimeLimitExceeded
 from .integrate import IntegrationResult, progress_bar
 
 
@@ -242,16 +245,30 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
             if bar is not None:
                 bar.update(abs(_reached(last, a, b, ended) - a))
             if record.interrupted:
-                last.status = "interrupted"
-                last.message = (f"interrupted by the user at t={last.t[-1]:.6g}, while the "
-                                "outputs were computed: the states are kept, the "
-                                "accelerations, multipliers and energies from there are NaN")
+                last.status = record.interrupted
+                cause = "interrupted by the user" if record.interrupted == "interrupted" \
+                    else "stopped by the run's time limit (timeout=)"
+                last.message = (f"{cause} at t={last.t[-1]:.6g}, while the outputs were "
+                                "computed: the states are kept, the accelerations, "
+                                "multipliers and energies from there are NaN")
                 break
             if ended:
                 break
             state = SegmentState(last.y[-1], state.inputs, state.active)
             if not final:
-                state = schedule.reset(b, state)
+                try:
+                    state = schedule.reset(b, state)
+                except TimeLimitExceeded:  # a sampled input that never returned
+                    last.status, last.message = "timeout", (
+                        f"stopped at t={b:.6g}: the run's time limit (timeout=) passed while "
+                        "the inputs were sampled there (a function of yours had not "
+                        "returned)")
+                    break
+                except InputError as exc:  # a sampled input that failed: the run so far
+                    last.status, last.message = "failed", f"integration stopped at " \
+                        f"t={b:.6g}: {exc}"
+                    last.error = exc
+                    break
     finally:
         if bar is not None:
             bar.close()
@@ -287,8 +304,9 @@ class _Record:
         self.derived: list[dict[str, np.ndarray]] = []
         self.inputs: list[np.ndarray | None] = []
         self.made: tuple[Segment, SegmentOutputs]
-        #: A Ctrl-C came while outputs were computed: their arrays from there are NaN.
-        self.interrupted = False
+        #: ``"interrupted"`` (a Ctrl-C) or ``"timeout"`` (the run's time limit) came while
+        #: outputs were computed: their arrays from there are NaN; else ``None``.
+        self.interrupted: str | None = None
 
     def add(self, segment: Segment, t: np.ndarray, y: np.ndarray, state: SegmentState,
             outputs: SegmentOutputs) -> None:
@@ -309,7 +327,9 @@ class _Record:
             try:
                 return outputs(segment, t, y)
             except KeyboardInterrupt:
-                self.interrupted = True
+                self.interrupted = "interrupted"
+            except TimeLimitExceeded:
+                self.interrupted = "timeout"
         empty = outputs(segment, np.zeros(0), np.zeros((0, y.shape[1])))
         return {name: np.full((len(t), *v.shape[1:]), np.nan) for name, v in empty.items()}
 
