@@ -29,9 +29,10 @@ every segment explicitly. :func:`run_segments` guarantees
   (its status and message are the run's), as does a reset that fails (an
   :class:`~dalembert.errors.InputError`) or passes the run's time limit (a
   :class:`~dalembert.errors.TimeLimitExceeded`): the points before are kept; the
-  events' times and states are concatenated, the statistics summed (``n_segments`` counts the segments run), one
-  progress bar covers the span, and with dense output ``sol`` answers each time from
-  the segment holding it (at an instant, the segment that starts there).
+  events' times and states are concatenated, the statistics summed (``n_segments``
+  counts the segments run), one progress bar covers the span, and with dense output
+  ``sol`` answers each time from the segment holding it (at an instant, the segment
+  that starts there).
 
 Each segment locates its own events: one whose function changes sign exactly at an
 instant is found by the segment that ends there, not again by the next, and an event's
