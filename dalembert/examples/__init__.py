@@ -58,6 +58,7 @@ EXAMPLES: dict[str, str] = {
     "bouncing-ball": "bouncing_ball",
     "slack-string": "slack_string",
     "newtons-cradle": "newtons_cradle",
+    "falling-chain": "falling_chain",
 }
 
 

@@ -113,14 +113,14 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     h
         The step.
     t_eval
-        The times to record (linear between steps); ``None``: every step.
+        The times to record (each a step's end: the steps between two of them are
+        equal, at most ``h``); ``None``: every step.
     signal
         The inputs at each state, or ``None``.
     """
     t0, tf = t_span
     n, m = full.n, full.m
-    count = max(1, math.ceil((tf - t0) / h - 1e-9))
-    h = (tf - t0) / count
+    grid = _grid(t0, tf, h, t_eval)
     pattern = full.pattern
     kkt = kkt_factorization(pattern)
     bilateral = np.zeros(m, dtype=bool)
@@ -128,41 +128,44 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     history = ContactHistory(gaps.names)
     q, v = np.array(y0[:n], dtype=float), np.array(y0[n:], dtype=float)
     history.switches.append(Switch(t0, (), q.copy(), v.copy()))
-    times, states, impulses = [t0], [np.concatenate([q, v])], [np.zeros(m)]
+    times, states, forces = [t0], [np.concatenate([q, v])], [np.zeros(m)]
     accelerations = [np.full(n, np.nan)]  # the mean over the step ending there
     closed_before: tuple[int, ...] = ()
     status, message = "finished", "the integration reached the end of t_span"
     try:
-        for k in range(count):
-            t = t0 + k * h
+        for t, end in zip(grid[:-1], grid[1:]):
+            h = end - t
             if signal is not None:
                 full.set_inputs(signal(t + h / 2, q + h / 2 * v, v))
             q, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h)
             closed = tuple(int(i) for i in np.flatnonzero(P[gaps.first:] > 0.0))
-            if closed and not set(closed) <= set(closed_before):  # a contact closing
-                lost = float(full.energies(t + h, q, v)[0]
-                             - full.energies(t + h, q, v_next)[0])
-                history.impacts.append(ImpactRecord(t + h, P[gaps.first:], lost, v, v_next))
+            new = sorted(set(closed) - set(closed_before))
+            # an impact: a contact closing faster than its rest speed (not one that
+            # opened and closed again at rest within the cascade)
+            if new and (gaps.rates(full, end, q, v)[new] < -gaps.rest_speed[new]).any():
+                lost = float(full.energies(end, q, v)[0] - full.energies(end, q, v_next)[0])
+                history.impacts.append(ImpactRecord(end, P[gaps.first:], lost, v, v_next))
             if closed != closed_before:
-                history.switches.append(Switch(t + h, closed, q.copy(), v_next.copy()))
+                history.switches.append(Switch(end, closed, q.copy(), v_next.copy()))
                 closed_before = closed
             accelerations.append((v_next - v) / h)
             v = v_next
-            times.append(t + h)
+            times.append(end)
             states.append(np.concatenate([q, v]))
-            impulses.append(P)
+            forces.append(P / h)
     except ContactError as exc:
         status, message = "failed", str(exc)
     except KeyboardInterrupt:
         status, message = "interrupted", f"interrupted by the user at t={times[-1]:.6g}"
     t_all, y_all = np.array(times), np.array(states)
-    P_all, a_all = np.array(impulses), np.array(accelerations)
-    if t_eval is not None:
-        t_all, y_all, P_all, a_all = _at(t_eval[t_eval <= t_all[-1]], t_all, y_all, P_all,
-                                         a_all)
-    derived = _outputs(full, gaps, t_all, y_all, P_all / h, a_all)
+    f_all, a_all = np.array(forces), np.array(accelerations)
+    if t_eval is not None:  # each a step's end (the grid's)
+        kept = np.isin(t_all, t_eval)
+        t_all, y_all, f_all, a_all = t_all[kept], y_all[kept], f_all[kept], a_all[kept]
+    derived = _outputs(full, gaps, t_all, y_all, f_all, a_all)
     result = IntegrationResult(t=t_all, y=y_all, status=status, message=message,
-                               stats={"n_steps": count, "n_impacts": len(history.impacts)})
+                               stats={"n_steps": len(times) - 1,
+                                      "n_impacts": len(history.impacts)})
     return SteppedRun(result, derived, history)
 
 
@@ -227,13 +230,16 @@ def _project_velocities(full: NumericModel, kkt, bilateral: np.ndarray, t: float
     return v - np.linalg.lstsq(A, residual, rcond=None)[0]
 
 
-def _at(times: np.ndarray, t: np.ndarray, y: np.ndarray, P: np.ndarray, a: np.ndarray
-        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The states at ``times``, linear between steps (the impulses and accelerations of
-    the step holding each time)."""
-    k = np.clip(np.searchsorted(t, times, "right") - 1, 0, len(t) - 2)
-    w = ((times - t[k]) / (t[k + 1] - t[k]))[:, None]
-    return times, (1 - w) * y[k] + w * y[k + 1], P[k + 1], a[k + 1]
+def _grid(t0: float, tf: float, h: float, t_eval: np.ndarray | None) -> np.ndarray:
+    """The steps' ends: equal steps of at most ``h`` between the output times.
+
+    >>> _grid(0.0, 1.0, 0.3, np.array([0.5, 1.0])).round(3).tolist()
+    [0.0, 0.25, 0.5, 0.75, 1.0]
+    """
+    marks = np.unique(np.concatenate([[t0, tf], [] if t_eval is None else t_eval]))
+    pieces = [np.linspace(a, b, max(1, math.ceil((b - a) / h - 1e-9)) + 1)[:-1]
+              for a, b in zip(marks[:-1], marks[1:])]
+    return np.concatenate([*pieces, [tf]])
 
 
 def _outputs(full: NumericModel, gaps: Gaps, t: np.ndarray, y: np.ndarray,
