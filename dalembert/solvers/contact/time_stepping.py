@@ -25,6 +25,7 @@ event-driven mode's rounding. The multipliers reported are the impulses over ``h
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -133,7 +134,7 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     closed_before: tuple[int, ...] = ()
     status, message = "finished", "the integration reached the end of t_span"
     try:
-        for t, end in zip(grid[:-1], grid[1:]):
+        for t, end in itertools.pairwise(grid):
             h = end - t
             if signal is not None:
                 full.set_inputs(signal(t + h / 2, q + h / 2 * v, v))
@@ -238,7 +239,7 @@ def _grid(t0: float, tf: float, h: float, t_eval: np.ndarray | None) -> np.ndarr
     """
     marks = np.unique(np.concatenate([[t0, tf], [] if t_eval is None else t_eval]))
     pieces = [np.linspace(a, b, max(1, math.ceil((b - a) / h - 1e-9)) + 1)[:-1]
-              for a, b in zip(marks[:-1], marks[1:])]
+              for a, b in itertools.pairwise(marks)]
     return np.concatenate([*pieces, [tf]])
 
 
