@@ -7,6 +7,7 @@ code generated once per System however often it is simulated.
 
 from __future__ import annotations
 
+import time
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import replace
@@ -980,12 +981,15 @@ class System:
                     np.array([u.rest_speed for u in rows]))
         names = self.unilateral_names
         user = options.output.events
+        # one time limit for the run: each set of closed gaps' data gets what is left
+        deadline = None if options.timeout is None else time.monotonic() + options.timeout
 
         def start(closed: tuple[int, ...], t: float, y: np.ndarray,
                   events: tuple[Callable, ...]) -> RunData:
             system = self.with_gaps_closed([names[k] for k in closed])
             output = replace(options.output, events=user + events)
-            segment = replace(options, t_span=(t, tf), output=output)
+            left = None if deadline is None else max(deadline - time.monotonic(), 1e-9)
+            segment = replace(options, t_span=(t, tf), output=output, timeout=left)
             layout = StateLayout(len(self.coordinate_names))
             return system._plan(segment, *layout.split(y), parameters, None).start()
 

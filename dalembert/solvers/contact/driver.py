@@ -31,12 +31,13 @@ message naming the contacts: a switch with no solution (a
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...errors import ContactError
+from ...errors import ContactError, InputError, TimeLimitExceeded
 from ...inputs import InputSignal
 from ...options import ImpactLaw
 from ..running.integrate import IntegrationResult
@@ -221,8 +222,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         keep = np.arange(len(result.t)) if fired is None else \
             np.flatnonzero(result.t < fired[0])
         shown = result.t[keep]
-        record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
-                   _outputs(full.m, gaps, closed, dynamics))
+        with _armed(data):  # the run's time limit in what the outputs call too
+            record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
+                       _outputs(full.m, gaps, closed, dynamics))
         record.segments.append(result)
         if fired is None or record.interrupted:
             break
@@ -235,9 +237,15 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             break
         opening = k if k in closed else None
         try:
-            y, closed = _switch(full, gaps, history, te, ye, law, signal, opening)
-        except ContactError as exc:
+            with _armed(data):  # the inputs are called at a switch
+                y, closed = _switch(full, gaps, history, te, ye, law, signal, opening)
+        except (ContactError, InputError) as exc:
             result.status, result.message, result.error = "failed", str(exc), exc
+            break
+        except TimeLimitExceeded:
+            result.status, result.message = "timeout", (
+                f"stopped at t={te:.6g}: the run's time limit (timeout=) passed while the "
+                "contacts switched there (a function of yours had not returned)")
             break
         history.switches.append(Switch(te, closed, y[:n].copy(), y[n:].copy()))
         t, last_switch = te, te
@@ -267,6 +275,11 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
     closed = closed_gaps(full, gaps, t, q, qd, touching,
                          () if opening is None else (opening,))
     return np.concatenate([q, qd]), closed
+
+
+def _armed(data: RunData) -> AbstractContextManager[None]:
+    """The run data's watchdog armed, if the run has a time limit."""
+    return data.watchdog.armed() if data.watchdog is not None else nullcontext()
 
 
 def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,

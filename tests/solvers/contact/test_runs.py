@@ -158,3 +158,21 @@ def test_restitution_as_a_parameter_swept_by_an_ensemble():
     with pytest.raises(Exception, match="restitution of unilateral constraint 'floor', "
                                         "the parameter 'e', must be in"):
         system.simulate((0.0, 1.0), {"y": h0}, parameters={"e": 1.5})
+
+
+def test_a_contact_run_keeps_one_time_limit_and_stops_a_hanging_input():
+    u = sp.Symbol("u")
+    pushed = System([Y], kinetic=Y.diff() ** 2 / 2, potential=g * Y,
+                    generalized_forces=[u], inputs=[u],
+                    constraints=[Unilateral(Y, name="floor", restitution=0.5)])
+
+    def hanging(t, q, qd):
+        if t > 0.8:  # after the first impact (t = 0.4515)
+            while True:
+                pass
+        return 0.0
+
+    with pytest.warns(Warning):
+        traj = pushed.simulate((0.0, 5.0), {"y": h0}, inputs=hanging, timeout=1.0)
+    assert traj.status == "timeout"
+    assert len(traj.contacts.impacts) == 1 and traj.t[-1] > 0.45
