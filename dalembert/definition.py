@@ -78,9 +78,10 @@ class Definition(Protocol):
     def unilateral(self) -> tuple[UnilateralLaw, ...]:
         """The unilateral constraints (contacts), apart from the rows."""
 
-    def with_gaps_closed(self, closed: tuple[int, ...]) -> Definition:
+    def with_gaps_closed(self, closed: tuple[int, ...], tangents: bool = False) -> Definition:
         """The definition with the unilateral constraints ``closed`` (indices) as rows
-        after the others, and none left apart."""
+        after the others, and none left apart (``tangents``: their sliding velocities
+        too, as rows after them, for friction)."""
 
 
 class UnilateralLaw(Protocol):
@@ -94,6 +95,9 @@ class UnilateralLaw(Protocol):
 
     @property
     def rest_speed(self) -> float: ...
+
+    @property
+    def friction(self) -> float: ...
 
 
 class SymbolicDefinition:
@@ -172,8 +176,8 @@ class SymbolicDefinition:
     def unilateral(self) -> tuple[UnilateralRow, ...]:
         return self.model.constraints.unilateral
 
-    def with_gaps_closed(self, closed: tuple[int, ...]) -> SymbolicDefinition:
+    def with_gaps_closed(self, closed: tuple[int, ...],
+                         tangents: bool = False) -> SymbolicDefinition:
         model = self.model
-        return SymbolicDefinition(replace(model, constraints=with_gaps(model.constraints,
-                                                                       closed)),
-                                  self.kinetic_energy)
+        return SymbolicDefinition(replace(model, constraints=with_gaps(
+            model.constraints, closed, tangents)), self.kinetic_energy)

@@ -391,15 +391,20 @@ class System:
         if unknown:
             raise ConstraintError(f"{unknown[0]!r} is not a unilateral constraint of "
                                   f"{self.name!r}; they are {', '.join(names) or 'none'}")
-        which = tuple(k for k, name in enumerate(names) if name in wanted)
+        return self._closed(tuple(k for k, name in enumerate(names) if name in wanted))
+
+    def _closed(self, which: tuple[int, ...], tangents: bool = False) -> System:
+        """:meth:`with_gaps_closed` by indices (``tangents``: with the sliding velocities
+        of the frictional ones as rows after them), made once."""
         made = self.__dict__.setdefault("_closed_systems", {})
-        if which not in made:
+        if (which, tangents) not in made:
             system = System.from_definition(
-                self._definition.with_gaps_closed(which), parameters=self.parameter_values,
+                self._definition.with_gaps_closed(which, tangents),
+                parameters=self.parameter_values,
                 redundant_constraints=self.redundant_constraints)
             system._closed_contacts = bool(which)
-            made[which] = system
-        return made[which]
+            made[which, tangents] = system
+        return made[which, tangents]
 
     def __repr__(self) -> str:
         return (f"System({self.name!r}, coordinates={list(self.coordinate_names)}, "
@@ -972,13 +977,19 @@ class System:
                              f"only (impacts lose energy): got t_span ({t0}, {tf})")
         if options.inputs is not None and options.inputs.sample_time is not None:
             raise ValueError("sample_time is not supported with unilateral constraints yet")
-        parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
-        every = self.with_gaps_closed()
-        full = every.numeric(parameters).for_run()  # the run's inputs are written in it
         rows = self._unilateral
-        gaps = Gaps(self.unilateral_names, len(self.constraint_names),
-                    np.array([_restitution(u, parameters) for u in rows]),
-                    np.array([u.rest_speed for u in rows]))
+        stepping = options.contact_mode == "time-stepping"
+        rubbing = [u.name for u in rows if u.friction > 0]
+        if rubbing and not stepping:
+            raise ValueError(f"the unilateral constraint {rubbing[0]!r} has friction, which "
+                             "runs in the time-stepping contact mode for now: give "
+                             "contact_mode='time-stepping'")
+        parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
+        # every gap a row (and, stepping with friction, the sliding velocities after them)
+        every = self._closed(tuple(range(len(rows))), tangents=bool(rubbing))
+        full = every.numeric(parameters).for_run()  # the run's inputs are written in it
+        gaps = Gaps.of(rows, len(self.constraint_names),
+                       [_restitution(u, parameters) for u in rows])
         names = self.unilateral_names
         user = options.output.events
         # one time limit for the run: each set of closed gaps' data gets what is left
@@ -993,7 +1004,7 @@ class System:
             layout = StateLayout(len(self.coordinate_names))
             return system._plan(segment, *layout.split(y), parameters, None).start()
 
-        if options.contact_mode == "time-stepping":
+        if stepping:
             from .solvers.contact.time_stepping import run_time_stepping
 
             stepped = run_time_stepping(full, gaps, (t0, tf), plan.y0, options.contact_step,

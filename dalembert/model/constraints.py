@@ -78,6 +78,15 @@ class Unilateral:
         whatever ``e``: the contact then stays closed (a bouncing ball comes to rest
         instead of bouncing infinitely often; the energy it loses is in the impacts'
         record). Default ``1e-6``.
+    friction
+        Coulomb's coefficient ``mu >= 0`` (0: frictionless). With it, ``tangents``.
+    tangents
+        The sliding velocities at the contact, each linear in the velocities (one in
+        the plane, two in space): for a disk of radius ``r`` on a floor,
+        ``x.diff() + r * theta.diff()``, the contact point's velocity along the floor.
+        The friction force acts along them, at most ``mu`` times the normal force,
+        opposing the sliding (or holding the contact still: sticking). Friction runs in
+        the time-stepping contact mode.
 
     Examples
     --------
@@ -91,6 +100,8 @@ class Unilateral:
     name: str | None = None
     restitution: float | sp.Symbol = 0.0
     rest_speed: float = 1e-6
+    friction: float = 0.0
+    tangents: tuple[object, ...] = ()
 
     def __repr__(self) -> str:
         return f"Unilateral({self.gap} >= 0, name={self.name!r}, restitution={self.restitution})"
@@ -107,6 +118,10 @@ class UnilateralRow:
     b: sp.Expr
     restitution: float | sp.Symbol
     rest_speed: float
+    #: Coulomb's coefficient and the sliding velocities ``(expression, A, b)``
+    #: (velocity = ``A qd + b``), one per tangent direction.
+    friction: float = 0.0
+    tangents: tuple[tuple[sp.Expr, tuple[sp.Expr, ...], sp.Expr], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -190,7 +205,8 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
     )
 
 
-def with_gaps(cons: ConstraintSet, closed: tuple[int, ...]) -> ConstraintSet:
+def with_gaps(cons: ConstraintSet, closed: tuple[int, ...],
+              tangents: bool = False) -> ConstraintSet:
     """The constraint set with the unilateral constraints ``closed`` (indices into
     ``cons.unilateral``) as holonomic rows after the others (kind ``"unilateral"``),
     and no unilateral constraint left apart: the equations while those gaps are closed.
@@ -201,6 +217,10 @@ def with_gaps(cons: ConstraintSet, closed: tuple[int, ...]) -> ConstraintSet:
         A constraint set with unilateral constraints.
     closed
         Which of them are closed, in increasing order.
+    tangents
+        Also the sliding velocities of the closed gaps with friction, as Pfaffian rows
+        after them (kind ``"friction"``, named ``<name>_friction_<k>``): rows whose
+        ``A`` the time-stepping mode reads, never enforced as constraints.
 
     Examples
     --------
@@ -212,13 +232,19 @@ def with_gaps(cons: ConstraintSet, closed: tuple[int, ...]) -> ConstraintSet:
     """
     rows = [cons.unilateral[i] for i in closed]
     m = cons.m
-    A = cons.A.col_join(sp.Matrix([list(u.A) for u in rows])) if rows else cons.A
+    extra = [(u.name, "unilateral", u.gap, u.A, u.b) for u in rows]
+    if tangents:
+        extra += [(f"{u.name}_friction_{k + 1}", "friction", expr, A_row, b)
+                  for u in rows if u.friction > 0
+                  for k, (expr, A_row, b) in enumerate(u.tangents)]
+    A = cons.A.col_join(sp.Matrix([list(e[3]) for e in extra])) if extra else cons.A
     return replace(
-        cons, names=cons.names + tuple(u.name for u in rows),
-        kinds=cons.kinds + ("unilateral",) * len(rows),
-        exprs=cons.exprs + tuple(u.gap for u in rows), A=A,
-        b=cons.b.col_join(sp.Matrix(len(rows), 1, [u.b for u in rows])),
+        cons, names=cons.names + tuple(e[0] for e in extra),
+        kinds=cons.kinds + tuple(e[1] for e in extra),
+        exprs=cons.exprs + tuple(e[2] for e in extra), A=A,
+        b=cons.b.col_join(sp.Matrix(len(extra), 1, [e[4] for e in extra])),
         holonomic_rows=cons.holonomic_rows + tuple(range(m, m + len(rows))), unilateral=())
+
 
 
 def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow:
@@ -240,7 +266,23 @@ def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow
     gap = coords.to_plain(c.gap, f"constraint {name!r}")
     row, b = _differentiate_holonomic(gap, name, coords)
     restitution = c.restitution if symbolic else float(c.restitution)
-    return UnilateralRow(name, gap, tuple(row), b, restitution, float(c.rest_speed))
+    friction = c.friction
+    if isinstance(friction, bool) or not isinstance(friction, (int, float)) \
+            or not 0.0 <= friction < math.inf:
+        raise ConstraintError(f"the friction of unilateral constraint {name!r} must be a "
+                              f"finite number >= 0, got {friction!r}")
+    tangents = listed(c.tangents, f"the tangents of unilateral constraint {name!r}",
+                      "velocity expressions", ConstraintError)
+    if friction > 0 and not tangents:
+        raise ConstraintError(f"unilateral constraint {name!r} has friction but no "
+                              "tangents: give the sliding velocities at the contact "
+                              "(tangents=[...], linear in the velocities)")
+    plain = [coords.to_plain(v, f"a tangent of constraint {name!r}") for v in tangents]
+    rows = tuple((v, tuple(a), b_t) for v, (a, b_t) in (
+        (v, _split_pfaffian(v, f"{name} (tangent {k + 1})", coords))
+        for k, v in enumerate(plain)))
+    return UnilateralRow(name, gap, tuple(row), b, restitution, float(c.rest_speed),
+                         float(friction), rows)
 
 
 def _differentiate_holonomic(

@@ -230,7 +230,8 @@ def _parameters(
     coords: Coordinates, L: sp.Expr, Q: sp.Matrix, cons: ConstraintSet
 ) -> tuple[sp.Symbol, ...]:
     exprs = [L, *Q, *cons.exprs, *(u.gap for u in cons.unilateral),
-             *(sp.sympify(u.restitution) for u in cons.unilateral)]
+             *(sp.sympify(u.restitution) for u in cons.unilateral),
+             *(e for u in cons.unilateral for e, _, _ in u.tangents)]
     free = set().union(*(e.free_symbols for e in exprs))
     free -= {t, *coords.q, *coords.qd}
     return tuple(sorted(free, key=lambda s: s.name))

@@ -50,6 +50,8 @@ class Contact:
     joint: Joint
     restitution: float | sp.Symbol = 0.0
     rest_speed: float = 1e-6
+    #: Coulomb friction (not yet for a Multibody's contacts: 0).
+    friction: float = 0.0
 
     @property
     def bodies(self) -> tuple[Body, Body]:

@@ -88,8 +88,10 @@ class MultibodyDefinition:
         """The Multibody's contacts (its unilateral constraints)."""
         return self.multibody.contacts
 
-    def with_gaps_closed(self, closed: tuple[int, ...]) -> MultibodyDefinition:
-        """The definition of the Multibody with the contacts ``closed`` as joints."""
+    def with_gaps_closed(self, closed: tuple[int, ...],
+                         tangents: bool = False) -> MultibodyDefinition:
+        """The definition of the Multibody with the contacts ``closed`` as joints (its
+        contacts have no friction: no tangents to add)."""
         return MultibodyDefinition(self.multibody.with_contacts_closed(closed))
 
     @property

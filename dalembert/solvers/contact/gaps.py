@@ -8,12 +8,17 @@ accelerations from that model's generated functions.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ..kkt.sparse import matvec
+
+if TYPE_CHECKING:
+    from ...definition import UnilateralLaw
 
 #: A gap (or rate) within this much of 0, relative to ``1 + max |q|`` (to the rates'
 #: scale), touches (has stopped): rounding, not a motion.
@@ -37,6 +42,11 @@ class Gaps:
     restitution, rest_speed
         Newton's coefficient and the rest speed of each gap
         (:class:`~dalembert.Unilateral`).
+    friction
+        Coulomb's coefficient of each gap (0: none).
+    tangents
+        Each gap's sliding velocities' rows in the model (none without friction, or in
+        a model without them: the event-driven mode's).
 
     Examples
     --------
@@ -49,6 +59,33 @@ class Gaps:
     first: int
     restitution: np.ndarray
     rest_speed: np.ndarray
+    friction: np.ndarray | None = None
+    tangents: tuple[np.ndarray, ...] = ()
+
+    @classmethod
+    def of(cls, laws: Sequence[UnilateralLaw], first: int,
+           restitution: Sequence[float]) -> Gaps:
+        """The gaps of unilateral constraints whose rows start at ``first``, their
+        restitution's values given (a parameter's, resolved), each frictional one's
+        sliding velocities' rows after every gap, in order.
+
+        Examples
+        --------
+        >>> from dalembert.model.constraints import UnilateralRow
+        >>> floor = UnilateralRow("floor", 0, (), 0, 0.5, 1e-6, 0.3, ((0, (1,), 0),))
+        >>> wall = UnilateralRow("wall", 0, (), 0, 0.0, 1e-6)
+        >>> gaps = Gaps.of([floor, wall], 1, [0.5, 0.0])
+        >>> gaps.rows.tolist(), [t.tolist() for t in gaps.tangents]
+        ([1, 2], [[3], []])
+        """
+        sizes = [len(getattr(u, "tangents", ())) if u.friction > 0 else 0 for u in laws]
+        starts = first + len(laws) + np.concatenate([[0], np.cumsum(sizes)[:-1]]) \
+            if laws else np.zeros(0, dtype=int)
+        return cls(tuple(u.name for u in laws), first,
+                   np.asarray(restitution, dtype=float),
+                   np.array([u.rest_speed for u in laws], dtype=float),
+                   np.array([u.friction for u in laws], dtype=float),
+                   tuple(np.arange(s, s + k) for s, k in zip(starts, sizes)))
 
     @property
     def count(self) -> int:
@@ -69,7 +106,7 @@ class Gaps:
         pattern = full.pattern
         Av, b = full.velocity_sparse(t, q)
         rate = matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b
-        return rate[self.first:]
+        return rate[self.rows]
 
     def touching(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:
         """Which gaps are 0 to rounding (a boolean mask)."""

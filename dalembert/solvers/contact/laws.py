@@ -139,7 +139,7 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         e = np.where(approaching & (-before >= gaps.rest_speed), gaps.restitution, 0.0)
         after = _complementary(full, gaps, t, q, v, before, np.flatnonzero(candidates), e)
         v = after.qd
-        total += after.impulses[gaps.first:]
+        total += after.impulses[gaps.rows]
         stages += 1
     lost = float(full.energies(t, q, qd)[0] - full.energies(t, q, v)[0])
     return ImpactOutcome(v, total, _momentum_change(full, t, q, qd, v), lost, stages)
@@ -196,8 +196,8 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each candidate's violation (positive: wrong) with ``chosen`` closed: a
         closed gap pulling, an open one accelerating into its obstacle."""
-        mask = np.ones(full.m, dtype=bool)
-        mask[gaps.rows] = False
+        mask = np.zeros(full.m, dtype=bool)  # the bilateral rows and the chosen gaps
+        mask[:gaps.first] = True
         mask[gaps.first + chosen] = True
         try:
             kkt.factor(np.concatenate([Mv, Av]), mask)
@@ -205,7 +205,7 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
             return np.full(len(candidates), np.inf), np.zeros(len(candidates))
         qdd, lam = kkt.solve(np.concatenate([f, c]))
         accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
-        force, gap_accel = lam[gaps.first:], accel[gaps.first:]
+        force, gap_accel = lam[gaps.rows], accel[gaps.rows]
         scale = FORCE_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(lam).max(initial=0.0))
         wrong = np.where(np.isin(np.arange(gaps.count), chosen), -force, -gap_accel)
         return wrong[candidates], np.full(len(candidates), scale)
@@ -225,12 +225,12 @@ def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     """The impact on a set of the ``candidates`` (gap indices) meeting the
     complementarity conditions (see the module docstring)."""
     restitution = np.zeros(full.m)
-    restitution[gaps.first:] = e
+    restitution[gaps.rows] = e
     outcome: dict[bytes, Impact] = {}
 
     def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        acting = np.ones(full.m, dtype=bool)
-        acting[gaps.rows] = False
+        acting = np.zeros(full.m, dtype=bool)  # the bilateral rows and the chosen gaps
+        acting[:gaps.first] = True
         acting[gaps.first + chosen] = True
         try:
             after = impact(full, t, q, v, acting, restitution)
@@ -238,7 +238,7 @@ def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
             return np.full(len(candidates), np.inf), np.zeros(len(candidates))
         outcome[chosen.tobytes()] = after
         rates = gaps.rates(full, t, q, after.qd)
-        impulses = after.impulses[gaps.first:]
+        impulses = after.impulses[gaps.rows]
         scale = TOUCH_RTOL * (1.0 + np.abs(impulses).max(initial=0.0)
                               + np.abs(before).max(initial=0.0))
         floor = -e * np.minimum(before, 0.0)  # an open gap's least rate after

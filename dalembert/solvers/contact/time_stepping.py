@@ -43,6 +43,8 @@ from .gaps import TOUCH_RTOL, Gaps
 
 #: Principal pivots of :func:`solve_lcp` per contact before it gives up.
 PIVOTS_PER_CONTACT = 50
+#: Projected Gauss-Seidel sweeps of :func:`solve_friction` before it gives up.
+MAX_SWEEPS = 10_000
 #: Gauss-Newton iterations of the position projection after a step.
 PROJECTION_ITERATIONS = 8
 
@@ -96,6 +98,62 @@ def solve_lcp(W: np.ndarray, q: np.ndarray) -> np.ndarray:
                        "principal pivoting did not end")
 
 
+def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
+                   tangents: list[np.ndarray]) -> np.ndarray:
+    """The contact impulses with Coulomb friction: ``k`` normal impulses first (an LCP
+    as in :func:`solve_lcp`), then each contact's tangential ones, in the disk of
+    radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
+    leave, or holding it at 0 (sticking): ``w = W P + q``. Solved by projected
+    Gauss-Seidel over the contacts (each contact's tangential block at once) until the
+    impulses change by less than rounding.
+
+    Parameters
+    ----------
+    W, q
+        The Delassus matrix over the normal rows then the tangent rows, and the
+        velocities without impulses (Newton's law folded into the normal ones).
+    mu
+        Each contact's coefficient.
+    tangents
+        Each contact's tangent rows' places in ``W`` (empty without friction).
+
+    Raises
+    ------
+    ContactError
+        No convergence in :data:`MAX_SWEEPS` sweeps.
+
+    Examples
+    --------
+    A unit mass pressed on a floor with an impulse 1 (its normal velocity -1 without
+    impulse), sliding at 2: friction 0.5 takes 0.5 of its speed; at 0.1 m/s it sticks:
+
+    >>> W = np.eye(2)
+    >>> solve_friction(W, np.array([-1.0, 2.0]), np.array([0.5]), [np.array([1])])
+    array([ 1. , -0.5])
+    >>> solve_friction(W, np.array([-1.0, 0.1]), np.array([0.5]), [np.array([1])])
+    array([ 1. , -0.1])
+    """
+    k = len(mu)
+    P = np.zeros(len(q))
+    diagonal = np.diag(W).copy()
+    for _ in range(MAX_SWEEPS):
+        before = P.copy()
+        for c in range(k):
+            if diagonal[c] > 0:
+                P[c] = max(0.0, P[c] - (W[c] @ P + q[c]) / diagonal[c])
+            rows = tangents[c]
+            if len(rows):
+                block = W[np.ix_(rows, rows)]
+                trial = P[rows] - np.linalg.lstsq(block, W[rows] @ P + q[rows],
+                                                  rcond=None)[0]
+                size, radius = np.linalg.norm(trial), mu[c] * P[c]
+                P[rows] = trial if size <= radius else trial * (radius / size)
+        if np.abs(P - before).max(initial=0.0) <= 1e-14 * (1.0 + np.abs(P).max(initial=0.0)):
+            return P
+    raise ContactError(f"the contact impulses with friction of a step ({k} contacts) did "
+                       f"not converge in {MAX_SWEEPS} sweeps")
+
+
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
                       y0: np.ndarray, h: float, t_eval: np.ndarray | None,
                       signal: InputSignal | None = None) -> SteppedRun:
@@ -139,13 +197,13 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
             if signal is not None:
                 full.set_inputs(signal(t + h / 2, q + h / 2 * v, v))
             q, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h)
-            closed = tuple(int(i) for i in np.flatnonzero(P[gaps.first:] > 0.0))
+            closed = tuple(int(i) for i in np.flatnonzero(P[gaps.rows] > 0.0))
             new = sorted(set(closed) - set(closed_before))
             # an impact: a contact closing faster than its rest speed (not one that
             # opened and closed again at rest within the cascade)
             if new and (gaps.rates(full, end, q, v)[new] < -gaps.rest_speed[new]).any():
                 lost = float(full.energies(end, q, v)[0] - full.energies(end, q, v_next)[0])
-                history.impacts.append(ImpactRecord(end, P[gaps.first:], lost, v, v_next))
+                history.impacts.append(ImpactRecord(end, P[gaps.rows], lost, v, v_next))
             if closed != closed_before:
                 history.switches.append(Switch(end, closed, q.copy(), v_next.copy()))
                 closed_before = closed
@@ -187,16 +245,28 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
     # above it: counted, else it would fall a step and be caught every other step)
     near = np.flatnonzero(g <= TOUCH_RTOL * (1.0 + np.abs(qm).max(initial=0.0)))
     if len(near):
-        rows = gaps.first + near
+        normal = gaps.first + near
+        sliding = [gaps.tangents[k] if gaps.tangents else np.zeros(0, dtype=int)
+                   for k in near]
+        rows = np.concatenate([normal, *sliding]).astype(int)
         A = pattern.dense_A(Av)
-        unit = np.zeros((n + m, len(near)))
+        unit = np.zeros((n + m, len(rows)))
         unit[:n] = A[rows].T  # a unit impulse on each contact's row
         response, reaction = kkt.solve(unit)  # the velocity change and bilateral impulses
         W = A[rows] @ response
-        rate = A[rows] @ v + b[rows]
+        rate = A[normal] @ v + b[normal]
         free = A[rows] @ v_free + b[rows]
         e = gaps.restitution[near]
-        impulse = solve_lcp(W, free + e * np.minimum(rate, 0.0))
+        free[:len(near)] += e * np.minimum(rate, 0.0)  # Newton's law on the normals
+        if len(rows) == len(near):  # no friction: the exact LCP
+            impulse = solve_lcp(W, free)
+        else:
+            mu = gaps.friction[near]
+            groups, at = [], len(near)
+            for k, tangents in enumerate(sliding):
+                groups.append(np.arange(at, at + len(tangents)))
+                at += len(tangents)
+            impulse = solve_friction(W, free, mu, groups)
         v_free = v_free + response @ impulse
         P[rows] = impulse
         P[bilateral] += (reaction @ impulse)[bilateral]
