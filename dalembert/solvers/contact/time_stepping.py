@@ -261,12 +261,12 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
         if len(rows) == len(near):  # no friction: the exact LCP
             impulse = solve_lcp(W, free)
         else:
-            mu = gaps.friction[near]
+            assert gaps.friction is not None  # tangent rows come with coefficients
             groups, at = [], len(near)
-            for k, tangents in enumerate(sliding):
+            for tangents in sliding:
                 groups.append(np.arange(at, at + len(tangents)))
                 at += len(tangents)
-            impulse = solve_friction(W, free, mu, groups)
+            impulse = solve_friction(W, free, gaps.friction[near], groups)
         v_free = v_free + response @ impulse
         P[rows] = impulse
         P[bilateral] += (reaction @ impulse)[bilateral]
