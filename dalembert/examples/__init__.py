@@ -59,6 +59,7 @@ EXAMPLES: dict[str, str] = {
     "slack-string": "slack_string",
     "newtons-cradle": "newtons_cradle",
     "falling-chain": "falling_chain",
+    "rolling-sphere": "rolling_sphere",
 }
 
 

@@ -14,6 +14,7 @@ constraint set in which some gaps are closed, as holonomic rows after the others
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import sympy as sp
@@ -101,7 +102,7 @@ class Unilateral:
     restitution: float | sp.Symbol = 0.0
     rest_speed: float = 1e-6
     friction: float = 0.0
-    tangents: tuple[object, ...] = ()
+    tangents: Sequence[object] = ()
 
     def __repr__(self) -> str:
         return f"Unilateral({self.gap} >= 0, name={self.name!r}, restitution={self.restitution})"

@@ -5,7 +5,8 @@ Each example's ``checks`` compares with an independent answer written in the exa
 ``t_1 (1 + e) / (1 - e)``; the slack string's angle ``cos(theta) = (2 g l - v0^2) /
 (3 g l)`` and the parabola's catch; the cradle's impact times from the pendulum's
 period ``4 sqrt(l / g) K(sin^2(theta0 / 2))``; the falling chain's horizontal
-momentum, conserved on a frictionless table); here the same runs as a user makes
+momentum, conserved on a frictionless table; the rolling sphere's ``5/7 v0`` from
+``2 v0 / (7 mu g)`` and its angular momentum about the contact); here the same runs as a user makes
 them, in both loops, and the simultaneous law on the cradle.
 """
 
@@ -14,7 +15,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dalembert.examples import bouncing_ball, falling_chain, newtons_cradle, slack_string
+from dalembert.examples import (
+    bouncing_ball,
+    falling_chain,
+    newtons_cradle,
+    rolling_sphere,
+    slack_string,
+)
 
 LIMITS = {
     bouncing_ball: {"impact time error": 1e-10, "rest time error": 1e-5,
@@ -31,6 +38,10 @@ LIMITS = {
                     "deepest point below the table": 1e-12,
                     "max rod length residual": 1e-12,
                     "height of the chain at the end": 1e-8},
+    rolling_sphere: {"rolling speed / (5/7 v0) - 1": 1e-12,
+                     "rolling starts, error (s)": 2e-3,  # within a step (1e-3)
+                     "angular momentum about the contact, relative error": 1e-12,
+                     "deepest point below the floor": 1e-14},
 }
 
 
