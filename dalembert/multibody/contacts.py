@@ -21,7 +21,7 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from .bodies import Body
-from .drivers import _angle_terms
+from .drivers import _angle_terms, take_joint_geometry
 from .joints import Distance, Joint, PointOnPlane, Prismatic, Revolute, _unit
 from .rotations import dot
 from .types import Vector
@@ -190,12 +190,8 @@ class JointStop(Joint):
         if not lower < upper or (turn and upper - lower >= 2 * math.pi):
             raise ModelError(f"joint limit {name!r}: the range [{lower}, {upper}] must have "
                              f"lower < upper{' and span less than a turn' if turn else ''}")
-        if not isinstance(name, str) or not name.isidentifier():
-            raise ModelError(f"a joint name must be an identifier-like string, got {name!r}")
-        # the limited joint's bodies and geometry (which the joint checked), as a Driver
-        vars(self).update({k: v for k, v in vars(joint).items()
-                           if k not in ("name", "n_equations")})
-        self.name, self.joint_kind, self.limited = name, type(joint).__name__, joint
+        self.joint_kind = take_joint_geometry(self, name, joint)
+        self.limited = joint
         self.middle, self.half = (lower + upper) / 2, (upper - lower) / 2
         self.uses_orientation = turn
         self.n_equations = 1

@@ -70,6 +70,18 @@ def _angle_terms(joint: Revolute) -> tuple[sp.Expr, sp.Expr]:
     return dot(ua, ub), dot(va, ub)
 
 
+def take_joint_geometry(piece: Joint, name: str, joint: Joint) -> str:
+    """Give ``piece`` (a one-row joint acting on another joint's coordinate: a driver, a
+    stop) the bodies and geometry of ``joint`` (which ``joint`` checked) and its own
+    name; the kind of ``joint`` returned."""
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ModelError(f"a joint name must be an identifier-like string, got {name!r}")
+    vars(piece).update({k: v for k, v in vars(joint).items()
+                        if k not in ("name", "n_equations")})
+    piece.name = name
+    return type(joint).__name__
+
+
 class Driver(Joint):
     """Prescribed motion of a revolute joint's angle or a prismatic joint's displacement.
 
@@ -109,12 +121,8 @@ class Driver(Joint):
         if not isinstance(expr, sp.Expr) or expr.atoms(AppliedUndef, sp.Derivative):
             raise ModelError(f"driver {name!r}: the motion must be an expression of the time "
                              f"and parameters, got {motion!r}")
-        if not isinstance(name, str) or not name.isidentifier():
-            raise ModelError(f"a joint name must be an identifier-like string, got {name!r}")
-        # the driven joint's bodies and geometry (which the joint checked)
-        vars(self).update({k: v for k, v in vars(joint).items()
-                           if k not in ("name", "n_equations")})
-        self.name, self.joint_kind, self.motion = name, type(joint).__name__, expr
+        self.joint_kind = take_joint_geometry(self, name, joint)
+        self.motion = expr
         #: the driven joint itself: its own rows must be in the mechanism too (a driver
         #: fixes one coordinate of the joint, not the joint)
         self.driven = joint
