@@ -226,7 +226,10 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
                        _outputs(full.m, gaps, closed, dynamics))
         record.segments.append(result)
-        if fired is None or record.interrupted:
+        if record.interrupted:
+            record.mark_stopped(result)
+            break
+        if fired is None:
             break
         te, ye, k = fired
         at_once = at_once + 1 if te - last_switch <= 1e-12 * (1.0 + abs(te)) else 0

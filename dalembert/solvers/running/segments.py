@@ -246,12 +246,7 @@ def run_segments(make: MakeSegment, outputs: SegmentOutputs, schedule: Schedule,
             if bar is not None:
                 bar.update(abs(_reached(last, a, b, ended) - a))
             if record.interrupted:
-                last.status = record.interrupted
-                cause = "interrupted by the user" if record.interrupted == "interrupted" \
-                    else "stopped by the run's time limit (timeout=)"
-                last.message = (f"{cause} at t={last.t[-1]:.6g}, while the outputs were "
-                                "computed: the states are kept, the accelerations, "
-                                "multipliers and energies from there are NaN")
+                record.mark_stopped(last)
                 break
             if ended:
                 break
@@ -308,6 +303,17 @@ class _Record:
         #: ``"interrupted"`` (a Ctrl-C) or ``"timeout"`` (the run's time limit) came while
         #: outputs were computed: their arrays from there are NaN; else ``None``.
         self.interrupted: str | None = None
+
+    def mark_stopped(self, last: IntegrationResult) -> None:
+        """Give the last segment's result the status and message of a stop while the
+        outputs were computed (:attr:`interrupted`)."""
+        assert self.interrupted is not None
+        last.status = self.interrupted
+        cause = "interrupted by the user" if self.interrupted == "interrupted" \
+            else "stopped by the run's time limit (timeout=)"
+        last.message = (f"{cause} at t={last.t[-1]:.6g}, while the outputs were "
+                        "computed: the states are kept, the accelerations, multipliers "
+                        "and energies from there are NaN")
 
     def add(self, segment: Segment, t: np.ndarray, y: np.ndarray, state: SegmentState,
             outputs: SegmentOutputs) -> None:
