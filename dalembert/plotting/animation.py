@@ -325,9 +325,10 @@ def animate(
 def _impacts_since(traj: Trajectory, idx: NDArray[np.intp], k: int) -> str:
     """``"   impact"`` (or ``"   3 impacts"``) when the run's contacts struck since the
     frame before ``k``, else empty."""
-    if traj.contacts is None or k == 0:
+    contacts = getattr(traj, "contacts", None)  # a trajectory-like value may lack it
+    if contacts is None or k == 0:
         return ""
-    times = traj.contacts.impact_times
+    times = contacts.impact_times
     count = int(np.count_nonzero((times > traj.t[idx[k - 1]]) & (times <= traj.t[idx[k]])))
     return "" if not count else "   impact" if count == 1 else f"   {count} impacts"
 
