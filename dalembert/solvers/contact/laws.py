@@ -130,10 +130,11 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         if not approaching.any():
             break
         if stages >= (1 if law == "simultaneous" else MAX_STAGES):
+            other = "simultaneous" if law == "sequential" else "sequential"
             raise ContactError(
-                f"an impact at t={t:.6g} did not end after {stages} stages of the "
-                f"sequential law (gaps {_named(gaps, approaching)} still closing): try "
-                "impact_law='simultaneous'")
+                f"an impact at t={t:.6g} did not end after {stages} stages of the {law} "
+                f"law (gaps {_named(gaps, approaching)} still closing): try "
+                f"impact_law={other!r}")
         candidates = touching if law == "simultaneous" else approaching
         # Newton's law on the approaching gaps; a slow one is plastic (see rest_speed)
         e = np.where(approaching & (-before >= gaps.rest_speed), gaps.restitution, 0.0)
