@@ -222,9 +222,8 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         keep = np.arange(len(result.t)) if fired is None else \
             np.flatnonzero(result.t < fired[0])
         shown = result.t[keep]
-        with _armed(data):  # the run's time limit in what the outputs call too
-            record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
-                       _outputs(full.m, gaps, closed, dynamics))
+        record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
+                   _outputs(full.m, gaps, closed, dynamics))
         record.segments.append(result)
         if record.interrupted:
             record.mark_stopped(result)

@@ -20,7 +20,7 @@ import numpy as np
 from ...errors import InputError
 from .run_data import RunData, RunSegment
 from .sampled import sampled_schedule
-from .segments import Schedule, SegmentedRun, SegmentOutputs, SegmentState, run_segments
+from .segments import Schedule, SegmentedRun, SegmentState, run_segments
 from .watchdog import Watchdog
 
 T = TypeVar("T")
@@ -74,12 +74,13 @@ def execute(plan: SimulationPlan, dynamics: bool = True) -> Executed:
         assert signal is not None
         schedule = sampled_schedule(signal, options.t_span, len(plan.initial.q))
     data = plan.start()
-    outputs: SegmentOutputs = partial(_outputs, dynamics=dynamics)
-    if data.watchdog is not None:  # the time limit also in what runs between segments
+    if data.watchdog is not None:  # the time limit also in the samples between segments
         schedule = replace(schedule, reset=_armed(data.watchdog, schedule.reset))
-        outputs = _armed(data.watchdog, outputs)
-    joined = run_segments(partial(_segment, data), outputs, schedule, options.t_span,
-                          plan.y0, options.output.t_eval, options.output.progress)
+    # (not in the outputs: they are not the integration the limit is for, and on threads
+    # they may wait for their turn behind another run)
+    joined = run_segments(partial(_segment, data), partial(_outputs, dynamics=dynamics),
+                          schedule, options.t_span, plan.y0, options.output.t_eval,
+                          options.output.progress)
     if sampled:
         joined.result.stats["n_samples"] = joined.result.stats["n_segments"]
     return Executed(joined, data.passages())
@@ -99,8 +100,8 @@ def _segment(data: RunData, a: float, b: float, start: SegmentState,
 
 
 def _armed(watchdog: Watchdog, function: Callable[..., T]) -> Callable[..., T]:
-    """``function`` run with the run's watchdog armed: a sampled input or an input of
-    the outputs that never returns is stopped as one inside a segment is."""
+    """``function`` run with the run's watchdog armed: a sampled input that never
+    returns is stopped as one inside a segment is."""
     def armed(*args: object) -> T:
         with watchdog.armed():
             return function(*args)
