@@ -418,7 +418,8 @@ def test_bad_t_eval(pend, t_eval, match):
     (1e-9, np.nan, "atol"), ([1e-9, -1.0], 1e-12, "rtol"), ("tight", 1e-12, "rtol")])
 def test_bad_tolerances(pend, rtol, atol, name):
     with pytest.raises(ValueError, match=rf"The '{name}' parameter of simulate must be a finite "
-                                         r"positive number or an array of them; got"):
+                                         r"positive number or an array of them or None "
+                                         r"\(the method.s default\); got"):
         pend.simulate((0, 1), q0=[1.0, 0.0], rtol=rtol, atol=atol)
 
 
