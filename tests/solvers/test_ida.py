@@ -148,3 +148,22 @@ def test_every_step_is_recorded_without_t_eval():
 def test_what_ida_does_not_take_is_refused(options, named):
     with pytest.raises(ValueError, match=rf"method='IDA' cannot take {named}"):
         simulation_options((0.0, 1.0), method="IDA", **options)
+
+
+def test_newton_matrix_of_a_chain_assembled_part_by_part():
+    """The GGL derivatives through the part route (a Multibody's, whose global equations
+    are never built): a 4-link chain of quaternion links on ball joints."""
+    from dalembert.multibody import chain
+
+    mb = chain(4, 1.0, 1.0, 0.05)
+    omega = np.array([0.4, 0.7, 0.0])
+    positions = {f"link{k + 1}": (0.0, 0.0, -(k + 0.5)) for k in range(4)}
+    q0, qd0 = mb.initial_state(
+        positions=positions,
+        velocities={name: np.cross(omega, x) for name, x in positions.items()},
+        angular_velocities=dict.fromkeys(positions, omega))
+    traj = mb.simulate((0, 0.2), q0, qd0, t_eval=[0.0, 0.1, 0.2])
+    assert_exact_newton_matrix(mb.system, traj)
+    ida = mb.simulate((0, 0.2), q0, qd0, method="IDA", rtol=1e-10, atol=1e-12,
+                      t_eval=[0.2])
+    assert np.abs(ida.q[-1] - traj.q[-1]).max() < 1e-7
