@@ -404,7 +404,8 @@ Tolerances(rtol=1e-08, atol=1e-10))
 def _check_ida(rtol: float | Sequence[float] | np.ndarray | None,
                stabilization: str | None, backend: Backend, events: Sequence[Callable],
                dense_output: bool, inputs: object, sample_time: float | None) -> None:
-    """What ``method="IDA"`` does not take (yet), refused naming it."""
+    """What ``method="IDA"`` does not take (yet), refused naming it; without
+    scikit-sundae an ``ImportError`` saying what to install."""
     refused = [
         (rtol is not None and np.ndim(rtol) > 0, "an array of 'rtol' (IDA takes one "
          "relative tolerance; give a number, and an array of 'atol' if needed)"),
@@ -421,6 +422,11 @@ def _check_ida(rtol: float | Sequence[float] | np.ndarray | None,
     for found, what in refused:
         if found:
             raise ValueError(f"method='IDA' cannot take {what}")
+    import importlib.util
+
+    if importlib.util.find_spec("sksundae") is None:  # at the door, not at the run
+        raise ImportError("method='IDA' needs scikit-sundae (SUNDIALS IDA): "
+                          "pip install 'dalembert[stiff]' or pip install scikit-sundae")
 
 
 def check_events(events: Sequence[Callable]) -> None:

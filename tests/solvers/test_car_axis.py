@@ -21,14 +21,9 @@ The bounds below leave a factor of about 3 over these values.
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
+import car_axis
 import numpy as np
 import pytest
-
-sys.path.insert(0, str(Path(__file__).parent))
-import car_axis  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -12,22 +12,18 @@ axis against the IVP Test Set's reference is in ``test_car_axis.py``.
 
 from __future__ import annotations
 
-import sys
 import warnings
-from pathlib import Path
 
+import car_axis
 import numpy as np
 import pytest
 from scipy.special import ellipk
+from test_jacobian import stiff_double_pendulum
 
 from dalembert import Holonomic, System, coordinates
 from dalembert.examples import heavy_top, rolling_disk
 from dalembert.options import simulation_options
 from dalembert.solvers.ggl import GGLForm
-
-sys.path.insert(0, str(Path(__file__).parent))
-import car_axis  # noqa: E402
-from test_jacobian import stiff_double_pendulum  # noqa: E402
 
 
 def central_differences(form: GGLForm, t: float, y: np.ndarray, yp: np.ndarray,
@@ -167,3 +163,13 @@ def test_newton_matrix_of_a_chain_assembled_part_by_part():
     ida = mb.simulate((0, 0.2), q0, qd0, method="IDA", rtol=1e-10, atol=1e-12,
                       t_eval=[0.2])
     assert np.abs(ida.q[-1] - traj.q[-1]).max() < 1e-7
+
+
+def test_without_scikit_sundae_the_door_says_what_to_install(monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "sksundae" else real(name, *a))
+    with pytest.raises(ImportError, match=r"pip install 'dalembert\[stiff\]'"):
+        simulation_options((0.0, 1.0), method="IDA")
