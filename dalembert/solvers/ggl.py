@@ -16,14 +16,16 @@ A DAE solver's Newton matrix is ``dF/dy + cj dF/dy'``; every block comes from th
 model's generated derivatives, exactly: the KKT residuals' (``residual_jacobians``:
 ``d r1/dq`` and ``d r1/dqd`` of ``r1 = M qdd - f - A^T lambda`` taken at ``qdd = v'``
 are ``dF2/dq`` and ``dF2/dv``) and the GGL ones (``ggl_jacobians``: ``d (A v + b)/dq``
-and ``d (A^T mu)/dq``, :mod:`dalembert.equations.ggl`). This first version builds the
-matrix dense (``N = 2 n + rows``), which is what IDA's dense linear solver takes; a
-band or sparse matrix for long chains is left for later.
+and ``d (A^T mu)/dq``, :mod:`dalembert.equations.ggl`). The matrix is assembled as
+sparse entries (:meth:`GGLForm.newton_entries`: its pattern is fixed by the generated
+functions' patterns), and given dense (:meth:`GGLForm.newton_matrix`) or in compressed
+columns (:class:`CompressedColumns`) to the solver's dense or sparse LU; the residual is
+evaluated from the sparse values too, so a long chain costs no dense ``n x n`` product.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -125,17 +127,28 @@ class GGLForm:
             The time, ``y = [q, v, lambda, mu]`` and its derivative.
         """
         num, rows, hol = self.num, self.rows, self.holonomic
+        n, m, pattern = num.n, num.m, num.pattern
         q, v, lam, mu = self.split(y)
-        qp, vp = yp[:num.n], yp[num.n:2 * num.n]
-        M, f, A, _ = num.kkt_blocks(t, q, v)
-        _, b = num.velocity_constraint(t, q)
+        qp, vp = yp[:n], yp[n:2 * n]
+        Mv, f, Av, _ = num.kkt_sparse(t, q, v)
+        _, b = num.velocity_sparse(t, q)
         psi = num.position_constraint(t, q)
-        return np.concatenate([qp - v + A[hol].T @ mu, M @ vp - f - A[rows].T @ lam,
-                               A[rows] @ v + b[rows], psi[self._psi_entries]])
+        Ar, Ac = pattern.A_rows, pattern.A_cols
 
-    def newton_matrix(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float
-                      ) -> np.ndarray:
-        """``dF/dy + cj dF/dy'`` (dense, ``N x N``), exact.
+        def transposed(weights: np.ndarray) -> np.ndarray:  # A^T weights
+            return np.bincount(Ac, Av * weights[Ar], minlength=n)
+
+        Mvp = np.bincount(pattern.M_rows, Mv * vp[pattern.M_cols], minlength=n)
+        Av_v = np.bincount(Ar, Av * v[Ac], minlength=m)
+        return np.concatenate([qp - v + transposed(self._full(mu, hol)),
+                               Mvp - f - transposed(self._full(lam, rows)),
+                               Av_v[rows] + b[rows], psi[self._psi_entries]])
+
+    def newton_entries(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``dF/dy + cj dF/dy'`` as entries ``(rows, columns, values)``, exact; an entry
+        may come more than once (the values add). The rows and columns are the same at
+        every call (the generated functions' patterns).
 
         Parameters
         ----------
@@ -145,25 +158,108 @@ class GGLForm:
             The solver's coefficient of ``dF/dy'``.
         """
         num, rows, hol = self.num, self.rows, self.holonomic
-        n, k, h = num.n, len(rows), len(hol)
+        n, k, pattern = num.n, len(rows), num.pattern
         q, v, lam, mu = self.split(y)
         vp = yp[n:2 * n]
-        M, _, A, _ = num.kkt_blocks(t, q, v)
-        r1_q, r1_qd, _, _ = num.residual_jacobians(t, q, v, vp, self._full(lam, rows)).dense()
+        Mv, _, Av, _ = num.kkt_sparse(t, q, v)
+        residual = num.residual_jacobians(t, q, v, vp, self._full(lam, rows))
+        r1_q, r1_qd = residual.r1_q, residual.r1_qd
         generated = num.compiled.functions["ggl_jacobians"]
-        blocks = generated.layout.split(num.evaluate("ggl_jacobians", t, q, v,
-                                                     self._full(mu, hol)))
-        velocity_q, force_q = (pattern.dense(values) for pattern, values
-                               in zip(generated.layout.blocks, blocks))
+        velocity_q, force_q = generated.layout.blocks
+        ggl = generated.layout.split(num.evaluate("ggl_jacobians", t, q, v,
+                                                  self._full(mu, hol)))
+        # where each constraint row sits among lambda's and mu's entries (-1: not there)
+        row_at, hol_at = np.full(num.m, -1), np.full(num.m, -1)
+        row_at[rows], hol_at[hol] = np.arange(k), np.arange(len(hol))
+        Ar, Ac = pattern.A_rows, pattern.A_cols
+        in_rows, in_hol = row_at[Ar] >= 0, hol_at[Ar] >= 0
+        vq_rows = row_at[velocity_q.index[0]]
+        V, L, U, R3, R4 = n, 2 * n, 2 * n + k, 2 * n, 2 * n + k
+        diagonal = np.arange(n)
+        parts = [
+            (force_q.index[0], force_q.index[1], ggl[1]),             # F1 by q
+            (diagonal, diagonal, np.full(n, cj)),
+            (diagonal, V + diagonal, np.full(n, -1.0)),               # F1 by v
+            (Ac[in_hol], U + hol_at[Ar[in_hol]], Av[in_hol]),         # F1 by mu
+            (n + r1_q.rows, r1_q.cols, r1_q.values),                  # F2 by q
+            (n + r1_qd.rows, V + r1_qd.cols, r1_qd.values),           # F2 by v
+            (n + pattern.M_rows, V + pattern.M_cols, cj * Mv),
+            (n + Ac[in_rows], L + row_at[Ar[in_rows]], -Av[in_rows]),  # F2 by lambda
+            (R3 + vq_rows[vq_rows >= 0], velocity_q.index[1][vq_rows >= 0],
+             ggl[0][vq_rows >= 0]),                                    # F3 by q
+            (R3 + row_at[Ar[in_rows]], V + Ac[in_rows], Av[in_rows]),  # F3 by v
+            (R4 + hol_at[Ar[in_hol]], Ac[in_hol], Av[in_hol]),         # F4 by q
+        ]
+        return tuple(np.concatenate([np.asarray(part[i], dtype=dtype) for part in parts])
+                     for i, dtype in ((0, np.intp), (1, np.intp), (2, float)))  # type: ignore[return-value]
+
+    def newton_matrix(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float
+                      ) -> np.ndarray:
+        """``dF/dy + cj dF/dy'`` dense (``N x N``), exact (:meth:`newton_entries`).
+
+        Parameters
+        ----------
+        t, y, yp, cj
+            As in :meth:`newton_entries`.
+        """
+        i, j, values = self.newton_entries(t, y, yp, cj)
         J = np.zeros((self.size, self.size))
-        lam_cols, mu_cols = slice(2 * n, 2 * n + k), slice(2 * n + k, 2 * n + k + h)
-        J[:n, :n] = force_q + cj * np.eye(n)
-        J[:n, n:2 * n] = -np.eye(n)
-        J[:n, mu_cols] = A[hol].T
-        J[n:2 * n, :n] = r1_q
-        J[n:2 * n, n:2 * n] = r1_qd + cj * M
-        J[n:2 * n, lam_cols] = -A[rows].T
-        J[2 * n:2 * n + k, :n] = velocity_q[rows]
-        J[2 * n:2 * n + k, n:2 * n] = A[rows]
-        J[2 * n + k:, :n] = A[hol]
+        np.add.at(J, (i, j), values)
         return J
+
+
+@dataclass(frozen=True)
+class CompressedColumns:
+    """The Newton matrix's fixed pattern in compressed-column order (what a sparse LU
+    such as SuperLU takes), and its values there from :meth:`GGLForm.newton_entries`.
+
+    Parameters
+    ----------
+    form
+        The GGL form.
+    t, y, yp
+        Any state (only the positions of the entries are read: they are the same at
+        every state).
+
+    Examples
+    --------
+    >>> from dalembert.examples import cartesian_pendulum
+    >>> form = GGLForm(cartesian_pendulum.build().numeric())
+    >>> y, yp = form.start(0.0, np.array([0.6, -0.8]), np.array([0.8, 0.6]))
+    >>> columns = CompressedColumns.of(form, 0.0, y, yp)
+    >>> dense = form.newton_matrix(0.0, y, yp, 2.0)
+    >>> bool(np.array_equal(columns.dense(columns.values(form, 0.0, y, yp, 2.0)), dense))
+    True
+    """
+
+    size: int
+    rows: np.ndarray
+    cols: np.ndarray
+    #: For each entry of :meth:`GGLForm.newton_entries`, its place among the values.
+    place: np.ndarray = field(repr=False)
+
+    @classmethod
+    def of(cls, form: GGLForm, t: float, y: np.ndarray, yp: np.ndarray
+           ) -> CompressedColumns:
+        """The pattern of ``form``'s Newton matrix (every entry that can be nonzero)."""
+        i, j, _ = form.newton_entries(t, y, yp, 1.0)
+        keys, place = np.unique(j * form.size + i, return_inverse=True)
+        return cls(form.size, keys % form.size, keys // form.size, place.ravel())
+
+    def pattern(self) -> np.ndarray:
+        """The pattern as a dense 0/1 matrix."""
+        out = np.zeros((self.size, self.size), dtype=np.int8)
+        out[self.rows, self.cols] = 1
+        return out
+
+    def values(self, form: GGLForm, t: float, y: np.ndarray, yp: np.ndarray, cj: float
+               ) -> np.ndarray:
+        """The matrix's values in compressed-column order."""
+        _, _, entries = form.newton_entries(t, y, yp, cj)
+        return np.bincount(self.place, entries, minlength=len(self.rows))
+
+    def dense(self, values: np.ndarray) -> np.ndarray:
+        """The matrix from its values (for checks)."""
+        out = np.zeros((self.size, self.size))
+        out[self.rows, self.cols] = values
+        return out

@@ -9,6 +9,8 @@ keyword away and compares with the other methods in the same process. Choices:
   tolerance is made so large that their weights vanish (:data:`ALGEBRAIC_ATOL`), the
   usual way to the same effect; in an index-2 DAE their error estimate does not
   shrink with the step and would otherwise stall it;
+- the Newton matrix is exact (:mod:`.ggl`), factored dense up to :data:`DENSE_MAX`
+  unknowns and by SuperLU above (compressed columns on the matrix's fixed pattern);
 - the start is dalembert's consistent initial state, with the multipliers and
   accelerations of the KKT solve there (no IDA initial-condition calculation);
 - with ``t_eval`` the steps are taken one by one and each output time is
@@ -24,11 +26,12 @@ without it is refused with an :class:`ImportError` saying so.
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
 from ..options import StepControl
-from .ggl import GGLForm
+from .ggl import CompressedColumns, GGLForm
 from .running.loop import IntegrationResult
 
 #: The absolute tolerance given to the algebraic entries (``lambda``, ``mu``): their
@@ -36,6 +39,10 @@ from .running.loop import IntegrationResult
 ALGEBRAIC_ATOL = 1e100
 #: IDA's limit on steps per call (one step per call here): effectively none.
 MAX_STEPS_PER_CALL = 1_000_000
+#: Up to this many unknowns (``2 n + rows + holonomic rows``) IDA factors the Newton
+#: matrix dense (LAPACK-free SUNDIALS dense LU), above it sparse (SuperLU_MT, the
+#: matrix in compressed columns).
+DENSE_MAX = 64
 
 
 def ida_solver_class() -> type:
@@ -104,13 +111,15 @@ def integrate_ida(form: GGLForm, t_span: tuple[float, float], y0: np.ndarray,
     atol[:2 * n] = step.atol
     options: dict[str, object] = {
         "rtol": float(step.rtol), "atol": atol, "algebraic_idx": form.algebraic,
-        "linsolver": "dense", "max_num_steps": MAX_STEPS_PER_CALL,
-        "jacfn": _newton_matrix(form)}
+        "max_num_steps": MAX_STEPS_PER_CALL}
+    options.update(_linear_solver(form, t0, start, start_rate))
     if step.first_step is not None:
         options["first_step"] = step.first_step
     if np.isfinite(step.max_step):
         options["max_step"] = step.max_step
-    solver = IDA(_residual(form), **options)
+    with warnings.catch_warnings():  # "custom sparse Jacobian ... ignored": ours is given
+        warnings.filterwarnings("ignore", message="Custom sparse Jacobian")
+        solver = IDA(_residual(form), **options)
     solver.init_step(t0, start, start_rate)
     times: list[float] = []
     states: list[np.ndarray] = []
@@ -163,9 +172,24 @@ def _residual(form: GGLForm):
     return residual
 
 
-def _newton_matrix(form: GGLForm):
-    def jacobian(t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float,
-                 JJ: np.ndarray) -> None:
-        JJ[:, :] = form.newton_matrix(t, y, yp, cj)
+def _linear_solver(form: GGLForm, t0: float, y0: np.ndarray, yp0: np.ndarray
+                   ) -> dict[str, object]:
+    """IDA's linear solver and Jacobian function: dense up to :data:`DENSE_MAX`
+    unknowns, else sparse on the Newton matrix's pattern."""
+    if form.size <= DENSE_MAX:
+        def dense(t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float,
+                  JJ: np.ndarray) -> None:
+            JJ[:, :] = form.newton_matrix(t, y, yp, cj)
 
-    return jacobian
+        return {"linsolver": "dense", "jacfn": dense}
+    from scipy.sparse import csc_matrix
+
+    columns = CompressedColumns.of(form, t0, y0, yp0)
+
+    def sparse(t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float,
+               JJ: np.ndarray) -> None:
+        JJ[:] = columns.values(form, t, y, yp, cj)
+
+    pattern = csc_matrix((np.ones(len(columns.rows)), (columns.rows, columns.cols)),
+                         shape=(form.size, form.size))
+    return {"linsolver": "sparse", "sparsity": pattern, "jacfn": sparse}

@@ -23,7 +23,8 @@ from test_jacobian import stiff_double_pendulum
 from dalembert import Holonomic, System, coordinates
 from dalembert.examples import heavy_top, rolling_disk
 from dalembert.options import simulation_options
-from dalembert.solvers.ggl import GGLForm
+from dalembert.solvers import ida
+from dalembert.solvers.ggl import CompressedColumns, GGLForm
 
 
 def central_differences(form: GGLForm, t: float, y: np.ndarray, yp: np.ndarray,
@@ -54,6 +55,9 @@ def assert_exact_newton_matrix(system: System, traj, kept=None, seed: int = 0) -
         differences = central_differences(form, traj.t[k], y, yp, cj)
         scale = max(1.0, np.abs(differences).max())
         assert np.abs(exact - differences).max() <= 1e-6 * scale
+        columns = CompressedColumns.of(form, traj.t[k], y, yp)
+        np.testing.assert_array_equal(
+            columns.dense(columns.values(form, traj.t[k], y, yp, cj)), exact)
 
 
 def test_newton_matrix_of_a_quaternion_body():
@@ -82,10 +86,15 @@ def rod_twice() -> tuple[System, dict]:
     return system, {x: 1.0, y: 0.0}
 
 
-def test_dependent_rows_are_left_out_and_the_quarter_period_holds():
+@pytest.mark.parametrize("linear_solver", ["dense", "sparse"])
+def test_dependent_rows_are_left_out_and_the_quarter_period_holds(linear_solver,
+                                                                  monkeypatch):
     """The rod given twice: the GGL form keeps one row (a dependent one would make the
     Newton matrix singular), and the pendulum released from the horizontal reaches the
-    bottom after ``K(1/2) / sqrt(g)`` (``l = 1``)."""
+    bottom after ``K(1/2) / sqrt(g)`` (``l = 1``); with the Newton matrix dense and
+    in compressed columns (SuperLU)."""
+    if linear_solver == "sparse":
+        monkeypatch.setattr(ida, "DENSE_MAX", 0)
     system, q0 = rod_twice()
     quarter = ellipk(0.5) / np.sqrt(9.81)
     with warnings.catch_warnings():
