@@ -40,9 +40,11 @@ ALGEBRAIC_ATOL = 1e100
 #: IDA's limit on steps per call (one step per call here): effectively none.
 MAX_STEPS_PER_CALL = 1_000_000
 #: Up to this many unknowns (``2 n + rows + holonomic rows``) IDA factors the Newton
-#: matrix dense (LAPACK-free SUNDIALS dense LU), above it sparse (SuperLU_MT, the
-#: matrix in compressed columns).
-DENSE_MAX = 64
+#: matrix dense (SUNDIALS' dense LU), above it sparse (SuperLU_MT, the matrix in
+#: compressed columns). Measured on planar chains hanging at 0.5 rad, 1 s, at the
+#: default tolerances: 16 links (160 unknowns) dense 0.46 s, sparse 0.71 s; 64 links
+#: (640) dense 2.0 s, sparse 1.0 s.
+DENSE_MAX = 256
 
 
 def ida_solver_class() -> type:
