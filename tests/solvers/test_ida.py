@@ -182,3 +182,12 @@ def test_without_scikit_sundae_the_door_says_what_to_install(monkeypatch):
                         lambda name, *a: None if name == "sksundae" else real(name, *a))
     with pytest.raises(ImportError, match=r"pip install 'dalembert\[stiff\]'"):
         simulation_options((0.0, 1.0), method="IDA")
+
+
+def test_a_timeout_ends_the_run_with_what_it_computed():
+    system = car_axis.build()
+    with pytest.warns(Warning, match="timeout"):
+        traj = system.simulate((0, 3), car_axis.Q0, car_axis.QD0, method="IDA",
+                               timeout=0.05)
+    assert traj.status == "timeout" and 0 < traj.t[-1] < 3
+    assert traj.position_residual.max() < 1e-8
