@@ -191,3 +191,15 @@ def test_a_timeout_ends_the_run_with_what_it_computed():
                                timeout=0.05)
     assert traj.status == "timeout" and 0 < traj.t[-1] < 3
     assert traj.position_residual.max() < 1e-8
+
+
+def test_without_constraints_the_form_is_an_ode():
+    """No constraint rows: ``y = [q, v]`` and nothing algebraic; ``x'' = -4 x`` from
+    ``x = 1`` at rest is ``cos(2 t)``."""
+    (x,) = coordinates("x")
+    system = System([x], kinetic=x.diff() ** 2 / 2, potential=2 * x**2)
+    times = np.linspace(0, 2, 5)
+    traj = system.simulate((0, 2), [1.0], [0.0], method="IDA", rtol=1e-10, atol=1e-12,
+                           t_eval=times)
+    assert np.abs(traj["x"] - np.cos(2 * times)).max() < 1e-7
+    assert np.abs(traj["x_dot"] + 2 * np.sin(2 * times)).max() < 1e-7
