@@ -38,6 +38,7 @@ from .rules import (
     Boolean,
     Callables,
     CheckedWhereUsed,
+    IsNone,
     Items,
     OneOf,
     PositiveInteger,
@@ -53,8 +54,11 @@ if TYPE_CHECKING:
     from scipy.integrate import OdeSolver
 
 #: SciPy's solvers by the names ``solve_ivp`` knows them by (``scipy.integrate`` is
-#: imported when a simulation is set up, not with dalembert: it is a large import).
-METHODS: tuple[str, ...] = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
+#: imported when a simulation is set up, not with dalembert: it is a large import), and
+#: ``"IDA"`` (SUNDIALS IDA on the stabilized index-2 form, :class:`IDA`).
+METHODS: tuple[str, ...] = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "IDA")
+#: The methods that are implicit (stiff solvers): their default tolerances are looser.
+IMPLICIT_METHODS: tuple[str, ...] = ("Radau", "BDF", "LSODA", "IDA")
 
 Backend = Literal["auto", "c", "python"]
 StepController = Literal["PI", "scipy"]
@@ -79,6 +83,43 @@ DEFAULT_BAUMGARTE_GAIN = 10.0
 
 
 # --------------------------------------------------------------------------- typed values
+
+
+class IDA:
+    """``method="IDA"``: SUNDIALS IDA (through scikit-sundae) on the stabilized index-2
+    (GGL) form of the equations, :mod:`dalembert.solvers.ida`.
+
+    The method's typed value, not an ``OdeSolver``: it integrates a DAE in ``[q, v,
+    lambda, mu]``, not ``y' = F(t, y)``, and keeps to the constraints by its form (no
+    projection). Events, dense output and inputs are not supported with it yet.
+    """
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Default tolerances of a kind of method.
+
+    Parameters
+    ----------
+    rtol, atol
+        The relative and absolute tolerances.
+    """
+
+    rtol: float
+    atol: float
+
+
+#: The default ``rtol``/``atol`` by kind of method, the one place they are set. The
+#: explicit methods run at 1e-11/1e-13: a step of DOP853 (order 8) costs little and a
+#: digit about 30% more steps, so the default is close to rounding. An implicit method
+#: pays a Newton iteration and a factorization per step at a lower order: at 1e-11 it
+#: is slow (issue 34: Radau took 43.9 s for 0.2 s of a stiff pendulum) for digits its
+#: default mostly gives already, so they default to 1e-8/1e-10 (docs/design.md, "Stiff
+#: mechanisms", has the measurements: car axis, a stiff spring).
+DEFAULT_TOLERANCES: dict[str, Tolerances] = {
+    "explicit": Tolerances(1e-11, 1e-13),
+    "implicit": Tolerances(1e-8, 1e-10),
+}
 
 
 @dataclass(frozen=True)
@@ -136,7 +177,7 @@ class SimulationOptions:
     """Every option of one simulation, checked (see :func:`simulation_options`)."""
 
     t_span: tuple[float, float]
-    method: type[OdeSolver]
+    method: type[OdeSolver] | type[IDA]
     step: StepControl = field(default_factory=StepControl)
     stabilization: Stabilization = field(default_factory=Projection)
     output: Output = field(default_factory=Output)
@@ -169,12 +210,15 @@ FIXED: list[Rule] = [CheckedWhereUsed("a sequence of coordinates or None")]
 #: against the model's inputs).
 INPUT_VALUES: list[Rule] = [CheckedWhereUsed("input values (see dalembert.inputs)")]
 
+#: ``None`` for a tolerance: the method's default (:func:`default_tolerances`).
+METHOD_DEFAULT = IsNone("None (the method's default)")
+
 #: Every option of ``simulate`` that makes its :class:`SimulationOptions` (but the
 #: inputs, whose form depends on the model) and the forms it may take.
 SIMULATE_PARAMETERS: dict[str, list[Rule]] = {
     "method": [OneOf(METHODS), SolverClass()],
-    "rtol": [Tolerance()],
-    "atol": [Tolerance()],
+    "rtol": [Tolerance(), METHOD_DEFAULT],
+    "atol": [Tolerance(), METHOD_DEFAULT],
     "step_control": [OneOf(STEP_CONTROLS)],
     "first_step": [PositiveNumber(), NONE],
     "max_step": [PositiveNumber(infinite=True)],
@@ -233,8 +277,8 @@ def simulation_options(
     *,
     t_eval: Sequence[float] | np.ndarray | None = None,
     method: str | type[OdeSolver] = "DOP853",
-    rtol: float | Sequence[float] | np.ndarray = 1e-11,
-    atol: float | Sequence[float] | np.ndarray = 1e-13,
+    rtol: float | Sequence[float] | np.ndarray | None = None,
+    atol: float | Sequence[float] | np.ndarray | None = None,
     step_control: StepController = "PI",
     first_step: float | None = None,
     max_step: float = math.inf,
@@ -260,8 +304,12 @@ def simulation_options(
 
     Parameters
     ----------
-    t_span, t_eval, method, rtol, atol, first_step, max_step, events, dense_output
-        As in :func:`scipy.integrate.solve_ivp`.
+    t_span, t_eval, method, first_step, max_step, events, dense_output
+        As in :func:`scipy.integrate.solve_ivp`; ``method`` may also be ``"IDA"``
+        (:class:`IDA`).
+    rtol, atol
+        As in :func:`scipy.integrate.solve_ivp`; ``None``: the method's defaults
+        (:func:`default_tolerances`).
     step_control
         The explicit Runge-Kutta methods' step-size controller, ``"PI"`` or
         ``"scipy"`` (:mod:`dalembert.solvers.steppers.scipy_ivp`).
@@ -311,6 +359,8 @@ def simulation_options(
 
     >>> simulation_options((0, 2), method="RK45", rtol=1e-8).step.rtol
     1e-08
+    >>> simulation_options((0, 2), method="Radau").step
+    StepControl(controller='PI', rtol=1e-08, atol=1e-10, first_step=None, max_step=inf)
     >>> simulation_options((0, 2), atol=[1e-9, 1e-9], state_size=4)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
@@ -326,7 +376,16 @@ def simulation_options(
                          "first step inside the span, or leave it None")
     import scipy.integrate  # here, not when dalembert is imported: a large import
 
-    solver = getattr(scipy.integrate, method) if isinstance(method, str) else method
+    solver: type[OdeSolver] | type[IDA]
+    if method == "IDA":
+        solver = IDA
+        _check_ida(rtol, stabilization, backend, events, dense_output, inputs,
+                   sample_time)
+    else:
+        solver = getattr(scipy.integrate, method) if isinstance(method, str) else method
+    defaults = default_tolerances(solver)
+    rtol = defaults.rtol if rtol is None else rtol
+    atol = defaults.atol if atol is None else atol
     if stabilization == "projection" and solver is scipy.integrate.LSODA:
         raise ValueError(
             "LSODA cannot be restarted from a projected state; use 'Radau' or 'BDF' for "
@@ -357,6 +416,60 @@ def simulation_options(
         contact_mode=contact_mode,
         contact_step=DEFAULT_CONTACT_STEP if contact_step is None else float(contact_step),
     )
+
+
+def default_tolerances(method: type[OdeSolver] | type[IDA]) -> Tolerances:
+    """The default ``rtol`` and ``atol`` of a method (:data:`DEFAULT_TOLERANCES`):
+    SciPy's implicit solvers (and their subclasses) and :class:`IDA` are implicit,
+    every other method explicit.
+
+    Parameters
+    ----------
+    method
+        The method's class.
+
+    Examples
+    --------
+    >>> from scipy.integrate import BDF, DOP853
+    >>> default_tolerances(DOP853), default_tolerances(BDF), default_tolerances(IDA)
+    (Tolerances(rtol=1e-11, atol=1e-13), Tolerances(rtol=1e-08, atol=1e-10), \
+Tolerances(rtol=1e-08, atol=1e-10))
+    """
+    import scipy.integrate
+
+    implicit = tuple(getattr(scipy.integrate, name) for name in IMPLICIT_METHODS
+                     if name != "IDA")
+    if method is IDA or issubclass(method, implicit):
+        return DEFAULT_TOLERANCES["implicit"]
+    return DEFAULT_TOLERANCES["explicit"]
+
+
+def _check_ida(rtol: float | Sequence[float] | np.ndarray | None,
+               stabilization: str | None, backend: Backend, events: Sequence[Callable],
+               dense_output: bool, inputs: object, sample_time: float | None) -> None:
+    """What ``method="IDA"`` does not take (yet), refused naming it; without
+    scikit-sundae an ``ImportError`` saying what to install."""
+    refused = [
+        (rtol is not None and np.ndim(rtol) > 0, "an array of 'rtol' (IDA takes one "
+         "relative tolerance; give a number, and an array of 'atol' if needed)"),
+        (stabilization != "projection", f"stabilization={stabilization!r} (IDA keeps "
+         "to the constraints by the stabilized index-2 form itself; leave "
+         "stabilization at its default)"),
+        (backend == "c", "backend='c' (IDA runs in SUNDIALS' own loop, calling the "
+         "model's generated functions)"),
+        (bool(events), "events (not supported with IDA yet; use 'Radau' or 'DOP853')"),
+        (dense_output, "dense_output (not supported with IDA yet; give t_eval)"),
+        (inputs is not None or sample_time is not None, "inputs (not supported with "
+         "IDA yet; use 'Radau' or 'DOP853')"),
+    ]
+    for found, what in refused:
+        if found:
+            raise ValueError(f"method='IDA' cannot take {what}")
+    import importlib.util
+
+    if importlib.util.find_spec("sksundae") is None:  # at the door, not at the run
+        raise ImportError("method='IDA' needs scikit-sundae (SUNDIALS IDA): "
+                          "pip install 'dalembert[stiff]' or pip install scikit-sundae")
 
 
 def check_events(events: Sequence[Callable]) -> None:

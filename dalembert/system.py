@@ -609,8 +609,8 @@ class System:
         *,
         t_eval: Sequence[float] | np.ndarray | None = None,
         method: str | type[OdeSolver] = "DOP853",
-        rtol: float | Sequence[float] = 1e-11,
-        atol: float | Sequence[float] = 1e-13,
+        rtol: float | Sequence[float] | None = None,
+        atol: float | Sequence[float] | None = None,
         first_step: float | None = None,
         max_step: float = np.inf,
         step_control: StepController = "PI",
@@ -652,9 +652,14 @@ class System:
             Output times (default: every step).
         method
             A ``solve_ivp`` method name (``"DOP853"`` default; ``"Radau"``/``"BDF"``
-            for stiff mechanisms) or an ``OdeSolver`` subclass.
+            for stiff mechanisms), an ``OdeSolver`` subclass, or ``"IDA"`` (SUNDIALS
+            IDA on the stabilized index-2 form, through scikit-sundae:
+            :mod:`dalembert.solvers.ida`; no events, dense output or inputs yet).
         rtol, atol
             Tolerances: finite positive numbers (or arrays, one per state entry).
+            Default (``None``): the method's (:data:`dalembert.options.DEFAULT_TOLERANCES`),
+            ``rtol=1e-11, atol=1e-13`` for the explicit methods, ``1e-8, 1e-10`` for
+            the implicit ones (Radau, BDF, LSODA, IDA).
         first_step, max_step
             Step limits, as in ``solve_ivp``.
         step_control

@@ -413,12 +413,30 @@ def test_bad_t_eval(pend, t_eval, match):
         pend.simulate((0, 1), q0=[1.0, 0.0], t_eval=t_eval)
 
 
+def test_ida_refuses_what_it_does_not_take_yet(pend):
+    with pytest.raises(ValueError, match=r"method='IDA' cannot take events \(not supported "
+                                         r"with IDA yet; use 'Radau' or 'DOP853'\)"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], method="IDA", events=[lambda t, q, qd: q[0]])
+
+
+def test_ida_without_scikit_sundae(pend, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "sksundae" else real(name, *a))
+    with pytest.raises(ImportError, match=r"method='IDA' needs scikit-sundae \(SUNDIALS IDA\): "
+                                          r"pip install 'dalembert\[stiff\]'"):
+        pend.simulate((0, 1), q0=[1.0, 0.0], method="IDA")
+
+
 @pytest.mark.parametrize(("rtol", "atol", "name"), [
     (-1.0, 1e-12, "rtol"), (1e-9, 0.0, "atol"), (0.0, 1e-12, "rtol"), (np.inf, 1e-12, "rtol"),
     (1e-9, np.nan, "atol"), ([1e-9, -1.0], 1e-12, "rtol"), ("tight", 1e-12, "rtol")])
 def test_bad_tolerances(pend, rtol, atol, name):
     with pytest.raises(ValueError, match=rf"The '{name}' parameter of simulate must be a finite "
-                                         r"positive number or an array of them; got"):
+                                         r"positive number or an array of them or None "
+                                         r"\(the method.s default\); got"):
         pend.simulate((0, 1), q0=[1.0, 0.0], rtol=rtol, atol=atol)
 
 

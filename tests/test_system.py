@@ -174,7 +174,7 @@ def test_check_options_refuses_what_simulate_refuses():
 @pytest.mark.parametrize(("call", "message"), [
     (lambda s: s.simulate((0, 1), [0.0, -1.0], rtol=0.0),
      "The 'rtol' parameter of simulate must be a finite positive number or an array of "
-     "them; got 0.0."),
+     "them or None (the method's default); got 0.0."),
     (lambda s: s.plan((0, 1), [0.0, -1.0], backend="gpu"),
      "The 'backend' parameter of simulate must be one of 'auto', 'c', 'python'; got 'gpu'."),
     (lambda s: s.consistent_initial_state([0.0, -1.0], velocity_projection="nearest"),

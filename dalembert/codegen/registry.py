@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from ..equations.ggl import ggl_jacobian_entries
 from ..equations.lagrange import Equations
 from ..equations.residual import residual_jacobian_entries
 from ..equations.sparse import gradient, nonzero_entries
@@ -127,8 +128,8 @@ def declaration(name: str) -> Declaration:
     >>> declaration("speed")
     Traceback (most recent call last):
     ...
-    ValueError: no generated function named 'speed'; the registry has energy, kkt, position, \
-residual_jacobians, velocity
+    ValueError: no generated function named 'speed'; the registry has energy, ggl_jacobians, kkt, \
+position, residual_jacobians, velocity
     """
     found = REGISTRY.get(name)
     if found is None:
@@ -364,6 +365,11 @@ def _residual_jacobians(eqs: Equations) -> dict[str, Entries]:
             "r2_qd": dict(found.r2_qd)}
 
 
+def _ggl_jacobians(eqs: Equations) -> dict[str, Entries]:
+    found = ggl_jacobian_entries(eqs)  # keyed (row, column)
+    return {"velocity_q": dict(found.velocity_q), "force_q": dict(found.force_q)}
+
+
 _STATE = ("t", "q", "qd", "p")
 _STATIC = ("t", "q", "p")
 
@@ -386,3 +392,9 @@ RESIDUAL_JACOBIANS = declare(Declaration(
     "residual_jacobians", ("t", "q", "qd", "qdd", "lam", "p"), (
         Block("r1_q", ("q", "q")), Block("r1_qd", ("q", "q")), Block("r2_q", ("row", "q")),
         Block("r2_qd", ("row", "q"))), _residual_jacobians, eager=False, native=4))
+#: ``d (A qd + b)/dq`` (``m x n``) and ``d (A^T lam)/dq`` (``n x n``): what the stabilized
+#: index-2 (GGL) form adds to the residuals' Jacobians (:mod:`dalembert.equations.ggl`).
+GGL_JACOBIANS = declare(Declaration(
+    "ggl_jacobians", ("t", "q", "qd", "lam", "p"), (
+        Block("velocity_q", ("row", "q")), Block("force_q", ("q", "q"))),
+    _ggl_jacobians, eager=False))

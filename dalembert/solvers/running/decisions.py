@@ -15,7 +15,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ...codegen.compiled import NumericModel
-from ...options import Backend, Baumgarte, Output, Projection, SimulationOptions
+from ...options import IDA, Backend, Baumgarte, Output, Projection, SimulationOptions
 from ..initialization import InitializationReport
 from ..native import NATIVE_METHODS, NotApplicable, native_solver
 from ..steppers.scipy_ivp import ControlledSteps, controlled_class
@@ -62,7 +62,10 @@ class Stabilization:
 
 
 def choose_stabilization(options: SimulationOptions) -> Stabilization:
-    """The stabilization ``options`` ask for (see :class:`Stabilization`)."""
+    """The stabilization ``options`` ask for (see :class:`Stabilization`); with IDA none
+    (its stabilized index-2 form keeps to the constraints)."""
+    if options.method is IDA:
+        return Stabilization(0.0, False)
     stabilization = options.stabilization
     gain = stabilization.gain if isinstance(stabilization, Baumgarte) else 0.0
     return Stabilization(gain, isinstance(stabilization, Projection))
@@ -85,8 +88,10 @@ class LoopChoice:
 
 
 def choose_loop(num: NumericModel, y0: np.ndarray, t0: float, gain: float,
-                kept: np.ndarray | None, backend: Backend) -> LoopChoice:
-    """The C loop where it applies and ``backend`` allows, else the Python loop.
+                kept: np.ndarray | None, backend: Backend,
+                method: type[OdeSolver] | type[IDA] | None = None) -> LoopChoice:
+    """The C loop where it applies and ``backend`` allows, else the Python loop (and
+    with IDA, which runs in SUNDIALS' own loop).
 
     Whether it applies is tried: a C solver of the model is made and solves at the
     initial state (each run then makes its own, :func:`~.run_data.start_run`).
@@ -103,6 +108,8 @@ def choose_loop(num: NumericModel, y0: np.ndarray, t0: float, gain: float,
         The constraint rows solved for (``None``: all).
     backend
         ``"auto"``, ``"c"`` or ``"python"``.
+    method
+        The method (``IDA``: not the C loop).
 
     Raises
     ------
@@ -111,6 +118,8 @@ def choose_loop(num: NumericModel, y0: np.ndarray, t0: float, gain: float,
     """
     if backend == "python":
         return LoopChoice("python", "")
+    if method is IDA:
+        return LoopChoice("python", "method='IDA' runs in SUNDIALS' own loop")
     try:
         native_solver(num, y0, t0, gain, kept)
     except NotApplicable as exc:
@@ -138,10 +147,10 @@ class SolverChoice:
         steps of a run stepping in C take it).
     """
 
-    solver: type[OdeSolver]
+    solver: type[OdeSolver] | type[IDA]
     options: dict[str, object]
     stepper: type[OdeSolver] | None
-    python_solver: type[OdeSolver]
+    python_solver: type[OdeSolver] | type[IDA]
     python_options: dict[str, object]
 
 
@@ -157,6 +166,8 @@ def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
         Whether the C loop runs.
     """
     step = options.step
+    if issubclass(options.method, IDA):  # its options are the StepControl itself
+        return SolverChoice(IDA, {}, None, IDA, {})
     solver = controlled_class(options.method, step.controller)
     solver_options = step.solver_options()
     python_options = dict(solver_options)

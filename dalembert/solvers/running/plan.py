@@ -32,7 +32,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ...codegen.compiled import NumericModel
-from ...options import SimulationOptions
+from ...options import IDA, SimulationOptions
 from ..initialization import InitializationReport
 from .decisions import (
     Loop,
@@ -63,7 +63,7 @@ class SimulationPlan:
     why_python
         Why the C loop does not apply (empty if it runs, or ``backend="python"``).
     solver
-        The ``OdeSolver`` class that steps.
+        The ``OdeSolver`` class that steps, or ``IDA`` (:mod:`dalembert.solvers.ida`).
     solver_options
         Its keyword arguments (tolerances, step limits, controller...); a run adds
         what is its own (:func:`~.run_data.start_run`).
@@ -87,10 +87,10 @@ class SimulationPlan:
     num: NumericModel = field(repr=False)
     loop: Loop
     why_python: str
-    solver: type[OdeSolver]
+    solver: type[OdeSolver] | type[IDA]
     solver_options: dict[str, object] = field(repr=False)
     stepper: type[OdeSolver] | None = field(repr=False)
-    python_solver: type[OdeSolver] = field(repr=False)
+    python_solver: type[OdeSolver] | type[IDA] = field(repr=False)
     python_options: dict[str, object] = field(repr=False)
     stretches: bool
     kept: np.ndarray | None = field(repr=False)
@@ -153,7 +153,8 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     t0, y0 = options.t_span[0], num.layout.join(initial.q, initial.qd)
     kept = kept_rows(initial)
     stabilization = choose_stabilization(options)
-    loop = choose_loop(num, y0, t0, stabilization.gain, kept, options.backend)
+    loop = choose_loop(num, y0, t0, stabilization.gain, kept, options.backend,
+                       options.method)
     chosen = choose_solver(options, loop.loop == "c")
     return SimulationPlan(
         options=options, initial=initial, num=num, loop=loop.loop,

@@ -34,7 +34,10 @@ from scipy.integrate import BDF, OdeSolver, Radau
 from ...codegen.compiled import NumericModel
 from ...inputs import InputSignal
 from ...numerics.state_layout import StateLayout
+from ...options import IDA
 from ..dynamics import first_order_rhs
+from ..ggl import GGLForm
+from ..ida import integrate_ida
 from ..jacobian import first_order_jacobian
 from ..native import NativeSolver
 from ..outputs import evaluate_outputs
@@ -121,10 +124,14 @@ class RunData:
             Show a progress bar.
         """
         out = self.plan.options.output
+        solver = self.plan.solver
+        if issubclass(solver, IDA):  # SUNDIALS' loop, on the GGL form
+            return integrate_ida(GGLForm(self.num, self.plan.kept), t_span, y0, t_eval,
+                                 self.plan.options.step, self.deadline)
         if self.careful_model is not None:
             self.careful_model.restart(t_span[0], self.num.layout.split(y0)[0])
         return integrate(
-            self.rhs, t_span, y0, method=self.plan.solver, t_eval=t_eval,
+            self.rhs, t_span, y0, method=solver, t_eval=t_eval,
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=progress, stretches=self.plan.stretches, diagnose=self.diagnose,
             singular=self.singular, careful=self.careful, runaway=self.runaway,
