@@ -220,7 +220,6 @@ __all__ = [
     "SingularSystemError",
     "StiffStabilizationWarning",
     "SymbolicSolveError",
-    "TimeLimitExceeded",
     "TooManyConstraintsError",
     "TrajectoryFileError",
     "UnsafeCacheError",

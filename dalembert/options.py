@@ -336,8 +336,9 @@ def simulation_options(
         checked between steps (in the C loop between its stretches of steps, a
         fraction of a second each): a run past it stops there with status
         ``"timeout"``, returning what it computed. A user's function (an input, an
-<<<<<<< HEAD
-        event) that itself never returns is not stopped.
+        event) that itself never returns is stopped half a second after the limit
+        (:mod:`~dalembert.solvers.running.watchdog`), unless it is blocked in a C call
+        (``time.sleep``): then when that call returns.
     impact_law
         How an impact on several touching unilateral constraints is resolved:
         ``"sequential"`` or ``"simultaneous"`` (:mod:`dalembert.solvers.contact.laws`).
@@ -346,11 +347,6 @@ def simulation_options(
         ``"time-stepping"`` (Moreau-Jean steps of ``contact_step``, default 1e-3: for
         many contacts; :mod:`dalembert.solvers.contact.time_stepping`). A step without
         the time-stepping mode is an error.
-=======
-        event) that itself never returns is stopped half a second after the limit
-        (:mod:`~dalembert.solvers.running.watchdog`), unless it is blocked in a C call
-        (``time.sleep``): then when that call returns.
->>>>>>> main
     state_size
         The length of the state ``[q, qd]`` (twice the coordinates), when known: an
         array of tolerances must have one entry per state entry.
