@@ -36,7 +36,7 @@ from scipy.spatial.transform import Rotation
 
 from ...multibody.bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from ...multibody.builder import Multibody
-from ...multibody.joints import Joint, Revolute
+from ...multibody.joints import Free, Joint, Revolute
 from ...multibody.outputs import joint_reactions
 from ...multibody.rolling import Rolling
 from ...multibody.types import FloatArray
@@ -222,7 +222,7 @@ def _moving_side(joint: Joint) -> tuple[Body, FloatArray, FloatArray] | None:
 def _body_points(mb: Multibody) -> dict[str, list[FloatArray]]:
     """Each body's joint and spring points (body frame), the center excluded, no repeats."""
     points: dict[str, list[FloatArray]] = {b.name: [] for b in mb.bodies}
-    pieces = [j for j in mb.joints if not isinstance(j, Rolling)] + list(mb.springs)
+    pieces = [j for j in mb.joints if not isinstance(j, Rolling | Free)] + list(mb.springs)
     for piece in pieces:
         for body, point in ((piece.body_a, piece.point_a), (piece.body_b, piece.point_b)):
             p = np.asarray(point, dtype=float)
@@ -399,7 +399,7 @@ def _joints(mb: Multibody, names: list[str], shapes: list[dict[str, Any]],
     columns: list[tuple[Joint, str]] = []
     for joint in mb.joints:
         side = _moving_side(joint)
-        if side is None or isinstance(joint, Rolling):
+        if side is None or isinstance(joint, Rolling | Free):  # Free: holds nothing
             continue
         body, point, axis = side
         index = names.index(body.name)
