@@ -380,9 +380,5 @@ def _warn_double_counting(mb: Multibody, loads: Model, used: set[sp.Function]) -
     # only the terms in the loads' coordinates (each is -m g_k x_k of one coordinate)
     gravity = sp.Add(*(term for term in sp.Add.make_args(every)
                        if term.atoms(AppliedUndef) <= used))
-    # the springs between points, not the joint springs: those are atan2 squared, whose
-    # derivative expanded took minutes for an arm with two of them (an imported model's
-    # motor beside them), and a joint spring given again as a torque is no classic slip
-    springs = sp.Add(*(s.potential() for s in mb.springs))
-    V = loads.coords.to_plain(gravity + springs, "the gravitational and spring potential")
+    V = loads.potential + loads.coords.to_plain(gravity, "the gravitational potential")
     warn_double_counting(loads.Q, V, loads.coords)
