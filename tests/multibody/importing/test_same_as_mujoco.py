@@ -86,6 +86,22 @@ def test_hinges_combined_into_universal_and_ball_joints():
     assert error < TOLERANCE
 
 
+def test_position_and_velocity_servos_as_inputs():
+    """MuJoCo's servos are affine in the joint's qpos and qvel (``kp (ctrl - gear q) -
+    kv gear qdot``, times the gear): a hinge with a reference angle (qpos0 not zero), a
+    position servo with damping and a geared one, a velocity servo."""
+    xml = """<mujoco><worldbody><body name="rod"><joint name="pin" axis="0 1 0" ref="12"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 -1" size="0.05"/></body></worldbody>
+      <actuator><position name="servo" joint="pin" kp="20" kv="2" gear="1.5"/>
+      <velocity name="spin" joint="pin" kv="0.5"/></actuator></mujoco>"""
+    mb = from_mjcf(xml)
+    assert [u.name for u in mb.inputs] == ["servo", "spin"]
+    model = tight(mujoco.MjModel.from_xml_string(xml))
+    error, _ = compare(mb, model, [0.5], [0.3], 1.0, ctrl=[0.1, 0.4],
+                       inputs={"servo": 0.1, "spin": 0.4})
+    assert error < TOLERANCE
+
+
 def test_free_body_tumbling():
     """The brick's center is off its body frame's origin (the box is shifted), so the
     free joint's travel is the frame origin's path, not the mass center's: the Free
