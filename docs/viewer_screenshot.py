@@ -1,5 +1,6 @@
-"""Write docs/viewer.png, the README's picture of the 3D viewer: the closed chain of the
-gallery (six rods on ball joints pinned at both ends) opened in headless Chromium.
+"""Write docs/viewer.png, the README's picture of the 3D viewer: the gallery's arm imported
+from MJCF (its parallelogram closed by a ``connect``), drawn with the file's geoms,
+opened in headless Chromium.
 
     python docs/viewer_screenshot.py   (needs playwright and Debian's chromium)
 """
@@ -16,7 +17,7 @@ from playwright.sync_api import sync_playwright
 from dalembert.examples import load
 from dalembert.plotting import view
 
-EXAMPLE, T_END, SHOWN_AT = "closed-chain", 4.0, 2.6
+EXAMPLE, T_END, SHOWN_AT = "imported-linkage", 5.0, 2.5
 OUT = Path(__file__).with_name("viewer.png")
 
 example = load(EXAMPLE)

@@ -151,6 +151,10 @@ def warn_double_counting(Q: sp.Matrix, V: sp.Expr, coords: Coordinates) -> None:
     ['DoubleCountingWarning']
     """
     rest = dict.fromkeys(coords.qd, sp.S.Zero)
+    # a potential's terms in an angle taken with atan2 (a joint spring's 1/2 k (q - r)^2)
+    # are left out: no weight or spring force given twice is written so, and expanding
+    # their derivatives took minutes for an arm with two joint springs and a motor
+    V = sp.Add(*(term for term in sp.Add.make_args(V) if not term.has(sp.atan2)))
     for j, q in enumerate(coords.q):
         if Q[j] == 0 or not V.has(q):
             continue

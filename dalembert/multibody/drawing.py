@@ -23,6 +23,7 @@ import numpy as np
 
 from .bodies import Body, Ground, TurningBody
 from .diagnostics import radius_of_gyration
+from .joints import Free
 from .rolling import Rolling
 from .types import FloatArray, Numbers
 
@@ -87,7 +88,9 @@ def stick_figure(mb: Multibody, q: Numbers, *,
     """
     poses = _poses(mb, np.asarray(q, dtype=float))
     lines: list[FloatArray] = []
-    for j in mb.joints:
+    # a Free joint holds nothing: no stick (its body keeps its axes)
+    joints = [j for j in mb.joints if not isinstance(j, Free)]
+    for j in joints:
         if isinstance(j, Rolling):
             x, R = poses[j.body_b.name]
             contact = j.contact_points(x[None], R[None])[0]
@@ -103,7 +106,7 @@ def stick_figure(mb: Multibody, q: Numbers, *,
     for s in mb.springs:
         lines.append(np.array([_point(poses, s.body_a, s.point_a),
                                _point(poses, s.body_b, s.point_b)]))
-    held = {b.name for j in mb.joints for b in (j.body_a, j.body_b)}
+    held = {b.name for j in joints for b in (j.body_a, j.body_b)}
     held |= {b.name for s in mb.springs for b in (s.body_a, s.body_b)}
     for body in mb.bodies:
         x, R = poses[body.name]

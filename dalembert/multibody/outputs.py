@@ -392,7 +392,7 @@ def joint_reactions(
     for j in mb.joints:
         rows = [names.index(c) for c in j.constraint_names]
         for body in j.bodies:
-            if not isinstance(body, Ground):
+            if not isinstance(body, Ground) and rows:  # a Free joint has none: no reaction
                 cols = [coord_index[c.name] for c in body.coordinates]
                 blocks.setdefault((len(rows), len(cols)), []).append(
                     ((j.name, body.name), rows, cols))
@@ -412,8 +412,8 @@ def joint_reactions(
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if not isinstance(body, Ground):
                 P = _application_points(mb, traj, j, body, point)
-                sides[body.name] = _reaction(mb, traj, j.name, body, P,
-                                             Q_joint[j.name, body.name])
+                Q = Q_joint.get((j.name, body.name), np.zeros((k, len(body.coordinates))))
+                sides[body.name] = _reaction(mb, traj, j.name, body, P, Q)
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if isinstance(body, Ground):
                 other = next(iter(sides.values()))

@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 from PIL import Image
 from playwright.sync_api import sync_playwright
+from viewer_runs import GEOMS_MJCF, geoms_qpos, posed_run
 
 from dalembert.examples import load
+from dalembert.multibody import from_mjcf
 from dalembert.plotting import view
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -155,3 +157,20 @@ def test_256_link_chain_keeps_playing(playwright, chain256_page):
 
 def test_page_of_a_10_s_256_link_run_is_under_5_mb(chain256_page):
     assert chain256_page.stat().st_size < 5_000_000
+
+
+def test_page_of_an_imported_model_draws_its_geoms(browser, tmp_path):
+    """The geoms of an imported MJCF model (boxes, a capsule, a cylinder, an ellipsoid,
+    a sphere, a mesh's box) on the page: no errors, the canvas drawn in several colours."""
+    with pytest.warns(UserWarning):  # the plane's contact, listed as unsupported
+        mb = from_mjcf(GEOMS_MJCF)
+    model = mb.imported.model
+    traj = posed_run(mb, [model.qpos0, geoms_qpos(model, 0), geoms_qpos(model, 1)])
+    page = open_page(browser, view(traj, mb, tmp_path / "geoms.html"))
+    page.wait_for_timeout(300)
+    image = picture(page)
+    drawn = np.any(np.abs(image - np.array([0xF4, 0xF5, 0xF7])) > 8, axis=-1)
+    assert page.problems == []
+    assert 0.002 < drawn.mean() < 0.6
+    assert len(np.unique(image[drawn].reshape(-1, 3), axis=0)) > 20
+    page.close()

@@ -100,7 +100,8 @@ function segmentMatrix(a, b, radius) {
 
 function shapeMatrix(s) {
   if (s.kind === 'cylinder') return segmentMatrix(s.from, s.to, s.radius);
-  const size = s.kind === 'box' ? s.size : [s.radius, s.radius, s.radius];
+  // a sphere may be an ellipsoid: its three radii along its turned axes
+  const size = s.kind === 'box' ? s.size : (s.radii || [s.radius, s.radius, s.radius]);
   return new THREE.Matrix4().compose(new THREE.Vector3(...s.center),
                                      new THREE.Quaternion(...(s.rotation || [0, 0, 0, 1])),
                                      new THREE.Vector3(...size));

@@ -4,7 +4,10 @@ At the reference pose ``qpos0`` MuJoCo's joint anchor and axis are the same worl
 and direction on both bodies, so each joint is built from them: a hinge becomes a
 :class:`~dalembert.multibody.Revolute` with one common reference direction, a slide a
 :class:`~dalembert.multibody.Prismatic`, a ball a
-:class:`~dalembert.multibody.Spherical`; a free joint leaves its body free. A dalembert
+:class:`~dalembert.multibody.Spherical`, a free joint a :class:`~dalembert.multibody.Free`
+joint from the world's origin to the body frame's origin (it constrains nothing; its
+travel and rotation, :func:`~dalembert.multibody.joint_positions`, are MuJoCo's
+``qpos`` of the joint: the body frame's position and orientation). A dalembert
 hinge angle or slide travel is then zero at ``qpos0`` and MuJoCo's ``qpos`` is it plus
 ``qpos0`` (MuJoCo's ``ref``). Springs (``stiffness``, ``springref``) and ``damping`` on
 hinges and slides become :class:`~dalembert.multibody.JointSpring` loads, rest at
@@ -27,7 +30,7 @@ import numpy as np
 
 from ...errors import ModelFileError
 from ..drivers import JointSpring
-from ..joints import Joint, Prismatic, Revolute, Spherical, Universal
+from ..joints import Free, Joint, Prismatic, Revolute, Spherical, Universal
 from ..types import FloatArray
 from .bodies import ReferencePose, body_label, identifier
 
@@ -118,15 +121,15 @@ def _one_joint(pose: ReferencePose, out: ImportedJoints, j: int, k: int, parent:
     model = pose.model
     kind = int(model.jnt_type[j])
     mujoco_name = model.joint(j).name
-    if kind == FREE:
-        if model.jnt_stiffness[j] or model.dof_damping[model.jnt_dofadr[j]]:
-            out.unsupported.append(f"spring or damping on free joint {mujoco_name!r}")
-        return
     name = identifier(mujoco_name, f"joint{j}", taken)
     a, b = pose.body_of(parent), pose.body_of(k)
     point_a, point_b = pose.world_point(parent, anchor), pose.world_point(k, anchor)
     joint: Joint
-    if kind == BALL:
+    if kind == FREE:  # its qpos is the body frame's world pose, whatever its parent
+        joint = Free(name, pose.bodies[0], b, (0.0, 0.0, 0.0), point_b)
+        if model.jnt_stiffness[j] or model.dof_damping[model.jnt_dofadr[j]]:
+            out.unsupported.append(f"spring or damping on free joint {mujoco_name!r}")
+    elif kind == BALL:
         joint = Spherical(name, a, b, point_a, point_b)
         if model.jnt_stiffness[j] or model.dof_damping[model.jnt_dofadr[j]]:
             out.unsupported.append(f"spring or damping on ball joint {mujoco_name!r}")

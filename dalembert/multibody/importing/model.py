@@ -99,8 +99,7 @@ class ImportedModel:
     bodies
         The moving bodies, by dalembert name.
     joints
-        The dalembert joint made of each MuJoCo joint, by MuJoCo name (a free joint
-        makes none).
+        The dalembert joint made of each MuJoCo joint, by MuJoCo name.
     shapes
         Every geom, for drawing (:class:`Shape`).
     unsupported

@@ -5,8 +5,10 @@ A :class:`Scene` holds, for the frames kept, each body's world position and rota
 axes), the constraint force at each joint, the traced points and the sticks between
 points. Two kinds of systems give one:
 
-- a :class:`~dalembert.multibody.Multibody` (or a System it built): bodies are drawn
-  as their default shapes, since a body carries no geometry of its own. A rigid or
+- a :class:`~dalembert.multibody.Multibody` (or a System it built): a mechanism
+  imported from a model file is drawn as its geoms (:mod:`.model_shapes`; a body with
+  none to draw, e.g. only planes, as its default shapes); any other as its default
+  shapes, since a body carries no geometry of its own. A rigid or
   planar body is drawn as cylinders ("spokes") from its mass center to each of its
   joint and spring points (one cylinder between two points on either side of the
   center; one through the center, as long on both sides, for a body held at one
@@ -34,12 +36,13 @@ from scipy.spatial.transform import Rotation
 
 from ...multibody.bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from ...multibody.builder import Multibody
-from ...multibody.joints import Joint, Revolute
+from ...multibody.joints import Free, Joint, Revolute
 from ...multibody.outputs import joint_reactions
 from ...multibody.rolling import Rolling
 from ...multibody.types import FloatArray
 from ...trajectory import Trajectory
 from ..drawers import particle_points
+from .model_shapes import imported_shapes
 
 #: Traced points chosen when none are named.
 DEFAULT_TRACES = 4
@@ -71,7 +74,8 @@ class Scene:
         Each a dict: ``body`` (index, -1 for the ground), ``kind`` (``"cylinder"``
         from ``from`` to ``to`` of ``radius``, ``"box"`` at ``center`` of ``size``
         turned by the quaternion ``rotation``, or ``"sphere"`` at ``center`` of
-        ``radius``), in the body's frame.
+        ``radius``, an ellipsoid if it has ``radii`` and ``rotation``), in the body's
+        frame.
     joints
         The joints' markers, each a dict: ``name``, ``body`` (index), ``point`` and
         ``axis`` (a hinge's, or ``None``) in that body's frame, and ``radius``.
@@ -120,11 +124,30 @@ class Scene:
         for shape in self.shapes:
             if shape["body"] >= 0:
                 reach[shape["body"]] = max(reach[shape["body"]], shape_reach(shape))
-            else:  # ground anchors are part of the picture too
-                lo, hi = np.minimum(lo, shape["center"]), np.maximum(hi, shape["center"])
+            else:  # ground anchors and geoms are part of the picture too
+                middle = shape_center(shape)
+                lo, hi = np.minimum(lo, middle), np.maximum(hi, middle)
         lo = np.minimum(lo, (self.positions - reach[:, None]).min(axis=(0, 1)))
         hi = np.maximum(hi, (self.positions + reach[:, None]).max(axis=(0, 1)))
         return (lo + hi) / 2, float(max(np.max(hi - lo), 1e-9))
+
+
+def shape_center(shape: dict[str, Any]) -> FloatArray:
+    """A shape's middle point in its body's frame (a cylinder's between its ends).
+
+    Parameters
+    ----------
+    shape
+        A shape of :attr:`Scene.shapes`.
+
+    Examples
+    --------
+    >>> shape_center({"kind": "cylinder", "from": [0, 0, -1], "to": [0, 0, 2], "radius": 0.5})
+    array([0. , 0. , 0.5])
+    """
+    if shape["kind"] == "cylinder":
+        return (np.asarray(shape["from"], dtype=float) + np.asarray(shape["to"], dtype=float)) / 2
+    return np.asarray(shape["center"], dtype=float)
 
 
 def shape_reach(shape: dict[str, Any]) -> float:
@@ -201,7 +224,7 @@ def _moving_side(joint: Joint) -> tuple[Body, FloatArray, FloatArray] | None:
 def _body_points(mb: Multibody) -> dict[str, list[FloatArray]]:
     """Each body's joint and spring points (body frame), the center excluded, no repeats."""
     points: dict[str, list[FloatArray]] = {b.name: [] for b in mb.bodies}
-    pieces = [j for j in mb.joints if not isinstance(j, Rolling)] + list(mb.springs)
+    pieces = [j for j in mb.joints if not isinstance(j, Rolling | Free)] + list(mb.springs)
     for piece in pieces:
         for body, point in ((piece.body_a, piece.point_a), (piece.body_b, piece.point_b)):
             p = np.asarray(point, dtype=float)
@@ -279,6 +302,19 @@ def _body_shapes(mb: Multibody, index: int, body: Body, points: list[FloatArray]
     return [{"body": index, **s} for s in shapes]
 
 
+def _shapes(mb: Multibody, bound: Multibody, names: list[str],
+            points: dict[str, list[FloatArray]], size: float) -> list[dict[str, Any]]:
+    """The bodies' shapes: an imported model's geoms (:mod:`.model_shapes`), else (and
+    for a body with none to draw) the default shapes."""
+    imported = getattr(mb, "imported", None)
+    geoms = imported_shapes(imported.shapes, {n: i for i, n in enumerate(names)}) \
+        if imported is not None else {}
+    shapes = list(geoms.get(-1, []))
+    for i, body in enumerate(bound.bodies):
+        shapes += geoms.get(i) or _body_shapes(bound, i, body, points[body.name], size)
+    return shapes
+
+
 def _largest_radius(shapes: list[dict[str, Any]], body: int, default: float) -> float:
     radii = [s["radius"] for s in shapes if s["body"] == body and s["kind"] == "cylinder"]
     return max(radii) if radii else default
@@ -332,8 +368,7 @@ def multibody_scene(mb: Multibody, traj: Trajectory,
         quaternions[:, i] = Rotation.from_matrix(R).as_quat()
     size = float(max(np.ptp(positions.reshape(-1, 3), axis=0).max(), 1e-3))
     points = _body_points(bound)
-    shapes = [s for i, b in enumerate(bound.bodies)
-              for s in _body_shapes(bound, i, b, points[b.name], size)]
+    shapes = _shapes(mb, bound, names, points, size)
     # the picture's size: the centers' spread, or a body's own size if larger (a top)
     size = max([size] + [2 * shape_reach(s) for s in shapes])
     joints, columns = _joints(bound, names, shapes, size)
@@ -366,7 +401,7 @@ def _joints(mb: Multibody, names: list[str], shapes: list[dict[str, Any]],
     columns: list[tuple[Joint, str]] = []
     for joint in mb.joints:
         side = _moving_side(joint)
-        if side is None or isinstance(joint, Rolling):
+        if side is None or isinstance(joint, Rolling | Free):  # Free: holds nothing
             continue
         body, point, axis = side
         index = names.index(body.name)

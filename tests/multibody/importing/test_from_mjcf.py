@@ -90,6 +90,7 @@ def test_one_warning_lists_everything_left_out():
       <tendon><fixed name="t"><joint joint="j" coef="1"/></fixed></tendon>
       <actuator>
         <position name="servo" joint="j" kp="10"/>
+        <general name="lagged" joint="j" dyntype="filter" dynprm="0.1"/>
         <motor name="m" joint="j" ctrlrange="-1 1" ctrllimited="true"/>
         <motor name="thruster" site="s" gear="0 0 1 0 0 0"/>
       </actuator>
@@ -99,10 +100,11 @@ def test_one_warning_lists_everything_left_out():
     assert len(caught) == 1
     message = str(caught[0].message)
     for feature in ("contact between geoms", "tendons 't'", "joint limits", "armature",
-                    "friction loss", "actuator 'servo' (not a motor",
+                    "friction loss", "actuator 'lagged' (a muscle, a user gain or bias, or "
+                    "activation dynamics)",
                     "control or force range of actuator 'm'", "actuator 'thruster'"):
         assert feature in message, feature
-    assert mb.imported.unsupported and [a.name for a in mb.actuators] == ["m"]
+    assert mb.imported.unsupported and [a.name for a in mb.actuators] == ["servo", "m"]
 
 
 def test_disabled_contact_is_not_warned_of():

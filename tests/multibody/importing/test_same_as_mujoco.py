@@ -23,7 +23,13 @@ import pytest
 from mujoco_reference import compare, dalembert_frames, mujoco_run, tight
 
 from dalembert.errors import RedundantConstraintsWarning, UnsupportedModelFeatureWarning
-from dalembert.multibody import from_mjcf, from_urdf, mujoco_state
+from dalembert.multibody import (
+    from_mjcf,
+    from_urdf,
+    joint_positions,
+    joint_reactions,
+    mujoco_state,
+)
 
 FILES = Path(__file__).parent / "files"
 # example-robot-data installs its robots in cmeel's prefix beside the packages
@@ -80,14 +86,48 @@ def test_hinges_combined_into_universal_and_ball_joints():
     assert error < TOLERANCE
 
 
-def test_free_body_tumbling():
-    xml = """<mujoco><worldbody><body name="brick" pos="0 0 1"><freejoint/>
-      <geom type="box" size="0.1 0.2 0.3"/></body></worldbody></mujoco>"""
+def test_position_and_velocity_servos_as_inputs():
+    """MuJoCo's servos are affine in the joint's qpos and qvel (``kp (ctrl - gear q) -
+    kv gear qdot``, times the gear): a hinge with a reference angle (qpos0 not zero), a
+    position servo with damping and a geared one, a velocity servo."""
+    xml = """<mujoco><worldbody><body name="rod"><joint name="pin" axis="0 1 0" ref="12"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 -1" size="0.05"/></body></worldbody>
+      <actuator><position name="servo" joint="pin" kp="20" kv="2" gear="1.5"/>
+      <velocity name="spin" joint="pin" kv="0.5"/></actuator></mujoco>"""
     mb = from_mjcf(xml)
+    assert [u.name for u in mb.inputs] == ["servo", "spin"]
     model = tight(mujoco.MjModel.from_xml_string(xml))
-    error, _ = compare(mb, model, [0.1, 0.2, 1.0, 1.0, 0.0, 0.0, 0.0],
-                       [0.5, 0.0, 3.0, 0.2, 4.0, 0.3], 1.0)
+    error, _ = compare(mb, model, [0.5], [0.3], 1.0, ctrl=[0.1, 0.4],
+                       inputs={"servo": 0.1, "spin": 0.4})
     assert error < TOLERANCE
+
+
+def test_free_body_tumbling():
+    """The brick's center is off its body frame's origin (the box is shifted), so the
+    free joint's travel is the frame origin's path, not the mass center's: the Free
+    joint's positions are MuJoCo's qpos of the joint (position, quaternion up to sign)."""
+    xml = """<mujoco><worldbody><body name="brick" pos="0 0 1"><freejoint name="loose"/>
+      <geom type="box" size="0.1 0.2 0.3" pos="0.05 -0.1 0.2"/></body></worldbody></mujoco>"""
+    mb = from_mjcf(xml)
+    assert [(type(j).__name__, j.name) for j in mb.joints] == [("Free", "loose")]
+    model = tight(mujoco.MjModel.from_xml_string(xml))
+    qpos, qvel = [0.1, 0.2, 1.0, 1.0, 0.0, 0.0, 0.0], [0.5, 0.0, 3.0, 0.2, 4.0, 0.3]
+    error, traj = compare(mb, model, qpos, qvel, 1.0)
+    assert error < TOLERANCE
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = qpos, qvel
+    mujoco_qpos = [data.qpos.copy()]
+    for _ in range(len(traj) - 1):  # at the trajectory's times, 0.1 s apart
+        mujoco.mj_step(model, data, nstep=round(0.1 / model.opt.timestep))
+        mujoco_qpos.append(data.qpos.copy())
+    expected = np.array(mujoco_qpos)
+    ours = joint_positions(mb, traj, rotations="quaternion")
+    assert list(ours.names) == [f"loose.{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+    sign = np.sign(np.einsum("ki,ki->k", ours.array[:, 3:], expected[:, 3:]))[:, None]
+    assert np.abs(ours.array[:, :3] - expected[:, :3]).max() < TOLERANCE
+    assert np.abs(sign * ours.array[:, 3:] - expected[:, 3:]).max() < TOLERANCE
+    reaction = joint_reactions(mb, traj)["loose"]["brick"]  # it holds nothing
+    assert not reaction.force_world.any() and not reaction.torque_world.any()
 
 
 def test_urdf_chain_from_pybullet_data():
@@ -180,7 +220,7 @@ def test_weld_equality_holds_like_a_rigid_attachment():
     welded = from_mjcf(WELDED.format(tip="", free=TIP.format(joint="<freejoint/>"),
                                      equality='<equality><weld body1="arm" body2="tip"/>'
                                               '</equality>'))
-    assert [type(j).__name__ for j in welded.joints] == ["Revolute", "Fixed"]
+    assert [type(j).__name__ for j in welded.joints] == ["Revolute", "Free", "Fixed"]
     spin = data.xmat[k].reshape(3, 3).T @ velocity[:3]  # a free joint's: body frame
     qpos = [0.7, *data.xpos[k], *data.xquat[k]]
     qvel = [1.5, *velocity[3:], *spin]
