@@ -30,8 +30,10 @@ def from_mjcf(source: str | os.PathLike[str]) -> Multibody:
     file gives no ``<inertial>``), hinge, slide, ball and free joints, ``connect`` and
     ``weld`` equalities as exact closed loops, joint springs and dampers, gravity, and
     motors as inputs named after the actuators; the geoms are kept for drawing in
-    ``mb.imported.shapes``. Features dalembert does not model (contact, tendons, joint
-    limits...) are listed in one :class:`~dalembert.UnsupportedModelFeatureWarning`.
+    ``mb.imported.shapes``, hinge and slide ranges as joint limits (hard stops,
+    :func:`~dalembert.multibody.joint_limit`). Features dalembert does not model
+    (contact between geoms, tendons, ball-joint limits...) are listed in one
+    :class:`~dalembert.UnsupportedModelFeatureWarning`.
     A hinge's dalembert angle is zero at the model's pose (MuJoCo's ``qpos0``);
     :func:`mujoco_state` gives the initial state at any ``qpos``, ``qvel``.
 
@@ -79,7 +81,7 @@ def from_urdf(path: str | os.PathLike[str]) -> Multibody:
     MuJoCo joins links fixed to each other, reads the URDF inertials, and keeps the
     collision geometry (the visual meshes are dropped by MuJoCo's URDF reader);
     ``revolute`` and ``continuous`` joints are hinges, ``prismatic`` ones slides;
-    the joint limits are listed in the warning.
+    their limits are joint limits.
 
     Parameters
     ----------

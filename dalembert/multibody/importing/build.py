@@ -14,12 +14,14 @@ from .bodies import reference_pose
 from .equalities import read_equalities
 from .geometry import read_shapes
 from .joints import read_joints
+from .limits import read_limits
 from .model import ImportedModel
 from .unsupported import _disabled, model_features, warn_unsupported
 
 
 def build_multibody(model: Any, label: str, name: str) -> Multibody:
-    """The mechanism of ``model``: its bodies, joints, loops, springs, gravity and motors,
+    """The mechanism of ``model``: its bodies, joints, loops, springs, gravity, motors and
+    joint limits,
     with :class:`~.model.ImportedModel` as ``mb.imported``; what is left out is warned of
     once (:class:`~dalembert.UnsupportedModelFeatureWarning`).
 
@@ -38,6 +40,7 @@ def build_multibody(model: Any, label: str, name: str) -> Multibody:
         joints = read_joints(pose, taken, _disabled(model, "mjDSBL_SPRING"),
                              _disabled(model, "mjDSBL_DAMPER"))
         loops = read_equalities(pose, taken)
+        limits = read_limits(pose, joints.by_id)
         motors = read_actuators(pose, joints.by_id, taken, _disabled(model, "mjDSBL_ACTUATION"))
         gravity = np.zeros(3) if _disabled(model, "mjDSBL_GRAVITY") else model.opt.gravity.copy()
         moving = pose.moving
@@ -52,13 +55,14 @@ def build_multibody(model: Any, label: str, name: str) -> Multibody:
             warnings.simplefilter("ignore", JointPointWarning)
             mb = Multibody(moving, [*joints.joints, *loops.joints], gravity=tuple(gravity),
                            name=name, joint_springs=joints.springs,
-                           actuators=motors.actuators, inputs=motors.inputs)
+                           actuators=motors.actuators, inputs=motors.inputs,
+                           contacts=limits.contacts)
     except ModelFileError:
         raise
     except ModelError as exc:
         raise ModelFileError(f"{label}: {exc}") from None
-    unsupported = (*model_features(model), *joints.unsupported, *loops.unsupported,
-                   *motors.unsupported)
+    unsupported = (*model_features(model, limits.joints), *joints.unsupported,
+                   *loops.unsupported, *motors.unsupported, *limits.unsupported)
     mb.imported = ImportedModel(label, pose.imported, joints.names, read_shapes(pose),
                                 unsupported, model)
     warn_unsupported(label, unsupported)

@@ -4,7 +4,7 @@ model and listed in one :class:`~dalembert.UnsupportedModelFeatureWarning`."""
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -54,13 +54,15 @@ def contact_possible(model: Any) -> bool:
     return False
 
 
-def model_features(model: Any) -> list[str]:
+def model_features(model: Any, limited: Collection[int] = ()) -> list[str]:
     """The features of the compiled model that dalembert does not model, one phrase each.
 
     Parameters
     ----------
     model
         MuJoCo's compiled ``MjModel``.
+    limited
+        The joints whose limits are imported (:mod:`.limits`): not listed.
 
     Examples
     --------
@@ -84,6 +86,8 @@ def model_features(model: Any) -> list[str]:
     ]
     for attribute, what, per, flag in checks:
         ids = np.flatnonzero(np.asarray(getattr(model, attribute)))
+        if attribute == "jnt_limited":
+            ids = np.array([j for j in ids if j not in limited], dtype=int)
         if flag is not None and _disabled(model, flag):
             continue
         if len(ids):

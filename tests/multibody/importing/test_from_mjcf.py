@@ -86,6 +86,10 @@ def test_one_warning_lists_everything_left_out():
           <geom type="sphere" size="0.1"/>
           <site name="s"/>
         </body>
+        <body name="b" pos="0.5 0 1">
+          <joint name="cone" type="ball" range="0 0.5" limited="true"/>
+          <geom type="sphere" size="0.1"/>
+        </body>
       </worldbody>
       <tendon><fixed name="t"><joint joint="j" coef="1"/></fixed></tendon>
       <actuator>
@@ -99,12 +103,15 @@ def test_one_warning_lists_everything_left_out():
         mb = from_mjcf(xml)
     assert len(caught) == 1
     message = str(caught[0].message)
-    for feature in ("contact between geoms", "tendons 't'", "joint limits", "armature",
+    for feature in ("contact between geoms", "tendons 't'", "joint limits (range) on "
+                    "'cone'", "armature",
                     "friction loss", "actuator 'lagged' (a muscle, a user gain or bias, or "
                     "activation dynamics)",
                     "control or force range of actuator 'm'", "actuator 'thruster'"):
         assert feature in message, feature
     assert mb.imported.unsupported and [a.name for a in mb.actuators] == ["servo", "m"]
+    assert "'j'" not in message.split("joint limits")[1].split(";")[0]  # a hinge's: imported
+    assert [c.name for c in mb.contacts] == ["j_range"]
 
 
 def test_disabled_contact_is_not_warned_of():
