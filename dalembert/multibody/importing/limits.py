@@ -5,9 +5,9 @@ A hinge's or slide's ``range`` (``limited``) becomes a
 the range, closed and opened by the run (:mod:`dalembert.solvers.contact`). dalembert's
 hinge angle or slide travel is zero at MuJoCo's ``qpos0`` (:mod:`.joints`), so the
 range is moved by it. MuJoCo's limits are soft (a spring and damper, ``solreflimit``);
-these are hard stops, plastic by default (the joint stays on its stop; ``restitution``
-gives the bounce). A range of a turn or more, and the cone limits of ball joints, are
-left out (listed in the warning).
+these are hard stops, plastic (the joint stays on its stop). A hinge's range of a turn
+or more, an empty range, and the cone limits of ball joints are left out (listed in the
+warning).
 """
 
 from __future__ import annotations
@@ -64,6 +64,9 @@ def read_limits(pose: ReferencePose, by_id: dict[int, Joint]) -> ImportedLimits:
         low, high = (float(v) - q0 for v in model.jnt_range[j])
         if model.jnt_type[j] == 3 and high - low >= 2 * math.pi:  # a hinge's whole turn
             out.unsupported.append(f"the range of hinge {joint.name!r} (a turn or more)")
+            continue
+        if not low < high:  # a joint its file holds still: no stop can model that
+            out.unsupported.append(f"the empty range of joint {joint.name!r}")
             continue
         out.contacts.append(joint_limit(f"{joint.name}_range", joint, low, high))
         out.joints.add(j)
