@@ -297,6 +297,9 @@ class Trajectory:
             arrays["near_singular"] = self.near_singular
         arrays.update({f"t_events_{k}": v for k, v in enumerate(self.t_events)})
         arrays.update({f"y_events_{k}": v for k, v in enumerate(self.y_events)})
+        if self.contacts is not None:
+            meta["contact_names"] = list(self.contacts.names)
+            arrays.update(self.contacts.arrays(len(self.coordinate_names)))
         trajectory_file.write(path, arrays, meta)
         return path
 
@@ -329,8 +332,14 @@ class Trajectory:
         FileNotFoundError, PermissionError
             The file is not there or cannot be read.
         """
-        return cls(**trajectory_file.read(trajectory_file.file_path(path, "Trajectory.load"),
-                                          max_bytes))
+        fields = trajectory_file.read(trajectory_file.file_path(path, "Trajectory.load"),
+                                      max_bytes)
+        contacts = fields.pop("contacts", None)
+        if contacts is not None:
+            from .solvers.contact.driver import ContactHistory
+
+            fields["contacts"] = ContactHistory.from_arrays(contacts)
+        return cls(**fields)
 
     def to_dataframe(self) -> pd.DataFrame:
         """A pandas DataFrame indexed by time ``t``, one column per quantity.

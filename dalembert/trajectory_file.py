@@ -1,9 +1,9 @@
 """The trajectory file (``.npz``): written atomically, read without trusting it.
 
 A trajectory file is a NumPy ``.npz`` archive: one ``.npy`` member per array of
-:data:`ARRAYS`, ``t_events_<k>`` and ``y_events_<k>`` per event function, and
-``meta``, a JSON text of the names, status, message, statistics and
-initialization report (:data:`METADATA`).
+:data:`ARRAYS`, ``t_events_<k>`` and ``y_events_<k>`` per event function, those of
+:data:`CONTACT_ARRAYS` for a run with unilateral constraints, and ``meta``, a JSON text
+of the names, status, message, statistics and initialization report (:data:`METADATA`).
 
 Writing goes to a temporary file beside the target (locked while it is written),
 synced, then renamed over the target: the file appears whole or not at all, and a
@@ -51,17 +51,22 @@ ARRAYS = ("t", "q", "qd", "qdd", "multipliers", "constraint_forces", "kinetic_en
 #: Arrays a file may lack: a model's inputs (one column each; none in files of earlier
 #: versions) and the times near a singular configuration (written where there are some).
 OPTIONAL_ARRAYS = ("inputs", "near_singular")
+#: A run with unilateral constraints: its impacts (time, impulse on each contact, energy
+#: lost, velocities before and after) and its switches (time, the contacts closed from
+#: then, the state there); written with ``contact_names`` in the metadata.
+CONTACT_ARRAYS = ("impact_t", "impact_impulses", "impact_energy_lost", "impact_qd_before",
+                  "impact_qd_after", "switch_t", "switch_closed", "switch_q", "switch_qd")
 #: How a trajectory can end (its ``status``).
 STATUSES = ("finished", "event", "failed", "interrupted", "timeout")
 #: The metadata fields and their JSON types.
 METADATA: dict[str, type] = {"coordinate_names": list, "constraint_names": list,
                              "status": str, "message": str, "stats": dict,
                              "initialization": str, "parameters": dict, "input_names": list,
-                             "energy_conserved": bool}
+                             "energy_conserved": bool, "contact_names": list}
 #: Fields a file of an earlier version may lack, and their value then.
 OPTIONAL = {"parameters": dict, "input_names": list}
 #: Fields that are absent where not known (``None`` then).
-UNKNOWN_IF_ABSENT = ("energy_conserved",)
+UNKNOWN_IF_ABSENT = ("energy_conserved", "contact_names")
 #: By default a file may read to at most this many times its size ...
 MAX_EXPANSION = 16
 #: ... or this many bytes, whichever is more.
@@ -73,7 +78,8 @@ ABANDONED_AFTER = 60.0
 #: function (4 990 of them). Checked from the zip directory before it is parsed.
 MAX_MEMBERS = 10_000
 
-_MEMBER = re.compile(rf"(meta|{'|'.join((*ARRAYS, *OPTIONAL_ARRAYS))}|[ty]_events_\d+)\.npy")
+_MEMBER = re.compile(
+    rf"(meta|{'|'.join((*ARRAYS, *OPTIONAL_ARRAYS, *CONTACT_ARRAYS))}|[ty]_events_\d+)\.npy")
 #: What reading a damaged, encrypted or oddly compressed member raises.
 _UNREADABLE = (ValueError, OSError, EOFError, RuntimeError, NotImplementedError,
                zipfile.BadZipFile)
@@ -207,7 +213,8 @@ def read(path: Path, max_bytes: int | None = None) -> dict[str, Any]:
     -------
     dict
         The arrays of :data:`ARRAYS`, the :data:`METADATA` fields (names as
-        tuples), ``t_events`` and ``y_events``: the keywords of a ``Trajectory``.
+        tuples), ``t_events`` and ``y_events``: the keywords of a ``Trajectory``; with
+        ``contact_names``, ``contacts``: the arrays of :data:`CONTACT_ARRAYS` by name.
 
     Raises
     ------
@@ -244,6 +251,17 @@ it has no 'meta' member (Trajectory.save writes one)
     shapes.update({name: (k, n) for name in ("q", "qd", "qdd", "constraint_forces")},
                   multipliers=(k, m), inputs=(k, len(fields["input_names"])),
                   near_singular=(k,))
+    contacts = fields.pop("contact_names", None)
+    if contacts is not None:
+        for name in CONTACT_ARRAYS:
+            if name not in members:
+                raise bad(f"the array {name!r}", "is missing (a run with contacts has it)")
+        impacts, switches, g = len(members["impact_t"]), len(members["switch_t"]), len(contacts)
+        shapes.update(impact_t=(impacts,), impact_impulses=(impacts, g),
+                      impact_energy_lost=(impacts,), impact_qd_before=(impacts, n),
+                      impact_qd_after=(impacts, n), switch_t=(switches,),
+                      switch_closed=(switches, g), switch_q=(switches, n),
+                      switch_qd=(switches, n))
     n_events = sum(1 for name in members if name.startswith("t_events_"))
     for e in range(n_events):
         events = members.get(f"t_events_{e}")
@@ -261,13 +279,17 @@ it has no 'meta' member (Trajectory.save writes one)
         if array.shape != shapes[name]:
             raise bad(f"the array {name!r}", f"has shape {array.shape}; {k} times, {n} "
                       f"coordinates and {m} constraints make it {shapes[name]}")
-        if array.dtype.kind not in ("b" if name == "near_singular" else "fiu"):
+        if array.dtype.kind not in ("b" if name in ("near_singular", "switch_closed")
+                                    else "fiu"):
             raise bad(f"the array {name!r}", f"holds {array.dtype}, not numbers")
     fields.update({name: members[name] for name in ARRAYS})
     fields["inputs"] = members.get("inputs", np.zeros((k, len(fields["input_names"]))))
     fields["near_singular"] = members.get("near_singular", np.zeros(k, dtype=bool))
     fields["t_events"] = [members[f"t_events_{e}"] for e in range(n_events)]
     fields["y_events"] = [members[f"y_events_{e}"] for e in range(n_events)]
+    if contacts is not None:
+        fields["contacts"] = {"names": tuple(contacts),
+                              **{name: members[name] for name in CONTACT_ARRAYS}}
     return fields
 
 
@@ -425,8 +447,10 @@ def _metadata(meta: np.ndarray, path: Path) -> dict[str, Any]:
             raise bad(f"the field {name!r}", "is missing")
         if not isinstance(fields[name], kind):
             raise bad(f"the field {name!r}", f"is {fields[name]!r}, not a JSON {kind.__name__}")
-    for name in ("coordinate_names", "constraint_names", "input_names"):
+    for name in ("coordinate_names", "constraint_names", "input_names", "contact_names"):
         names = fields[name]
+        if names is None:  # no contacts
+            continue
         if not all(isinstance(s, str) for s in names) or len(set(names)) != len(names):
             raise bad(f"the field {name!r}", f"is {names!r}, not a list of distinct names")
         fields[name] = tuple(names)

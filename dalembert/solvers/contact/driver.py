@@ -33,6 +33,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -113,6 +114,48 @@ class ContactHistory:
     names: tuple[str, ...]
     impacts: list[ImpactRecord] = field(default_factory=list)
     switches: list[Switch] = field(default_factory=list)
+
+    def arrays(self, n: int) -> dict[str, np.ndarray]:
+        """The history as arrays (``n`` coordinates), as a trajectory file keeps it
+        (:data:`~dalembert.trajectory_file.CONTACT_ARRAYS`)."""
+        g = len(self.names)
+        closed = np.zeros((len(self.switches), g), dtype=bool)
+        for k, switch in enumerate(self.switches):
+            closed[k, list(switch.closed)] = True
+        impacts = self.impacts
+
+        def rows(values: list[np.ndarray], width: int) -> np.ndarray:
+            return np.array(values, dtype=float).reshape(len(values), width)
+
+        return {"impact_t": np.array([i.t for i in impacts], dtype=float),
+                "impact_impulses": rows([i.impulses for i in impacts], g),
+                "impact_energy_lost": np.array([i.energy_lost for i in impacts], dtype=float),
+                "impact_qd_before": rows([i.qd_before for i in impacts], n),
+                "impact_qd_after": rows([i.qd_after for i in impacts], n),
+                "switch_t": np.array([s.t for s in self.switches], dtype=float),
+                "switch_closed": closed,
+                "switch_q": rows([s.q for s in self.switches], n),
+                "switch_qd": rows([s.qd for s in self.switches], n)}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, Any]) -> ContactHistory:
+        """The history from :meth:`arrays` (and its ``names``).
+
+        Examples
+        --------
+        >>> history = ContactHistory(("floor",), [], [Switch(0.0, (0,), np.zeros(1),
+        ...                                                   np.zeros(1))])
+        >>> again = ContactHistory.from_arrays({"names": history.names, **history.arrays(1)})
+        >>> again.switches[0].closed, again.impacts
+        ((0,), [])
+        """
+        impacts = [ImpactRecord(float(t), p, float(e), b, a) for t, p, e, b, a in zip(
+            arrays["impact_t"], arrays["impact_impulses"], arrays["impact_energy_lost"],
+            arrays["impact_qd_before"], arrays["impact_qd_after"])]
+        switches = [Switch(float(t), tuple(int(k) for k in np.flatnonzero(c)), q, qd)
+                    for t, c, q, qd in zip(arrays["switch_t"], arrays["switch_closed"],
+                                           arrays["switch_q"], arrays["switch_qd"])]
+        return cls(tuple(arrays["names"]), impacts, switches)
 
     @property
     def impact_times(self) -> np.ndarray:

@@ -176,3 +176,29 @@ def test_a_contact_run_keeps_one_time_limit_and_stops_a_hanging_input():
         traj = pushed.simulate((0.0, 5.0), {"y": h0}, inputs=hanging, timeout=1.0)
     assert traj.status == "timeout"
     assert len(traj.contacts.impacts) == 1 and traj.t[-1] > 0.45
+
+
+def test_a_contact_run_saved_and_loaded_keeps_its_impacts_and_switches(tmp_path):
+    traj = ball(0.5).simulate((0.0, 2.0), {"y": h0})
+    again = type(traj).load(traj.save(tmp_path / "ball.npz"))
+    assert again.contacts is not None and again.contacts.names == ("floor",)
+    for before, after in zip(traj.contacts.impacts, again.contacts.impacts, strict=True):
+        assert before.t == after.t and before.energy_lost == after.energy_lost
+        assert np.array_equal(before.impulses, after.impulses)
+        assert np.array_equal(before.qd_after, after.qd_after)
+    assert [(s.t, s.closed) for s in again.contacts.switches] == \
+        [(s.t, s.closed) for s in traj.contacts.switches]
+    assert np.array_equal(again.contacts.closed_at(traj.t), traj.contacts.closed_at(traj.t))
+    # a file whose contact arrays disagree with its contacts is refused, naming the array
+    import zipfile
+
+    from dalembert import TrajectoryFileError
+
+    broken = tmp_path / "broken.npz"
+    with zipfile.ZipFile(tmp_path / "ball.npz") as source, \
+            zipfile.ZipFile(broken, "w") as target:
+        for item in source.infolist():
+            if item.filename != "impact_impulses.npy":
+                target.writestr(item, source.read(item.filename))
+    with pytest.raises(TrajectoryFileError, match="'impact_impulses' is missing"):
+        type(traj).load(broken)
