@@ -60,12 +60,16 @@ def project_positions(
 
 
 def project_velocities(
-    num: NumericModel, t: float, q: np.ndarray, qd: np.ndarray, free: np.ndarray | None = None
+    num: NumericModel, t: float, q: np.ndarray, qd: np.ndarray, free: np.ndarray | None = None,
+    rows: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Nearest ``qd`` (over the ``free`` coordinates) with ``A qd + b = 0``."""
-    if num.m == 0:
+    """Nearest ``qd`` (over the ``free`` coordinates) with ``A qd + b = 0`` (on the
+    constraint ``rows`` only, if given: a contact run's bilateral ones)."""
+    if num.m == 0 or (rows is not None and not len(rows)):
         return qd
     A, b = num.velocity_constraint(t, q)
+    if rows is not None:
+        A, b = A[rows], b[rows]
     qd = np.array(qd, dtype=float)
     cols = np.arange(num.n) if free is None else np.flatnonzero(free)
     residual = A @ qd + b

@@ -28,15 +28,18 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...errors import ContactError
 from ...inputs import InputSignal
+from ...numerics.gauss_newton import gauss_newton
 from ..kkt.factorization import kkt_factorization
 from ..kkt.sparse import matvec
 from ..outputs import output_arrays
+from ..projection import project_velocities
 from ..running.integrate import IntegrationResult
 from .driver import ContactHistory, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
@@ -45,7 +48,8 @@ from .gaps import TOUCH_RTOL, Gaps
 PIVOTS_PER_CONTACT = 50
 #: Projected Gauss-Seidel sweeps of :func:`solve_friction` before it gives up.
 MAX_SWEEPS = 10_000
-#: Gauss-Newton iterations of the position projection after a step.
+#: Rounds of the position projection after a step (each a Gauss-Newton projection on
+#: the rows held so far), and Gauss-Newton iterations in each.
 PROJECTION_ITERATIONS = 8
 
 
@@ -271,34 +275,37 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
         P[rows] = impulse
         P[bilateral] += (reaction @ impulse)[bilateral]
     q_next = _project(full, gaps, t + h, qm + h / 2 * v_free)
-    return q_next, _project_velocities(full, kkt, bilateral, t + h, q_next, v_free), P
+    return q_next, project_velocities(full, t + h, q_next, v_free,
+                                      rows=np.flatnonzero(bilateral)), P
 
 
 def _project(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray) -> np.ndarray:
-    """``q`` moved the least onto the bilateral rows and the gaps below 0."""
-    rows = list(full.holonomic_rows)
-    psi_index = {row: k for k, row in enumerate(rows)}
-    gap_rows = set(int(r) for r in gaps.rows)
+    """``q`` moved the least onto the bilateral rows and the gaps below 0 (Gauss-Newton,
+    the initial projection's), gaps that the projection itself pushes below 0 joining
+    (a rod lifting one mass out of the table lowers its neighbour)."""
+    rows = np.asarray(full.holonomic_rows, dtype=int)
+    held = rows < gaps.first  # entries of psi held at 0
     for _ in range(PROJECTION_ITERATIONS):
         psi = full.position_constraint(t, q)
-        held = [r for r in rows if r not in gap_rows or psi[psi_index[r]] < 0.0]
-        residual = np.array([psi[psi_index[r]] for r in held])
-        if not held or np.abs(residual).max() <= 1e-14 * (1.0 + np.abs(q).max()):
-            break
-        J = full.pattern.dense_A(full.velocity_sparse(t, q)[0])[held]
-        q = q - np.linalg.lstsq(J, residual, rcond=None)[0]
+        held |= (psi < 0.0) & (rows >= gaps.first)
+        if not held.any() or np.abs(psi[held]).max() <= 1e-14 * (1.0 + np.abs(q).max()):
+            return q
+        entries = np.flatnonzero(held)
+        q = gauss_newton(partial(_held_psi, full, t, entries),
+                         partial(_held_jacobian, full, t, rows[entries]), q,
+                         max_iter=PROJECTION_ITERATIONS).q
     return q
 
 
-def _project_velocities(full: NumericModel, kkt, bilateral: np.ndarray, t: float,
-                        q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``v`` changed the least onto the bilateral rows at ``q``."""
-    if not bilateral.any():
-        return v
-    Av, b = full.velocity_sparse(t, q)
-    A = full.pattern.dense_A(Av)[bilateral]
-    residual = A @ v + b[bilateral]
-    return v - np.linalg.lstsq(A, residual, rcond=None)[0]
+def _held_psi(full: NumericModel, t: float, entries: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The entries ``entries`` of ``psi`` at ``q``."""
+    return full.position_constraint(t, q)[entries]
+
+
+def _held_jacobian(full: NumericModel, t: float, rows: np.ndarray,
+                   q: np.ndarray) -> np.ndarray:
+    """The rows ``rows`` of ``A = dpsi/dq`` at ``q``."""
+    return full.velocity_constraint(t, q)[0][rows]
 
 
 def _grid(t0: float, tf: float, h: float, t_eval: np.ndarray | None) -> np.ndarray:
