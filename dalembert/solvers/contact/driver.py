@@ -31,7 +31,6 @@ message naming the contacts: a switch with no solution (a
 from __future__ import annotations
 
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -44,6 +43,7 @@ from ...options import ImpactLaw
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.segments import Segment, SegmentedRun, SegmentState, _Record
+from ..running.watchdog import watching
 from .gaps import FORCE_RTOL, Gaps
 from .laws import closed_gaps, resolve_impact
 
@@ -282,7 +282,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             break
         opening = k if k in closed else None
         try:
-            with _armed(data):  # the inputs are called at a switch
+            with watching(data.watchdog):  # the inputs are called at a switch
                 y, closed = _switch(full, gaps, history, te, ye, law, signal, opening)
         except (ContactError, InputError) as exc:
             result.status, result.message, result.error = "failed", str(exc), exc
@@ -320,11 +320,6 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
     closed = closed_gaps(full, gaps, t, q, qd, touching,
                          () if opening is None else (opening,))
     return np.concatenate([q, qd]), closed
-
-
-def _armed(data: RunData) -> AbstractContextManager[None]:
-    """The run data's watchdog armed, if the run has a time limit."""
-    return data.watchdog.armed() if data.watchdog is not None else nullcontext()
 
 
 def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,

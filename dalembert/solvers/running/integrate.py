@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from contextlib import nullcontext
 
 import numpy as np
 from scipy.integrate import OdeSolver
@@ -24,7 +23,7 @@ from ..singular.watch import Runaway, Singularity
 from ..steppers.scipy_ivp import CONTROLLED, ControlledSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
-from .watchdog import GRACE, Watchdog, where_stopped
+from .watchdog import GRACE, Watchdog, watching, where_stopped
 
 __all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate", "progress_bar"]
 
@@ -108,7 +107,7 @@ def integrate(
     # warnings about them (from the model's code, from SciPy's norms) would only repeat it
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         try:
-            with watchdog.armed() if watchdog is not None else nullcontext():
+            with watching(watchdog):
                 times = None if t_eval is None else np.asarray(t_eval, dtype=float)
                 # SciPy's solvers evaluate fun (and pick the first step) when made: the
                 # model may fail right there, and a Ctrl-C may land there too

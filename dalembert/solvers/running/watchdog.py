@@ -29,7 +29,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from types import TracebackType
 
 from ...errors import TimeLimitExceeded
@@ -149,6 +149,22 @@ class _Monitor:
                 dues = [d for d in (dog.due(now) for dog in self._armed.values())
                         if d is not None]
                 self._lock.wait(max(min(dues) - time.monotonic(), 0.0) if dues else None)
+
+
+def watching(watchdog: Watchdog | None) -> AbstractContextManager[None]:
+    """``watchdog`` armed over a block, or nothing (a run without a time limit).
+
+    Parameters
+    ----------
+    watchdog
+        The run's watchdog, or ``None``.
+
+    Examples
+    --------
+    >>> with watching(None):
+    ...     pass
+    """
+    return watchdog.armed() if watchdog is not None else nullcontext()
 
 
 _state: dict[int, _Monitor] = {}
