@@ -12,13 +12,13 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.integrate import OdeSolver
+from scipy.integrate import OdeSolver, Radau
 
 from ...codegen.compiled import NumericModel
 from ...options import IDA, Backend, Baumgarte, Output, Projection, SimulationOptions
 from ..initialization import InitializationReport
 from ..native import NATIVE_METHODS, NotApplicable, native_solver
-from ..steppers.scipy_ivp import ControlledSteps, controlled_class
+from ..steppers.scipy_ivp import ControlledSteps, LinearizedRadau, controlled_class
 
 Loop = Literal["c", "python"]
 
@@ -169,6 +169,8 @@ def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
     if issubclass(options.method, IDA):  # its options are the StepControl itself
         return SolverChoice(IDA, {}, None, IDA, {})
     solver = controlled_class(options.method, step.controller)
+    if solver is Radau:  # its Newton systems on the KKT structure (run_data.py)
+        solver = LinearizedRadau
     solver_options = step.solver_options()
     python_options = dict(solver_options)
     stepper = NATIVE_METHODS.get(options.method) if native else None

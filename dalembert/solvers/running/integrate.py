@@ -98,7 +98,7 @@ def integrate(
     """
     t0, tf = t_span
     y0 = np.asarray(y0, dtype=float)
-    jac = solver_options.get("jac")
+    jac = solver_options.get("jac", solver_options.get("linearize"))
     jac_before = getattr(jac, "evaluations", 0)  # fun's calls in a Jacobian, in nfev too
     times = None
     loop: SimulationLoop | None = None

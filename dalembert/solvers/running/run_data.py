@@ -40,11 +40,13 @@ from ..ggl import GGLForm
 from ..ida import integrate_ida
 from ..jacobian import first_order_jacobian
 from ..native import NativeSolver
+from ..newton import Linearize, dense_linearization, kkt_linearization
 from ..outputs import evaluate_outputs
 from ..projection import StepProjector
 from ..singular.careful import CarefulModel, CarefulSteps, Outputs
 from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_diagnosis
 from ..state import accelerations_at
+from ..steppers.scipy_ivp import LinearizedRadau
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
 from .watchdog import Watchdog
@@ -206,7 +208,9 @@ def start_run(plan: SimulationPlan) -> RunData:
     solver_options = dict(plan.solver_options)
     if stepping_in_c:
         solver_options["native"] = native
-    if plan.solver in (Radau, BDF):
+    if plan.solver is LinearizedRadau:
+        solver_options["linearize"] = _linearization(num, rhs, kept, gain, signal)
+    elif plan.solver in (Radau, BDF):
         solver_options["jac"] = _jacobian(num, rhs, kept, gain, signal)
     steps = None
     # careful steps: in the Python loop's own solver, or (a solver stepping in C) in one
@@ -262,6 +266,27 @@ def _jacobian(num: NumericModel, rhs: Callable[[float, np.ndarray], np.ndarray],
     if gain == 0.0 and signal is None:
         return first_order_jacobian(num, kept)
     return finite_difference_jacobian(rhs)
+
+
+#: Up to this many state components Radau factors the dense ``I - c J`` (with the
+#: exact ``J``): a few per cent to a third faster than the KKT-structured systems on
+#: chains of up to 16 planar links (96 components), which above it are faster and grow
+#: linearly where the dense LU grows as the cube (docs/design.md, "Radau's Newton
+#: systems").
+DENSE_STATE_MAX = 128
+
+
+def _linearization(num: NumericModel, rhs: Callable[[float, np.ndarray], np.ndarray],
+                   kept: np.ndarray | None, gain: float, signal: InputSignal | None
+                   ) -> Linearize:
+    """Radau's Newton systems: with the exact Jacobian where it applies (see
+    :func:`_jacobian`), dense up to ``DENSE_STATE_MAX`` state components, else on the
+    KKT structure (:mod:`~dalembert.solvers.newton`: the size and sparsity of the KKT
+    matrix, a step linear in the mechanism); with the dense forward-difference
+    Jacobian where it does not."""
+    if gain != 0.0 or signal is not None or 2 * num.n <= DENSE_STATE_MAX:
+        return dense_linearization(_jacobian(num, rhs, kept, gain, signal))
+    return kkt_linearization(num, kept)
 
 
 def _careful_solver(cls: type[OdeSolver], rhs: Callable, t_bound: float,

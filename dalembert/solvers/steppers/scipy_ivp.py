@@ -20,9 +20,11 @@ array([-0.5, -0.5])
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, RK23, RK45, OdeSolver
+import scipy.sparse
+from scipy.integrate import BDF, DOP853, RK23, RK45, OdeSolver, Radau
 from scipy.integrate._ivp import dop853_coefficients
 from scipy.integrate._ivp.rk import (
     MAX_FACTOR,
@@ -38,6 +40,9 @@ from ...options import StepController
 from .controller import ControllerState, PIController
 from .runge_kutta import ExplicitRungeKutta, Tableau, controlled_step
 
+if TYPE_CHECKING:
+    from ..newton import Linearization
+
 __all__ = [
     "CONTROLLED",
     "INTERPOLATOR_POWER",
@@ -45,6 +50,7 @@ __all__ = [
     "MIN_FACTOR",
     "SAFETY",
     "ControlledSteps",
+    "LinearizedRadau",
     "StepEnd",
     "StepStart",
     "StepTolerances",
@@ -507,3 +513,82 @@ def controlled_class(cls: type[OdeSolver], step_control: StepController) -> type
     if step_control == "PI" and cls in CONTROLLED:
         return CONTROLLED[cls]
     return cls
+
+
+# SciPy's Radau with the linear algebra given. Its step builds the Newton matrices as
+# ``MU / h * self.I - J`` and factors them with ``self.lu``, solving with
+# ``self.solve_lu``, and gets ``J`` from ``self.jac(t, y, f)``: four attributes SciPy
+# does not document. Here ``J`` is a linearization (``factor(c)`` solves
+# ``(I - c J) x = b``, :mod:`dalembert.solvers.newton`), ``self.I`` turns
+# ``MU / h * I - J`` into the pair ``(MU / h, J)``, and ``self.lu`` factors it as
+# ``I - (h / MU) J``: ``(MU/h I - J) x = b`` is ``(I - (h/MU) J) x = (h/MU) b``. The
+# Newton iteration, error estimate, step control and dense output stay SciPy's.
+
+
+class _ShiftedIdentity:
+    """``a * I - J`` as the pair ``(a, J)`` (see above)."""
+
+    def __init__(self, a: complex = 1.0) -> None:
+        self.a = a
+
+    def __rmul__(self, a: complex) -> _ShiftedIdentity:
+        return _ShiftedIdentity(a * self.a)
+
+    def __sub__(self, lin: Linearization) -> tuple[complex, Linearization]:
+        return self.a, lin
+
+
+class LinearizedRadau(Radau):
+    """SciPy's Radau IIA (order 5) solving its Newton systems with a given
+    linearization (see the comment above) instead of a Jacobian matrix.
+
+    Parameters
+    ----------
+    fun, t0, y0, t_bound
+        As SciPy's solvers take them.
+    linearize
+        ``linearize(t, y, f)``: an object whose ``factor(c)`` returns a solve of
+        ``(I - c J) x = b`` for real and complex ``c`` (:mod:`dalembert.solvers.newton`).
+    options
+        Radau's other keywords (``rtol``, ``atol``, ``max_step``, ``first_step``).
+
+    Examples
+    --------
+    The same steps as SciPy's Radau given the Jacobian as a function:
+
+    >>> from dalembert.solvers.newton import dense_linearization
+    >>> J = np.array([[0.0, 1.0], [-1e4, -10.0]])
+    >>> solvers = [LinearizedRadau(lambda t, y: J @ y, 0.0, np.array([1.0, 0.0]), 1.0,
+    ...                            linearize=dense_linearization(lambda t, y: J)),
+    ...            Radau(lambda t, y: J @ y, 0.0, np.array([1.0, 0.0]), 1.0,
+    ...                  jac=lambda t, y: J)]
+    >>> for solver in solvers:
+    ...     while solver.status == "running":
+    ...         _ = solver.step()
+    >>> bool(np.allclose(solvers[0].y, solvers[1].y, rtol=0, atol=1e-12))
+    True
+    >>> solvers[0].nlu == solvers[1].nlu, solvers[0].njev == solvers[1].njev
+    (True, True)
+    """
+
+    def __init__(self, fun, t0, y0, t_bound, *, linearize, **options) -> None:
+        n = len(y0)
+        # a zero sparse Jacobian: SciPy's set-up then takes its sparse branch, which
+        # allocates no dense identity; everything it set up for it is replaced below
+        super().__init__(fun, t0, y0, t_bound, jac=scipy.sparse.csc_matrix((n, n)),
+                         **options)
+
+        def jac(t: float, y: np.ndarray, f: np.ndarray) -> Linearization:
+            self.njev += 1
+            return linearize(t, y, f)
+
+        def lu(shifted: tuple[complex, Linearization]):
+            a, lin = shifted
+            self.nlu += 1
+            solve = lin.factor(1.0 / a)
+            return lambda b: solve(b / a)
+
+        self.jac, self.lu, self.I = jac, lu, _ShiftedIdentity()
+        self.solve_lu = lambda LU, b: LU(b)
+        self.njev = 0
+        self.J = self.jac(self.t, self.y, self.f)
