@@ -7,6 +7,7 @@ code generated once per System however often it is simulated.
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -985,24 +986,31 @@ class System:
         rows = self._unilateral
         stepping = options.contact_mode == "time-stepping"
         rubbing = [u.name for u in rows if u.friction > 0]
-        if rubbing and not stepping:
-            raise ValueError(f"the unilateral constraint {rubbing[0]!r} has friction, which "
+        sliding = [u.name for u in rows if 0 < u.friction < math.inf]
+        rough = [u.name for u in rows if u.friction == math.inf]
+        if sliding and not stepping:
+            raise ValueError(f"the unilateral constraint {sliding[0]!r} has friction, which "
                              "runs in the time-stepping contact mode for now: give "
-                             "contact_mode='time-stepping'")
+                             "contact_mode='time-stepping' (or friction=math.inf for a "
+                             "rough contact that never slides, event-driven)")
+        if rough and stepping:
+            raise ValueError(f"the unilateral constraint {rough[0]!r} is rough "
+                             "(friction=math.inf), which runs in the event-driven contact "
+                             "mode: give a finite friction coefficient for time-stepping")
         parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
         # every gap a row (and, stepping with friction, the sliding velocities after them)
         every = self._closed(tuple(range(len(rows))), tangents=bool(rubbing))
         full = every.numeric(parameters).for_run()  # the run's inputs are written in it
         gaps = Gaps.of(rows, len(self.constraint_names),
                        [_restitution(u, parameters) for u in rows])
-        names = self.unilateral_names
         user = options.output.events
         # one time limit for the run: each set of closed gaps' data gets what is left
         deadline = None if options.timeout is None else time.monotonic() + options.timeout
 
         def start(closed: tuple[int, ...], t: float, y: np.ndarray,
                   events: tuple[Callable, ...]) -> RunData:
-            system = self.with_gaps_closed([names[k] for k in closed])
+            # a rough contact's sliding velocities are rows while it is closed
+            system = self._closed(closed, any(rows[k].friction == math.inf for k in closed))
             output = replace(options.output, events=user + events)
             left = None if deadline is None else max(deadline - time.monotonic(), 1e-9)
             segment = replace(options, t_span=(t, tf), output=output, timeout=left)

@@ -80,14 +80,18 @@ class Unilateral:
         instead of bouncing infinitely often; the energy it loses is in the impacts'
         record). Default ``1e-6``.
     friction
-        Coulomb's coefficient ``mu >= 0`` (0: frictionless). With it, ``tangents``.
+        Coulomb's coefficient ``mu >= 0`` (0: frictionless), or ``math.inf``: a rough
+        contact, which never slides. With it, ``tangents``.
     tangents
         The sliding velocities at the contact, each linear in the velocities (one in
         the plane, two in space): for a disk of radius ``r`` on a floor,
         ``x.diff() + r * theta.diff()``, the contact point's velocity along the floor.
         The friction force acts along them, at most ``mu`` times the normal force,
-        opposing the sliding (or holding the contact still: sticking). Friction runs in
-        the time-stepping contact mode.
+        opposing the sliding (or holding the contact still: sticking). A finite
+        ``mu`` runs in the time-stepping contact mode; a rough contact in the
+        event-driven mode, where its sliding velocities are held at 0 while it is
+        closed (at an impact too: it grips where it lands), by a force as large as
+        that takes.
 
     Examples
     --------
@@ -269,9 +273,10 @@ def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow
     restitution = c.restitution if symbolic else float(c.restitution)
     friction = c.friction
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) \
-            or not 0.0 <= friction < math.inf:
+            or not 0.0 <= friction <= math.inf:
         raise ConstraintError(f"the friction of unilateral constraint {name!r} must be a "
-                              f"finite number >= 0, got {friction!r}")
+                              f"number >= 0 (math.inf: rough, never sliding), got "
+                              f"{friction!r}")
     tangents = listed(c.tangents, f"the tangents of unilateral constraint {name!r}",
                       "velocity expressions", ConstraintError)
     if friction > 0 and not tangents:

@@ -40,11 +40,13 @@ from ...codegen.compiled import NumericModel
 from ...errors import ContactError, InputError, TimeLimitExceeded
 from ...inputs import InputSignal
 from ...options import ImpactLaw
+from ..impact import Impact, impact
+from ..kkt.sparse import matvec
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.segments import Segment, SegmentedRun, SegmentState, _Record
 from ..running.watchdog import watching
-from .gaps import FORCE_RTOL, Gaps
+from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps
 from .laws import closed_gaps, resolve_impact
 
 #: Switches within rounding of one instant before the run is called a chattering cascade.
@@ -319,7 +321,27 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         qd = outcome.qd
     closed = closed_gaps(full, gaps, t, q, qd, touching,
                          () if opening is None else (opening,))
+    grip = _grip(full, gaps, t, q, qd, closed)
+    if grip is not None:  # a rough contact closing while sliding stops sliding at once
+        history.impacts.append(ImpactRecord(t, grip.impulses[gaps.rows],
+                                            grip.energy_lost, qd.copy(), grip.qd))
+        qd = grip.qd
     return np.concatenate([q, qd]), closed
+
+
+def _grip(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
+          closed: tuple[int, ...]) -> Impact | None:
+    """The impact of the rough gaps among ``closed`` that slide (their sliding
+    velocities' rows acting, ``e = 0``), or ``None`` where none does."""
+    rows = gaps.rough_rows(closed)
+    if not len(rows):
+        return None
+    Av, b = full.velocity_sparse(t, q)
+    pattern = full.pattern
+    rates = (matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b)[rows]
+    if np.abs(rates).max() <= TOUCH_RTOL * (1.0 + np.abs(qd).max()):
+        return None
+    return impact(full, t, q, qd, gaps.acting(full.m, np.array(closed, dtype=int)))
 
 
 def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,
@@ -372,7 +394,8 @@ def _outputs(m: int, gaps: Gaps, closed: tuple[int, ...], dynamics: bool
              ) -> Callable[[Segment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
     """The outputs of a segment, its multipliers placed by row of the model with every
     gap (0 on the open gaps), the same arrays for every segment."""
-    rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(closed, dtype=int)])
+    rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(closed, dtype=int),
+                           gaps.rough_rows(closed)])
 
     def outputs(segment: Segment, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
         assert isinstance(segment, RunSegment)  # the driver makes every segment

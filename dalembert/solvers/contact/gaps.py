@@ -96,6 +96,43 @@ class Gaps:
         """The gaps' rows in the model."""
         return np.arange(self.first, self.first + self.count)
 
+    def acting(self, m: int, chosen: np.ndarray) -> np.ndarray:
+        """The rows of the model that act with the gaps ``chosen`` closed (a boolean
+        mask over its ``m`` rows): the bilateral ones, the chosen gaps and the sliding
+        velocities' rows of the rough ones among them (``friction=math.inf``: held
+        at 0 while closed; a finite friction's rows never act as constraints).
+
+        Examples
+        --------
+        >>> gaps = Gaps(("a", "b"), 1, np.zeros(2), np.ones(2), np.array([np.inf, 0.0]),
+        ...             (np.array([3]), np.array([], dtype=int)))
+        >>> gaps.acting(4, np.array([0])).tolist()
+        [True, True, False, True]
+        """
+        mask = np.zeros(m, dtype=bool)
+        mask[:self.first] = True
+        mask[self.first + chosen] = True
+        for k in chosen:
+            if self.friction is not None and self.friction[k] == np.inf:
+                mask[self.tangents[k]] = True
+        return mask
+
+    def rough_rows(self, closed: Sequence[int]) -> np.ndarray:
+        """The sliding velocities' rows of the rough gaps among ``closed``, in the
+        order the model with those gaps closed has them (after the gaps).
+
+        Examples
+        --------
+        >>> gaps = Gaps(("a", "b"), 1, np.zeros(2), np.ones(2), np.array([np.inf, 0.0]),
+        ...             (np.array([3]), np.array([], dtype=int)))
+        >>> gaps.rough_rows((0, 1)).tolist(), gaps.rough_rows((1,)).tolist()
+        ([3], [])
+        """
+        if self.friction is None:
+            return np.zeros(0, dtype=int)
+        found = [self.tangents[k] for k in closed if self.friction[k] == np.inf]
+        return np.concatenate(found).astype(int) if found else np.zeros(0, dtype=int)
+
     def values(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:
         """``g(q, t)``, one per gap (the last entries of the model's ``psi``)."""
         return full.position_constraint(t, q)[-self.count:]

@@ -23,6 +23,10 @@ Two laws (:data:`IMPACT_LAWS`):
 An impact slower than a gap's ``rest_speed`` is plastic (``e = 0``): the contact then
 stays closed instead of bouncing infinitely often in a finite time.
 
+A rough contact (``friction=math.inf``) acts with its sliding velocities' rows: where
+it acts they end at 0 (it grips where it lands), with an impulse as large as that
+takes; where it does not act, they are free.
+
 **Closed contacts.** After a switch, the gaps that stay closed are those of the
 complementarity problem at the acceleration level: among the touching gaps at rest,
 each closed one pushes (``lambda >= 0``) and each open one does not accelerate into
@@ -197,9 +201,7 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each candidate's violation (positive: wrong) with ``chosen`` closed: a
         closed gap pulling, an open one accelerating into its obstacle."""
-        mask = np.zeros(full.m, dtype=bool)  # the bilateral rows and the chosen gaps
-        mask[:gaps.first] = True
-        mask[gaps.first + chosen] = True
+        mask = gaps.acting(full.m, chosen)
         try:
             kkt.factor(np.concatenate([Mv, Av]), mask)
         except SingularSystemError:  # dependent contact rows: another set will do
@@ -230,9 +232,7 @@ def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     outcome: dict[bytes, Impact] = {}
 
     def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        acting = np.zeros(full.m, dtype=bool)  # the bilateral rows and the chosen gaps
-        acting[:gaps.first] = True
-        acting[gaps.first + chosen] = True
+        acting = gaps.acting(full.m, chosen)
         try:
             after = impact(full, t, q, v, acting, restitution)
         except SingularSystemError:  # dependent contact rows: another set will do
