@@ -28,7 +28,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..codegen.compiled import NumericModel
+from ..codegen.compiled import NumericModel, ResidualJacobians
 from .kkt.sparse import kkt_solver
 
 
@@ -62,21 +62,55 @@ def first_order_jacobian(num: NumericModel, kept: np.ndarray | None = None
     >>> bool(np.isclose(tangent @ J[2:, :2] @ tangent, -9.81 * np.cos(theta)))
     True
     """
-    n, m = num.n, num.m
+    n = num.n
     layout = num.layout
-    solver = kkt_solver(num.pattern, kept)
-    rows = np.arange(m) if kept is None else np.asarray(kept, dtype=np.intp)
+    rows = np.arange(num.m) if kept is None else np.asarray(kept, dtype=np.intp)
     top = np.hstack([np.zeros((n, n)), np.eye(n)])
 
     def jac(t: float, y: np.ndarray) -> np.ndarray:
         q, qd = layout.split(y)
-        Mv, f, Av, c = num.kkt_sparse(t, q, qd)
-        solve = solver.factor(Mv, Av)
-        x = solve(np.concatenate([f, c[rows]]))
-        lam = np.zeros(m)
-        lam[rows] = -x[n:]
-        r1_q, r1_qd, r2_q, r2_qd = num.residual_jacobians(t, q, qd, x[:n], lam).dense()
+        found, solve, _, _ = residual_jacobians_at(num, kept, t, q, qd)
+        r1_q, r1_qd, r2_q, r2_qd = found.dense()
         partial = np.vstack([np.hstack([r1_q, r1_qd]), np.hstack([r2_q, r2_qd])[rows]])
         return np.vstack([top, -solve(partial)[:n]])
 
     return jac
+
+
+def residual_jacobians_at(num: NumericModel, kept: np.ndarray | None, t: float,
+                          q: np.ndarray, qd: np.ndarray
+                          ) -> tuple[ResidualJacobians, Callable[[np.ndarray], np.ndarray],
+                                     np.ndarray, np.ndarray]:
+    """The KKT residuals' Jacobians at the solution ``(qdd, lambda)`` of the KKT system
+    at ``(t, q, qd)``, the solve of that KKT matrix (on the kept rows), and the values
+    of ``M`` and ``A`` it was made from.
+
+    Parameters
+    ----------
+    num
+        The compiled equations bound to parameter values.
+    kept
+        The constraint rows solved for (``None``: all).
+    t, q, qd
+        The state.
+
+    Examples
+    --------
+    The Cartesian pendulum at rest, hanging: the rod pulls ``m g``, ``lambda = g / 2``
+    (``A = [2 x, 2 y]``), so ``d r1/dq = -2 lambda I``:
+
+    >>> from dalembert.examples import cartesian_pendulum
+    >>> num = cartesian_pendulum.build().numeric()
+    >>> found, *_ = residual_jacobians_at(num, None, 0.0, np.array([0.0, -1.0]), np.zeros(2))
+    >>> found.r1_q.dense()
+    array([[9.81, 0.  ],
+           [0.  , 9.81]])
+    """
+    n, m = num.n, num.m
+    rows = np.arange(m) if kept is None else np.asarray(kept, dtype=np.intp)
+    Mv, f, Av, c = num.kkt_sparse(t, q, qd)
+    solve = kkt_solver(num.pattern, kept).factor(Mv, Av)
+    x = solve(np.concatenate([f, c[rows]]))
+    lam = np.zeros(m)
+    lam[rows] = -x[n:]
+    return num.residual_jacobians(t, q, qd, x[:n], lam), solve, Mv, Av

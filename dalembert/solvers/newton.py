@@ -41,7 +41,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 
 from ..codegen.compiled import NumericModel
-from .kkt.sparse import kkt_solver
+from .jacobian import residual_jacobians_at
 
 
 class Linearization(Protocol):
@@ -204,14 +204,9 @@ class KKTLinearization:
 
     def __init__(self, num: NumericModel, kept: np.ndarray | None, t: float,
                  y: np.ndarray, assembly: _Assembly | None = None) -> None:
-        n, m = num.n, num.m
         q, v = num.layout.split(y)
-        Mv, f, Av, c = num.kkt_sparse(t, q, v)
-        rows = np.arange(m) if kept is None else np.asarray(kept, dtype=np.intp)
-        x = kkt_solver(num.pattern, kept).factor(Mv, Av)(np.concatenate([f, c[rows]]))
-        lam = np.zeros(m)
-        lam[rows] = -x[n:]
-        jac = num.residual_jacobians(t, q, v, x[:n], lam)
+        jac, _, Mv, Av = residual_jacobians_at(num, kept, t, q, v)
+        rows = np.arange(num.m) if kept is None else np.asarray(kept, dtype=np.intp)
         self.assembly = _Assembly(num, rows, jac) if assembly is None else assembly
         a = self.assembly
         self._Mv, self._Av = Mv, Av[a.a_keep]
