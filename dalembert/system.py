@@ -981,8 +981,6 @@ class System:
         if tf < t0:
             raise ValueError("a System with unilateral constraints runs forward in time "
                              f"only (impacts lose energy): got t_span ({t0}, {tf})")
-        if options.inputs is not None and options.inputs.sample_time is not None:
-            raise ValueError("sample_time is not supported with unilateral constraints yet")
         rows = self._unilateral
         stepping = options.contact_mode == "time-stepping"
         rubbing = [u.name for u in rows if u.friction > 0]
@@ -993,6 +991,9 @@ class System:
                              "runs in the time-stepping contact mode for now: give "
                              "contact_mode='time-stepping' (or friction=math.inf for a "
                              "rough contact that never slides, event-driven)")
+        if stepping and options.inputs is not None and options.inputs.sample_time is not None:
+            raise ValueError("sample_time is not supported in the time-stepping contact mode "
+                             "yet: use the event-driven mode, or inputs without sample_time")
         if rough and stepping:
             raise ValueError(f"the unilateral constraint {rough[0]!r} is rough "
                              "(friction=math.inf), which runs in the event-driven contact "

@@ -18,6 +18,12 @@ a switch is the one after it), the multipliers by row of the model with every ga
 where a gap is open), and the impacts and the closed gaps over time are recorded
 (:class:`ContactHistory`).
 
+Inputs held by a digital controller (``sample_time``) are sampled at their instants
+(:mod:`~dalembert.solvers.running.sampled`): a segment also ends at each instant, where
+the new sample is taken and the closed contacts are found again under it (a sampled
+force that lifts a resting body opens its contact at that instant); an output time at
+an instant shows the sample taken there.
+
 Each gap starts a segment touching if it has just closed or opened: its event is
 taken positive at the segment's start (a gap that opens at rounding level does not
 fire again at once), and wherever it is exactly 0 (see :func:`_open_at_start`).
@@ -44,7 +50,8 @@ from ..impact import Impact, impact
 from ..kkt.sparse import matvec
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
-from ..running.segments import Segment, SegmentedRun, SegmentState, _Record
+from ..running.sampled import sampled_schedule
+from ..running.segments import Schedule, Segment, SegmentedRun, SegmentState, _Record
 from ..running.watchdog import watching
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps
 from .laws import closed_gaps, resolve_impact
@@ -251,7 +258,16 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     segment_start = SegmentStart()
     made: dict[tuple[int, ...], RunData] = {}
     record = _Record()
-    y, closed = _switch(full, gaps, history, t, y, law, signal, opening=None)
+    hold = _Hold.of(signal, t_span, n)
+    held = hold.sample(t, y) if hold.sampled else None
+
+    def inputs_at(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
+        """The inputs at a switch: the held sample, or the signal's at the state."""
+        if hold.sampled:
+            return held
+        return None if signal is None else signal(t, q, qd)
+
+    y, closed = _switch(full, gaps, history, t, y, law, inputs_at, opening=None)
     history.switches.append(Switch(t, closed, y[:n].copy(), y[n:].copy()))
     at_once, last_switch = 0, t
     while True:
@@ -259,43 +275,70 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         if data is None:
             data = made[closed] = start(closed, t, y, _gap_events(gaps, closed, full,
                                                                   segment_start))
+        if held is not None:
+            data.hold_inputs(held)
         segment_start.t = t
-        asked = None if t_eval is None else t_eval[(t_eval >= t) & (t_eval <= tf)]
-        segment = data.segment((t, tf), y, asked, False)
+        end = hold.next_instant(t, tf)
+        # an output time at an inner instant is the next segment's (after the sample)
+        last = end if end == tf else end - hold.tolerance
+        asked = None if t_eval is None else t_eval[(t_eval >= t) & (t_eval <= last)]
+        run_at = asked if asked is None or end == tf else np.append(asked, end)
+        segment = data.segment((t, end), y, run_at, False)
         result = segment.run()
         fired = _gap_fired(result, user_events)
-        keep = np.arange(len(result.t)) if fired is None else \
-            np.flatnonzero(result.t < fired[0])
-        shown = result.t[keep]
-        record.add(segment, shown, result.y[keep], SegmentState(y, None, closed),
-                   _outputs(full.m, gaps, closed, dynamics))
+        keep = np.flatnonzero(result.t < fired[0]) if fired is not None else \
+            np.arange(len(result.t)) if end == tf else np.flatnonzero(result.t < end)
+        outputs = _outputs(full.m, gaps, closed, dynamics)
+        final_sample = fired is None and end == tf and hold.is_instant(tf) and \
+            len(keep) > 0 and result.t[keep[-1]] == tf
+        shown = keep[:-1] if final_sample else keep
+        record.add(segment, result.t[shown], result.y[shown],
+                   SegmentState(y, held, closed), outputs)
         record.segments.append(result)
         if record.interrupted:
             record.mark_stopped(result)
             break
-        if fired is None:
+        if fired is None and end == tf:
+            if final_sample:  # the sample a controller takes at tf, shown at the last point
+                y_end = result.y[keep[-1]]
+                try:
+                    with watching(data.watchdog):
+                        held = hold.sample(tf, y_end)
+                except (InputError, TimeLimitExceeded) as exc:
+                    _stopped_sampling(result, tf, exc)
+                    break
+                data.hold_inputs(held)
+                record.add(segment, result.t[keep[-1:]], y_end[None, :],
+                           SegmentState(y_end, held, closed), outputs)
             break
-        te, ye, k = fired
-        at_once = at_once + 1 if te - last_switch <= 1e-12 * (1.0 + abs(te)) else 0
-        if at_once > MAX_SWITCHES_AT_ONCE:
-            result.status, result.message = "failed", (
-                f"the contacts switched {at_once} times at t={te:.6g} (chattering): last "
-                f"{gaps.names[k]!r}")
-            break
-        opening = k if k in closed else None
+        if fired is None:  # a sample instant: new inputs, and maybe other contacts
+            te, ye, opening = end, result.y[-1], None
+        else:
+            te, ye, k = fired
+            opening = k if k in closed else None
+            at_once = at_once + 1 if te - last_switch <= 1e-12 * (1.0 + abs(te)) else 0
+            if at_once > MAX_SWITCHES_AT_ONCE:
+                result.status, result.message = "failed", (
+                    f"the contacts switched {at_once} times at t={te:.6g} (chattering): "
+                    f"last {gaps.names[k]!r}")
+                break
+        was = closed
         try:
             with watching(data.watchdog):  # the inputs are called at a switch
-                y, closed = _switch(full, gaps, history, te, ye, law, signal, opening)
-        except (ContactError, InputError) as exc:
+                if fired is None:
+                    held = hold.sample(te, ye)
+                y, closed = _switch(full, gaps, history, te, ye, law, inputs_at, opening)
+        except ContactError as exc:
             result.status, result.message, result.error = "failed", str(exc), exc
             break
-        except TimeLimitExceeded:
-            result.status, result.message = "timeout", (
-                f"stopped at t={te:.6g}: the run's time limit (timeout=) passed while the "
-                "contacts switched there (a function of yours had not returned)")
+        except (InputError, TimeLimitExceeded) as exc:
+            _stopped_sampling(result, te, exc, fired is None)
             break
-        history.switches.append(Switch(te, closed, y[:n].copy(), y[n:].copy()))
-        t, last_switch = te, te
+        if fired is not None or closed != was:
+            history.switches.append(Switch(te, closed, y[:n].copy(), y[n:].copy()))
+        t = te
+        if fired is not None:
+            last_switch = te
     joined = record.joined(len(y0), t0)
     joined.result.t_events = joined.result.t_events[:user_events]
     joined.result.y_events = joined.result.y_events[:user_events]
@@ -303,16 +346,67 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     return ContactRun(joined, history)
 
 
+def _stopped_sampling(result: IntegrationResult, t: float, exc: BaseException,
+                      sampling: bool = True) -> None:
+    """End the run at ``t`` because the inputs failed (``InputError``, chained) or did
+    not return within the run's time limit, while sampled (or at a switch)."""
+    where = "the inputs were sampled" if sampling else "the contacts switched"
+    if isinstance(exc, TimeLimitExceeded):
+        result.status, result.message = "timeout", (
+            f"stopped at t={t:.6g}: the run's time limit (timeout=) passed while {where} "
+            "there (a function of yours had not returned)")
+    else:
+        result.status, result.message, result.error = "failed", \
+            f"integration stopped at t={t:.6g}: {exc}", exc
+
+
+class _Hold:
+    """Inputs held between the instants a digital controller samples them
+    (:mod:`~dalembert.solvers.running.sampled`), or (``schedule`` ``None``) inputs
+    that are not sampled: no instant but the end."""
+
+    def __init__(self, schedule: Schedule | None) -> None:
+        self.schedule = schedule
+        self.sampled = schedule is not None
+        self.tolerance = 0.0 if schedule is None else schedule.tolerance
+
+    @classmethod
+    def of(cls, signal: InputSignal | None, t_span: tuple[float, float], n: int) -> _Hold:
+        if signal is None or signal.sample_time is None:
+            return cls(None)
+        return cls(sampled_schedule(signal, t_span, n))
+
+    def sample(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The inputs sampled at ``(t, y)``."""
+        assert self.schedule is not None
+        inputs = self.schedule.reset(t, SegmentState(y)).inputs
+        assert inputs is not None  # a sample is the inputs' values
+        return inputs
+
+    def next_instant(self, t: float, tf: float) -> float:
+        """The first instant after ``t`` (beyond rounding) and before ``tf``, or ``tf``."""
+        if self.schedule is None:
+            return tf
+        later = self.schedule.instants[self.schedule.instants > t + self.tolerance]
+        return float(later[0]) if len(later) and later[0] < tf - self.tolerance else tf
+
+    def is_instant(self, t: float) -> bool:
+        return self.schedule is not None and bool(
+            np.any(np.abs(self.schedule.instants - t) <= self.tolerance))
+
+
 def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
-            y: np.ndarray, law: ImpactLaw, signal: InputSignal | None,
+            y: np.ndarray, law: ImpactLaw,
+            inputs_at: Callable[[float, np.ndarray, np.ndarray], np.ndarray | None],
             opening: int | None) -> tuple[np.ndarray, tuple[int, ...]]:
     """The state after a switch at ``t`` and the gaps closed from there: the impact of
     the touching gaps (if any approaches), then the closed set (``opening``: the gap
-    whose multiplier reached 0, left open)."""
+    whose multiplier reached 0, left open), under the inputs ``inputs_at`` gives."""
     n = full.n
     q, qd = y[:n], y[n:]
-    if signal is not None:
-        full.set_inputs(signal(t, q, qd))
+    inputs = inputs_at(t, q, qd)
+    if inputs is not None:
+        full.set_inputs(inputs)
     touching = gaps.touching(full, t, q)
     outcome = resolve_impact(full, gaps, t, q, qd, touching, law)
     if outcome.stages:
