@@ -6,9 +6,10 @@ with ``W`` symmetric positive definite, are the optimality conditions of the QP
 solves them too. Measured on:
 
 - Newton's cradle of 3 and 5 unit balls, the first at speed 1, every contact in one
-  LCP (the simultaneous law, ``e = 1``): ``W`` the contacts' Delassus matrix (1 on the
-  ends' diagonal... tridiagonal ``[-1, 2, -1]``), ``q = (1 + e) U-``. Closed form for 3
-  balls: the velocities after are ``[-1/3, 2/3, 2/3]``.
+  LCP (the simultaneous law, ``e = 1``): ``W`` the contacts' Delassus matrix
+  ``A M^-1 A^T`` (tridiagonal ``[-1, 2, -1]``), ``q = U- + e min(U-, 0)`` with ``U-``
+  the gaps' rates before. Closed form for 3 balls: the velocities after are
+  ``[-1/3, 2/3, 2/3]``.
 - A uniform bar landing flat on two contacts at its ends at speed 1 (``e = 0.5``):
   ``W = [[4, -2], [-2, 4]] / m``; closed form: each impulse ``m (1 + e) / 2``.
 - Random well-conditioned SPD LCPs of sizes 2 to 64 (``W = B B^T / n + I``, ``q`` normal).
