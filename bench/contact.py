@@ -271,15 +271,16 @@ def dalembert_chain():
     return run, simulate
 
 
-def mujoco_chain_xml(dt: float, radius: float = 0.005) -> str:
+def mujoco_chain_xml(dt: float, radius: float = 0.005, default_solref: bool = False) -> str:
     """The same chain in MJCF: the first mass on an x and a z slide, each link a body
     on a hinge about y at the mass before it, a point mass (its rotational inertia
     1e-9, nothing) at the link's end with a sphere of ``radius`` for the contact; the
     plane ``radius`` below z = 0, so a sphere touches it when its mass's height (the
     dalembert gap) is 0. Frictionless (``condim=1``); the spheres collide with the
     plane only. Contact softness: ``solref`` time constant ``2 dt`` (the stiffest
-    MuJoCo allows at a step, its documented rule), critically damped."""
-    solref = f'solref="{2 * dt} 1"'
+    MuJoCo allows at a step, its documented rule), critically damped; or MuJoCo's
+    default (0.02 s) with ``default_solref``."""
+    solref = "" if default_solref else f'solref="{2 * dt} 1"'
     links = "".join(
         f'<body pos="{LINK if k > 1 else 0} 0 0"><joint type="hinge" axis="0 1 0"/>'
         f'<inertial pos="{LINK} 0 0" mass="{MASS}" diaginertia="1e-9 1e-9 1e-9"/>'
@@ -295,13 +296,13 @@ def mujoco_chain_xml(dt: float, radius: float = 0.005) -> str:
       {links}{"</body>" * LINKS}</body></worldbody></mujoco>"""
 
 
-def mujoco_chain():
+def mujoco_chain(default_solref: bool = False):
     """``run(dt) -> measures`` and the timed run (MuJoCo's rollout, in C)."""
     import mujoco
     from mujoco import rollout
 
     def simulate(dt: float):
-        m = mujoco.MjModel.from_xml_string(mujoco_chain_xml(dt))
+        m = mujoco.MjModel.from_xml_string(mujoco_chain_xml(dt, default_solref=default_solref))
         d = mujoco.MjData(m)
         d.qpos[2] = -TILT  # the first hinge: the chain tilted up by TILT
         d.qvel[0] = SIDEWAYS
@@ -426,6 +427,13 @@ def chain(record: dict, rounds: int) -> None:
                          "ladder": {f"{k:g}": v for k, v in sorted(mj_found.items())}}
         for s in sorted({shown, 2e-3}):  # and MuJoCo's default step
             timed_runs[f"mujoco_{s:g}"] = lambda s=s: mj_simulate(s)
+        # what a user who leaves the contact's softness at its default gets (not timed)
+        soft_run, _ = mujoco_chain(default_solref=True)
+        soft_dt, soft_found = coarsest(soft_run, [2e-3, 1e-3, 2.5e-4, 1e-4, 5e-5],
+                                       chain_meets)
+        out["mujoco_default_solref"] = {
+            "timestep": soft_dt, "meets_target": soft_dt is not None,
+            "ladder": {f"{k:g}": v for k, v in sorted(soft_found.items())}}
     except ImportError:
         out["mujoco"] = "not installed"
     timings: list[dict] = []
