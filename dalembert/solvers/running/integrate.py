@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from scipy.integrate import OdeSolver
+from scipy.integrate import OdeSolver, Radau
 
 from ...errors import DalembertError, InputError, TimeLimitExceeded
 from ..singular.careful import CarefulSteps
@@ -181,10 +181,10 @@ def _not_started(t0: float, y0: np.ndarray, t_eval: np.ndarray | None, status: s
 
 
 def _method_name(cls: type[OdeSolver]) -> str:
-    """SciPy's name for its solvers' controlled and native versions."""
+    """SciPy's name for its solvers' controlled, native and linearized versions."""
     if issubclass(cls, ControlledSteps):
         return next(c.__name__ for c in cls.__mro__ if c in CONTROLLED)
-    return cls.__name__
+    return "Radau" if issubclass(cls, Radau) else cls.__name__
 
 
 def finite_difference_jacobian(fun: Callable) -> Callable:
