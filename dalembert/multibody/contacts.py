@@ -29,9 +29,8 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.constraints import Holonomic, Pfaffian
 from ..model.coordinates import t
-from .bodies import Body
+from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .drivers import _angle_terms, take_joint_geometry
-from .bodies import Ground, Particle, PlanarBody, RigidBody
 from .joints import Distance, Joint, PointOnPlane, Prismatic, Revolute, _unit
 from .rotations import G_matrix, dot
 from .types import Vector

@@ -60,7 +60,7 @@ def test_a_sphere_launched_sliding_rolls_at_five_sevenths():
     # linearly; while sliding it falls by 7/2 mu g h a step)
     slip = v - w * r
     first = int(np.argmax(np.abs(slip) < 1e-4 * v0))
-    assert 0 < first and abs(traj.t[first] - rolls) <= H
+    assert first > 0 and abs(traj.t[first] - rolls) <= H
     assert np.abs(slip[first:]).max() < 1e-4 * v0
     # the scheme steps the quaternion linearly: the spin loses O((h w)^2) a step
     assert np.abs(v[first:] - 5 / 7 * v0).max() < 5 / 7 * v0 * 1e-3
@@ -158,7 +158,7 @@ def test_a_disk_launched_sliding_rolls_at_two_thirds():
     slip = v - angular_velocities(mb, traj, "disk")[:, 1] * r
     rolls = v0 / (3 * mu * g)
     first = int(np.argmax(np.abs(slip) < 1e-4 * v0))  # as for the sphere
-    assert 0 < first and abs(traj.t[first] - rolls) <= H
+    assert first > 0 and abs(traj.t[first] - rolls) <= H
     assert np.abs(v[first:] - 2 / 3 * v0).max() < 2 / 3 * v0 * 1e-3
 
 
@@ -198,5 +198,5 @@ def test_friction_bad_input_is_named():
         disk_contact("rim", Ground(), disk, 0.0, axis=axis)
     mb = Multibody([ball], contacts=[plane_contact("floor", Ground(), ball, friction=mu)])
     q0, qd0 = mb.initial_state(positions={"ball": (0, 0, 0.5)})
-    with pytest.raises(ValueError, match="friction.*time-stepping"):
+    with pytest.raises(ValueError, match=r"friction.*time-stepping"):
         mb.simulate((0.0, 0.1), q0, qd0)  # event-driven: friction refused
