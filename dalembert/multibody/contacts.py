@@ -137,7 +137,9 @@ def sphere_contact(name: str, body_a: Body, body_b: Body, radius_a: float,
                    point_b: Vector = (0, 0, 0), restitution: float | sp.Symbol = 0.0,
                    rest_speed: float = 1e-6, friction: float = 0.0) -> Contact:
     """Two spheres (centres ``point_a`` on ``body_a``, ``point_b`` on ``body_b``): the gap
-    is ``|c_b - c_a|^2 - (r_a + r_b)^2``, positive while apart.
+    is ``|c_b - c_a|^2 - (r_a + r_b)^2``, positive while apart; with friction
+    ``|c_b - c_a| - (r_a + r_b)`` (:class:`SphereGap`), whose multiplier is the normal
+    force that bounds the friction.
 
     Parameters
     ----------
@@ -171,8 +173,12 @@ def sphere_contact(name: str, body_a: Body, body_b: Body, radius_a: float,
     """
     size_a = _length(radius_a, name, "radius_a")
     total = size_a + _length(radius_b, name, "radius_b")
-    return _contact(name, Distance(name, body_a, body_b, total, point_a, point_b),
-                    restitution, rest_speed, friction,
+    # with friction the gap is a distance: the cone's radius is mu times the gap's
+    # multiplier, which is then the normal force (the squared form's is that over 2|d|)
+    rough = not isinstance(friction, bool) and isinstance(friction, (int, float)) \
+        and friction > 0
+    joint = (SphereGap if rough else Distance)(name, body_a, body_b, total, point_a, point_b)
+    return _contact(name, joint, restitution, rest_speed, friction,
                     lambda: Sliding(name, "sphere", body_a, body_b, point_a=point_a,
                                     point_b=point_b, radius=size_a))
 
@@ -325,6 +331,30 @@ class DiskOnPlane(Joint):
         centre = self.body_b.position(self.point_b)
         height = dot(n, centre - self.body_a.position(self.point_a))
         return [height - self.radius * sp.sqrt(1 - dot(n, a) ** 2)]
+
+    planar_equations = equations
+
+
+class SphereGap(Distance):
+    """Two points at a distance ``length`` as a distance, ``|d| - length`` (1 equation):
+    its multiplier is the force along ``d`` (:class:`~.joints.Distance`'s squared form
+    has it over ``2 |d|``), as friction's cone needs.
+
+    Parameters
+    ----------
+    name, body_a, body_b, length, point_a, point_b
+        As for :class:`~.joints.Distance`.
+
+    Examples
+    --------
+    >>> from dalembert.multibody import Ground, Particle
+    >>> SphereGap("touch", Ground(), Particle("p", 1.0), 2.0).constraints()[0].expr
+    sqrt(p_x(t)**2 + p_y(t)**2 + p_z(t)**2) - 2.0
+    """
+
+    def equations(self) -> list[sp.Expr]:
+        d = self.separation()
+        return [sp.sqrt(dot(d, d)) - self.length]
 
     planar_equations = equations
 

@@ -200,3 +200,34 @@ def test_friction_bad_input_is_named():
     q0, qd0 = mb.initial_state(positions={"ball": (0, 0, 0.5)})
     with pytest.raises(ValueError, match=r"friction.*time-stepping"):
         mb.simulate((0.0, 0.1), q0, qd0)  # event-driven: friction refused
+
+
+@pytest.mark.parametrize("alpha", [0.2, 0.4])
+def test_a_ball_on_a_fixed_sphere_sticks_or_starts_sliding(alpha):
+    """A particle ball resting on a fixed sphere ``alpha`` off its top (3D: the sliding
+    velocity's three components less the normal one): it sticks for ``tan(alpha) <
+    mu``, else its first step's velocity is ``h g (sin(alpha) - mu cos(alpha))`` down
+    the slope (at rest the step's impulses are exact), its friction ``mu m g cos``."""
+    m, R, r, beta = 1.5, 1.0, 0.1, 0.7  # beta: the azimuth, every world component used
+    ball = Particle("ball", m)
+    mb = Multibody([ball], gravity=(0, 0, -g), contacts=[
+        sphere_contact("dome", Ground(), ball, R, r, friction=mu)])
+    n = np.array([np.sin(alpha) * np.cos(beta), np.sin(alpha) * np.sin(beta),
+                  np.cos(alpha)])
+    down = np.array([np.cos(alpha) * np.cos(beta), np.cos(alpha) * np.sin(beta),
+                     -np.sin(alpha)])
+    q0, qd0 = mb.initial_state(positions={"ball": (R + r) * n})
+    traj = mb.simulate((0.0, 0.05), q0, qd0, contact_mode="time-stepping",
+                       contact_step=H)
+    assert traj.success, traj.message
+    velocity = np.column_stack([traj[f"ball_{c}_dot"] for c in "xyz"])
+    friction = np.linalg.norm(np.column_stack(
+        [traj.multiplier(f"dome_friction_{k}") for k in (1, 2, 3)]), axis=1)
+    assert abs(traj.multiplier("dome_1")[1] - m * g * np.cos(alpha)) < 1e-9
+    if np.tan(alpha) < mu:
+        assert np.abs(velocity).max() < 1e-12
+        assert abs(friction[1] - m * g * np.sin(alpha)) < 1e-9
+    else:
+        a = g * (np.sin(alpha) - mu * np.cos(alpha))
+        assert np.abs(velocity[1] - H * a * down).max() < 1e-12
+        assert abs(friction[1] - mu * m * g * np.cos(alpha)) < 1e-9
