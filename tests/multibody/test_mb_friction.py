@@ -10,7 +10,9 @@ scheme's impulses are exact for these constant forces); a disk rolling upright k
 ``v = omega r`` with a contact force ``m g`` along the normal, and, launched sliding
 without spin, rolls from ``t = v0 / (3 mu g)`` at ``2/3 v0`` (its moment about the
 axis ``m r^2 / 2``); a disk dropped tilted onto its rim from ``h`` strikes at
-``sqrt(2 h / g)``.
+``sqrt(2 h / g)``; a ball resting on a fixed sphere sticks or starts sliding as on an
+incline of the same slope; a box on a free moving belt is carried along at the
+common speed of momentum conservation.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from dalembert.multibody import (
     Multibody,
     Particle,
     PlanarBody,
+    Prismatic,
     RigidBody,
     angular_velocities,
     disk_contact,
@@ -231,3 +234,32 @@ def test_a_ball_on_a_fixed_sphere_sticks_or_starts_sliding(alpha):
         a = g * (np.sin(alpha) - mu * np.cos(alpha))
         assert np.abs(velocity[1] - H * a * down).max() < 1e-12
         assert abs(friction[1] - mu * m * g * np.cos(alpha)) < 1e-9
+
+
+def test_a_box_dropped_on_a_moving_belt_is_carried_along():
+    """Friction against a moving plane: a planar box at rest on a free belt (a
+    ``Prismatic`` along ``x``) moving at ``u``; the box speeds up at ``mu g``, the belt
+    slows at ``mu g m / M``, until they move together at ``M u / (M + m)`` from
+    ``t = u / (mu g (1 + m / M))``; the momentum ``M u`` is conserved throughout."""
+    m, M, u, w, h = 1.0, 4.0, 2.0, 0.4, 0.1
+    belt = PlanarBody("belt", M, 1.0)
+    box = PlanarBody("box", m, m * (w**2 + h**2) / 12)
+    corners = [plane_contact(f"corner{k}", belt, box, normal=(0, 1, 0),
+                             point=(s * w / 2, -h / 2, 0), friction=mu)
+               for k, s in enumerate((-1, 1))]
+    mb = Multibody([belt, box], [Prismatic("rail", Ground(), belt, axis_a=(1, 0, 0))],
+                   gravity=(0, -g, 0), contacts=corners)
+    q0, qd0 = mb.initial_state(positions={"belt": (0, 0, 0), "box": (0, h / 2, 0)},
+                               velocities={"belt": (u, 0, 0)})
+    traj = mb.simulate((0.0, 0.6), q0, qd0, contact_mode="time-stepping",
+                       contact_step=H)
+    assert traj.success, traj.message
+    v_box, v_belt = traj["box_x_dot"], traj["belt_x_dot"]
+    assert np.abs(m * v_box + M * v_belt - M * u).max() < 1e-9
+    together = u / (mu * g * (1 + m / M))
+    sliding = traj.t < together - H
+    assert np.abs(v_box[sliding] - mu * g * traj.t[sliding]).max() < 1e-9
+    after = traj.t > together + H
+    assert after.any()
+    assert np.abs(v_box[after] - M * u / (M + m)).max() < 1e-9
+    assert np.abs(v_belt[after] - M * u / (M + m)).max() < 1e-9
