@@ -82,7 +82,8 @@ class Multibody:
         their values come with ``simulate(inputs=...)`` (see :mod:`dalembert.inputs`).
     contacts
         :mod:`dalembert.multibody.contacts` between listed bodies or ground (a sphere on
-        a floor, two spheres): unilateral constraints, closed and opened by the run
+        a floor, two spheres, a disk's rim, a joint's stop; with Coulomb friction in
+        the time-stepping mode): unilateral constraints, closed and opened by the run
         (:mod:`dalembert.solvers.contact`).
     name
         The system's name (in titles and messages).

@@ -194,10 +194,11 @@ def disk_contact(name: str, plane_body: Body, disk_body: Body, radius: float, *,
     plane's normal, all in world components).
 
     The gap is smooth while the disk is not flat. A disk lying flat on the plane
-    (``a`` along ``n``) is outside the contact's domain: every rim point is then lowest,
-    the square root's slope is infinite and the constraint's row not finite, so a run
-    that gets there stops with an error about non-finite values. Keep the disk off
-    flat (or model a flat-lying coin by contacts at points of its rim).
+    (``a`` along ``n``) is outside the contact's domain: every rim point is then lowest
+    and the gap's row is ``0/0``, not finite. A run that gets there fails: the
+    event-driven mode warns of invalid values and stops, the time-stepping mode raises
+    from its linear algebra. Keep the disk off flat (or model a coin that may lie flat
+    by contacts at points of its rim).
 
     Parameters
     ----------
