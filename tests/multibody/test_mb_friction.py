@@ -65,11 +65,13 @@ def test_a_sphere_launched_sliding_rolls_at_five_sevenths():
     first = int(np.argmax(np.abs(slip) < 1e-4 * v0))
     assert first > 0 and abs(traj.t[first] - rolls) <= H
     assert np.abs(slip[first:]).max() < 1e-4 * v0
-    # the scheme steps the quaternion linearly: the spin loses O((h w)^2) a step
-    assert np.abs(v[first:] - 5 / 7 * v0).max() < 5 / 7 * v0 * 1e-3
+    # the scheme steps the quaternion linearly: the spin loses at most (h w)^2 of
+    # itself a step to the projection onto the unit norm, and the rolling speed with it
+    drift = (traj.t[-1] - rolls) / H * (H * 5 / 7 * v0 / r) ** 2
+    assert np.abs(v[first:] - 5 / 7 * v0).max() < 5 / 7 * v0 * drift
     # angular momentum about the contact point, m v r + I w, conserved (to that drift)
     L = m * v * r + 0.4 * m * r**2 * w
-    assert np.abs(L - m * v0 * r).max() < m * v0 * r * 1e-3
+    assert np.abs(L - m * v0 * r).max() < m * v0 * r * drift
 
 
 def test_a_point_on_an_incline_sticks_or_slides():
@@ -139,7 +141,8 @@ def test_a_disk_rolls_upright_inside_the_friction_cone():
     assert traj.success, traj.message
     spin = angular_velocities(mb, traj, "disk")[:, 1]
     assert np.abs(traj["disk_x_dot"] - spin * r).max() < 1e-4 * v  # v = omega r
-    assert np.abs(traj["disk_x_dot"] - v).max() < v * 1e-3
+    drift = traj.t[-1] / H * (H * v / r) ** 2  # the spin's, as for the sphere
+    assert np.abs(traj["disk_x_dot"] - v).max() < v * drift
     normal = traj.multiplier("rim_1")[1:]
     friction = np.hypot(traj.multiplier("rim_friction_1"),
                         traj.multiplier("rim_friction_2"))[1:]
@@ -162,7 +165,8 @@ def test_a_disk_launched_sliding_rolls_at_two_thirds():
     rolls = v0 / (3 * mu * g)
     first = int(np.argmax(np.abs(slip) < 1e-4 * v0))  # as for the sphere
     assert first > 0 and abs(traj.t[first] - rolls) <= H
-    assert np.abs(v[first:] - 2 / 3 * v0).max() < 2 / 3 * v0 * 1e-3
+    drift = (traj.t[-1] - rolls) / H * (H * 2 / 3 * v0 / r) ** 2  # as for the sphere
+    assert np.abs(v[first:] - 2 / 3 * v0).max() < 2 / 3 * v0 * drift
 
 
 def test_a_tilted_disk_dropped_strikes_its_rim_at_the_free_fall_time():
