@@ -11,8 +11,9 @@ scheme's impulses are exact for these constant forces); a disk rolling upright k
 without spin, rolls from ``t = v0 / (3 mu g)`` at ``2/3 v0`` (its moment about the
 axis ``m r^2 / 2``); a disk dropped tilted onto its rim from ``h`` strikes at
 ``sqrt(2 h / g)``; a ball resting on a fixed sphere sticks or starts sliding as on an
-incline of the same slope; a box on a free moving belt is carried along at the
-common speed of momentum conservation.
+incline of the same slope, and a planar disk on a fixed circle starts rolling at
+``2/3 g sin(alpha)`` while ``tan(alpha) <= 3 mu``, else sliding; a box on a free moving
+belt is carried along at the common speed of momentum conservation.
 """
 
 from __future__ import annotations
@@ -267,3 +268,34 @@ def test_a_box_dropped_on_a_moving_belt_is_carried_along():
     assert after.any()
     assert np.abs(v_box[after] - M * u / (M + m)).max() < 1e-9
     assert np.abs(v_belt[after] - M * u / (M + m)).max() < 1e-9
+
+
+@pytest.mark.parametrize("alpha", [0.4, 1.3])  # tan 0.4 = 0.42 < 3 mu = 0.9 < tan 1.3
+def test_a_planar_disk_on_a_fixed_circle_starts_rolling_or_sliding(alpha):
+    """Planar bodies (one row, along ``z x n``): a disk (moment ``m r^2 / 2``) at rest on
+    a fixed circle ``alpha`` off its top starts rolling, ``a = 2/3 g sin(alpha)`` with a
+    friction ``m g sin(alpha) / 3``, while that is at most ``mu`` times the normal
+    force (``tan(alpha) <= 3 mu``); else it slides, ``a = g (sin - mu cos)``, spinning up
+    at ``mu m g cos(alpha) r / I``."""
+    m, R, r = 1.0, 1.0, 0.2
+    inertia = m * r**2 / 2
+    disk = PlanarBody("disk", m, inertia)
+    mb = Multibody([disk], gravity=(0, -g, 0), contacts=[
+        sphere_contact("hill", Ground(), disk, R, r, friction=mu)])
+    n = np.array([np.sin(alpha), np.cos(alpha), 0.0])
+    down = np.array([np.cos(alpha), -np.sin(alpha), 0.0])
+    q0, qd0 = mb.initial_state(positions={"disk": (R + r) * n})
+    traj = mb.simulate((0.0, 2 * H), q0, qd0, contact_mode="time-stepping",
+                       contact_step=H)
+    assert traj.success, traj.message
+    velocity = np.array([traj["disk_x_dot"][1], traj["disk_y_dot"][1], 0.0])
+    normal, friction = traj.multiplier("hill_1")[1], traj.multiplier("hill_friction_1")[1]
+    assert abs(normal - m * g * np.cos(alpha)) < 1e-9
+    if np.tan(alpha) <= 3 * mu:
+        assert np.abs(velocity - H * 2 / 3 * g * np.sin(alpha) * down).max() < 1e-12
+        assert abs(abs(friction) - m * g * np.sin(alpha) / 3) < 1e-9
+    else:
+        a = g * (np.sin(alpha) - mu * np.cos(alpha))
+        assert np.abs(velocity - H * a * down).max() < 1e-12
+        spin = mu * m * g * np.cos(alpha) * r / inertia
+        assert abs(abs(traj["disk_theta_dot"][1]) - H * spin) < 1e-9
