@@ -16,7 +16,16 @@ joint angles, actuator torques and linearizations in joint coordinates.
 
 from .bodies import Body, Ground, Particle, PlanarBody, RigidBody
 from .builder import Multibody, chain, multibody_of, ring, ring_state
-from .contacts import Contact, JointStop, joint_limit, plane_contact, sphere_contact
+from .contacts import (
+    Contact,
+    DiskOnPlane,
+    JointStop,
+    Sliding,
+    disk_contact,
+    joint_limit,
+    plane_contact,
+    sphere_contact,
+)
 from .diagnostics import JointPointWarning, check_mobility
 from .drivers import Actuator, Driver, JointSpring
 from .importing import from_mjcf, from_urdf, mujoco_state
@@ -61,6 +70,7 @@ __all__ = [
     "Actuator",
     "Body",
     "Contact",
+    "DiskOnPlane",
     "Distance",
     "Driver",
     "E_matrix",
@@ -84,6 +94,7 @@ __all__ = [
     "Revolute",
     "RigidBody",
     "Rolling",
+    "Sliding",
     "Spherical",
     "SpringDamper",
     "Torque",
@@ -92,6 +103,7 @@ __all__ = [
     "angular_velocities",
     "chain",
     "check_mobility",
+    "disk_contact",
     "energy",
     "euler_angles",
     "euler_from_matrix",

@@ -82,7 +82,8 @@ class Multibody:
         their values come with ``simulate(inputs=...)`` (see :mod:`dalembert.inputs`).
     contacts
         :mod:`dalembert.multibody.contacts` between listed bodies or ground (a sphere on
-        a floor, two spheres): unilateral constraints, closed and opened by the run
+        a floor, two spheres, a disk's rim, a joint's stop; with Coulomb friction in
+        the time-stepping mode): unilateral constraints, closed and opened by the run
         (:mod:`dalembert.solvers.contact`).
     name
         The system's name (in titles and messages).
@@ -429,7 +430,8 @@ class Multibody:
         """
         return System.from_definition(MultibodyDefinition(self), parameters=self.defaults)
 
-    def with_contacts_closed(self, closed: tuple[int, ...]) -> Multibody:
+    def with_contacts_closed(self, closed: tuple[int, ...],
+                             tangents: bool = False) -> Multibody:
         """This mechanism with the contacts ``closed`` (indices) as joints after its own,
         and no contact left apart: the mechanism while they hold.
 
@@ -437,6 +439,10 @@ class Multibody:
         ----------
         closed
             Indices into :attr:`contacts`.
+        tangents
+            Also the sliding velocities of the closed contacts with friction, as joints
+            of Pfaffian rows after them (:class:`~.contacts.Sliding`: rows the
+            time-stepping mode reads for friction, never enforced).
 
         Examples
         --------
@@ -449,7 +455,10 @@ class Multibody:
         closed_mb = copy.copy(self)
         closed_mb.__dict__ = {k: v for k, v in self.__dict__.items()
                               if not isinstance(getattr(type(self), k, None), cached_property)}
-        closed_mb.joints = (*self.joints, *(self.contacts[k].joint for k in closed))
+        sliding = [s for k in closed if tangents
+                   for s in (self.contacts[k].sliding,) if s is not None]
+        closed_mb.joints = (*self.joints, *(self.contacts[k].joint for k in closed),
+                            *sliding)
         closed_mb.contacts = ()
         closed_mb._bound = {}
         return closed_mb

@@ -90,9 +90,10 @@ class MultibodyDefinition:
 
     def with_gaps_closed(self, closed: tuple[int, ...],
                          tangents: bool = False) -> MultibodyDefinition:
-        """The definition of the Multibody with the contacts ``closed`` as joints (its
-        contacts have no friction: no tangents to add)."""
-        return MultibodyDefinition(self.multibody.with_contacts_closed(closed))
+        """The definition of the Multibody with the contacts ``closed`` as joints
+        (``tangents``: the sliding velocities of those with friction as joints after
+        them)."""
+        return MultibodyDefinition(self.multibody.with_contacts_closed(closed, tangents))
 
     @property
     def model(self) -> Model:
