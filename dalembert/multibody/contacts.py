@@ -107,7 +107,8 @@ def plane_contact(name: str, plane_body: Body, body: Body, *, normal: Vector = (
         Coulomb's coefficient ``mu >= 0`` (0: frictionless), along the sliding velocity
         of the touching point (the sphere's lowest point) over the plane: two
         directions of the plane, one (in the plane of motion) between planar bodies.
-        Runs in the time-stepping contact mode.
+        Runs in the time-stepping contact mode; ``math.inf`` is a rough contact
+        (never sliding), event-driven.
 
     Examples
     --------
@@ -158,7 +159,8 @@ def sphere_contact(name: str, body_a: Body, body_b: Body, radius_a: float,
         at the point of contact: in space its three world components projected on the
         tangent plane (no two fixed directions stay tangent to a sphere everywhere),
         between planar bodies its component in the plane of motion. Runs in the
-        time-stepping contact mode.
+        time-stepping contact mode; ``math.inf`` (rough, never sliding, event-driven)
+        between planar bodies only.
 
     Examples
     --------
@@ -178,6 +180,12 @@ def sphere_contact(name: str, body_a: Body, body_b: Body, radius_a: float,
     rough = not isinstance(friction, bool) and isinstance(friction, (int, float)) \
         and friction > 0
     joint = (SphereGap if rough else Distance)(name, body_a, body_b, total, point_a, point_b)
+    if friction == math.inf and not all(isinstance(b, (PlanarBody, Ground))
+                                        for b in (body_a, body_b)):
+        raise ModelError(f"contact {name!r}: a rough sphere contact (friction=math.inf) "
+                         "runs between planar bodies only: in space its three sliding "
+                         "rows are dependent (rank 2); give a finite friction "
+                         "(time-stepping)")
     return _contact(name, joint, restitution, rest_speed, friction,
                     lambda: Sliding(name, "sphere", body_a, body_b, point_a=point_a,
                                     point_b=point_b, radius=size_a))
@@ -219,7 +227,8 @@ def disk_contact(name: str, plane_body: Body, disk_body: Body, radius: float, *,
     friction
         Coulomb's coefficient ``mu >= 0`` (0: frictionless), along the sliding velocity
         of the rim's lowest point over the plane (two directions of the plane; one
-        between planar bodies). Runs in the time-stepping contact mode.
+        between planar bodies). Runs in the time-stepping contact mode; ``math.inf``
+        is a rough contact (never sliding), event-driven.
 
     Examples
     --------
@@ -255,7 +264,8 @@ def _contact(name: str, joint: Joint, restitution: float | sp.Symbol,
              rest_speed: float, friction: object = 0.0,
              sliding: Callable[[], Sliding] | None = None) -> Contact:
     """The contact checked: its restitution in [0, 1] (or a symbol), a positive finite
-    rest speed, a finite friction coefficient >= 0 (its sliding rows made if > 0)."""
+    rest speed, a friction coefficient >= 0 or ``math.inf`` (rough) (its sliding rows
+    made if > 0)."""
     if not isinstance(restitution, sp.Symbol) and (
             isinstance(restitution, bool) or not isinstance(restitution, (int, float))
             or not 0.0 <= restitution <= 1.0):
@@ -266,10 +276,10 @@ def _contact(name: str, joint: Joint, restitution: float | sp.Symbol,
         raise ModelError(f"contact {name!r}: the rest_speed must be a finite positive "
                          f"number, got {rest_speed!r}")
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) \
-            or not 0.0 <= friction < math.inf:
-        raise ModelError(f"contact {name!r}: the friction must be a finite number >= 0 "
-                         f"(Coulomb's coefficient; a contact's law is not a parameter), "
-                         f"got {friction!r}")
+            or not 0.0 <= friction <= math.inf:
+        raise ModelError(f"contact {name!r}: the friction must be a number >= 0 "
+                         f"(Coulomb's coefficient, or math.inf: rough, never sliding; a "
+                         f"contact's law is not a parameter), got {friction!r}")
     restitution = restitution if isinstance(restitution, sp.Symbol) else float(restitution)
     rows = sliding() if friction > 0 and sliding is not None else None
     return Contact(name, joint, restitution, float(rest_speed), float(friction), rows)
@@ -364,7 +374,8 @@ class Sliding(Joint):
     """The sliding velocity at a contact: the velocity of ``body_b``'s material point
     at the contact point less ``body_a``'s there, along directions tangent to the
     contact (Pfaffian rows ``<name>_1, ...``, :attr:`Contact.sliding`). The
-    time-stepping contact mode reads them for friction; they are never enforced.
+    time-stepping contact mode reads them for friction, never enforcing them; a rough
+    contact's (``friction=math.inf``) are enforced while it is closed.
 
     The contact point and the directions, by ``kind``:
 
