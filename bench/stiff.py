@@ -6,8 +6,8 @@ torsional spring ``k`` and damper ``c`` on joints 2..16 (rest: the chain straigh
 ``c`` giving the fastest mode of the linearized chain a damping ratio of 0.05; 10 s
 simulated; ``k`` in 1e2, 1e4, 1e6, 1e8. Accuracy = the largest absolute angle error
 of the links at t = 10 s against the minimal-coordinate reference of
-``bench/stiff_chain.py`` (Radau at rtol 1e-11, checked against DOP853 at the same
-tolerance; cached in ``bench/results/stiff_reference.json``, computed when missing).
+``bench/stiff_chain.py`` (DOP853 at rtol 1e-12, checked at 1e-10; cached in
+``bench/results/stiff_reference.json``, computed when missing).
 
 Each (tool, k) runs in a fresh process under a time cap (``--cap``): for each target
 (1e-3 rad, then 1e-6 rad) its coarsest setting meeting it is found by bisection to
@@ -168,7 +168,7 @@ def prepare_mujoco(integrator: str, k: float, c: float, ref: np.ndarray) -> Prep
                 "finished": bad == 0, "residual": 0.0, **angle_record(phi, ref)}
 
     info = {"build_s": build_s, "coordinates": sc.N, "constraints": 0,
-            "note": "stiffness/damping can be version-dependent arrays in MjSpec"}
+            "note": "hinge stiffness and damping given as MjSpec arrays (first entry)"}
     return Prepared(info, attempt, MUJOCO_STEPS, lambda r: True)
 
 
