@@ -52,6 +52,19 @@ APEX_TIMES = IMPACTS[:APEXES] + E ** np.arange(1, APEXES + 1) * T1
 APEX_HEIGHTS = E ** (2 * np.arange(1, APEXES + 1)) * H0
 
 
+def apex_measures(z: np.ndarray) -> dict:
+    """A stepped run's apexes against ``e^(2k) h0`` (its own apexes: the first drop has
+    none), its penetration and the restitution its apexes show, from the heights ``z``
+    at every step."""
+    inner = (z[1:-1] > z[:-2]) & (z[1:-1] >= z[2:]) & (z[1:-1] > 1e-3)
+    apexes = z[1:-1][inner][:APEXES]
+    if len(apexes) < APEXES:
+        apexes = np.r_[apexes, np.full(APEXES - len(apexes), np.nan)]
+    return {"apex_error": float(np.abs(apexes / APEX_HEIGHTS - 1).max()),
+            "penetration": float(max(0.0, -z.min())),
+            "restitution": float(np.sqrt(apexes[1:] / apexes[:-1]).mean())}
+
+
 def timed(run):
     wall, cpu = time.perf_counter(), time.process_time()
     out = run()
@@ -116,14 +129,7 @@ def mujoco_case():
         return states[0, :, 1 + 2] - RADIUS  # time, then qpos: x, y, z, quaternion
 
     def run(dt: float):
-        z = simulate(dt)
-        inner = (z[1:-1] > z[:-2]) & (z[1:-1] >= z[2:]) & (z[1:-1] > 1e-3)
-        apexes = z[1:-1][inner][:APEXES]  # its own apexes (the first drop has none)
-        if len(apexes) < APEXES:
-            apexes = np.r_[apexes, np.full(APEXES - len(apexes), np.nan)]
-        return {"apex_error": float(np.abs(apexes / APEX_HEIGHTS - 1).max()),
-                "penetration": float(max(0.0, -z.min())),
-                "restitution": float(np.sqrt(apexes[1:] / apexes[:-1]).mean())}
+        return apex_measures(simulate(dt))
 
     return run, simulate
 
@@ -167,14 +173,7 @@ def pinocchio_case():
         return z
 
     def run(dt: float) -> dict:
-        z = simulate(dt)
-        inner = (z[1:-1] > z[:-2]) & (z[1:-1] >= z[2:]) & (z[1:-1] > 1e-3)
-        apexes = z[1:-1][inner][:APEXES]
-        if len(apexes) < APEXES:
-            apexes = np.r_[apexes, np.full(APEXES - len(apexes), np.nan)]
-        return {"apex_error": float(np.abs(apexes / APEX_HEIGHTS - 1).max()),
-                "penetration": float(max(0.0, -z.min())),
-                "restitution": float(np.sqrt(apexes[1:] / apexes[:-1]).mean())}
+        return apex_measures(simulate(dt))
 
     return run, simulate
 
