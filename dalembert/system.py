@@ -999,7 +999,7 @@ class System:
                              "(friction=math.inf), which runs in the event-driven contact "
                              "mode: give a finite friction coefficient for time-stepping")
         parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
-        # every gap a row (and, stepping with friction, the sliding velocities after them)
+        # every gap a row (and, with friction or rough, the sliding velocities after them)
         every = self._closed(tuple(range(len(rows))), tangents=bool(rubbing))
         full = every.numeric(parameters).for_run()  # the run's inputs are written in it
         gaps = Gaps.of(rows, len(self.constraint_names),
