@@ -203,10 +203,10 @@ def disk_contact(name: str, plane_body: Body, disk_body: Body, radius: float, *,
 
     The gap is smooth while the disk is not flat. A disk lying flat on the plane
     (``a`` along ``n``) is outside the contact's domain: every rim point is then lowest
-    and the gap's row is ``0/0``, not finite. A run that gets there fails: the
-    event-driven mode warns of invalid values and stops, the time-stepping mode raises
-    from its linear algebra. Keep the disk off flat (or model a coin that may lie flat
-    by contacts at points of its rim).
+    and the gap's row is ``0/0``, not finite. A run in which it lands flat ends there as
+    failed, naming the contact, with what it computed (falling flat far from the plane
+    is fine). Keep the disk off flat (or model a coin that may lie flat by contacts at
+    points of its rim).
 
     Parameters
     ----------

@@ -18,6 +18,8 @@ belt is carried along at the common speed of momentum conservation.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -327,3 +329,20 @@ def test_a_rough_sphere_contact_in_space_is_refused():
     with pytest.raises(ModelError, match="rough sphere contact"):
         sphere_contact("touch", Particle("a", 1.0), Particle("b", 1.0), 0.1, 0.1,
                        friction=np.inf)
+
+
+@pytest.mark.parametrize("mode", ["event-driven", "time-stepping"])
+def test_a_disk_landing_flat_ends_the_run_naming_the_contact(mode):
+    """Lying flat, a disk's rim has no lowest point and its gap no derivative: the run
+    ends as failed at the landing, naming the contact, with what it computed."""
+    disk, _ = _disk()
+    mb = Multibody([disk], gravity=(0, 0, -g), contacts=[
+        disk_contact("rim", Ground(), disk, 0.3, axis=(0, 0, 1))])  # axis along the normal
+    q0, qd0 = mb.initial_state(positions={"disk": (0, 0, 0.05)})
+    with pytest.warns(Warning, match="'rim'.* no finite"):
+        traj = mb.simulate((0.0, 0.5), q0, qd0, contact_mode=mode)
+    assert traj.status == "failed"
+    assert re.search(r"'rim'.* no finite", traj.message)
+    landing = np.sqrt(2 * 0.05 / g)
+    assert landing - 0.03 < traj.t[-1] <= landing  # what it computed, up to the landing
+    np.testing.assert_allclose(traj["disk_z"], 0.05 - g / 2 * traj.t**2, atol=1e-6)

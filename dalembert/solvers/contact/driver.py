@@ -408,6 +408,7 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
     if inputs is not None:
         full.set_inputs(inputs)
     touching = gaps.touching(full, t, q)
+    gaps.check_finite(np.where(touching, gaps.rates(full, t, q, qd), 0.0), t)
     outcome = resolve_impact(full, gaps, t, q, qd, touching, law)
     if outcome.stages:
         history.impacts.append(ImpactRecord(t, outcome.impulses, outcome.energy_lost,

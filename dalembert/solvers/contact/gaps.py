@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...codegen.compiled import NumericModel
+from ...errors import ContactError
 from ..kkt.sparse import matvec
 
 if TYPE_CHECKING:
@@ -139,11 +140,30 @@ class Gaps:
 
     def rates(self, full: NumericModel, t: float, q: np.ndarray,
               qd: np.ndarray) -> np.ndarray:
-        """``g' = A qd + b``, one per gap."""
+        """``g' = A qd + b``, one per gap (NaN where a gap has no derivative: see
+        :meth:`check_finite`)."""
         pattern = full.pattern
         Av, b = full.velocity_sparse(t, q)
-        rate = matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b
-        return rate[self.rows]
+        with np.errstate(invalid="ignore"):
+            return (matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b)[self.rows]
+
+    def check_finite(self, rate: np.ndarray, t: float) -> None:
+        """Raise a ``ContactError`` naming the first gap whose ``rate`` (or row) is not
+        finite.
+
+        Examples
+        --------
+        >>> Gaps(("rim",), 0, np.zeros(1), np.ones(1)).check_finite(np.array([np.nan]), 0.5)
+        Traceback (most recent call last):
+        ...
+        dalembert.errors.ContactError: the contact 'rim' has no finite rate at t=0.5: ...
+        """
+        bad = np.flatnonzero(~np.isfinite(rate))
+        if len(bad):
+            raise ContactError(
+                f"the contact {self.names[int(bad[0])]!r} has no finite rate at t={t:.6g}: "
+                "its gap is not differentiable there (a disk's rim with the disk lying flat "
+                "has no lowest point); keep the contact away from such a configuration")
 
     def touching(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:
         """Which gaps are 0 to rounding (a boolean mask)."""

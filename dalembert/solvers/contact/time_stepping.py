@@ -240,7 +240,10 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
     Mv, f, Av, _ = full.kkt_sparse(tm, qm, v)
     _, b = full.velocity_sparse(tm, qm)
     momentum = matvec(pattern.M_rows, pattern.M_cols, Mv, v, n) + h * f
-    kkt.factor(np.concatenate([Mv, Av]), bilateral)
+    # a gap row with no derivative here (a disk lying flat, far from the plane) does not
+    # act in the free step: it must not spoil the factorization of the others
+    free_Av = np.where((pattern.A_rows >= gaps.first) & ~np.isfinite(Av), 0.0, Av)
+    kkt.factor(np.concatenate([Mv, free_Av]), bilateral)
     v_free, P_b = kkt.solve(np.concatenate([momentum, -b]))
     P = np.zeros(m)
     P[bilateral] = P_b[bilateral]
@@ -255,6 +258,7 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
                    for k in near]
         rows = np.concatenate([normal, *sliding]).astype(int)
         A = pattern.dense_A(Av)
+        gaps.check_finite(A[normal].sum(axis=1), tm)
         unit = np.zeros((n + m, len(rows)))
         unit[:n] = A[rows].T  # a unit impulse on each contact's row
         response, reaction = kkt.solve(unit)  # the velocity change and bilateral impulses
@@ -298,10 +302,29 @@ def _project(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         if not held.any() or np.abs(psi[held]).max() <= 1e-14 * (1.0 + np.abs(q).max()):
             return q
         entries = np.flatnonzero(held)
-        q = gauss_newton(partial(_held_psi, full, t, entries),
-                         partial(_held_jacobian, full, t, rows[entries]), q,
-                         max_iter=PROJECTION_ITERATIONS).q
+        try:
+            q = gauss_newton(partial(_held_psi, full, t, entries),
+                             partial(_held_jacobian, full, t, rows[entries]), q,
+                             max_iter=PROJECTION_ITERATIONS).q
+        except np.linalg.LinAlgError:  # rows not finite: named, not a raw solver failure
+            held_gaps = rows[entries][rows[entries] >= gaps.first] - gaps.first
+            names = ", ".join(repr(gaps.names[k]) for k in held_gaps)
+            raise ContactError(
+                f"the projection onto the contacts {names} failed at t={t:.6g}: a gap "
+                "with no finite derivative there (a disk's rim with the disk lying flat "
+                "has no lowest point); keep the contact away from such a configuration"
+            ) from None
     return q
+
+
+def _finite_open_rows(A: np.ndarray, gaps: Gaps, force: np.ndarray) -> np.ndarray:
+    """``A`` with the rows of the gaps that carry no force and have no derivative here
+    set to 0 (they add nothing to ``A^T lambda``; a NaN would)."""
+    rows = gaps.rows[(force[gaps.rows] == 0.0) & ~np.isfinite(A[gaps.rows]).all(axis=1)]
+    if len(rows):
+        A = A.copy()
+        A[rows] = 0.0
+    return A
 
 
 def _held_psi(full: NumericModel, t: float, entries: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -338,7 +361,7 @@ def _outputs(full: NumericModel, gaps: Gaps, t: np.ndarray, y: np.ndarray,
     for i, (ti, yi) in enumerate(zip(t, y)):
         q, qd = yi[:n], yi[n:]
         Av, b = full.velocity_sparse(ti, q)
-        A = full.pattern.dense_A(Av)
+        A = _finite_open_rows(full.pattern.dense_A(Av), gaps, forces[i])
         out["multipliers"][i] = forces[i]
         out["constraint_forces"][i] = A.T @ forces[i]
         out["qdd"][i] = accelerations[i]
