@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .lagrange import Equations
-from .sparse import SparseEntries, gradient, nonzero_entries
+from .sparse import SparseEntries, jacobian_entries, nonzero_entries
 
 
 @dataclass(frozen=True)
@@ -63,8 +63,4 @@ def ggl_jacobian_entries(eqs: Equations) -> GGLJacobianEntries:
         force_terms[j].append(a * lam[k])
     velocity = [sp.Add(*terms) + eqs.b[k] for k, terms in enumerate(velocity_terms)]
     force = [sp.Add(*terms) for terms in force_terms]
-    return GGLJacobianEntries(_jacobian(velocity, q), _jacobian(force, q))
-
-
-def _jacobian(rows: list[sp.Expr], variables: tuple[sp.Symbol, ...]) -> SparseEntries:
-    return {(i, j): d for i, row in enumerate(rows) for j, d in gradient(row, variables).items()}
+    return GGLJacobianEntries(jacobian_entries(velocity, q), jacobian_entries(force, q))

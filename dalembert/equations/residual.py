@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .lagrange import Equations
-from .sparse import SparseEntries, gradient, nonzero_entries
+from .sparse import SparseEntries, jacobian_entries, nonzero_entries
 
 
 @dataclass(frozen=True)
@@ -87,9 +87,5 @@ def residual_jacobian_entries(eqs: Equations) -> ResidualJacobianEntries:
     """
     q, qd = eqs.q, eqs.qd
     r1, r2 = residuals(eqs)
-    return ResidualJacobianEntries(_jacobian(r1, q), _jacobian(r1, qd), _jacobian(r2, q),
-                                   _jacobian(r2, qd))
-
-
-def _jacobian(rows: list[sp.Expr], variables: tuple[sp.Symbol, ...]) -> SparseEntries:
-    return {(i, j): d for i, row in enumerate(rows) for j, d in gradient(row, variables).items()}
+    return ResidualJacobianEntries(jacobian_entries(r1, q), jacobian_entries(r1, qd),
+                                   jacobian_entries(r2, q), jacobian_entries(r2, qd))

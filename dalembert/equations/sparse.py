@@ -42,6 +42,18 @@ def gradient(expr: sp.Expr, variables: Sequence[sp.Symbol]) -> dict[int, sp.Expr
     return {k: d for k, d in out.items() if d != 0}
 
 
+def jacobian_entries(rows: Sequence[sp.Expr],
+                     variables: Sequence[sp.Symbol]) -> SparseEntries:
+    """The nonzero entries of ``d rows / d variables``, row-major (:func:`gradient` of
+    each row).
+
+    >>> x, y = sp.symbols("x y")
+    >>> jacobian_entries([x * y, y**2], [x, y])
+    {(0, 0): y, (0, 1): x, (1, 1): 2*y}
+    """
+    return {(i, j): d for i, row in enumerate(rows) for j, d in gradient(row, variables).items()}
+
+
 def _monomial_derivative(term: sp.Expr, v: sp.Symbol) -> sp.Expr:
     """``term.diff(v)``, built directly when ``term`` is ``number * symbol powers``.
 
