@@ -47,13 +47,12 @@ from ...errors import ContactError, InputError, TimeLimitExceeded
 from ...inputs import InputSignal
 from ...options import ImpactLaw
 from ..impact import Impact, impact
-from ..kkt.sparse import matvec
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.sampled import sampled_schedule
 from ..running.segments import Schedule, Segment, SegmentedRun, SegmentState, _Record
 from ..running.watchdog import watching
-from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps
+from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .laws import closed_gaps, resolve_impact
 
 #: Switches within rounding of one instant before the run is called a chattering cascade.
@@ -431,9 +430,7 @@ def _grip(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarra
     rows = gaps.rough_rows(closed)
     if not len(rows):
         return None
-    Av, b = full.velocity_sparse(t, q)
-    pattern = full.pattern
-    rates = (matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b)[rows]
+    rates = row_rates(full, t, q, qd)[rows]
     if np.abs(rates).max() <= TOUCH_RTOL * (1.0 + np.abs(qd).max()):
         return None
     return impact(full, t, q, qd, gaps.acting(full.m, np.array(closed, dtype=int)))

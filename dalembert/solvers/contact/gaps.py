@@ -30,6 +30,23 @@ TOUCH_RTOL = 1e-9
 FORCE_RTOL = 1e-12
 
 
+def row_rates(full: NumericModel, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """``A qd + b`` of every row of ``full`` (NaN where a row has no derivative).
+
+    Examples
+    --------
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> (y,) = coordinates("y")
+    >>> ball = System([y], kinetic=y.diff()**2 / 2, constraints=[Unilateral(y, "floor")])
+    >>> row_rates(ball.with_gaps_closed().numeric(), 0.0, np.ones(1), np.array([-2.0]))
+    array([-2.])
+    """
+    pattern = full.pattern
+    Av, b = full.velocity_sparse(t, q)
+    with np.errstate(invalid="ignore"):
+        return matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b
+
+
 @dataclass(frozen=True)
 class Gaps:
     """The gaps of a model whose last rows are every unilateral constraint.
@@ -142,10 +159,7 @@ class Gaps:
               qd: np.ndarray) -> np.ndarray:
         """``g' = A qd + b``, one per gap (NaN where a gap has no derivative: see
         :meth:`check_finite`)."""
-        pattern = full.pattern
-        Av, b = full.velocity_sparse(t, q)
-        with np.errstate(invalid="ignore"):
-            return (matvec(pattern.A_rows, pattern.A_cols, Av, qd, full.m) + b)[self.rows]
+        return row_rates(full, t, q, qd)[self.rows]
 
     def check_finite(self, rate: np.ndarray, t: float) -> None:
         """Raise a ``ContactError`` naming the first gap whose ``rate`` (or row) is not
