@@ -56,10 +56,11 @@ from .solver import NativeSolver
 from .structure import NotApplicable
 
 if TYPE_CHECKING:
+    from .radau import NativeRadau
     from .runge_kutta import NATIVE_METHODS, NativeDOP853, NativeRK23, NativeRK45
 
-__all__ = ["NATIVE_METHODS", "NativeDOP853", "NativeRK23", "NativeRK45", "NativeSolver",
-           "NotApplicable", "native_solver"]
+__all__ = ["NATIVE_METHODS", "NativeDOP853", "NativeRK23", "NativeRK45", "NativeRadau",
+           "NativeSolver", "NotApplicable", "native_solver"]
 
 #: Made on first use (PEP 562): they subclass SciPy's solvers, and ``scipy.integrate``
 #: is a large import that ``import dalembert`` (through the ensemble's thread turns,
@@ -72,6 +73,10 @@ def __getattr__(name: str) -> object:
         from . import runge_kutta
 
         return getattr(runge_kutta, name)
+    if name == "NativeRadau":
+        from . import radau
+
+        return radau.NativeRadau
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -42,7 +42,8 @@ FN_COUNT, MAX_ARGS = 5, 8
 FUNCTION_CODES = {**{f"DL_FN_{name.upper()}": k for name, k in FUNCTIONS.items()},
                   "DL_FN_COUNT": FN_COUNT, "DL_MAX_ARGS": MAX_ARGS}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
-SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "functions.c", "layout.c")
+SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "radau.c", "functions.c",
+           "layout.c")
 HEADER = "runtime.h"
 
 
@@ -116,11 +117,40 @@ class Run(ctypes.Structure):
                 *((name, _ptr) for name in ("y_new", "y_end", "rows")), ("near2", _f64)]
 
 
+class Newton(ctypes.Structure):
+    """``dl_newton``: where the values of an implicit step's reduced Newton matrix go
+    (constant for a model and its kept rows)."""
+
+    _fields_ = [*((name, _i64) for name in ("N", "kl", "ku", "ldab")), ("perm", _ptr),
+                ("kkt_size", _i64), ("jac_size", _i64), ("n_fixed", _i64),
+                *((name, _ptr) for name in ("fixed_src", "fixed_dst", "fixed_sign")),
+                ("n_v", _i64), *((name, _ptr) for name in ("v_src", "v_dst", "v_row", "v_col")),
+                ("n_q", _i64), *((name, _ptr) for name in ("q_src", "q_dst", "q_row", "q_col"))]
+
+
+class RadauState(ctypes.Structure):
+    """``dl_radau``: one Radau solver's state between steps and its work arrays."""
+
+    _fields_ = [*((name, _f64) for name in ("t", "t_old", "t_bound", "direction", "rtol",
+                                            "max_step", "newton_tol")),
+                ("atol", _ptr), *((name, _f64) for name in ("h_abs", "h_abs_old",
+                                                            "error_norm_old")),
+                *((name, _i64) for name in ("current_jac", "jac_ready", "lu_ready", "nfev",
+                                            "njev", "nlu")),
+                ("kkt", _ptr), ("jac", _ptr),
+                *((name, _f64) for name in ("c_real", "c_complex_re", "c_complex_im")),
+                *((name, _ptr) for name in ("lu_real", "lu_complex", "piv_real",
+                                            "piv_complex")),
+                ("has_sol", _i64), ("sol_t_old", _f64), ("sol_h", _f64),
+                *((name, _ptr) for name in ("sol_Q", "sol_y_old", "work", "cwork",
+                                            "stage_work"))]
+
+
 #: The C struct each mirror stands for.
 MIRRORS: dict[str, type[ctypes.Structure]] = {
     "dl_function": Function, "dl_model": Model, "dl_factor": Factor, "dl_data": Data,
     "dl_tableau": Tableau,
-    "dl_stepper": Stepper, "dl_run": Run}
+    "dl_stepper": Stepper, "dl_run": Run, "dl_newton": Newton, "dl_radau": RadauState}
 
 
 class LayoutError(c_backend.CompileError):
@@ -244,6 +274,7 @@ def _runtime() -> ctypes.CDLL:
         "dl_stages": [_ptr, _ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr,
                       _ptr, _ptr],
         "dl_call": [_ptr, _ptr, _i64, _ptr, _ptr],
+        "dl_radau_step": [_ptr] * 9,
     }
     for name, argtypes in signatures.items():
         fn = getattr(lib, name)

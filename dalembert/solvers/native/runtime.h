@@ -13,6 +13,7 @@
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
+ *   radau.c        implicit steps: Radau IIA on the KKT-sized Newton systems (band LU)
  *   functions.c    any generated function of the model's array, called by its place
  *   layout.c       sizes, offsets and codes, checked against library.py's mirrors
  * The structs below are mirrored field by field in library.py (ctypes), which
@@ -187,6 +188,47 @@ typedef struct {
   double near2;               /* a step ending with conditioning below this ends the call */
 } dl_run;
 
+/* The reduced Newton matrix of an implicit step (radau.c, native/radau.py): where each
+ * value goes in its band, for one model and set of kept rows (C only reads it). The
+ * matrix [[M + c r1_v + c^2 r1_q, -A^T], [A + c r2_v + c^2 r2_q, 0]] (N = n + kept rows
+ * unknowns, permuted by perm into a band of kl sub- and ku superdiagonals, LAPACK's
+ * band storage of ldab = 2 kl + ku + 1 rows) is made from the KKT function's values
+ * (fixed: M, A and -A^T, at fixed_src with fixed_sign) and the residuals' Jacobians
+ * (v: r1_v and r2_v, times c; q: r1_q and r2_q, times c^2), each added at its *_dst. The
+ * right-hand side's products take the same Jacobian values at (row, col): row among
+ * the N unknowns before the permutation, col a coordinate. */
+typedef struct {
+  int64_t N, kl, ku, ldab;
+  const int64_t *perm;          /* N: the band place of each unknown */
+  int64_t kkt_size, jac_size;   /* the values' buffers: the kkt function's, the Jacobians' */
+  int64_t n_fixed;
+  const int64_t *fixed_src, *fixed_dst;
+  const double *fixed_sign;
+  int64_t n_v;
+  const int64_t *v_src, *v_dst, *v_row, *v_col;
+  int64_t n_q;
+  const int64_t *q_src, *q_dst, *q_row, *q_col;
+} dl_newton;
+
+/* One Radau solver's state between steps (scipy's Radau's attributes: h_abs_old and
+ * error_norm_old < 0 stand for None), its held linearization and factors, the last
+ * step's interpolant (the next step's Newton guess) and its work arrays. */
+typedef struct {
+  double t, t_old, t_bound, direction, rtol, max_step, newton_tol;
+  const double *atol;           /* n_state */
+  double h_abs, h_abs_old, error_norm_old;
+  int64_t current_jac, jac_ready, lu_ready;
+  int64_t nfev, njev, nlu;
+  double *kkt, *jac;            /* the held linearization's values */
+  double c_real, c_complex_re, c_complex_im;  /* the c = h / MU of the held factors */
+  double *lu_real, *lu_complex; /* ldab x N, real and complex (interleaved) */
+  int64_t *piv_real, *piv_complex;
+  int64_t has_sol;              /* the last step's interpolant: y_old + Q [x, x^2, x^3] */
+  double sol_t_old, sol_h;
+  double *sol_Q, *sol_y_old;    /* 3 x n_state, n_state */
+  double *work, *cwork, *stage_work;  /* max(2n + m, n + 2N); 2n + 2N complex; 17 n_state */
+} dl_radau;
+
 /* Small helpers are inlined where the block size is a constant (see BY_SIZE); the
  * functions one source calls in another are hidden (not exported, not interposable),
  * so the compiler may inline them across sources like static ones. */
@@ -270,6 +312,10 @@ int dl_rk_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper 
                const double *y, double *K, double *y_new, double *stage);
 int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st, dl_run *run,
               double *y, double *K, double *stage);
+
+/* radau.c */
+int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
+                  const double *y, const double *f, double *y_new, double *f_new, double *Z);
 
 /* functions.c */
 int dl_call(const dl_model *md, const dl_data *d, int64_t which, const double *const *args,

@@ -247,6 +247,7 @@ class _Tables:
         arrays["holonomic"] = np.ascontiguousarray(num.holonomic_rows, dtype=np.int64)
         arrays["holonomic_mask"] = np.isin(np.arange(m), num.holonomic_rows).astype(np.uint8)
         self._arrays = arrays
+        self.kkt_place = np.arange(kkt.size)  # [M, f, A, c] as they are, unless remapped
         self.address = {name: a.ctypes.data for name, a in arrays.items()}
         s, n = structure, num.n
         #: sizes and offsets of the solve's layout [blocks, u, a, c] in the KKT buffer
@@ -260,6 +261,8 @@ class _Tables:
             place = np.concatenate([s.M_at, start["u"] + slot, start["a"] + s.A_at,
                                     c_at + np.arange(m)])
             assert len(place) == kkt.size  # [M, f, A, c]
+            #: where each of the kkt function's values [M, f, A, c] lands in its buffer
+            self.kkt_place = place
             self._targets = [np.ascontiguousarray(place[t], dtype=np.int64)
                              for t in kkt.targets]
             self._table = (ctypes.c_void_p * len(self._targets))(
@@ -297,6 +300,8 @@ class _SharedModel:
             model.fn[library.FUNCTIONS["kkt"]] = _function("kkt", kkt)
             self.part_at = {}
             self.values_size, self.c_at = kkt.size, kkt.size - m
+        #: where each of the kkt function's values [M, f, A, c] is in a run's buffer
+        self.kkt_place: np.ndarray = tables.kkt_place
         self.model = model
 
 

@@ -17,7 +17,7 @@ from scipy.integrate import OdeSolver, Radau
 from ...codegen.compiled import NumericModel
 from ...options import IDA, Backend, Baumgarte, Output, Projection, SimulationOptions
 from ..initialization import InitializationReport
-from ..native import NATIVE_METHODS, NotApplicable, native_solver
+from ..native import NATIVE_METHODS, NativeRadau, NotApplicable, native_solver
 from ..steppers.scipy_ivp import ControlledSteps, LinearizedRadau, controlled_class
 
 Loop = Literal["c", "python"]
@@ -154,9 +154,10 @@ class SolverChoice:
     python_options: dict[str, object]
 
 
-def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
+def choose_solver(options: SimulationOptions, native: bool,
+                  exact_jacobian: bool = True) -> SolverChoice:
     """SciPy's method under the chosen step-size controller, or its C stepper where the
-    C loop runs and has one.
+    C loop runs and has one (Radau's where its exact Jacobian applies).
 
     Parameters
     ----------
@@ -164,6 +165,10 @@ def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
         The checked options.
     native
         Whether the C loop runs.
+    exact_jacobian
+        Whether the right-hand side is the KKT system's alone (no Baumgarte terms, no
+        inputs computed from the state at every evaluation), so that the residuals'
+        exact Jacobians give its Jacobian.
     """
     step = options.step
     if issubclass(options.method, IDA):  # its options are the StepControl itself
@@ -174,6 +179,8 @@ def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
     solver_options = step.solver_options()
     python_options = dict(solver_options)
     stepper = NATIVE_METHODS.get(options.method) if native else None
+    if native and solver is LinearizedRadau and exact_jacobian:
+        stepper = NativeRadau
     if stepper is not None:
         solver = stepper
     if issubclass(solver, ControlledSteps):
@@ -186,12 +193,12 @@ def choose_solver(options: SimulationOptions, native: bool) -> SolverChoice:
 
 def choose_stretches(stepper: type[OdeSolver] | None, projection: bool,
                      output: Output) -> bool:
-    """Whether whole stretches of steps run in C: with a C stepper, the C loop's
-    projection, and neither events nor dense output.
+    """Whether whole stretches of steps run in C: with an explicit Runge-Kutta C stepper,
+    the C loop's projection, and neither events nor dense output.
 
     >>> from dalembert.options import simulation_options
     >>> choose_stretches(None, True, simulation_options((0.0, 1.0)).output)
     False
     """
-    return stepper is not None and projection and not output.events \
-        and not output.dense_output
+    return stepper is not None and issubclass(stepper, ControlledSteps) and projection \
+        and not output.events and not output.dense_output

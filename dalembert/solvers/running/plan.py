@@ -155,7 +155,9 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     stabilization = choose_stabilization(options)
     loop = choose_loop(num, y0, t0, stabilization.gain, kept, options.backend,
                        options.method)
-    chosen = choose_solver(options, loop.loop == "c")
+    inputs = options.inputs
+    exact = stabilization.gain == 0.0 and (inputs is None or inputs.sample_time is not None)
+    chosen = choose_solver(options, loop.loop == "c", exact)
     return SimulationPlan(
         options=options, initial=initial, num=num, loop=loop.loop,
         why_python=loop.why_python, solver=chosen.solver, solver_options=chosen.options,

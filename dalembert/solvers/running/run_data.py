@@ -39,7 +39,7 @@ from ..dynamics import first_order_rhs
 from ..ggl import GGLForm
 from ..ida import integrate_ida
 from ..jacobian import first_order_jacobian
-from ..native import NativeSolver
+from ..native import NativeRadau, NativeSolver
 from ..newton import Linearize, dense_linearization, kkt_linearization
 from ..outputs import evaluate_outputs
 from ..projection import StepProjector
@@ -189,6 +189,8 @@ def start_run(plan: SimulationPlan) -> RunData:
     """
     options, initial, num = plan.options, plan.initial, plan.num.for_run()
     kept, gain, projection = plan.kept, plan.gain, plan.projection
+    if plan.stepper is NativeRadau:  # its Newton matrices need them, in C
+        num.compiled.functions["residual_jacobians"]  # generated now
     native = NativeSolver(num, gain, kept) if plan.loop == "c" else None
     # inputs at every evaluation (a sampled signal is held: its segments set the values)
     inputs = options.inputs
