@@ -81,11 +81,12 @@ def test_the_band_holds_a_chain_in_a_narrow_band():
 
 
 def test_a_stiff_spring_meets_the_reference_in_c():
-    """A stiff damped spring (k = 1e6) in the C loop: the C stepper is the one chosen,
+    """A stiff damped spring (k = 1e6) in the C loop: the C stepper is the one chosen
+    (whole stretches of its steps in C),
     and the run meets a tight DOP853 reference."""
     system, q0 = stiff_double_pendulum()
     plan = system.plan((0, 1), q0, method="Radau", backend="c")
-    assert plan.stepper is NativeRadau and not plan.stretches
+    assert plan.stepper is NativeRadau and plan.stretches
     reference = system.simulate((0, 1), q0, rtol=1e-12, atol=1e-14, t_eval=[1.0])
     traj = system.simulate((0, 1), q0, method="Radau", rtol=1e-8, atol=1e-10, t_eval=[1.0],
                            backend="c")
@@ -120,3 +121,20 @@ def test_a_run_state_is_per_run():
     a = first.integrate((0.0, 0.1), plan.y0, None, False)
     b = second.integrate((0.0, 0.1), plan.y0, None, False)
     assert np.array_equal(a.y[-1], b.y[-1])
+
+
+@pytest.mark.parametrize("t_eval", [None, np.linspace(0.0, 1.0, 11)])
+def test_stretches_in_c_take_the_steps_of_the_step_by_step_loop(t_eval):
+    """Whole stretches of Radau steps in C (step, projection, outputs from the step's
+    interpolant, restart from ``f`` at the projected end) give the steps and outputs of
+    the loop that sees every step in Python (dense output asked for: no stretches)."""
+    system, q0 = stiff_double_pendulum()
+    options = dict(method="Radau", rtol=1e-8, atol=1e-10, t_eval=t_eval, backend="c")
+    assert system.plan((0, 1), q0, **options).stretches
+    assert not system.plan((0, 1), q0, **options, dense_output=True).stretches
+    stretches = system.simulate((0, 1), q0, **options)
+    stepwise = system.simulate((0, 1), q0, **options, dense_output=True)
+    assert stretches.stats == stepwise.stats
+    assert np.array_equal(stretches.t, stepwise.t)
+    assert np.abs(stretches.q - stepwise.q).max() < 1e-13
+    assert np.abs(stretches.qd - stepwise.qd).max() < 1e-11

@@ -275,6 +275,7 @@ def _runtime() -> ctypes.CDLL:
                       _ptr, _ptr],
         "dl_call": [_ptr, _ptr, _i64, _ptr, _ptr],
         "dl_radau_step": [_ptr] * 9,
+        "dl_radau_run": [_ptr] * 8,
     }
     for name, argtypes in signatures.items():
         fn = getattr(lib, name)

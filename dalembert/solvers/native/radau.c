@@ -417,6 +417,79 @@ int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau 
   return DL_OK;
 }
 
+/* ---- whole stretches: step, projection, outputs, restart ---------------------------- */
+
+/* One step from (st->t, y, f) finished as the Python loop finishes it (integrate.py):
+ * the end projected into run->y_end and f there into f_end (SciPy's restart), the
+ * outputs in (t_old, t_new] written after row run->n_out (the step's interpolant,
+ * projected; the one at t_new is the projected end). On DL_OK the outputs are counted;
+ * on any other status nothing is, and the caller restores st's scalars. */
+static int radau_finish(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
+                        dl_run *run, const double *y, const double *f, double *f_end,
+                        double *Z) {
+  const int64_t ns = 2 * md->n;
+  int status = dl_radau_step(md, d, nw, st, y, f, run->y_new, run->rows, Z);
+  if (status != DL_OK) return status;
+  const double t_new = st->t, dir = st->direction;
+  const int every_step = run->n_eval < 0;
+  int64_t hi = run->next_eval;
+  while (hi < run->n_eval && dir * run->t_eval[hi] <= dir * t_new) ++hi;
+  const int64_t count = every_step ? 1 : hi - run->next_eval;
+  if (run->n_out + count > run->capacity) return DL_OUTPUTS;
+  memcpy(run->y_end, run->y_new, (size_t)ns * sizeof(double));
+  if ((status = run_project(md, d, run, t_new, run->y_end)) != DL_OK) return status;
+  const double conditioning = d->conditioning;
+  st->nfev++;
+  if ((status = dl_rhs(md, d, t_new, run->y_end, f_end, NULL)) != DL_OK) return status;
+  for (int64_t k = 0; k < count; ++k) {
+    const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
+    double *row = run->y_out + (run->n_out + k) * ns;
+    run->t_out[run->n_out + k] = s;
+    if (s == t_new) {
+      memcpy(row, run->y_end, (size_t)ns * sizeof(double));
+      continue;
+    }
+    interpolate_last(st, ns, s, row);
+    if ((status = run_project(md, d, run, s, row)) != DL_OK) return status;
+  }
+  run->next_eval = hi;
+  run->n_out += count;
+  return conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
+}
+
+/* Steps from (st->t, y, f = f(t, y)) as the Python loop takes them (radau_finish), until
+ * t_bound, the step or time budget, or a full output buffer; as dl_rk_run (see it): on
+ * return y, f and st hold the state after the last finished step, and a non-OK status
+ * leaves the next step to the caller. The held Jacobian, factors and interpolant of a
+ * step that could not be finished stay: they are as good a start for the caller's step
+ * as the ones before (each is only the simplified Newton iteration's matrix or guess),
+ * and the scalars that say what the factors are stay with them. */
+int dl_radau_run(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
+                 dl_run *run, double *y, double *f, double *Z) {
+  const int64_t ns = 2 * md->n;
+  double *f_end = run->rows + ns;
+  const double start = wall_seconds();
+  run->n_steps = run->n_out = 0;
+  if (!isfinite(st->t)) return DL_NOT_FINITE;
+  while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
+    if (run->n_steps && wall_seconds() - start > run->max_seconds) break;
+    const double t = st->t, h_abs = st->h_abs, h_abs_old = st->h_abs_old,
+                 error_norm_old = st->error_norm_old, t_old = st->t_old;
+    const int status = radau_finish(md, d, nw, st, run, y, f, f_end, Z);
+    if (status != DL_OK && status != DL_NEAR_SINGULAR) {
+      st->t = t, st->h_abs = h_abs, st->h_abs_old = h_abs_old;
+      st->error_norm_old = error_norm_old, st->t_old = t_old;
+      return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;
+    }
+    run->t_old = t;
+    ++run->n_steps;
+    memcpy(y, run->y_end, (size_t)ns * sizeof(double));
+    memcpy(f, f_end, (size_t)ns * sizeof(double));
+    if (status == DL_NEAR_SINGULAR) return status;  /* the caller measures and decides */
+  }
+  return DL_OK;
+}
+
 /* the one translation unit goes on after this source: complex.h's short names end here */
 #undef I
 #undef complex

@@ -19,10 +19,10 @@ import ctypes
 
 import numpy as np
 import scipy.sparse
-from scipy.integrate import Radau
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ...codegen.compiled import NumericModel
+from ..steppers.scipy_ivp import RadauEnd, SteppedRadau, step_size
 from . import library
 from .solver import NativeSolver
 
@@ -134,7 +134,7 @@ def newton_tables(native: NativeSolver) -> NewtonTables:
         lambda: NewtonTables(num, native.kept, shared.kkt_place, size))
 
 
-class NativeRadau(Radau):
+class NativeRadau(SteppedRadau):
     """:class:`scipy.integrate.Radau` stepping in C on the KKT structure (see the module).
 
     Parameters
@@ -150,15 +150,14 @@ class NativeRadau(Radau):
     """
 
     def __init__(self, fun, t0, y0, t_bound, *, native: NativeSolver, **options) -> None:
+        super().__init__(fun, t0, y0, t_bound, **options)
         n = len(y0)
-        # a zero sparse Jacobian: SciPy's set-up then makes no dense matrix (and no
-        # Jacobian evaluation); the steps' linear algebra is C's
-        super().__init__(fun, t0, y0, t_bound, jac=scipy.sparse.csc_matrix((n, n)), **options)
         self._native = native
         tables = newton_tables(native)
         self._tables = tables
         N, m, nw = tables.N, tables.m, tables.struct
-        self._atol = np.ascontiguousarray(np.broadcast_to(self.atol, (n,)), dtype=np.float64)
+        tolerances = self.tolerances
+        self._atol = tolerances.atol
         buffers = {
             "kkt": np.zeros(nw.kkt_size), "jac": np.zeros(max(nw.jac_size, 1)),
             "lu_real": np.zeros(nw.ldab * N), "lu_complex": np.zeros(nw.ldab * N, complex),
@@ -167,19 +166,21 @@ class NativeRadau(Radau):
             "work": np.zeros(max(n + m, n // 2 + 2 * N)),
             "cwork": np.zeros(n + 2 * N, complex), "stage_work": np.zeros(17 * n)}
         self._buffers = buffers  # kept alive: the struct points into them
+        # SciPy's Radau makes its first Jacobian at the start; C makes it at the first step
         self._state = library.RadauState(
-            t=t0, t_bound=t_bound, direction=self.direction, rtol=float(self.rtol),
-            max_step=float(self.max_step), newton_tol=float(self.newton_tol),
-            atol=self._atol.ctypes.data, h_abs=self.h_abs, h_abs_old=-1.0,
+            t=t0, t_bound=t_bound, direction=self.direction, rtol=tolerances.rtol,
+            max_step=tolerances.max_step, newton_tol=self.newton_tolerance,
+            atol=self._atol.ctypes.data, h_abs=step_size(self), h_abs_old=-1.0,
             error_norm_old=-1.0, current_jac=1,
             **{name: a.ctypes.data for name, a in buffers.items()})
         self._fixed = (ctypes.addressof(nw), ctypes.addressof(self._state))
 
-    def _step_impl(self):
-        st, n = self._state, self.n
-        st.t, st.h_abs = self.t, self.h_abs  # the loop may have changed them
-        y = np.ascontiguousarray(self.y, dtype=np.float64)
-        f = np.ascontiguousarray(self.f, dtype=np.float64)
+    def take_step(self, t: float, y: np.ndarray, f: np.ndarray, h_abs: float
+                  ) -> RadauEnd | str:
+        st, n = self._state, len(y)
+        st.t, st.h_abs = t, h_abs  # the loop may have restarted the solver
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        f = np.ascontiguousarray(f, dtype=np.float64)
         y_new, f_new, Z = np.empty(n), np.empty(n), np.empty((3, n))
         counts = st.nfev, st.njev, st.nlu
         status = self._native.lib.dl_radau_step(
@@ -189,14 +190,10 @@ class NativeRadau(Radau):
         self.njev += st.njev - counts[1]
         self.nlu += st.nlu - counts[2]
         if status == library.STEP_TOO_SMALL:
-            return False, self.TOO_SMALL_STEP
+            return self.TOO_SMALL_STEP
         if status == library.NOT_FINITE:  # the loop checks first; said here for other callers
-            return False, "the step would start from values that are not finite"
+            return "the step would start from values that are not finite"
         self._native._check(status)
-        self.y_old, self.t_old = y, st.t_old
-        self.t, self.y, self.f, self.Z = st.t, y_new, f_new, Z
-        self.h_abs = st.h_abs
-        self.h_abs_old = None if st.h_abs_old < 0 else st.h_abs_old
-        self.error_norm_old = None if st.error_norm_old < 0 else st.error_norm_old
-        self.sol = self._compute_dense_output()
-        return True, None
+        return RadauEnd(st.t_old, y, st.t, y_new, f_new, Z, st.h_abs,
+                        None if st.h_abs_old < 0 else st.h_abs_old,
+                        None if st.error_norm_old < 0 else st.error_norm_old)

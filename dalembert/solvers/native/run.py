@@ -5,7 +5,8 @@ pivot ratio of the projection's ``A A^T`` below ``SCREEN``): the caller then
 measures as the Python loop does and decides (:mod:`~dalembert.solvers.singular.careful`).
 
 :class:`StretchRunner` drives ``dl_rk_run`` for one of the native Runge-Kutta
-solvers: each call takes steps as :func:`~dalembert.solvers.running.integrate.integrate`'s
+solvers, :class:`RadauStretchRunner` ``dl_radau_run`` for ``NativeRadau``: each call
+takes steps as :func:`~dalembert.solvers.running.integrate.integrate`'s
 loop takes them (step, project the end, interpolate and project the output times
 in the step, restart from the projected end) and returns after a fraction of a
 second, so Ctrl-C and the progress bar are served between calls. A step C cannot
@@ -22,7 +23,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ...numerics.singular import SCREEN
-from ..steppers.scipy_ivp import step_start, take_state
+from ..steppers.scipy_ivp import step_size, step_start, take_state
 from . import library
 from .turns import outside_python
 
@@ -33,25 +34,25 @@ MAX_SECONDS, MAX_STEPS = 0.05, 1 << 62
 BUFFER_DOUBLES, ROWS = 1 << 20, (64, 4096)
 
 
-class StretchRunner:
-    """Runs a native solver (``NativeDOP853``, ``NativeRK45``, ``NativeRK23``) in C,
-    with outputs at ``t_eval`` (or at every step end if ``None``).
+class _Stretches:
+    """What the stretch runners share: the output buffers, the ``dl_run`` struct, the
+    call (made by the subclass, over ``work_rows`` rows of work) and the hand-over.
 
     :meth:`run` calls C; :meth:`take` hands over what it did and brings the SciPy
-    solver object up to date (through the adapter's ``take_state``: its time, state,
-    derivative, step sizes, ``nfev`` and ``status``). The two are separate so that what
-    a call did survives a Ctrl-C that lands right after it: ``take`` can be called
-    again until it returns.
+    solver object up to date (through the adapter: its time, state, derivative, step
+    sizes, ``nfev`` and ``status``). The two are separate so that what a call did
+    survives a Ctrl-C that lands right after it: ``take`` can be called again until
+    it returns.
     """
 
-    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None, work_rows: int) -> None:
         self.solver, native, n_state = solver, solver._native, solver.n
         rows = max(ROWS[0], min(ROWS[1], BUFFER_DOUBLES // n_state))
         if t_eval is not None:  # no more than the output times (a large buffer is mapped anew)
             rows = max(1, min(rows, len(t_eval)))
-        self._K, self._y = solver.stage_storage(), np.empty(n_state)
+        self._y = np.empty(n_state)
         self._t_out, self._y_out = np.empty(rows), np.empty((rows, n_state))
-        self._work = np.empty((2 + solver._n_rows, n_state))  # y_new, y_end, rows
+        self._work = np.empty((2 + work_rows, n_state))  # y_new, y_end, rows
         self._t_eval = np.ascontiguousarray([] if t_eval is None else t_eval, dtype=float)
         self._ahead = None if t_eval is None else solver.direction * self._t_eval
         mask, max_newton, max_full, position_tol, accept_tol = native.projection_arguments()
@@ -63,12 +64,21 @@ class StretchRunner:
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
             rows=interpolant, near2=SCREEN)
-        self._call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
-                             ctypes.addressof(self._run), self._y.ctypes.data,
-                             self._K.ctypes.data, solver._stage.ctypes.data)
         self._nfev = 0
         self._pending = False
         self.near_singular = False
+
+    def _call(self) -> int:
+        """Run the stretch in C from the loaded start (:meth:`_load`); its status."""
+        raise NotImplementedError
+
+    def _load(self) -> int:
+        """Load the solver's state into C; the solver's ``nfev`` before the call."""
+        raise NotImplementedError
+
+    def _hand_back(self) -> int:
+        """Bring the solver to the end of the last finished step; the evaluations C made."""
+        raise NotImplementedError
 
     def run(self) -> bool:
         """Steps from the solver's state until ``t_bound`` or the budget of one call.
@@ -78,16 +88,13 @@ class StretchRunner:
         What the inputs' function raised (an :class:`~dalembert.errors.InputError`, a
         Ctrl-C landing in it) is raised again here, :meth:`take` still to follow.
         """
-        solver, st, run = self.solver, self.solver._stepper, self._run
-        start = step_start(solver)
-        self._y[:] = start.y
-        self._K[0] = start.f
-        st.t, st.h_abs, st.err_old, st.nfev = start.t, start.h_abs, start.state.err_old, 0
+        solver, run = self.solver, self._run
+        self._nfev = self._load()
         if self._ahead is not None:
             run.next_eval = int(np.searchsorted(self._ahead, solver.direction * solver.t,
                                                 "right"))
         run.n_steps = run.n_out = 0
-        self._nfev, self._pending = solver.nfev, True
+        self._pending = True
         with outside_python():  # the GIL is released: other threads run their Python
             status = self._call()
         #: whether the stretch ended after a step near a singular configuration (the
@@ -103,13 +110,95 @@ class StretchRunner:
         repeated: it hands over nothing twice)."""
         if not self._pending:
             return None
-        solver, st, run = self.solver, self.solver._stepper, self._run
+        run = self._run
         k = run.n_out
         taken = (run.n_steps, self._t_out[:k].copy(), self._y_out[:k].copy())
-        solver.nfev = self._nfev + st.nfev
+        self.solver.nfev = self._nfev + self._hand_back()
+        self._pending = False
+        return taken
+
+
+class StretchRunner(_Stretches):
+    """Runs a native Runge-Kutta solver (``NativeDOP853``, ``NativeRK45``,
+    ``NativeRK23``) in C by ``dl_rk_run``, with outputs at ``t_eval`` (or at every step
+    end if ``None``)."""
+
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
+        super().__init__(solver, t_eval, solver._n_rows)
+        native = solver._native
+        self._K = solver.stage_storage()
+        self._c_call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
+                               ctypes.addressof(self._run), self._y.ctypes.data,
+                               self._K.ctypes.data, solver._stage.ctypes.data)
+
+    def _call(self) -> int:
+        return self._c_call()
+
+    def _load(self) -> int:
+        solver, st = self.solver, self.solver._stepper
+        start = step_start(solver)
+        self._y[:] = start.y
+        self._K[0] = start.f
+        st.t, st.h_abs, st.err_old, st.nfev = start.t, start.h_abs, start.state.err_old, 0
+        return solver.nfev
+
+    def _hand_back(self) -> int:
+        solver, st, run = self.solver, self.solver._stepper, self._run
         if run.n_steps:
             take_state(solver, t=st.t, t_old=run.t_old, y=self._y.copy(), f=self._K[0].copy(),
                        h_abs=st.h_abs, h_previous=st.h_previous)
             solver.err_old = st.err_old
-        self._pending = False
-        return taken
+        return st.nfev
+
+
+class RadauStretchRunner(_Stretches):
+    """Runs a :class:`~.radau.NativeRadau` in C by ``dl_radau_run``, with outputs at
+    ``t_eval`` (or at every step end if ``None``): the step's interpolant and the end
+    projected, the restart from ``f`` at the projected end (SciPy's restart)."""
+
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
+        super().__init__(solver, t_eval, 2)  # the step's f and f at the projected end
+        native = solver._native
+        self._f, self._Z = np.empty(solver.n), np.empty((3, solver.n))
+        self._c_call = partial(native.lib.dl_radau_run, *native._at, *solver._fixed,
+                               ctypes.addressof(self._run), self._y.ctypes.data,
+                               self._f.ctypes.data, self._Z.ctypes.data)
+        self._counts = (0, 0, 0)
+
+    def _call(self) -> int:
+        return self._c_call()
+
+    def _load(self) -> int:
+        solver = self.solver
+        st = solver._state
+        st.t, st.h_abs = solver.t, step_size(solver)
+        self._y[:] = solver.y
+        self._f[:] = solver.f
+        self._counts = (st.nfev, st.njev, st.nlu)
+        return solver.nfev
+
+    def _hand_back(self) -> int:
+        solver, st, run = self.solver, self.solver._state, self._run
+        solver.njev += st.njev - self._counts[1]
+        solver.nlu += st.nlu - self._counts[2]
+        if run.n_steps:
+            take_state(solver, t=st.t, t_old=run.t_old, y=self._y.copy(), f=self._f.copy(),
+                       h_abs=st.h_abs, h_previous=st.t - run.t_old)
+        return st.nfev - self._counts[0]
+
+
+def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches:
+    """The runner of ``solver``'s stretches in C (its class decides which).
+
+    Parameters
+    ----------
+    solver
+        A native solver: a Runge-Kutta one or :class:`~.radau.NativeRadau`.
+    t_eval
+        The output times (``None``: every step end).
+    """
+    from .radau import NativeRadau  # scipy.integrate: imported when a run needs it
+
+    if isinstance(solver, NativeRadau):
+        return RadauStretchRunner(solver, t_eval)
+    return StretchRunner(solver, t_eval)

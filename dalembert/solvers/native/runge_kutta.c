@@ -194,11 +194,6 @@ static void interpolate(const dl_tableau *tb, int64_t n_state, double t_old, dou
   for (int64_t i = 0; i < n_state; ++i) y[i] += y_old[i];
 }
 
-static int project(const dl_model *md, dl_data *d, const dl_run *run, double t, double *y) {
-  return dl_project(md, d, t, y, run->holonomic, run->max_newton, run->max_full,
-                    run->position_tol, run->accept_tol);
-}
-
 /* One step from (st->t, y, K[0] = f(t, y)), finished as the Python loop finishes it:
  * the end projected into y_end, the outputs in (t_old, t_new] written after row
  * run->n_out (interpolated and projected; the one at t_new is the projected end). On
@@ -217,7 +212,7 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
   const int64_t count = every_step ? 1 : hi - run->next_eval;
   if (run->n_out + count > run->capacity) return DL_OUTPUTS;
   memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
-  if ((status = project(md, d, run, t_new, run->y_end)) != DL_OK) return status;
+  if ((status = run_project(md, d, run, t_new, run->y_end)) != DL_OK) return status;
   int made = 0;
   for (int64_t k = 0; k < count; ++k) {
     const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
@@ -232,20 +227,11 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
       return status;
     made = 1;
     interpolate(tb, n_state, t_old, t_new - t_old, y, run->rows, s, row);
-    if ((status = project(md, d, run, s, row)) != DL_OK) return status;
+    if ((status = run_project(md, d, run, s, row)) != DL_OK) return status;
   }
   run->next_eval = hi;
   run->n_out += count;
   return d->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
-}
-
-/* Seconds on the monotonic clock: a call's budget serves Ctrl-C and the progress bar,
- * which wait on the wall clock, and it is read in nanoseconds where clock() (the
- * process's CPU time, summed over its threads) is a system call of about 0.5 us. */
-static double wall_seconds(void) {
-  struct timespec now;
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
 /* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),

@@ -316,6 +316,8 @@ int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *
 /* radau.c */
 int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
                   const double *y, const double *f, double *y_new, double *f_new, double *Z);
+int dl_radau_run(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
+                 dl_run *run, double *y, double *f, double *Z);
 
 /* functions.c */
 int dl_call(const dl_model *md, const dl_data *d, int64_t which, const double *const *args,
@@ -329,5 +331,23 @@ typedef struct {
   int64_t value;
 } dl_layout_entry;
 int64_t dl_layout(const dl_layout_entry **entries);
+
+/* ---- shared by the stretches of steps (runge_kutta.c, radau.c) ---- */
+
+/* Seconds on the monotonic clock: a call's budget serves Ctrl-C and the progress bar,
+ * which wait on the wall clock, and it is read in nanoseconds where clock() (the
+ * process's CPU time, summed over its threads) is a system call of about 0.5 us. */
+DL_INLINE double wall_seconds(void) {
+  struct timespec now;
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
+}
+
+/* dl_project with a stretch's arguments. */
+DL_INLINE int run_project(const dl_model *md, dl_data *d, const dl_run *run, double t,
+                          double *y) {
+  return dl_project(md, d, t, y, run->holonomic, run->max_newton, run->max_full,
+                    run->position_tol, run->accept_tol);
+}
 
 #endif

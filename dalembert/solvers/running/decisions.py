@@ -193,12 +193,12 @@ def choose_solver(options: SimulationOptions, native: bool,
 
 def choose_stretches(stepper: type[OdeSolver] | None, projection: bool,
                      output: Output) -> bool:
-    """Whether whole stretches of steps run in C: with an explicit Runge-Kutta C stepper,
-    the C loop's projection, and neither events nor dense output.
+    """Whether whole stretches of steps run in C: with a C stepper, the C loop's
+    projection, and neither events nor dense output.
 
     >>> from dalembert.options import simulation_options
     >>> choose_stretches(None, True, simulation_options((0.0, 1.0)).output)
     False
     """
-    return stepper is not None and issubclass(stepper, ControlledSteps) and projection \
-        and not output.events and not output.dense_output
+    return stepper is not None and projection and not output.events \
+        and not output.dense_output

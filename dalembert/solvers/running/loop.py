@@ -21,7 +21,7 @@ from scipy.integrate import OdeSolver
 
 from ...errors import DalembertError
 from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
-from ..native.run import StretchRunner
+from ..native.run import stretch_runner
 from ..singular.careful import CarefulSteps, RetakeStep
 from ..singular.watch import Runaway, Singularity, StepCollapse
 from ..steppers.dense_output import DenseRecorder
@@ -508,10 +508,11 @@ class _StepState:
 
 class StretchLoop(PythonLoop):
     """The loop in C: whole stretches of steps (step, projection, outputs at
-    ``t_eval``, restart) run by a :class:`~dalembert.solvers.native.run.StretchRunner`, returning to
-    Python every fraction of a second; a step C cannot finish is taken the Python
+    ``t_eval``, restart) run by the runner of
+    :func:`~dalembert.solvers.native.run.stretch_runner`, returning to Python every
+    fraction of a second; a step C cannot finish is taken the Python
     way (a step from values that are not finite among them: the Python loop then
-    stops with its diagnosis). Only for a native Runge-Kutta solver with its native
+    stops with its diagnosis). Only for a native solver with its native
     projection, no events and no dense output (the plan checks). Same steps and
     states as :class:`PythonLoop` (tested). Near a singular configuration (measured
     after every stretch) the steps are taken the Python way, carefully (``careful``,
@@ -525,7 +526,7 @@ class StretchLoop(PythonLoop):
                  runaway: Runaway | None = None) -> None:
         super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful,
                          runaway)
-        self.runner = StretchRunner(solver, self.t_eval)
+        self.runner = stretch_runner(solver, self.t_eval)
 
     def advance(self) -> None:
         if self.solver is not self.native or self._careful_from_here():

@@ -51,9 +51,11 @@ __all__ = [
     "SAFETY",
     "ControlledSteps",
     "LinearizedRadau",
+    "RadauEnd",
     "StepEnd",
     "StepStart",
     "StepTolerances",
+    "SteppedRadau",
     "controlled_class",
     "hand_over",
     "interpolant_form",
@@ -592,3 +594,95 @@ class LinearizedRadau(Radau):
         self.solve_lu = lambda LU, b: LU(b)
         self.njev = 0
         self.J = self.jac(self.t, self.y, self.f)
+
+
+# SciPy's Radau with each step taken elsewhere (in C: native/radau.py). Its start-up
+# (the first derivative and step size), dense output (``RadauDenseOutput`` from the
+# step's stages ``Z``) and restarts stay SciPy's; a step writes back the attributes
+# SciPy's own ``_step_impl`` leaves (``h_abs_old`` and ``error_norm_old`` for the
+# step-size predictor, ``Z`` and ``sol`` for the dense output and the next step's
+# Newton guess).
+
+
+@dataclass(frozen=True, eq=False)
+class RadauEnd:
+    """An accepted Radau step, as SciPy's Radau continues from it.
+
+    Attributes
+    ----------
+    t_old, y_old
+        Its start.
+    t, y, f
+        Its end: the time, the state and the derivative there.
+    Z
+        The stage increments (``3 x n``): the collocation polynomial.
+    h_abs
+        The next step's size.
+    h_abs_old, error_norm_old
+        The step-size predictor's memory (``None``: none).
+    """
+
+    t_old: float
+    y_old: np.ndarray
+    t: float
+    y: np.ndarray
+    f: np.ndarray
+    Z: np.ndarray
+    h_abs: float
+    h_abs_old: float | None
+    error_norm_old: float | None
+
+
+class SteppedRadau(Radau):
+    """SciPy's Radau IIA whose steps :meth:`take_step` takes (see the comment above).
+
+    Parameters
+    ----------
+    fun, t0, y0, t_bound
+        As SciPy's solvers take them.
+    options
+        Radau's other keywords (``rtol``, ``atol``, ``max_step``, ``first_step``).
+    """
+
+    def __init__(self, fun, t0, y0, t_bound, **options) -> None:
+        n = len(y0)
+        # a zero sparse Jacobian: SciPy's set-up then makes no dense matrix and evaluates
+        # no Jacobian; the steps' linear algebra is take_step's
+        super().__init__(fun, t0, y0, t_bound, jac=scipy.sparse.csc_matrix((n, n)),
+                         **options)
+
+    @property
+    def newton_tolerance(self) -> float:
+        """SciPy's tolerance of the Newton iteration (from ``rtol``)."""
+        return float(self.newton_tol)
+
+    @property
+    def tolerances(self) -> StepTolerances:
+        """The tolerances and the largest step, as SciPy checked them."""
+        atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
+        return StepTolerances(float(self.rtol), atol, float(self.max_step))
+
+    def take_step(self, t: float, y: np.ndarray, f: np.ndarray, h_abs: float
+                  ) -> RadauEnd | str:
+        """One accepted step from ``(t, y)`` (``f`` the derivative there, ``h_abs`` the
+        size to try first), or the message saying why none could be taken.
+
+        Parameters
+        ----------
+        t, y, f
+            Where the step starts.
+        h_abs
+            The step size to try first.
+        """
+        raise NotImplementedError
+
+    def _step_impl(self):
+        end = self.take_step(self.t, self.y, self.f, self.h_abs)
+        if isinstance(end, str):
+            return False, end
+        self.t_old, self.y_old = end.t_old, end.y_old
+        self.t, self.y, self.f, self.Z = end.t, end.y, end.f, end.Z
+        self.h_abs, self.h_abs_old, self.error_norm_old = end.h_abs, end.h_abs_old, \
+            end.error_norm_old
+        self.sol = self._compute_dense_output()
+        return True, None

@@ -74,3 +74,31 @@ def test_dense_output_attributes(cls):
     implicit = Radau(decay, 0.0, np.ones(2), 1.0)
     implicit.step()
     assert scipy_ivp.interpolant_form(implicit.dense_output()) is None
+
+
+class _ScipysOwnStep(scipy_ivp.SteppedRadau):
+    """A SteppedRadau whose take_step is SciPy's own step, read back from a twin."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.twin = Radau(*args, **kwargs)
+
+    def take_step(self, t, y, f, h_abs):
+        twin = self.twin
+        twin.step()
+        return scipy_ivp.RadauEnd(twin.t_old, twin.y_old, twin.t, twin.y, twin.f, twin.Z,
+                                  twin.h_abs, twin.h_abs_old, twin.error_norm_old)
+
+
+def test_stepped_radau_continues_as_scipys_radau():
+    """The attributes a SteppedRadau writes after a step are the ones SciPy's Radau reads:
+    its dense output and its state agree with SciPy's own step by step."""
+    solver = _ScipysOwnStep(decay, 0.0, np.ones(2), 1.0, rtol=1e-6, atol=1e-9)
+    assert 0 < solver.newton_tolerance < 0.03 and solver.tolerances.atol.shape == (2,)
+    for _ in range(3):
+        solver.step()
+        twin = solver.twin
+        assert (solver.t, solver.t_old, solver.h_abs) == (twin.t, twin.t_old, twin.h_abs)
+        t = 0.5 * (solver.t_old + solver.t)
+        assert np.array_equal(solver.dense_output()(t), twin.dense_output()(t))
+        assert np.array_equal(solver.sol(t), twin.sol(t))  # the next step's Newton guess
