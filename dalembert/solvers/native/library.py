@@ -27,13 +27,15 @@ INPUTS_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, _f64)
 #: RANK_CHANGED: a dropped dependent row no longer follows from the kept ones;
 #: NOT_FINITE: a step would start from a time, step size, state or derivative that is
 #: not finite; INPUT: the inputs' callback failed; NEAR_SINGULAR: a stretch ended after
-#: a step that ended near a singular configuration).
+#: a step that ended near a singular configuration; STIFF: a stretch ended after the step
+#: that made the stiffness detector say stiff).
 (OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED,
- NOT_FINITE, INPUT, NEAR_SINGULAR) = range(10)
+ NOT_FINITE, INPUT, NEAR_SINGULAR, STIFF) = range(11)
 CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
          "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
-         "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT, "DL_NEAR_SINGULAR": NEAR_SINGULAR}
+         "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT, "DL_NEAR_SINGULAR": NEAR_SINGULAR,
+         "DL_STIFF": STIFF}
 #: The places of the generated functions in ``dl_model.fn`` (``DL_FN_<NAME>``): the
 #: registry's ``native`` numbers; ``DL_FN_COUNT`` places in all, functions of at most
 #: ``DL_MAX_ARGS`` arguments for ``dl_call``.
@@ -105,7 +107,9 @@ class Stepper(ctypes.Structure):
                                             "rtol", "max_step")),
                 ("atol", _ptr), ("nfev", _i64), ("alpha", _f64), ("beta", _f64),
                 ("err_old", _f64), ("safety", _f64), ("min_factor", _f64),
-                ("max_factor", _f64), ("error_floor", _f64)]
+                ("max_factor", _f64), ("error_floor", _f64), ("h_lambda", _f64),
+                ("stiff_limit", _f64), *((name, _i64) for name in (
+                    "stiff_after", "calm_after", "stiff_count", "calm_count"))]
 
 
 class Run(ctypes.Structure):

@@ -88,7 +88,16 @@ static int rk_attempt(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_s
   if (status != DL_OK) return status;
   combine(y, h, K, tb->B, s, n_state, y_new);
   st->nfev++;
-  return dl_rhs(md, d, st->t + h, y_new, K + s * n_state, NULL);
+  const int rhs = dl_rhs(md, d, st->t + h, y_new, K + s * n_state, NULL);
+  /* the stiffness estimate (steppers/stiffness.py): stage holds the last stage's argument */
+  double num = 0.0, den = 0.0;
+  for (int64_t i = 0; i < n_state; ++i) {
+    const double df = K[s * n_state + i] - K[(s - 1) * n_state + i], dy = y_new[i] - stage[i];
+    num += df * df;
+    den += dy * dy;
+  }
+  st->h_lambda = den > 0.0 ? fabs(h) * sqrt(num / den) : NAN;
+  return rhs;
 }
 
 /* Steps from st->t until one is accepted (steppers/runge_kutta.py's controlled_step, under
@@ -234,6 +243,18 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
   return d->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
 }
 
+/* The stiffness detector's memory after an accepted step (steppers/stiffness.py's
+ * StiffnessDetector.note, its constants in st); 1 when it says stiff. */
+static int note_stiffness(dl_stepper *st) {
+  if (st->h_lambda > st->stiff_limit) {
+    ++st->stiff_count;
+    st->calm_count = 0;
+  } else if (st->h_lambda <= st->stiff_limit && ++st->calm_count >= st->calm_after) {
+    st->stiff_count = st->calm_count = 0;
+  }
+  return st->stiff_count >= st->stiff_after;
+}
+
 /* Steps from (st->t, y, K[0] = f(t, y)) as the Python loop takes them (finish_step),
  * until t_bound, the step or time budget, or a full output buffer. On return y,
  * K[0] and st hold the state after the last finished step; a non-OK status means
@@ -242,7 +263,9 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
  * itself, from this state, and st->nfev does not count the dropped attempt (a step that
  * would start from values that are not finite is one: DL_NOT_FINITE, see dl_rk_step).
  * Every loop inside a step is bounded, so the call returns within a step of the time
- * budget and Ctrl-C is served. */
+ * budget and Ctrl-C is served. With st->stiff_limit > 0 the call also ends, DL_STIFF,
+ * after the step that makes the stiffness detector say stiff (the caller may switch to
+ * an implicit method). */
 int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *st, dl_run *run,
               double *y, double *K, double *stage) {
   const int64_t n_state = 2 * md->n;
@@ -266,6 +289,7 @@ int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *
     memcpy(K, y + md->n, (size_t)md->n * sizeof(double));
     memcpy(K + md->n, K + tb->n_stages * n_state + md->n, (size_t)md->n * sizeof(double));
     if (status == DL_NEAR_SINGULAR) return status;  /* the caller measures and decides */
+    if (st->stiff_limit > 0.0 && note_stiffness(st)) return DL_STIFF;
   }
   return DL_OK;
 }

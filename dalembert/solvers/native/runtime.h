@@ -32,10 +32,11 @@
  * from the kept ones (the rank changed since it was measured); DL_NOT_FINITE: a step
  * would start from a time, step size, state or derivative that is not finite;
  * DL_NEAR_SINGULAR: a stretch ended after a step that ended near a singular
- * configuration (the caller measures and decides, numerics/singular.py). */
+ * configuration (the caller measures and decides, numerics/singular.py); DL_STIFF: a
+ * stretch ended after the step that made the stiffness detector say stiff. */
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
        DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7,
-       DL_INPUT = 8, DL_NEAR_SINGULAR = 9 };
+       DL_INPUT = 8, DL_NEAR_SINGULAR = 9, DL_STIFF = 10 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);
@@ -167,6 +168,10 @@ typedef struct {
   double alpha, beta;
   double err_old;             /* its state: the last accepted step's error (>= error_floor) */
   double safety, min_factor, max_factor, error_floor;
+  /* the last attempt's stiffness estimate h |lambda| (steppers/stiffness.py), and the
+   * detector run by dl_rk_run: its constants (stiff_limit 0: off) and its memory */
+  double h_lambda, stiff_limit;
+  int64_t stiff_after, calm_after, stiff_count, calm_count;
 } dl_stepper;
 
 /* One call of dl_rk_run: where the outputs go, how to project, when to return. */
