@@ -1019,10 +1019,12 @@ class System:
             return system._plan(segment, *layout.split(y), parameters, None).start()
 
         if stepping:
+            from .solvers.contact.rotations import Rotations
             from .solvers.contact.time_stepping import run_time_stepping
 
             stepped = run_time_stepping(full, gaps, (t0, tf), plan.y0, options.contact_step,
-                                        options.output.t_eval, options.inputs)
+                                        options.output.t_eval, options.inputs,
+                                        Rotations(self.definition.quaternions))
             result, derived, history = stepped.result, stepped.derived, stepped.history
             applied = None
         else:

@@ -6,6 +6,9 @@ and Jean's scheme steps over them at a fixed step ``h``, impacts and persistent
 contact alike, with impulses over the step in place of forces:
 
 1. the midpoint ``q_m = q + h/2 v``; there ``M``, ``f``, the rows ``A`` and the gaps;
+   a rigid body's Euler parameters turn there instead, by its angular velocity
+   (:mod:`~dalembert.solvers.contact.rotations`: a straight line would cost a
+   spinning body ``O((h w)^2)`` of its spin each step), its rates carried along;
 2. the contacts that count are the gaps closed (or touching, to rounding) at the
    midpoint, ``g(q_m) <= 0``;
 3. the velocity at the step's end solves the KKT system with the bilateral rows,
@@ -14,7 +17,8 @@ contact alike, with impulses over the step in place of forces:
    gaps' rates, Newton's law at the velocity level): with the Delassus matrix
    ``W = A_c K^-1 A_c^T`` (one KKT factorization, one solve per contact) it is a small
    dense LCP, solved by principal pivoting (:func:`solve_lcp`);
-4. ``q+ = q_m + h/2 v+``, then the positions projected onto the bilateral rows and
+4. ``q+ = q_m + h/2 v+`` (the quaternions turned again), then the positions
+   projected onto the bilateral rows and
    the gaps that went below 0 (least change), and the velocities onto the bilateral
    rows.
 
@@ -43,6 +47,7 @@ from ..projection import project_velocities
 from ..running.integrate import IntegrationResult
 from .driver import ContactHistory, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
+from .rotations import Rotations
 
 #: Principal pivots of :func:`solve_lcp` per contact before it gives up.
 PIVOTS_PER_CONTACT = 50
@@ -160,7 +165,8 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
 
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
                       y0: np.ndarray, h: float, t_eval: np.ndarray | None,
-                      signal: InputSignal | None = None) -> SteppedRun:
+                      signal: InputSignal | None = None,
+                      rotations: Rotations | None = None) -> SteppedRun:
     """Run ``t_span`` with Moreau-Jean steps of ``h`` (see the module docstring).
 
     Parameters
@@ -180,10 +186,14 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
         equal, at most ``h``); ``None``: every step.
     signal
         The inputs at each state, or ``None``.
+    rotations
+        Where the coordinates are unit quaternions (turned, not moved along a line,
+        by a step); ``None``: nowhere.
     """
     t0, tf = t_span
     n, m = full.n, full.m
     grid = _grid(t0, tf, h, t_eval)
+    turn = Rotations.none() if rotations is None else rotations
     pattern = full.pattern
     kkt = kkt_factorization(pattern)
     bilateral = np.zeros(m, dtype=bool)
@@ -198,9 +208,9 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     try:
         for t, end in itertools.pairwise(grid):
             h = end - t
-            if signal is not None:
-                full.set_inputs(signal(t + h / 2, q + h / 2 * v, v))
-            q, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h)
+            q_next, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h, turn, signal)
+            v = turn.carry(q, v, q_next)  # the velocity before, at the new positions
+            q = q_next
             closed = tuple(int(i) for i in np.flatnonzero(P[gaps.rows] > 0.0))
             new = sorted(set(closed) - set(closed_before))
             # an impact: a contact closing faster than its rest speed (not one that
@@ -233,10 +243,15 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
 
 
 def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
-          q: np.ndarray, v: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One Moreau-Jean step: the positions and velocity after it and the impulses."""
+          q: np.ndarray, v: np.ndarray, h: float, turn: Rotations,
+          signal: InputSignal | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One Moreau-Jean step: the positions and velocity after it and the impulses
+    (the inputs from ``signal`` at the midpoint, if given)."""
     n, m, pattern = full.n, full.m, full.pattern
-    tm, qm = t + h / 2, q + h / 2 * v
+    tm, qm = t + h / 2, turn.advance(q, v, h / 2)
+    v = turn.carry(q, v, qm)  # rates tied to the midpoint's quaternions
+    if signal is not None:
+        full.set_inputs(signal(tm, qm, v))
     Mv, f, Av, _ = full.kkt_sparse(tm, qm, v)
     _, b = full.velocity_sparse(tm, qm)
     momentum = matvec(pattern.M_rows, pattern.M_cols, Mv, v, n) + h * f
@@ -280,8 +295,8 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
         P[rows] = impulse
         pushing = near[impulse[:len(near)] > 0.0]
         P[bilateral] += (reaction @ impulse)[bilateral]
-    q_next = _project(full, gaps, t + h, qm + h / 2 * v_free, pushing)
-    return q_next, project_velocities(full, t + h, q_next, v_free,
+    q_next = _project(full, gaps, t + h, turn.advance(qm, v_free, h / 2), pushing)
+    return q_next, project_velocities(full, t + h, q_next, turn.carry(qm, v_free, q_next),
                                       rows=np.flatnonzero(bilateral)), P
 
 
