@@ -25,6 +25,15 @@ contact alike, with impulses over the step in place of forces:
 It is first order: the impacts land within a step of their times and the apexes of a
 bouncing ball within ``O(h)`` of the closed form (measured in the tests), against the
 event-driven mode's rounding. The multipliers reported are the impulses over ``h``.
+
+Inputs held by a digital controller (``sample_time``): the steps fall on the sample
+instants (each interval between two instants, or an instant and an output time, cut
+into equal steps of at most ``h``), the sample is taken at each instant from the
+state there (as the event-driven mode takes it, :class:`~.driver.Hold`) and held
+over the steps to the next; an output time at an instant shows the sample taken there.
+Under inputs held constant over a step the step is exact for a constant force (its
+position update is the trapezoid of a velocity linear in time), so a free motion
+follows the zero-order hold's recurrence to rounding.
 """
 
 from __future__ import annotations
@@ -37,7 +46,7 @@ from functools import partial
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...errors import ContactError
+from ...errors import ContactError, InputError
 from ...inputs import InputSignal
 from ...numerics.gauss_newton import gauss_newton
 from ..kkt.factorization import kkt_factorization
@@ -45,7 +54,7 @@ from ..kkt.sparse import matvec
 from ..outputs import output_arrays
 from ..projection import project_velocities
 from ..running.integrate import IntegrationResult
-from .driver import ContactHistory, ImpactRecord, Switch
+from .driver import ContactHistory, Hold, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
 from .rotations import Rotations
 
@@ -60,11 +69,13 @@ PROJECTION_ITERATIONS = 8
 
 @dataclass(frozen=True)
 class SteppedRun:
-    """A time-stepping run: the states, the outputs, the contact history."""
+    """A time-stepping run: the states, the outputs, the contact history, and (inputs
+    sampled) the inputs held at each point recorded."""
 
     result: IntegrationResult
     derived: dict[str, np.ndarray]
     history: ContactHistory
+    inputs: np.ndarray | None = None
 
 
 def solve_lcp(W: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -185,14 +196,19 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
         The times to record (each a step's end: the steps between two of them are
         equal, at most ``h``); ``None``: every step.
     signal
-        The inputs at each state, or ``None``.
+        The inputs at each step's midpoint, or (with its ``sample_time``) sampled at
+        each instant and held; or ``None``.
     rotations
         Where the coordinates are unit quaternions (turned, not moved along a line,
         by a step); ``None``: nowhere.
     """
     t0, tf = t_span
     n, m = full.n, full.m
-    grid = _grid(t0, tf, h, t_eval)
+    hold = Hold.of(signal, t_span, n)
+    asked = None if t_eval is None else hold_marks(hold, t_eval)
+    instants = np.zeros(0) if hold.schedule is None else hold.schedule.instants
+    grid = _grid(t0, tf, h, None if asked is None and not len(instants) else
+                 np.concatenate([np.zeros(0) if asked is None else asked, instants]))
     turn = Rotations.none() if rotations is None else rotations
     pattern = full.pattern
     kkt = kkt_factorization(pattern)
@@ -203,12 +219,23 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     history.switches.append(Switch(t0, (), q.copy(), v.copy()))
     times, states, forces = [t0], [np.concatenate([q, v])], [np.zeros(m)]
     accelerations = [np.full(n, np.nan)]  # the mean over the step ending there
+    held = [hold.sample(t0, np.concatenate([q, v]))] if hold.sampled else []
     closed_before: tuple[int, ...] = ()
     status, message = "finished", "the integration reached the end of t_span"
     try:
         for t, end in itertools.pairwise(grid):
             h = end - t
-            q_next, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h, turn, signal)
+            if held:
+                full.set_inputs(held[-1])
+            q_next, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h, turn,
+                                      None if hold.sampled else signal)
+            if hold.sampled:  # the sample at an instant, shown at its point; else held
+                try:
+                    held.append(hold.sample(end, np.concatenate([q_next, v_next]))
+                                if hold.is_instant(end) else held[-1])
+                except InputError as exc:  # the point is the sample's: not recorded
+                    status, message = "failed", f"integration stopped at t={end:.6g}: {exc}"
+                    break
             v = turn.carry(q, v, q_next)  # the velocity before, at the new positions
             q = q_next
             closed = tuple(int(i) for i in np.flatnonzero(P[gaps.rows] > 0.0))
@@ -232,14 +259,45 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
         status, message = "interrupted", f"interrupted by the user at t={times[-1]:.6g}"
     t_all, y_all = np.array(times), np.array(states)
     f_all, a_all = np.array(forces), np.array(accelerations)
-    if t_eval is not None:  # each a step's end (the grid's)
-        kept = np.isin(t_all, t_eval)
+    u_all = np.array(held) if hold.sampled else None
+    if t_eval is not None and asked is not None:  # each a step's end (the grid's)
+        kept = np.isin(t_all, asked)
         t_all, y_all, f_all, a_all = t_all[kept], y_all[kept], f_all[kept], a_all[kept]
+        # the times asked for, where one was moved onto an instant within rounding
+        t_all = np.asarray(t_eval, dtype=float)[np.searchsorted(asked, t_all)]
+        u_all = None if u_all is None else u_all[kept]
     derived = _outputs(full, gaps, t_all, y_all, f_all, a_all)
     result = IntegrationResult(t=t_all, y=y_all, status=status, message=message,
                                stats={"n_steps": len(times) - 1,
                                       "n_impacts": len(history.impacts)})
-    return SteppedRun(result, derived, history)
+    return SteppedRun(result, derived, history, u_all)
+
+
+def hold_marks(hold: Hold, t_eval: np.ndarray) -> np.ndarray:
+    """The output times, each within rounding of a sample instant moved onto it (a
+    ``t_eval`` of ``0.3`` against the instant ``3 * 0.1``): a step ends there, not a
+    rounding error away from it.
+
+    Parameters
+    ----------
+    hold
+        The sample instants (none: ``t_eval`` as it is).
+    t_eval
+        The output times, increasing.
+
+    Examples
+    --------
+    >>> from dalembert.inputs import input_signal
+    >>> signal = input_signal(lambda t, q, qd: -q[0], ["u"], 0.1, (0.0, 1.0))
+    >>> hold_marks(Hold.of(signal, (0.0, 1.0), 1), np.array([0.15, 0.3])).tolist()
+    [0.15, 0.30000000000000004]
+    """
+    t_eval = np.asarray(t_eval, dtype=float)
+    if hold.schedule is None or not len(t_eval):
+        return t_eval
+    instants = hold.schedule.instants
+    nearest = instants[np.abs(t_eval[:, None] - instants[None, :]).argmin(axis=1)]
+    return np.where(np.abs(t_eval - nearest) <= hold.tolerance, nearest, t_eval)
 
 
 def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
