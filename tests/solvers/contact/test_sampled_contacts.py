@@ -16,7 +16,8 @@ constant over each step, and a Moreau-Jean step is exact for a constant force (i
 position update is the trapezoid of a velocity linear in time). Its first-order error
 is in where within a step a contact closes; here every contact opens at a step's
 start, so these hold to rounding (1e-12 over 2000 steps), with steps that divide the
-sample time and steps that do not (cut shorter to fall on the instants).
+sample time and steps that do not (then each interval is cut into equal steps a
+little shorter, which fall on the instants).
 """
 
 from __future__ import annotations
