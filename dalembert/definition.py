@@ -78,6 +78,12 @@ class Definition(Protocol):
     def unilateral(self) -> tuple[UnilateralLaw, ...]:
         """The unilateral constraints (contacts), apart from the rows."""
 
+    @property
+    def quaternions(self) -> np.ndarray:
+        """The places ``(k, 4)`` of the coordinates that are a unit quaternion's Euler
+        parameters ``b0..b3`` (a rigid body's), which a time step turns rather than
+        moves along a line; ``(0, 4)`` for none."""
+
     def with_gaps_closed(self, closed: tuple[int, ...], tangents: bool = False) -> Definition:
         """The definition with the unilateral constraints ``closed`` (indices) as rows
         after the others, and none left apart (``tangents``: their sliding velocities
@@ -175,6 +181,12 @@ class SymbolicDefinition:
     @property
     def unilateral(self) -> tuple[UnilateralRow, ...]:
         return self.model.constraints.unilateral
+
+    @property
+    def quaternions(self) -> np.ndarray:
+        """None known: a model written by hand has no coordinates marked as Euler
+        parameters, and each moves along a line in a time step."""
+        return np.zeros((0, 4), dtype=int)
 
     def with_gaps_closed(self, closed: tuple[int, ...],
                          tangents: bool = False) -> SymbolicDefinition:

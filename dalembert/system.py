@@ -708,7 +708,8 @@ class System:
             :mod:`dalembert.inputs`). The trajectory records them (``traj.inputs``).
         sample_time
             Hold the inputs between samples taken every ``sample_time`` (a digital
-            controller's zero-order hold); the integration restarts at each sample.
+            controller's zero-order hold); the integration restarts at each sample
+            (in the time-stepping contact mode the steps fall on the samples).
         timeout
             Seconds on the wall clock the integration may take (default: no limit),
             checked between steps (between the C loop's stretches of steps, a
@@ -991,9 +992,6 @@ class System:
                              "runs in the time-stepping contact mode for now: give "
                              "contact_mode='time-stepping' (or friction=math.inf for a "
                              "rough contact that never slides, event-driven)")
-        if stepping and options.inputs is not None and options.inputs.sample_time is not None:
-            raise ValueError("sample_time is not supported in the time-stepping contact mode "
-                             "yet: use the event-driven mode, or inputs without sample_time")
         if rough and stepping:
             raise ValueError(f"the unilateral constraint {rough[0]!r} is rough "
                              "(friction=math.inf), which runs in the event-driven contact "
@@ -1019,12 +1017,14 @@ class System:
             return system._plan(segment, *layout.split(y), parameters, None).start()
 
         if stepping:
+            from .solvers.contact.rotations import Rotations
             from .solvers.contact.time_stepping import run_time_stepping
 
             stepped = run_time_stepping(full, gaps, (t0, tf), plan.y0, options.contact_step,
-                                        options.output.t_eval, options.inputs)
+                                        options.output.t_eval, options.inputs,
+                                        Rotations(self.definition.quaternions))
             result, derived, history = stepped.result, stepped.derived, stepped.history
-            applied = None
+            applied = stepped.inputs  # the samples held (None: the inputs at each point)
         else:
             done = run_contacts(full, gaps, start, (t0, tf), plan.y0, options.output.t_eval,
                                 options.impact_law, len(user), options.inputs, dynamics)

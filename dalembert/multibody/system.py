@@ -20,6 +20,7 @@ from ..codegen.assembly import compile_parts
 from ..codegen.compiled import CompiledEquations
 from ..equations.lagrange import Equations, derive_equations
 from ..model.model import Model, build_model
+from .bodies import RigidBody
 from .parts import multibody_parts
 
 if TYPE_CHECKING:
@@ -87,6 +88,22 @@ class MultibodyDefinition:
     def unilateral(self) -> tuple[Contact, ...]:
         """The Multibody's contacts (its unilateral constraints)."""
         return self.multibody.contacts
+
+    @property
+    def quaternions(self) -> np.ndarray:
+        """The places of each rigid body's Euler parameters ``b0..b3``, ``(k, 4)``.
+
+        Examples
+        --------
+        >>> from dalembert.multibody import Multibody, Particle, RigidBody
+        >>> mb = Multibody([Particle("p", 1.0), RigidBody("box", 1.0, (1, 1, 1))])
+        >>> mb.system.definition.quaternions.tolist()
+        [[6, 7, 8, 9]]
+        """
+        place = {name: i for i, name in enumerate(self.coordinate_names)}
+        blocks = [[place[c.name] for c in body.coordinates[3:]]
+                  for body in self.multibody.bodies if isinstance(body, RigidBody)]
+        return np.array(blocks, dtype=int).reshape(-1, 4)
 
     def with_gaps_closed(self, closed: tuple[int, ...],
                          tangents: bool = False) -> MultibodyDefinition:

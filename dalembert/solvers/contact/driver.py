@@ -257,7 +257,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     segment_start = SegmentStart()
     made: dict[tuple[int, ...], RunData] = {}
     record = _Record()
-    hold = _Hold.of(signal, t_span, n)
+    hold = Hold.of(signal, t_span, n)
     held = hold.sample(t, y) if hold.sampled else None
 
     def inputs_at(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
@@ -359,10 +359,22 @@ def _stopped_sampling(result: IntegrationResult, t: float, exc: BaseException,
             f"integration stopped at t={t:.6g}: {exc}", exc
 
 
-class _Hold:
+class Hold:
     """Inputs held between the instants a digital controller samples them
     (:mod:`~dalembert.solvers.running.sampled`), or (``schedule`` ``None``) inputs
-    that are not sampled: no instant but the end."""
+    that are not sampled: no instant but the end. Both contact modes take their
+    samples through it.
+
+    Examples
+    --------
+    >>> from dalembert.inputs import input_signal
+    >>> signal = input_signal(lambda t, q, qd: -q[0], ["u"], 0.5, (0.0, 1.0))
+    >>> hold = Hold.of(signal, (0.0, 1.0), 1)
+    >>> hold.next_instant(0.0, 1.0), hold.is_instant(0.5), hold.is_instant(0.7)
+    (0.5, True, False)
+    >>> hold.sample(0.5, np.array([2.0, 0.0])).tolist()
+    [-2.0]
+    """
 
     def __init__(self, schedule: Schedule | None) -> None:
         self.schedule = schedule
@@ -370,7 +382,7 @@ class _Hold:
         self.tolerance = 0.0 if schedule is None else schedule.tolerance
 
     @classmethod
-    def of(cls, signal: InputSignal | None, t_span: tuple[float, float], n: int) -> _Hold:
+    def of(cls, signal: InputSignal | None, t_span: tuple[float, float], n: int) -> Hold:
         if signal is None or signal.sample_time is None:
             return cls(None)
         return cls(sampled_schedule(signal, t_span, n))

@@ -6,6 +6,9 @@ and Jean's scheme steps over them at a fixed step ``h``, impacts and persistent
 contact alike, with impulses over the step in place of forces:
 
 1. the midpoint ``q_m = q + h/2 v``; there ``M``, ``f``, the rows ``A`` and the gaps;
+   a rigid body's Euler parameters turn there instead, by its angular velocity
+   (:mod:`~dalembert.solvers.contact.rotations`: a straight line would cost a
+   spinning body ``O((h w)^2)`` of its spin each step), its rates carried along;
 2. the contacts that count are the gaps closed (or touching, to rounding) at the
    midpoint, ``g(q_m) <= 0``;
 3. the velocity at the step's end solves the KKT system with the bilateral rows,
@@ -14,13 +17,23 @@ contact alike, with impulses over the step in place of forces:
    gaps' rates, Newton's law at the velocity level): with the Delassus matrix
    ``W = A_c K^-1 A_c^T`` (one KKT factorization, one solve per contact) it is a small
    dense LCP, solved by principal pivoting (:func:`solve_lcp`);
-4. ``q+ = q_m + h/2 v+``, then the positions projected onto the bilateral rows and
+4. ``q+ = q_m + h/2 v+`` (the quaternions turned again), then the positions
+   projected onto the bilateral rows and
    the gaps that went below 0 (least change), and the velocities onto the bilateral
    rows.
 
 It is first order: the impacts land within a step of their times and the apexes of a
 bouncing ball within ``O(h)`` of the closed form (measured in the tests), against the
 event-driven mode's rounding. The multipliers reported are the impulses over ``h``.
+
+Inputs held by a digital controller (``sample_time``): the steps fall on the sample
+instants (each interval between two instants, or an instant and an output time, cut
+into equal steps of at most ``h``), the sample is taken at each instant from the
+state there (as the event-driven mode takes it, :class:`~.driver.Hold`) and held
+over the steps to the next; an output time at an instant shows the sample taken there.
+Under inputs held constant over a step the step is exact for a constant force (its
+position update is the trapezoid of a velocity linear in time), so a free motion
+follows the zero-order hold's recurrence to rounding.
 """
 
 from __future__ import annotations
@@ -33,7 +46,7 @@ from functools import partial
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...errors import ContactError
+from ...errors import ContactError, InputError
 from ...inputs import InputSignal
 from ...numerics.gauss_newton import gauss_newton
 from ..kkt.factorization import kkt_factorization
@@ -41,8 +54,9 @@ from ..kkt.sparse import matvec
 from ..outputs import output_arrays
 from ..projection import project_velocities
 from ..running.integrate import IntegrationResult
-from .driver import ContactHistory, ImpactRecord, Switch
+from .driver import ContactHistory, Hold, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
+from .rotations import Rotations
 
 #: Principal pivots of :func:`solve_lcp` per contact before it gives up.
 PIVOTS_PER_CONTACT = 50
@@ -55,11 +69,13 @@ PROJECTION_ITERATIONS = 8
 
 @dataclass(frozen=True)
 class SteppedRun:
-    """A time-stepping run: the states, the outputs, the contact history."""
+    """A time-stepping run: the states, the outputs, the contact history, and (inputs
+    sampled) the inputs held at each point recorded."""
 
     result: IntegrationResult
     derived: dict[str, np.ndarray]
     history: ContactHistory
+    inputs: np.ndarray | None = None
 
 
 def solve_lcp(W: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -160,7 +176,8 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
 
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
                       y0: np.ndarray, h: float, t_eval: np.ndarray | None,
-                      signal: InputSignal | None = None) -> SteppedRun:
+                      signal: InputSignal | None = None,
+                      rotations: Rotations | None = None) -> SteppedRun:
     """Run ``t_span`` with Moreau-Jean steps of ``h`` (see the module docstring).
 
     Parameters
@@ -179,11 +196,20 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
         The times to record (each a step's end: the steps between two of them are
         equal, at most ``h``); ``None``: every step.
     signal
-        The inputs at each state, or ``None``.
+        The inputs at each step's midpoint, or (with its ``sample_time``) sampled at
+        each instant and held; or ``None``.
+    rotations
+        Where the coordinates are unit quaternions (turned, not moved along a line,
+        by a step); ``None``: nowhere.
     """
     t0, tf = t_span
     n, m = full.n, full.m
-    grid = _grid(t0, tf, h, t_eval)
+    hold = Hold.of(signal, t_span, n)
+    asked = None if t_eval is None else hold_marks(hold, t_eval)
+    instants = np.zeros(0) if hold.schedule is None else hold.schedule.instants
+    grid = _grid(t0, tf, h, None if asked is None and not len(instants) else
+                 np.concatenate([np.zeros(0) if asked is None else asked, instants]))
+    turn = Rotations.none() if rotations is None else rotations
     pattern = full.pattern
     kkt = kkt_factorization(pattern)
     bilateral = np.zeros(m, dtype=bool)
@@ -193,14 +219,25 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     history.switches.append(Switch(t0, (), q.copy(), v.copy()))
     times, states, forces = [t0], [np.concatenate([q, v])], [np.zeros(m)]
     accelerations = [np.full(n, np.nan)]  # the mean over the step ending there
+    held = [hold.sample(t0, np.concatenate([q, v]))] if hold.sampled else []
     closed_before: tuple[int, ...] = ()
     status, message = "finished", "the integration reached the end of t_span"
     try:
         for t, end in itertools.pairwise(grid):
             h = end - t
-            if signal is not None:
-                full.set_inputs(signal(t + h / 2, q + h / 2 * v, v))
-            q, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h)
+            if held:
+                full.set_inputs(held[-1])
+            q_next, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h, turn,
+                                      None if hold.sampled else signal)
+            if hold.sampled:  # the sample at an instant, shown at its point; else held
+                try:
+                    held.append(hold.sample(end, np.concatenate([q_next, v_next]))
+                                if hold.is_instant(end) else held[-1])
+                except InputError as exc:  # the point is the sample's: not recorded
+                    status, message = "failed", f"integration stopped at t={end:.6g}: {exc}"
+                    break
+            v = turn.carry(q, v, q_next)  # the velocity before, at the new positions
+            q = q_next
             closed = tuple(int(i) for i in np.flatnonzero(P[gaps.rows] > 0.0))
             new = sorted(set(closed) - set(closed_before))
             # an impact: a contact closing faster than its rest speed (not one that
@@ -222,21 +259,57 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
         status, message = "interrupted", f"interrupted by the user at t={times[-1]:.6g}"
     t_all, y_all = np.array(times), np.array(states)
     f_all, a_all = np.array(forces), np.array(accelerations)
-    if t_eval is not None:  # each a step's end (the grid's)
-        kept = np.isin(t_all, t_eval)
+    u_all = np.array(held) if hold.sampled else None
+    if t_eval is not None and asked is not None:  # each a step's end (the grid's)
+        kept = np.isin(t_all, asked)
         t_all, y_all, f_all, a_all = t_all[kept], y_all[kept], f_all[kept], a_all[kept]
+        # the times asked for, where one was moved onto an instant within rounding
+        t_all = np.asarray(t_eval, dtype=float)[np.searchsorted(asked, t_all)]
+        u_all = None if u_all is None else u_all[kept]
     derived = _outputs(full, gaps, t_all, y_all, f_all, a_all)
     result = IntegrationResult(t=t_all, y=y_all, status=status, message=message,
                                stats={"n_steps": len(times) - 1,
                                       "n_impacts": len(history.impacts)})
-    return SteppedRun(result, derived, history)
+    return SteppedRun(result, derived, history, u_all)
+
+
+def hold_marks(hold: Hold, t_eval: np.ndarray) -> np.ndarray:
+    """The output times, each within rounding of a sample instant moved onto it (a
+    ``t_eval`` of ``0.3`` against the instant ``3 * 0.1``): a step ends there, not a
+    rounding error away from it.
+
+    Parameters
+    ----------
+    hold
+        The sample instants (none: ``t_eval`` as it is).
+    t_eval
+        The output times, increasing.
+
+    Examples
+    --------
+    >>> from dalembert.inputs import input_signal
+    >>> signal = input_signal(lambda t, q, qd: -q[0], ["u"], 0.1, (0.0, 1.0))
+    >>> hold_marks(Hold.of(signal, (0.0, 1.0), 1), np.array([0.15, 0.3])).tolist()
+    [0.15, 0.30000000000000004]
+    """
+    t_eval = np.asarray(t_eval, dtype=float)
+    if hold.schedule is None or not len(t_eval):
+        return t_eval
+    instants = hold.schedule.instants
+    nearest = instants[np.abs(t_eval[:, None] - instants[None, :]).argmin(axis=1)]
+    return np.where(np.abs(t_eval - nearest) <= hold.tolerance, nearest, t_eval)
 
 
 def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
-          q: np.ndarray, v: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One Moreau-Jean step: the positions and velocity after it and the impulses."""
+          q: np.ndarray, v: np.ndarray, h: float, turn: Rotations,
+          signal: InputSignal | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One Moreau-Jean step: the positions and velocity after it and the impulses
+    (the inputs from ``signal`` at the midpoint, if given)."""
     n, m, pattern = full.n, full.m, full.pattern
-    tm, qm = t + h / 2, q + h / 2 * v
+    tm, qm = t + h / 2, turn.advance(q, v, h / 2)
+    v = turn.carry(q, v, qm)  # rates tied to the midpoint's quaternions
+    if signal is not None:
+        full.set_inputs(signal(tm, qm, v))
     Mv, f, Av, _ = full.kkt_sparse(tm, qm, v)
     _, b = full.velocity_sparse(tm, qm)
     momentum = matvec(pattern.M_rows, pattern.M_cols, Mv, v, n) + h * f
@@ -280,8 +353,8 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
         P[rows] = impulse
         pushing = near[impulse[:len(near)] > 0.0]
         P[bilateral] += (reaction @ impulse)[bilateral]
-    q_next = _project(full, gaps, t + h, qm + h / 2 * v_free, pushing)
-    return q_next, project_velocities(full, t + h, q_next, v_free,
+    q_next = _project(full, gaps, t + h, turn.advance(qm, v_free, h / 2), pushing)
+    return q_next, project_velocities(full, t + h, q_next, turn.carry(qm, v_free, q_next),
                                       rows=np.flatnonzero(bilateral)), P
 
 
