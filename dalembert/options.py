@@ -54,9 +54,11 @@ if TYPE_CHECKING:
     from scipy.integrate import OdeSolver
 
 #: SciPy's solvers by the names ``solve_ivp`` knows them by (``scipy.integrate`` is
-#: imported when a simulation is set up, not with dalembert: it is a large import), and
-#: ``"IDA"`` (SUNDIALS IDA on the stabilized index-2 form, :class:`IDA`).
-METHODS: tuple[str, ...] = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "IDA")
+#: imported when a simulation is set up, not with dalembert: it is a large import),
+#: ``"IDA"`` (SUNDIALS IDA on the stabilized index-2 form, :class:`IDA`) and ``"auto"``
+#: (DOP853, switching to Radau where the problem is stiff, :class:`Switching`).
+METHODS: tuple[str, ...] = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "IDA",
+                            "auto")
 #: The methods that are implicit (stiff solvers): their default tolerances are looser.
 IMPLICIT_METHODS: tuple[str, ...] = ("Radau", "BDF", "LSODA", "IDA")
 
@@ -93,6 +95,22 @@ class IDA:
     lambda, mu]``, not ``y' = F(t, y)``, and keeps to the constraints by its form (no
     projection). Events, dense output and inputs are not supported with it yet.
     """
+
+
+@dataclass(frozen=True)
+class Switching:
+    """``method="auto"``: the run starts with DOP853 (the options' ``method``) and
+    switches to Radau where Hairer's test finds the problem stiff and Radau's steps pay
+    (:mod:`dalembert.solvers.running.switching`).
+
+    Parameters
+    ----------
+    rtol, atol
+        Radau's tolerances: the ones given, or its defaults where none were.
+    """
+
+    rtol: float | np.ndarray
+    atol: float | np.ndarray
 
 
 @dataclass(frozen=True)
@@ -194,6 +212,8 @@ class SimulationOptions:
     contact_mode: ContactMode = "event-driven"
     #: The time-stepping mode's step.
     contact_step: float = DEFAULT_CONTACT_STEP
+    #: ``method="auto"``'s switching to an implicit method, or ``None``.
+    switching: Switching | None = None
 
 
 # --------------------------------------------------------------------------- the table
@@ -306,10 +326,10 @@ def simulation_options(
     ----------
     t_span, t_eval, method, first_step, max_step, events, dense_output
         As in :func:`scipy.integrate.solve_ivp`; ``method`` may also be ``"IDA"``
-        (:class:`IDA`).
+        (:class:`IDA`) or ``"auto"`` (:class:`Switching`).
     rtol, atol
         As in :func:`scipy.integrate.solve_ivp`; ``None``: the method's defaults
-        (:func:`default_tolerances`).
+        (:func:`default_tolerances`; with ``"auto"``, each method's own).
     step_control
         The explicit Runge-Kutta methods' step-size controller, ``"PI"`` or
         ``"scipy"`` (:mod:`dalembert.solvers.steppers.scipy_ivp`).
@@ -373,10 +393,19 @@ def simulation_options(
     import scipy.integrate  # here, not when dalembert is imported: a large import
 
     solver: type[OdeSolver] | type[IDA]
+    switching = None
     if method == "IDA":
         solver = IDA
         _check_ida(rtol, stabilization, backend, events, dense_output, inputs,
                    sample_time)
+    elif method == "auto":  # DOP853 at its defaults, Radau at its own
+        if step_control != "PI":
+            raise ValueError("method='auto' watches DOP853's steps for stiffness under "
+                             "step_control='PI' (the default); give that, or a method")
+        solver = scipy.integrate.DOP853
+        implicit = DEFAULT_TOLERANCES["implicit"]
+        switching = Switching(_tolerance(implicit.rtol if rtol is None else rtol),
+                              _tolerance(implicit.atol if atol is None else atol))
     else:
         solver = getattr(scipy.integrate, method) if isinstance(method, str) else method
     defaults = default_tolerances(solver)
@@ -411,6 +440,7 @@ def simulation_options(
         impact_law=impact_law,
         contact_mode=contact_mode,
         contact_step=DEFAULT_CONTACT_STEP if contact_step is None else float(contact_step),
+        switching=switching,
     )
 
 

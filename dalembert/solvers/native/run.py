@@ -24,6 +24,7 @@ from scipy.integrate import OdeSolver
 
 from ...numerics.singular import SCREEN
 from ..steppers.scipy_ivp import step_size, step_start, take_state
+from ..steppers.stiffness import StiffnessState
 from . import library
 from .turns import outside_python
 
@@ -102,7 +103,7 @@ class _Stretches:
         self.near_singular = status == library.NEAR_SINGULAR
         if status == library.INPUT:  # the inputs' function raised (or took a Ctrl-C):
             self.solver._native._check(status)  # raised here, not retried in Python
-        return status in (library.OK, library.NEAR_SINGULAR)
+        return status in (library.OK, library.NEAR_SINGULAR, library.STIFF)
 
     def take(self) -> tuple[int, np.ndarray, np.ndarray] | None:
         """``(steps, t, y)`` done by the last :meth:`run`, the solver brought up to
@@ -140,6 +141,11 @@ class StretchRunner(_Stretches):
         self._y[:] = start.y
         self._K[0] = start.f
         st.t, st.h_abs, st.err_old, st.nfev = start.t, start.h_abs, start.state.err_old, 0
+        detector = solver.detector  # C runs the same test (0: off)
+        st.stiff_limit = 0.0 if detector is None else detector.limit
+        if detector is not None:
+            st.stiff_after, st.calm_after = detector.stiff_after, detector.calm_after
+            st.stiff_count, st.calm_count = solver.stiffness.stiff, solver.stiffness.calm
         return solver.nfev
 
     def _hand_back(self) -> int:
@@ -148,6 +154,8 @@ class StretchRunner(_Stretches):
             take_state(solver, t=st.t, t_old=run.t_old, y=self._y.copy(), f=self._K[0].copy(),
                        h_abs=st.h_abs, h_previous=st.h_previous)
             solver.err_old = st.err_old
+            if solver.detector is not None:
+                solver.stiffness = StiffnessState(st.stiff_count, st.calm_count)
         return st.nfev
 
 
@@ -187,8 +195,9 @@ class RadauStretchRunner(_Stretches):
         return st.nfev - self._counts[0]
 
 
-def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches:
-    """The runner of ``solver``'s stretches in C (its class decides which).
+def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches | None:
+    """The runner of ``solver``'s stretches in C (its class decides which), or ``None``
+    for a solver that steps in Python (``method="auto"`` may switch to one).
 
     Parameters
     ----------
@@ -198,7 +207,10 @@ def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches:
         The output times (``None``: every step end).
     """
     from .radau import NativeRadau  # scipy.integrate: imported when a run needs it
+    from .runge_kutta import NATIVE_METHODS
 
     if isinstance(solver, NativeRadau):
         return RadauStretchRunner(solver, t_eval)
-    return StretchRunner(solver, t_eval)
+    if isinstance(solver, tuple(NATIVE_METHODS.values())):
+        return StretchRunner(solver, t_eval)
+    return None

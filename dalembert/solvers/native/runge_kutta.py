@@ -101,7 +101,7 @@ class _NativeSteps(ControlledSteps):
             return "the step would start from values that are not finite"
         self._native._check(status)
         return StepEnd(y, st.h_previous, st.t, y_new, K[self._n_stages].copy(), st.h_abs,
-                       ControllerState(st.err_old))
+                       ControllerState(st.err_old), st.h_lambda)
 
 
 class NativeDOP853(_NativeSteps, ControlledDOP853):

@@ -23,6 +23,7 @@ from ..singular.watch import Runaway, Singularity
 from ..steppers.scipy_ivp import CONTROLLED, ControlledSteps
 from .loop import IntegrationResult, Projector, PythonLoop, SimulationLoop, StretchLoop
 from .nonfinite import Diagnosis
+from .switching import StiffSwitch
 from .watchdog import GRACE, Watchdog, watching, where_stopped
 
 __all__ = ["IntegrationResult", "finite_difference_jacobian", "integrate", "progress_bar"]
@@ -46,6 +47,7 @@ def integrate(
     runaway: Runaway | None = None,
     deadline: float | None = None,
     watchdog: Watchdog | None = None,
+    switch: StiffSwitch | None = None,
     **solver_options: object,
 ) -> IntegrationResult:
     """Integrate ``y' = fun(t, y)`` like ``solve_ivp``, projecting after each step.
@@ -85,6 +87,9 @@ def integrate(
         The run's :class:`~.watchdog.Watchdog` (its deadline's), armed while the loop
         runs: a function of the user's that never returns is stopped by it, the run
         ending as at the deadline; or ``None``.
+    switch
+        ``method="auto"``'s switching between the explicit solver (``method``) and an
+        implicit one (:mod:`~.switching`), or ``None``.
     solver_options
         Passed to ``method``.
 
@@ -114,10 +119,10 @@ def integrate(
                 solver = method(fun, t0, y0, tf, **solver_options)
                 if stretches and project is not None:
                     loop = StretchLoop(solver, times, project, diagnose, singular, careful,
-                                       runaway)
+                                       runaway, switch)
                 else:
                     loop = PythonLoop(solver, times, events, project, dense_output,
-                                      diagnose, singular, careful, runaway)
+                                      diagnose, singular, careful, runaway, switch)
                 bar = progress_bar(t0, tf) if progress else None
                 while loop.status is None:
                     loop.advance()
@@ -156,7 +161,7 @@ def integrate(
         finally:
             if bar is not None:
                 bar.close()
-    result = loop.result(_method_name(method))
+    result = loop.result(_method_name(method) if switch is None else "auto")
     if "nfev" in result.stats:
         result.stats["nfev"] += getattr(jac, "evaluations", 0) - jac_before
     return result

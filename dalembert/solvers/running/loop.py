@@ -37,6 +37,7 @@ from ..steppers.scipy_ivp import (
     step_size,
 )
 from .nonfinite import Diagnosis
+from .switching import StiffSwitch
 
 Projector = Callable[[float, np.ndarray], np.ndarray]
 
@@ -132,9 +133,12 @@ class PythonLoop(SimulationLoop):
                  dense_output: bool = False, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
                  careful: CarefulSteps | None = None,
-                 runaway: Runaway | None = None) -> None:
+                 runaway: Runaway | None = None, switch: StiffSwitch | None = None) -> None:
         self.solver = solver
         self.careful = careful
+        #: method="auto"'s switching between an explicit and an implicit solver, or None
+        self.switch = switch
+        self._retired = (0, 0, 0)  # nfev, njev, nlu of the solvers switched away from
         #: The run's own solver and projection (the careful steps swap in others).
         self.native, self.native_project = solver, project
         self._careful_nfev = 0  # the evaluations of the careful solvers before this one
@@ -210,6 +214,22 @@ class PythonLoop(SimulationLoop):
         if self.status is None and self.solver is not self.native and self.careful \
                 is not None and not self.careful.model.careful:
             self._back_to_native()
+        self._switch_if_due()
+
+    def _switch_if_due(self) -> None:
+        """Continue with the other method where ``method="auto"``'s switch says so."""
+        if self.switch is None or self.status is not None or self.solver is not self.native:
+            return
+        new = self.switch.after(self.solver, self.n_steps)
+        if new is not None:
+            self._take_solver(new)
+
+    def _take_solver(self, new: OdeSolver) -> None:
+        """Continue the run with ``new`` (made at the solver's state)."""
+        old = self.solver
+        nfev, njev, nlu = self._retired
+        self._retired = (nfev + old.nfev, njev + old.njev, nlu + old.nlu)
+        self.solver = self.native = new
 
     def _careful_from_here(self) -> bool:
         """Take the next steps with the careful solver if the careful model says so (a
@@ -456,10 +476,14 @@ class PythonLoop(SimulationLoop):
     def result(self, method_name: str) -> IntegrationResult:
         solver = self.solver
         n_state = solver.y.size
-        nfev = solver.nfev + self._careful_nfev + \
+        nfev = solver.nfev + self._careful_nfev + self._retired[0] + \
             (self.native.nfev if solver is not self.native else 0)
-        stats = {"nfev": nfev, "njev": solver.njev, "nlu": solver.nlu,
+        njev, nlu = (None if v is None else v + r for v, r in
+                     zip((solver.njev, solver.nlu), self._retired[1:]))
+        stats = {"nfev": nfev, "njev": njev, "nlu": nlu,
                  "n_steps": self.n_steps, "n_projections": self.n_projections}
+        if self.switch is not None:
+            stats["n_switches"] = len(self.switch.switches)
         stats = {k: int(v) for k, v in stats.items() if v is not None}
         y = np.array(self.ys) if self.ys else np.empty((0, n_state))
         return IntegrationResult(
@@ -523,14 +547,15 @@ class StretchLoop(PythonLoop):
                  project: Projector, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
                  careful: CarefulSteps | None = None,
-                 runaway: Runaway | None = None) -> None:
+                 runaway: Runaway | None = None, switch: StiffSwitch | None = None) -> None:
         super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful,
-                         runaway)
+                         runaway, switch)
         self.runner = stretch_runner(solver, self.t_eval)
 
     def advance(self) -> None:
-        if self.solver is not self.native or self._careful_from_here():
-            return super().advance()  # careful steps
+        if self.runner is None or self.solver is not self.native or \
+                self._careful_from_here():
+            return super().advance()  # careful steps, or a solver without stretches in C
         try:
             ran = self.runner.run()
         except DalembertError as exc:  # the inputs' function failed: the steps before kept
@@ -549,6 +574,12 @@ class StretchLoop(PythonLoop):
             if self._careful_from_here():
                 return
         self._watch_steps()
+        self._switch_if_due()
+
+    def _take_solver(self, new: OdeSolver) -> None:
+        self._absorb()  # (taken already after a stretch: nothing twice)
+        super()._take_solver(new)
+        self.runner = stretch_runner(new, self.t_eval)
 
     def interrupt(self) -> None:
         self._absorb()  # a stretch run in C before the Ctrl-C is kept
@@ -556,7 +587,7 @@ class StretchLoop(PythonLoop):
 
     def _absorb(self) -> None:
         """Take over the steps and outputs of the last stretch run in C."""
-        taken = self.runner.take()
+        taken = self.runner.take() if self.runner is not None else None
         if taken is None:
             return
         steps, t, y = taken

@@ -26,10 +26,10 @@ Both loops give the same trajectory to rounding (tested).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.integrate import OdeSolver
+from scipy.integrate import OdeSolver, Radau
 
 from ...codegen.compiled import NumericModel
 from ...options import IDA, SimulationOptions
@@ -80,6 +80,9 @@ class SimulationPlan:
         The Baumgarte gain (0: none).
     projection
         Whether each step is projected onto the constraints.
+    implicit
+        ``method="auto"``'s implicit solver (Radau: in C where its stepper applies),
+        ``None`` for another method.
     """
 
     options: SimulationOptions
@@ -96,6 +99,7 @@ class SimulationPlan:
     kept: np.ndarray | None = field(repr=False)
     gain: float = field(repr=False)
     projection: bool = field(repr=False)
+    implicit: type[OdeSolver] | None = field(default=None, repr=False)
 
     @property
     def y0(self) -> np.ndarray:
@@ -158,6 +162,10 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
     inputs = options.inputs
     exact = stabilization.gain == 0.0 and (inputs is None or inputs.sample_time is not None)
     chosen = choose_solver(options, loop.loop == "c", exact)
+    implicit = None
+    if options.switching is not None:  # method="auto": the Radau it may switch to
+        implicit = choose_solver(replace(options, method=Radau), loop.loop == "c",
+                                 exact).solver
     return SimulationPlan(
         options=options, initial=initial, num=num, loop=loop.loop,
         why_python=loop.why_python, solver=chosen.solver, solver_options=chosen.options,
@@ -165,4 +173,5 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         python_options=chosen.python_options,
         stretches=choose_stretches(chosen.stepper, stabilization.projection,
                                    options.output),
-        kept=kept, gain=stabilization.gain, projection=stabilization.projection)
+        kept=kept, gain=stabilization.gain, projection=stabilization.projection,
+        implicit=implicit)

@@ -47,8 +47,10 @@ from ..singular.careful import CarefulModel, CarefulSteps, Outputs
 from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_diagnosis
 from ..state import accelerations_at
 from ..steppers.scipy_ivp import LinearizedRadau
+from ..steppers.stiffness import StiffnessDetector
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
+from .switching import StiffSwitch
 from .watchdog import Watchdog
 
 if TYPE_CHECKING:
@@ -86,6 +88,8 @@ class RunData:
     watchdog
         The deadline's :class:`~.watchdog.Watchdog` (armed while a segment integrates:
         it stops a function of the user's that never returns), or ``None``.
+    implicit_options
+        ``method="auto"``'s implicit solver's keyword arguments, or ``None``.
     """
 
     plan: SimulationPlan
@@ -103,6 +107,7 @@ class RunData:
     careful: CarefulSteps | None
     deadline: float | None = None
     watchdog: Watchdog | None = None
+    implicit_options: dict[str, object] | None = None
 
     def hold_inputs(self, values: np.ndarray) -> None:
         """Hold the inputs at ``values`` for the evaluations from now on (a sampled
@@ -137,7 +142,31 @@ class RunData:
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=progress, stretches=self.plan.stretches, diagnose=self.diagnose,
             singular=self.singular, careful=self.careful, runaway=self.runaway,
-            deadline=self.deadline, watchdog=self.watchdog, **self.solver_options)
+            deadline=self.deadline, watchdog=self.watchdog, switch=self._switch(),
+            **self.solver_options)
+
+    def _switch(self) -> StiffSwitch | None:
+        """``method="auto"``'s switching for one segment (its memory is the segment's)."""
+        implicit, options = self.plan.implicit, self.implicit_options
+        if implicit is None or options is None:
+            return None
+        explicit, explicit_options = self.plan.solver, dict(self.solver_options)
+        if issubclass(explicit, IDA):
+            return None
+        explicit_class: type[OdeSolver] = explicit  # (closures keep no narrowing)
+        explicit_options.pop("detector", None)  # going back is for good
+
+        def make_implicit(t: float, y: np.ndarray, t_bound: float,
+                          h_abs: float) -> OdeSolver:
+            return implicit(self.rhs, t, y, t_bound, **options)
+
+        def make_explicit(t: float, y: np.ndarray, t_bound: float,
+                          h_abs: float) -> OdeSolver:
+            first = min(h_abs, abs(t_bound - t)) if h_abs > 0 else None
+            return explicit_class(self.rhs, t, y, t_bound,
+                                  **{**explicit_options, "first_step": first})
+
+        return StiffSwitch(make_implicit, make_explicit)
 
     def passages(self) -> str:
         """The warning naming the singular configurations the run passed (empty if none)."""
@@ -189,7 +218,7 @@ def start_run(plan: SimulationPlan) -> RunData:
     """
     options, initial, num = plan.options, plan.initial, plan.num.for_run()
     kept, gain, projection = plan.kept, plan.gain, plan.projection
-    if plan.stepper is NativeRadau:  # its Newton matrices need them, in C
+    if NativeRadau in (plan.stepper, plan.implicit):  # its Newton matrices need them, in C
         num.compiled.functions["residual_jacobians"]  # generated now
     native = NativeSolver(num, gain, kept) if plan.loop == "c" else None
     # inputs at every evaluation (a sampled signal is held: its segments set the values)
@@ -212,6 +241,17 @@ def start_run(plan: SimulationPlan) -> RunData:
         solver_options["native"] = native
     if plan.solver is LinearizedRadau:
         solver_options["linearize"] = _linearization(num, rhs, kept, gain, signal)
+    implicit_options = None
+    switching = options.switching
+    if switching is not None and plan.implicit is not None:  # method="auto"
+        solver_options["detector"] = StiffnessDetector()
+        implicit_options = {**options.step.solver_options(), "rtol": switching.rtol,
+                            "atol": switching.atol}
+        implicit_options.pop("first_step", None)
+        if plan.implicit is NativeRadau:
+            implicit_options["native"] = native
+        else:
+            implicit_options["linearize"] = _linearization(num, rhs, kept, gain, signal)
     elif plan.solver in (Radau, BDF):
         solver_options["jac"] = _jacobian(num, rhs, kept, gain, signal)
     steps = None
@@ -235,7 +275,8 @@ def start_run(plan: SimulationPlan) -> RunData:
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
         runaway=runaway_diagnosis(num, rows, initial.names, t0, y0), careful=steps,
-        deadline=deadline, watchdog=None if deadline is None else Watchdog(deadline))
+        deadline=deadline, watchdog=None if deadline is None else Watchdog(deadline),
+        implicit_options=implicit_options)
 
 
 def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulModel | None,

@@ -39,6 +39,7 @@ from ...numerics.state_layout import StateLayout
 from ...options import StepController
 from .controller import ControllerState, PIController
 from .runge_kutta import ExplicitRungeKutta, Tableau, controlled_step
+from .stiffness import StiffnessDetector, StiffnessState, h_lambda
 
 if TYPE_CHECKING:
     from ..newton import Linearization
@@ -336,6 +337,8 @@ class StepEnd:
         The next step's size.
     state
         The controller's memory after it.
+    h_lambda
+        The step's stiffness estimate (:mod:`.stiffness`; NaN: not measured).
     """
 
     y_old: np.ndarray
@@ -345,6 +348,7 @@ class StepEnd:
     f: np.ndarray
     h_abs: float
     state: ControllerState
+    h_lambda: float = float("nan")
 
 
 @dataclass(frozen=True, eq=False)
@@ -374,13 +378,22 @@ class ControlledSteps(RungeKutta):
     """
 
     def __init__(self, fun, t0, y0, t_bound, *, step_control: StepController = "PI",
-                 controller: PIController | None = None, **options) -> None:
+                 controller: PIController | None = None,
+                 detector: StiffnessDetector | None = None, **options) -> None:
         super().__init__(fun, t0, y0, t_bound, **options)
         self.step_control = step_control
         self.controller = controller if controller is not None else \
             PIController.for_method(step_control, self.error_estimator_order)
         self.controller_state: ControllerState = self.controller.initial_state()
         self.stepper = ExplicitRungeKutta(tableau_of(type(self)))
+        #: the stiffness detector (``None``: none) and its memory, kept across restarts
+        self.detector = detector
+        self.stiffness = StiffnessState()
+
+    @property
+    def stiff(self) -> bool:
+        """Whether the stiffness detector (if any) says the problem is stiff."""
+        return self.detector is not None and self.detector.stiff(self.stiffness)
 
     @property
     def err_old(self) -> float:
@@ -421,8 +434,10 @@ class ControlledSteps(RungeKutta):
         step = out.step
         if step is None:
             return self.TOO_SMALL_STEP
+        stiffness = h_lambda(self.stepper.tableau, step) if self.detector is not None \
+            else float("nan")
         return StepEnd(step.y, step.h, step.t_new, step.y_new, step.f_new, out.h_abs,
-                       out.state)
+                       out.state, stiffness)
 
     def _step_impl(self):
         end = self.take_step(step_start(self))
@@ -431,6 +446,8 @@ class ControlledSteps(RungeKutta):
         self.h_previous, self.y_old = end.h, end.y_old
         self.t, self.y, self.h_abs, self.f = end.t, end.y, end.h_abs, end.f
         self.controller_state = end.state
+        if self.detector is not None:
+            self.stiffness = self.detector.note(self.stiffness, end.h_lambda)
         return True, None
 
 
