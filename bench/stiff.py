@@ -48,7 +48,7 @@ from bench.peers.ladder import Prepared, bisect  # noqa: E402
 from bench.suite import SINGLE_THREAD, machine, rounds_for  # noqa: E402
 
 #: dalembert's methods benchmarked: a new method is one more name here.
-METHODS = ["DOP853", "Radau", "BDF", "IDA"]
+METHODS = ["DOP853", "Radau", "auto", "BDF", "IDA"]
 PEERS = ["mujoco-RK4", "mujoco-implicitfast", "exudyn-GA"]
 TOOLS = [f"dalembert-{m}" for m in METHODS] + PEERS
 TARGETS = (1e-3, 1e-6)

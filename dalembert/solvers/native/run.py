@@ -81,8 +81,9 @@ class _Stretches:
         """Bring the solver to the end of the last finished step; the evaluations C made."""
         raise NotImplementedError
 
-    def run(self) -> bool:
-        """Steps from the solver's state until ``t_bound`` or the budget of one call.
+    def run(self, max_steps: int | None = None) -> bool:
+        """Steps from the solver's state until ``t_bound`` or the budget of one call
+        (``max_steps``: fewer steps than the usual budget).
 
         ``False`` if C could not finish the next step: the caller takes it (from the
         solver's state after :meth:`take`, which must follow, after a Ctrl-C too).
@@ -95,6 +96,7 @@ class _Stretches:
             run.next_eval = int(np.searchsorted(self._ahead, solver.direction * solver.t,
                                                 "right"))
         run.n_steps = run.n_out = 0
+        run.max_steps = MAX_STEPS if max_steps is None else max_steps
         self._pending = True
         with outside_python():  # the GIL is released: other threads run their Python
             status = self._call()

@@ -170,6 +170,26 @@ class NativeSolver:
         self._y[:] = y
         self._check(self.lib.dl_rhs(*self._at, t, self._y_at, self._ydot_at, lam_at))
 
+    def generate(self, name: str) -> None:
+        """Generate the registry's function ``name`` (if not yet) and give C its place
+        in the model (a function only an implicit step calls, made when a run first
+        needs it: ``method="auto"`` switching to Radau).
+
+        Parameters
+        ----------
+        name
+            A function of the registry with a place in C (``"residual_jacobians"``).
+        """
+        place = library.FUNCTIONS[name]
+        if self.model.fn[place].fn:
+            return
+        handle = self.num.compiled.functions[name].native
+        if handle is None:
+            raise NotApplicable(f"the model's {name} were not generated in C")
+        # the shared model gains a function the loop's own code never calls: any run
+        # reading it finds it set, or had set it itself (the same values)
+        self.model.fn[place] = _function(name, handle)
+
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """``[qd, qdd]`` at ``(t, y)``, ``y = [q, qd]``."""
         self._evaluate(t, y, None)

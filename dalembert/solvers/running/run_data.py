@@ -47,10 +47,9 @@ from ..singular.careful import CarefulModel, CarefulSteps, Outputs
 from ..singular.watch import Runaway, Singularity, runaway_diagnosis, singular_diagnosis
 from ..state import accelerations_at
 from ..steppers.scipy_ivp import LinearizedRadau
-from ..steppers.stiffness import StiffnessDetector
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
-from .switching import StiffSwitch
+from .switching import DETECTOR, StiffSwitch
 from .watchdog import Watchdog
 
 if TYPE_CHECKING:
@@ -158,6 +157,8 @@ class RunData:
 
         def make_implicit(t: float, y: np.ndarray, t_bound: float,
                           h_abs: float) -> OdeSolver:
+            if self.native is not None and implicit is NativeRadau:
+                self.native.generate("residual_jacobians")  # on the first switch only
             return implicit(self.rhs, t, y, t_bound, **options)
 
         def make_explicit(t: float, y: np.ndarray, t_bound: float,
@@ -218,9 +219,9 @@ def start_run(plan: SimulationPlan) -> RunData:
     """
     options, initial, num = plan.options, plan.initial, plan.num.for_run()
     kept, gain, projection = plan.kept, plan.gain, plan.projection
-    if NativeRadau in (plan.stepper, plan.implicit):  # its Newton matrices need them, in C
-        num.compiled.functions["residual_jacobians"]  # generated now
     native = NativeSolver(num, gain, kept) if plan.loop == "c" else None
+    if native is not None and plan.stepper is NativeRadau:  # its Newton matrices need them
+        native.generate("residual_jacobians")
     # inputs at every evaluation (a sampled signal is held: its segments set the values)
     inputs = options.inputs
     signal = inputs if inputs is not None and inputs.sample_time is None else None
@@ -244,7 +245,7 @@ def start_run(plan: SimulationPlan) -> RunData:
     implicit_options = None
     switching = options.switching
     if switching is not None and plan.implicit is not None:  # method="auto"
-        solver_options["detector"] = StiffnessDetector()
+        solver_options["detector"] = DETECTOR
         implicit_options = {**options.step.solver_options(), "rtol": switching.rtol,
                             "atol": switching.atol}
         implicit_options.pop("first_step", None)
