@@ -13,7 +13,9 @@ projection of each step's end, the outputs at ``t_eval`` (the step's interpolant
 as SciPy makes it, projected) and the restart, returning to Python every fraction
 of a second; a step C cannot finish is taken the step-by-step way. Otherwise
 Python sees each accepted step (:mod:`.runge_kutta`: the steps in C, SciPy's
-solver object around them) and the regular loop does the rest. Initial values
+solver object around them) and the regular loop does the rest. Radau's steps run in
+C too (:mod:`.radau`, whole stretches of them as well), its Newton systems reduced to
+the KKT matrix's size and factored by a band LU. Initial values
 and the trajectory's outputs are the regular path's, so results match it to
 rounding (tested).
 

@@ -432,9 +432,8 @@ static int radau_finish(const dl_model *md, dl_data *d, const dl_newton *nw, dl_
   if (status != DL_OK) return status;
   const double t_new = st->t, dir = st->direction;
   const int every_step = run->n_eval < 0;
-  int64_t hi = run->next_eval;
-  while (hi < run->n_eval && dir * run->t_eval[hi] <= dir * t_new) ++hi;
-  const int64_t count = every_step ? 1 : hi - run->next_eval;
+  int64_t hi;
+  const int64_t count = outputs_due(run, t_new, dir, &hi);
   if (run->n_out + count > run->capacity) return DL_OUTPUTS;
   memcpy(run->y_end, run->y_new, (size_t)ns * sizeof(double));
   if ((status = run_project(md, d, run, t_new, run->y_end)) != DL_OK) return status;

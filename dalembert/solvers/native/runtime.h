@@ -348,6 +348,15 @@ DL_INLINE double wall_seconds(void) {
   return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
+/* The outputs of a step ending at t_new: their count (1 at every step end without
+ * t_eval), and in *hi the output time after them. */
+DL_INLINE int64_t outputs_due(const dl_run *run, double t_new, double dir, int64_t *hi) {
+  int64_t k = run->next_eval;
+  while (k < run->n_eval && dir * run->t_eval[k] <= dir * t_new) ++k;
+  *hi = k;
+  return run->n_eval < 0 ? 1 : k - run->next_eval;
+}
+
 /* dl_project with a stretch's arguments. */
 DL_INLINE int run_project(const dl_model *md, dl_data *d, const dl_run *run, double t,
                           double *y) {

@@ -557,8 +557,9 @@ class StretchLoop(PythonLoop):
                 self._careful_from_here():
             return super().advance()  # careful steps, or a solver without stretches in C
         try:
-            ran = self.runner.run(None if self.switch is None else
-                                  self.switch.steps_to_judgement(self.n_steps))
+            due = None if self.switch is None else \
+                self.switch.steps_to_judgement(self.n_steps)
+            ran = self.runner.run() if due is None else self.runner.run(due)
         except DalembertError as exc:  # the inputs' function failed: the steps before kept
             self._absorb()
             self.error = exc  # chained to the run's warning
