@@ -207,6 +207,12 @@ def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches |
         A native solver: a Runge-Kutta one or :class:`~.radau.NativeRadau`.
     t_eval
         The output times (``None``: every step end).
+
+    Examples
+    --------
+    >>> from scipy.integrate import RK45
+    >>> stretch_runner(RK45(lambda t, y: -y, 0.0, np.ones(1), 1.0), None) is None
+    True
     """
     from .radau import NativeRadau  # scipy.integrate: imported when a run needs it
     from .runge_kutta import NATIVE_METHODS

@@ -56,6 +56,16 @@ class StiffSwitch:
         The factories of the implicit solver and of the explicit one (going back).
     implicit_name
         The implicit method's name, for the run's record.
+
+    Examples
+    --------
+    A solver without a stiffness detector never makes it switch:
+
+    >>> from scipy.integrate import RK45
+    >>> switch = StiffSwitch(lambda *a: None, lambda *a: None)
+    >>> solver = RK45(lambda t, y: -y, 0.0, np.ones(1), 1.0)
+    >>> switch.after(solver, 0) is None, switch.steps_to_judgement(0), switch.switches
+    (True, None, [])
     """
 
     implicit: SolverFactory
