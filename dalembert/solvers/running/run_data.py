@@ -159,7 +159,8 @@ class RunData:
                           h_abs: float) -> OdeSolver:
             if self.native is not None and implicit is NativeRadau:
                 self.native.generate("residual_jacobians")  # on the first switch only
-            return implicit(self.rhs, t, y, t_bound, **options)
+            first = min(h_abs, abs(t_bound - t)) if h_abs > 0 else None
+            return implicit(self.rhs, t, y, t_bound, **options, first_step=first)
 
         def make_explicit(t: float, y: np.ndarray, t_bound: float,
                           h_abs: float) -> OdeSolver:

@@ -3,13 +3,14 @@
 The run starts with DOP853 under Hairer's stiffness detector
 (:mod:`~dalembert.solvers.steppers.stiffness`, its limit lowered: :data:`DETECTOR`).
 When the detector says stiff, the loop hands the run, at the state reached, to Radau
-(in C on the KKT structure where it applies). After ``TRIAL_STEPS`` implicit steps the
-switch is judged once: if
-Radau's mean step is not ``COST_RATIO`` times the explicit step it replaced, the
+(in C on the KKT structure where it applies), its first step the explicit one. After
+``TRIAL_STEPS`` implicit steps the switch is judged: if the step Radau has grown to is
+``COST_RATIO`` times the explicit step it replaced, the run stays with Radau; if it is
+still growing (by ``GROWING`` over the last judgement) the trial goes on; otherwise the
 implicit steps do not pay (a mildly stiff problem, where DOP853 at its stability limit
-is cheaper) and the run goes back to DOP853 for good; otherwise it stays with Radau.
-A run switches at most twice: a problem that turns non-stiff again later is left
-to Radau (the explicit method is not tried again).
+is cheaper) and the run goes back to DOP853 for good. A run switches at most twice: a
+problem that turns non-stiff again later is left to Radau (the explicit method is not
+tried again).
 
 :class:`StiffSwitch` holds the policy and its memory for one run segment; the loops
 (:mod:`.loop`) call :meth:`StiffSwitch.after` after each unit of work.
@@ -35,6 +36,9 @@ from ..steppers.stiffness import StiffnessDetector
 DETECTOR = StiffnessDetector(limit=1.0)
 #: Implicit steps after a switch before it is judged.
 TRIAL_STEPS = 20
+#: A trial that ends short of paying is extended while the implicit step still grows by
+#: this factor over it (a fast transient at the switch holds Radau's first steps short).
+GROWING = 1.5
 #: How many times longer than the explicit step an implicit step must be to pay: a
 #: Radau step in C (about 10 right-hand sides, two factorizations every few steps) costs
 #: about as much as one or two of DOP853 (12 right-hand sides); measured on the 16-link
@@ -74,6 +78,7 @@ class StiffSwitch:
     #: ``(t, method)`` of each switch made
     switches: list[tuple[float, str]] = field(default_factory=list)
     _trial: tuple[float, int, float] | None = None  # t, steps and explicit step at the switch
+    _judged: float = 0.0  # the implicit step at the last judgement (0: none yet)
     _settled: bool = False
 
     def steps_to_judgement(self, n_steps: int) -> int | None:
@@ -104,15 +109,20 @@ class StiffSwitch:
         if self._trial is None:
             if not (isinstance(solver, ControlledSteps) and solver.stiff):
                 return None
-            self._trial = (solver.t, n_steps, step_size(solver))
+            h_explicit = step_size(solver)
+            self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
             self.switches.append((solver.t, self.implicit_name))
-            return self.implicit(solver.t, solver.y, solver.t_bound, 0.0)
-        t0, steps0, h_explicit = self._trial
+            return self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
+        _, steps0, h_explicit = self._trial
         if n_steps - steps0 < TRIAL_STEPS:
             return None
-        self._settled = True
-        mean_step = abs(solver.t - t0) / (n_steps - steps0)
-        if mean_step >= COST_RATIO * h_explicit:
+        h_implicit = step_size(solver)  # the step Radau has grown to
+        if h_implicit >= COST_RATIO * h_explicit:
+            self._settled = True
             return None
+        if h_implicit > GROWING * self._judged:  # still growing: another trial
+            self._trial, self._judged = (solver.t, n_steps, h_explicit), h_implicit
+            return None
+        self._settled = True
         self.switches.append((solver.t, "DOP853"))
         return self.explicit(solver.t, solver.y, solver.t_bound, h_explicit)
