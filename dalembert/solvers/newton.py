@@ -122,6 +122,56 @@ def dense_linearization(jac: Callable[[float, np.ndarray], np.ndarray]) -> Linea
     return _DenseLinearize(jac)
 
 
+def kept_places(m: int, rows: np.ndarray) -> np.ndarray:
+    """Each constraint row's place among the kept ``rows`` (-1: not kept).
+
+    Parameters
+    ----------
+    m
+        The number of constraint rows.
+    rows
+        The kept rows.
+
+    Examples
+    --------
+    >>> kept_places(4, np.array([0, 2, 3]))
+    array([ 0, -1,  1,  2])
+    """
+    place = np.full(m, -1)
+    place[rows] = np.arange(len(rows))
+    return place
+
+
+def stacked_entries(r1: tuple[np.ndarray, np.ndarray], r2: tuple[np.ndarray, np.ndarray],
+                    place: np.ndarray, n: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The entries ``(rows, cols)`` of an ``r1`` block (``n`` rows), then those of an
+    ``r2`` block on kept constraint rows, placed after ``n``: the reduced matrix's rows,
+    columns, and which of ``r2``'s entries were kept.
+
+    Parameters
+    ----------
+    r1, r2
+        The blocks' row and column indices (``r2``'s rows: constraint rows).
+    place
+        Each constraint row's place among the kept (:func:`kept_places`).
+    n
+        The number of coordinates.
+
+    Examples
+    --------
+    >>> rows, cols, keep = stacked_entries((np.array([0]), np.array([1])),
+    ...                                    (np.array([0, 1]), np.array([0, 0])),
+    ...                                    kept_places(2, np.array([1])), 2)
+    >>> rows, cols, keep
+    (array([0, 2]), array([1, 0]), array([False,  True]))
+    """
+    r2_place = place[r2[0]]
+    keep = r2_place >= 0
+    return (np.concatenate([r1[0], r2_place[keep] + n]),
+            np.concatenate([r1[1], r2[1][keep]]), keep)
+
+
 class _Assembly:
     """Where each value of the reduced matrix goes (see the module), fixed by the
     model's patterns: the matrix ``[[M + c r1_v + c^2 r1_q, -A^T], [A + c r2_v + c^2
@@ -129,23 +179,17 @@ class _Assembly:
 
     def __init__(self, num: NumericModel, rows: np.ndarray, jac) -> None:
         n, m = num.n, num.m
-        place = np.full(m, -1)
-        place[rows] = np.arange(len(rows))  # a kept row's place among the kept
+        place = kept_places(m, rows)
         self.n, self.size = n, n + len(rows)
         pattern = num.pattern
         a_place = place[pattern.A_rows]
         self.a_keep = a_place >= 0
         a_rows, a_cols = a_place[self.a_keep] + n, pattern.A_cols[self.a_keep]
 
-        def stacked(r1, r2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-            """r1's rows, then r2's kept rows (as places after n): rows, cols, which."""
-            r2_place = place[r2.rows]
-            keep = r2_place >= 0
-            return (np.concatenate([r1.rows, r2_place[keep] + n]),
-                    np.concatenate([r1.cols, r2.cols[keep]]), keep)
-
-        self.q_rows, self.q_cols, self.q_keep = stacked(jac.r1_q, jac.r2_q)
-        self.v_rows, self.v_cols, self.v_keep = stacked(jac.r1_qd, jac.r2_qd)
+        self.q_rows, self.q_cols, self.q_keep = stacked_entries(
+            (jac.r1_q.rows, jac.r1_q.cols), (jac.r2_q.rows, jac.r2_q.cols), place, n)
+        self.v_rows, self.v_cols, self.v_keep = stacked_entries(
+            (jac.r1_qd.rows, jac.r1_qd.cols), (jac.r2_qd.rows, jac.r2_qd.cols), place, n)
         i = np.concatenate([pattern.M_rows, a_rows, a_cols, self.v_rows, self.q_rows])
         j = np.concatenate([pattern.M_cols, a_cols, a_rows, self.v_cols, self.q_cols])
         order = np.lexsort((i, j))  # by column, then row

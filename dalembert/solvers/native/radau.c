@@ -115,8 +115,8 @@ static double complex mu_complex(void) {
 
 /* The values the reduced matrix is made of, at (t, y): the KKT function's and the
  * residuals' Jacobians at the solution (qdd, lambda) there. */
-static int linearize(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
-                     double t, const double *y) {
+static int linearize(const dl_model *md, dl_data *d, dl_radau *st, double t,
+                     const double *y) {
   const int64_t n = md->n;
   double *ydot = st->work, *lambda = st->work + 2 * n;  /* 2 n + m of the work */
   int status = dl_rhs(md, d, t, y, ydot, lambda);
@@ -131,13 +131,23 @@ static int linearize(const dl_model *md, dl_data *d, const dl_newton *nw, dl_rad
   return DL_OK;
 }
 
+/* The band ab (real or complex) of I - c J's reduced matrix (see the top), from the
+ * held values. */
+#define ASSEMBLE(ab, nw, st, c)                                                           \
+  do {                                                                                    \
+    memset(ab, 0, (size_t)((nw)->ldab * (nw)->N) * sizeof(*(ab)));                        \
+    for (int64_t k = 0; k < (nw)->n_fixed; ++k)                                           \
+      (ab)[(nw)->fixed_dst[k]] += (nw)->fixed_sign[k] * (st)->kkt[(nw)->fixed_src[k]];    \
+    for (int64_t k = 0; k < (nw)->n_v; ++k)                                               \
+      (ab)[(nw)->v_dst[k]] += (c) * (st)->jac[(nw)->v_src[k]];                            \
+    for (int64_t k = 0; k < (nw)->n_q; ++k)                                               \
+      (ab)[(nw)->q_dst[k]] += (c) * (c) * (st)->jac[(nw)->q_src[k]];                      \
+  } while (0)
+
 /* The band of I - c J's reduced matrix (see the top), factored. */
 static int factor_real(const dl_newton *nw, dl_radau *st, double c) {
   double *ab = st->lu_real;
-  memset(ab, 0, (size_t)(nw->ldab * nw->N) * sizeof(double));
-  for (int64_t k = 0; k < nw->n_fixed; ++k) ab[nw->fixed_dst[k]] += nw->fixed_sign[k] * st->kkt[nw->fixed_src[k]];
-  for (int64_t k = 0; k < nw->n_v; ++k) ab[nw->v_dst[k]] += c * st->jac[nw->v_src[k]];
-  for (int64_t k = 0; k < nw->n_q; ++k) ab[nw->q_dst[k]] += c * c * st->jac[nw->q_src[k]];
+  ASSEMBLE(ab, nw, st, c);
   st->nlu++;
   st->c_real = c;
   return band_real_factor(ab, nw->N, nw->kl, nw->ku, nw->ldab, st->piv_real);
@@ -145,10 +155,7 @@ static int factor_real(const dl_newton *nw, dl_radau *st, double c) {
 
 static int factor_complex(const dl_newton *nw, dl_radau *st, double complex c) {
   double complex *ab = (double complex *)st->lu_complex;
-  memset(ab, 0, (size_t)(nw->ldab * nw->N) * sizeof(double complex));
-  for (int64_t k = 0; k < nw->n_fixed; ++k) ab[nw->fixed_dst[k]] += nw->fixed_sign[k] * st->kkt[nw->fixed_src[k]];
-  for (int64_t k = 0; k < nw->n_v; ++k) ab[nw->v_dst[k]] += c * st->jac[nw->v_src[k]];
-  for (int64_t k = 0; k < nw->n_q; ++k) ab[nw->q_dst[k]] += c * c * st->jac[nw->q_src[k]];
+  ASSEMBLE(ab, nw, st, c);
   st->nlu++;
   st->c_complex_re = creal(c);
   st->c_complex_im = cimag(c);
@@ -300,7 +307,7 @@ int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau 
   if (st->h_abs > st->max_step) h_abs = st->max_step, h_abs_old = error_norm_old = -1.0;
   else if (st->h_abs < min_step) h_abs = min_step, h_abs_old = error_norm_old = -1.0;
   if (!st->jac_ready) {  /* SciPy's Radau makes its Jacobian when it is made */
-    const int status = linearize(md, d, nw, st, t, y);
+    const int status = linearize(md, d, st, t, y);
     if (status != DL_OK) return status;
     st->current_jac = 1;
   }
@@ -345,7 +352,7 @@ int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau 
       }
       if (!converged) {
         if (st->current_jac) break;
-        const int status = linearize(md, d, nw, st, t, y);
+        const int status = linearize(md, d, st, t, y);
         if (status != DL_OK) return status;
         st->current_jac = 1;
         st->lu_ready = 0;
@@ -395,7 +402,7 @@ int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau 
   int status = dl_rhs(md, d, t_new, y_new, f_new, NULL);
   if (status != DL_OK) return status;
   if (recompute_jac) {
-    if ((status = linearize(md, d, nw, st, t_new, y_new)) != DL_OK) return status;
+    if ((status = linearize(md, d, st, t_new, y_new)) != DL_OK) return status;
     st->current_jac = 1;
   } else {
     st->current_jac = 0;
@@ -430,13 +437,11 @@ static int radau_finish(const dl_model *md, dl_data *d, const dl_newton *nw, dl_
   const int64_t ns = 2 * md->n;
   int status = dl_radau_step(md, d, nw, st, y, f, run->y_new, run->rows, Z);
   if (status != DL_OK) return status;
-  const double t_new = st->t, dir = st->direction;
+  const double t_new = st->t;
   const int every_step = run->n_eval < 0;
-  int64_t hi;
-  const int64_t count = outputs_due(run, t_new, dir, &hi);
-  if (run->n_out + count > run->capacity) return DL_OUTPUTS;
-  memcpy(run->y_end, run->y_new, (size_t)ns * sizeof(double));
-  if ((status = run_project(md, d, run, t_new, run->y_end)) != DL_OK) return status;
+  int64_t hi, count;
+  if ((status = end_of_step(md, d, run, t_new, st->direction, &hi, &count)) != DL_OK)
+    return status;
   const double conditioning = d->conditioning;
   st->nfev++;
   if ((status = dl_rhs(md, d, t_new, run->y_end, f_end, NULL)) != DL_OK) return status;
@@ -492,3 +497,4 @@ int dl_radau_run(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *
 /* the one translation unit goes on after this source: complex.h's short names end here */
 #undef I
 #undef complex
+#undef ASSEMBLE

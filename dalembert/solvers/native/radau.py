@@ -22,6 +22,7 @@ import scipy.sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ...codegen.compiled import NumericModel
+from ..newton import kept_places, stacked_entries
 from ..steppers.scipy_ivp import RadauEnd, SteppedRadau, step_size
 from . import library
 from .solver import NativeSolver
@@ -59,8 +60,7 @@ class NewtonTables:
                  kkt_size: int) -> None:
         n, m, pattern = num.n, num.m, num.pattern
         rows = np.arange(m) if kept is None else np.asarray(kept, dtype=np.intp)
-        place = np.full(m, -1)
-        place[rows] = np.arange(len(rows))  # a kept row's place among the kept
+        place = kept_places(m, rows)
         N = n + len(rows)
         found = num.compiled.functions["residual_jacobians"]
         blocks = dict(zip(("r1_q", "r1_qd", "r2_q", "r2_qd"), found.layout.blocks))
@@ -69,16 +69,14 @@ class NewtonTables:
         def stacked(r1: str, r2: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             """The Jacobian entries of r1, then r2's kept rows: row, col, source."""
             b1, b2 = blocks[r1], blocks[r2]
-            r2_place = place[b2.index[0]]
-            keep = r2_place >= 0
-            return (np.concatenate([b1.index[0], r2_place[keep] + n]),
-                    np.concatenate([b1.index[1], b2.index[1][keep]]),
-                    np.concatenate([offsets[r1] + np.arange(b1.size),
-                                    offsets[r2] + np.flatnonzero(keep)]))
+            row, col, keep = stacked_entries((b1.index[0], b1.index[1]),
+                                             (b2.index[0], b2.index[1]), place, n)
+            return row, col, np.concatenate([offsets[r1] + np.arange(b1.size),
+                                             offsets[r2] + np.flatnonzero(keep)])
 
         v_row, v_col, v_src = stacked("r1_qd", "r2_qd")
         q_row, q_col, q_src = stacked("r1_q", "r2_q")
-        nM, nA = len(pattern.M_rows), len(pattern.A_rows)
+        nM = len(pattern.M_rows)
         a_place = place[pattern.A_rows]
         a_keep = a_place >= 0
         a_rows, a_cols = a_place[a_keep] + n, pattern.A_cols[a_keep]
@@ -87,7 +85,6 @@ class NewtonTables:
         fixed_col = np.concatenate([pattern.M_cols, a_cols, a_rows])
         fixed_src = np.concatenate([kkt_place[:nM], a_src, a_src])
         fixed_sign = np.concatenate([np.ones(nM), np.ones(len(a_src)), -np.ones(len(a_src))])
-        assert nA >= len(a_src)
         # the band: reverse Cuthill-McKee on the symmetric pattern of every entry
         i = np.concatenate([fixed_row, v_row, q_row, np.arange(N)])
         j = np.concatenate([fixed_col, v_col, q_col, np.arange(N)])
@@ -154,7 +151,6 @@ class NativeRadau(SteppedRadau):
         n = len(y0)
         self._native = native
         tables = newton_tables(native)
-        self._tables = tables
         N, m, nw = tables.N, tables.m, tables.struct
         tolerances = self.tolerances
         self._atol = tolerances.atol

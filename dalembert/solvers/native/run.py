@@ -17,6 +17,7 @@ which takes it the step-by-step way (the Python projector then stands in).
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Callable
 from functools import partial
 
 import numpy as np
@@ -69,9 +70,8 @@ class _Stretches:
         self._pending = False
         self.near_singular = False
 
-    def _call(self) -> int:
-        """Run the stretch in C from the loaded start (:meth:`_load`); its status."""
-        raise NotImplementedError
+    #: the stretch's C call over this runner's buffers (made by the subclass): its status
+    _call: Callable[[], int]
 
     def _load(self) -> int:
         """Load the solver's state into C; the solver's ``nfev`` before the call."""
@@ -130,12 +130,9 @@ class StretchRunner(_Stretches):
         super().__init__(solver, t_eval, solver._n_rows)
         native = solver._native
         self._K = solver.stage_storage()
-        self._c_call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
+        self._call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
                                ctypes.addressof(self._run), self._y.ctypes.data,
                                self._K.ctypes.data, solver._stage.ctypes.data)
-
-    def _call(self) -> int:
-        return self._c_call()
 
     def _load(self) -> int:
         solver, st = self.solver, self.solver._stepper
@@ -170,13 +167,10 @@ class RadauStretchRunner(_Stretches):
         super().__init__(solver, t_eval, 2)  # the step's f and f at the projected end
         native = solver._native
         self._f, self._Z = np.empty(solver.n), np.empty((3, solver.n))
-        self._c_call = partial(native.lib.dl_radau_run, *native._at, *solver._fixed,
+        self._call = partial(native.lib.dl_radau_run, *native._at, *solver._fixed,
                                ctypes.addressof(self._run), self._y.ctypes.data,
                                self._f.ctypes.data, self._Z.ctypes.data)
         self._counts = (0, 0, 0)
-
-    def _call(self) -> int:
-        return self._c_call()
 
     def _load(self) -> int:
         solver = self.solver

@@ -214,13 +214,11 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
   const double t_old = st->t;
   int status = dl_rk_step(md, d, tb, st, y, K, run->y_new, stage);
   if (status != DL_OK) return status;
-  const double t_new = st->t, dir = st->direction;
+  const double t_new = st->t;
   const int every_step = run->n_eval < 0;
-  int64_t hi;
-  const int64_t count = outputs_due(run, t_new, dir, &hi);
-  if (run->n_out + count > run->capacity) return DL_OUTPUTS;
-  memcpy(run->y_end, run->y_new, (size_t)n_state * sizeof(double));
-  if ((status = run_project(md, d, run, t_new, run->y_end)) != DL_OK) return status;
+  int64_t hi, count;
+  if ((status = end_of_step(md, d, run, t_new, st->direction, &hi, &count)) != DL_OK)
+    return status;
   int made = 0;
   for (int64_t k = 0; k < count; ++k) {
     const double s = every_step ? t_new : run->t_eval[run->next_eval + k];

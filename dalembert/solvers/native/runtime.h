@@ -348,20 +348,25 @@ DL_INLINE double wall_seconds(void) {
   return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
-/* The outputs of a step ending at t_new: their count (1 at every step end without
- * t_eval), and in *hi the output time after them. */
-DL_INLINE int64_t outputs_due(const dl_run *run, double t_new, double dir, int64_t *hi) {
-  int64_t k = run->next_eval;
-  while (k < run->n_eval && dir * run->t_eval[k] <= dir * t_new) ++k;
-  *hi = k;
-  return run->n_eval < 0 ? 1 : k - run->next_eval;
-}
-
 /* dl_project with a stretch's arguments. */
 DL_INLINE int run_project(const dl_model *md, dl_data *d, const dl_run *run, double t,
                           double *y) {
   return dl_project(md, d, t, y, run->holonomic, run->max_newton, run->max_full,
                     run->position_tol, run->accept_tol);
+}
+
+/* The end of a stretch's step at t_new (its state in run->y_new): *count outputs fall
+ * in the step (1 at every step end without t_eval), *hi is the output time after them,
+ * and the end is projected into run->y_end. DL_OUTPUTS if the buffer cannot hold them. */
+DL_INLINE int end_of_step(const dl_model *md, dl_data *d, dl_run *run, double t_new,
+                          double dir, int64_t *hi, int64_t *count) {
+  int64_t k = run->next_eval;
+  while (k < run->n_eval && dir * run->t_eval[k] <= dir * t_new) ++k;
+  *hi = k;
+  *count = run->n_eval < 0 ? 1 : k - run->next_eval;
+  if (run->n_out + *count > run->capacity) return DL_OUTPUTS;
+  memcpy(run->y_end, run->y_new, (size_t)(2 * md->n) * sizeof(double));
+  return run_project(md, d, run, t_new, run->y_end);
 }
 
 #endif

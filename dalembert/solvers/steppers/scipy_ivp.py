@@ -361,6 +361,13 @@ class StepTolerances:
     max_step: float
 
 
+def _tolerances(solver: OdeSolver) -> StepTolerances:
+    """A SciPy solver's tolerances and largest step, as it checked them (``atol`` one
+    value per component)."""
+    atol = np.ascontiguousarray(np.broadcast_to(solver.atol, (solver.n,)), dtype=np.float64)
+    return StepTolerances(float(solver.rtol), atol, float(solver.max_step))
+
+
 class ControlledSteps(RungeKutta):
     """Mixin for a SciPy ``RungeKutta`` subclass: its steps taken by our stepper under
     ``step_control``.
@@ -407,8 +414,7 @@ class ControlledSteps(RungeKutta):
     @property
     def tolerances(self) -> StepTolerances:
         """The tolerances and the largest step, as SciPy checked them."""
-        atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
-        return StepTolerances(float(self.rtol), atol, float(self.max_step))
+        return _tolerances(self)
 
     def stage_storage(self) -> np.ndarray:
         """SciPy's own stage array, one row per stage and the last step's end
@@ -676,8 +682,7 @@ class SteppedRadau(Radau):
     @property
     def tolerances(self) -> StepTolerances:
         """The tolerances and the largest step, as SciPy checked them."""
-        atol = np.ascontiguousarray(np.broadcast_to(self.atol, (self.n,)), dtype=np.float64)
-        return StepTolerances(float(self.rtol), atol, float(self.max_step))
+        return _tolerances(self)
 
     def take_step(self, t: float, y: np.ndarray, f: np.ndarray, h_abs: float
                   ) -> RadauEnd | str:
