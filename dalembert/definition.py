@@ -20,7 +20,7 @@ import sympy as sp
 from .codegen import compiled as codegen
 from .codegen.compiled import CompiledEquations
 from .equations.lagrange import Equations, derive_equations
-from .model.constraints import UnilateralRow, with_gaps
+from .model.constraints import ClosedGaps, UnilateralRow, friction_inputs, with_gaps
 from .model.coordinates import t as time_symbol
 from .model.model import Model
 
@@ -84,10 +84,11 @@ class Definition(Protocol):
         parameters ``b0..b3`` (a rigid body's), which a time step turns rather than
         moves along a line; ``(0, 4)`` for none."""
 
-    def with_gaps_closed(self, closed: tuple[int, ...], tangents: bool = False) -> Definition:
-        """The definition with the unilateral constraints ``closed`` (indices) as rows
-        after the others, and none left apart (``tangents``: their sliding velocities
-        too, as rows after them, for friction)."""
+    def with_gaps_closed(self, which: ClosedGaps) -> Definition:
+        """The definition with the unilateral constraints ``which.closed`` as rows after
+        the others, the sliding velocities of ``which.held`` as rows after them, the
+        friction forces of ``which.sliding`` as inputs after the others, and no
+        unilateral constraint left apart (:class:`~dalembert.model.constraints.ClosedGaps`)."""
 
 
 class UnilateralLaw(Protocol):
@@ -188,8 +189,15 @@ class SymbolicDefinition:
         parameters, and each moves along a line in a time step."""
         return np.zeros((0, 4), dtype=int)
 
-    def with_gaps_closed(self, closed: tuple[int, ...],
-                         tangents: bool = False) -> SymbolicDefinition:
+    def with_gaps_closed(self, which: ClosedGaps) -> SymbolicDefinition:
         model = self.model
-        return SymbolicDefinition(replace(model, constraints=with_gaps(
-            model.constraints, closed, tangents)), self.kinetic_energy)
+        rows = model.constraints.unilateral
+        forces = friction_inputs(rows, which.sliding)
+        # each sliding velocity's friction force does work along it: Q += A_k^T F_k
+        directions = [A_row for i in which.sliding for _, A_row, _ in rows[i].tangents]
+        Q = model.Q
+        for force, A_row in zip(forces, directions):
+            Q = Q + force * sp.Matrix(A_row)
+        return SymbolicDefinition(replace(
+            model, constraints=with_gaps(model.constraints, which), Q=Q,
+            inputs=model.inputs + forces), self.kinetic_energy)

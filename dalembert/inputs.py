@@ -118,6 +118,31 @@ class InputSignal:
             sources.append((source, where, what))
         return dataclasses.replace(self, sources=tuple(sources))
 
+    def extended(self, names: Sequence[str], source: Source, what: str) -> InputSignal:
+        """This signal with inputs ``names`` after its own, all given by ``source``
+        (forces a run computes itself at each state, such as sliding friction).
+
+        Parameters
+        ----------
+        names
+            The new inputs.
+        source
+            ``(t, q, qd) -> values`` of the new inputs.
+        what
+            What gives them, for messages.
+
+        Examples
+        --------
+        >>> signal = input_signal(2.0, ["u"], None, (0, 1))
+        >>> both = signal.extended(["f"], lambda t, q, qd: [3 * t], "a test")
+        >>> both.names, both(0.5, np.zeros(1), np.zeros(1)).tolist()
+        (('u', 'f'), [2.0, 1.5])
+        """
+        start = len(self.names)
+        where = tuple(range(start, start + len(names)))
+        return dataclasses.replace(self, names=self.names + tuple(names),
+                                   sources=(*self.sources, (source, where, what)))
+
     def _values(self, value: object, where: tuple[int, ...], what: str,
                 t: float) -> np.ndarray:
         """``value`` as an array of ``len(where)`` finite numbers, or an InputError."""

@@ -33,6 +33,7 @@ from .errors import (
     user_stacklevel,
 )
 from .inputs import InputSignal
+from .model.constraints import ClosedGaps
 from .model.forces import PointForce
 from .model.model import Model, build_model
 from .model.parameters import parameter_values, resolve_parameters
@@ -392,20 +393,23 @@ class System:
         if unknown:
             raise ConstraintError(f"{unknown[0]!r} is not a unilateral constraint of "
                                   f"{self.name!r}; they are {', '.join(names) or 'none'}")
-        return self._closed(tuple(k for k, name in enumerate(names) if name in wanted))
+        return self._closed(ClosedGaps(tuple(k for k, name in enumerate(names)
+                                             if name in wanted)))
 
-    def _closed(self, which: tuple[int, ...], tangents: bool = False) -> System:
-        """:meth:`with_gaps_closed` by indices (``tangents``: with the sliding velocities
-        of the frictional ones as rows after them), made once."""
+    def _closed(self, which: ClosedGaps) -> System:
+        """:meth:`with_gaps_closed` by indices, with the sliding velocities of
+        ``which.held`` as rows after the gaps and the friction forces of
+        ``which.sliding`` as inputs (:class:`~dalembert.model.constraints.ClosedGaps`),
+        made once."""
         made = self.__dict__.setdefault("_closed_systems", {})
-        if (which, tangents) not in made:
+        if which not in made:
             system = System.from_definition(
-                self._definition.with_gaps_closed(which, tangents),
+                self._definition.with_gaps_closed(which),
                 parameters=self.parameter_values,
                 redundant_constraints=self.redundant_constraints)
-            system._closed_contacts = bool(which)
-            made[which, tangents] = system
-        return made[which, tangents]
+            system._closed_contacts = bool(which.closed)
+            made[which] = system
+        return made[which]
 
     def __repr__(self) -> str:
         return (f"System({self.name!r}, coordinates={list(self.coordinate_names)}, "
@@ -975,6 +979,7 @@ class System:
         (:mod:`dalembert.solvers.contact.driver`), each set of closed gaps run as the
         System with those gaps closed."""
         from .solvers.contact.driver import run_contacts
+        from .solvers.contact.friction import SlidingForces
         from .solvers.contact.gaps import Gaps
 
         options = plan.options
@@ -984,21 +989,18 @@ class System:
                              f"only (impacts lose energy): got t_span ({t0}, {tf})")
         rows = self._unilateral
         stepping = options.contact_mode == "time-stepping"
-        rubbing = [u.name for u in rows if u.friction > 0]
-        sliding = [u.name for u in rows if 0 < u.friction < math.inf]
         rough = [u.name for u in rows if u.friction == math.inf]
-        if sliding and not stepping:
-            raise ValueError(f"the unilateral constraint {sliding[0]!r} has friction, which "
-                             "runs in the time-stepping contact mode for now: give "
-                             "contact_mode='time-stepping' (or friction=math.inf for a "
-                             "rough contact that never slides, event-driven)")
         if rough and stepping:
             raise ValueError(f"the unilateral constraint {rough[0]!r} is rough "
                              "(friction=math.inf), which runs in the event-driven contact "
                              "mode: give a finite friction coefficient for time-stepping")
+        sliding = [u.name for u in rows if 0 < u.friction < math.inf]
+        if sliding and not stepping:
+            self._check_sliding_event_driven(sliding[0], options)
         parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
-        # every gap a row (and, with friction or rough, the sliding velocities after them)
-        every = self._closed(tuple(range(len(rows))), tangents=bool(rubbing))
+        # every gap a row, and the sliding velocities of those with friction after them
+        every = self._closed(ClosedGaps(tuple(range(len(rows))),
+                                        tuple(k for k, u in enumerate(rows) if u.friction > 0)))
         full = every.numeric(parameters).for_run()  # the run's inputs are written in it
         gaps = Gaps.of(rows, len(self.constraint_names),
                        [_restitution(u, parameters) for u in rows])
@@ -1006,15 +1008,24 @@ class System:
         # one time limit for the run: each set of closed gaps' data gets what is left
         deadline = None if options.timeout is None else time.monotonic() + options.timeout
 
-        def start(closed: tuple[int, ...], t: float, y: np.ndarray,
-                  events: tuple[Callable, ...]) -> RunData:
-            # a rough contact's sliding velocities are rows while it is closed
-            system = self._closed(closed, any(rows[k].friction == math.inf for k in closed))
+        def start(which: ClosedGaps, t: float, y: np.ndarray, events: tuple[Callable, ...],
+                  forces: SlidingForces | None) -> RunData:
+            system = self._closed(which)
             output = replace(options.output, events=user + events)
             left = None if deadline is None else max(deadline - time.monotonic(), 1e-9)
-            segment = replace(options, t_span=(t, tf), output=output, timeout=left)
+            segment = replace(options, t_span=(t, tf), output=output, timeout=left,
+                              inputs=with_friction(options.inputs, system, forces))
             layout = StateLayout(len(self.coordinate_names))
             return system._plan(segment, *layout.split(y), parameters, None).start()
+
+        def with_friction(signal: InputSignal | None, system: System,
+                          forces: SlidingForces | None) -> InputSignal | None:
+            """The segment's inputs: the user's, then its sliding friction forces."""
+            if forces is None:
+                return signal
+            names = [u.name for u in system.definition.inputs]
+            base = signal or InputSignal((), ())
+            return base.extended(names[len(base.names):], forces, "the sliding friction")
 
         if stepping:
             from .solvers.contact.rotations import Rotations
@@ -1039,6 +1050,19 @@ class System:
         return replace(traj, contacts=history,
                        energy_conserved=traj.energy_conserved
                        and not any(i.energy_lost for i in history.impacts))
+
+    def _check_sliding_event_driven(self, name: str, options: SimulationOptions) -> None:
+        """Refuse what finite friction does not do in the event-driven mode yet."""
+        if not isinstance(self._definition, SymbolicDefinition):
+            raise ValueError(f"the contact {name!r} has finite friction, which runs in the "
+                             "time-stepping contact mode for a Multibody for now: give "
+                             "contact_mode='time-stepping' (or friction=math.inf for a rough "
+                             "contact that never slides, event-driven)")
+        if options.inputs is not None and options.inputs.sample_time is not None:
+            raise ValueError(f"the unilateral constraint {name!r} has finite friction, which "
+                             "does not run with sampled inputs (sample_time=) in the "
+                             "event-driven contact mode yet: give "
+                             "contact_mode='time-stepping'")
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:

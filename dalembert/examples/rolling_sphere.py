@@ -3,12 +3,12 @@
 A solid sphere (mass ``m``, radius ``r``, ``I = 2/5 m r^2``) in the plane of its motion,
 coordinates ``x, y, theta`` (``theta`` counterclockwise), on a floor ``y - r >= 0`` with
 Coulomb friction ``mu`` along the contact point's sliding velocity
-``x' + r theta'`` (:class:`~dalembert.Unilateral` with ``friction`` and ``tangents``,
-run in the time-stepping contact mode). Launched at ``v0`` without spin, friction
-``mu m g`` slows it and spins it up until the contact point stops sliding at
-``t = 2 v0 / (7 mu g)``; from then it rolls at ``5/7 v0``. Friction and the normal
-force pass through the contact line, so the angular momentum about it,
-``m r x' - I theta'``, stays ``m r v0`` throughout (a conservation law).
+``x' + r theta'`` (:class:`~dalembert.Unilateral` with ``friction`` and ``tangents``).
+Launched at ``v0`` without spin, friction ``mu m g`` slows it and spins it up until
+the contact point stops sliding at ``t = 2 v0 / (7 mu g)`` (an event of the
+event-driven contact mode, found to rounding); from then it rolls at ``5/7 v0``.
+Friction and the normal force pass through the contact line, so the angular momentum
+about it, ``m r x' - I theta'``, stays ``m r v0`` throughout (a conservation law).
 """
 
 from __future__ import annotations
@@ -25,8 +25,7 @@ TITLE = "Sphere launched sliding on a floor: Coulomb friction, sliding then roll
 m, g, r = sp.symbols("m g r", positive=True)
 x, y, theta = coordinates("x y theta")
 RADIUS, MU, V0 = 0.1, 0.3, 2.0
-INITIAL = {"q0": {"x": 0.0, "y": RADIUS}, "qd0": {"x": V0},
-           "contact_mode": "time-stepping", "contact_step": 1e-3}
+INITIAL = {"q0": {"x": 0.0, "y": RADIUS}, "qd0": {"x": V0}}
 T_END = 1.0
 
 

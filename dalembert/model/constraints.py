@@ -210,38 +210,81 @@ def build_constraints(constraints: object, coords: Coordinates) -> ConstraintSet
     )
 
 
-def with_gaps(cons: ConstraintSet, closed: tuple[int, ...],
-              tangents: bool = False) -> ConstraintSet:
-    """The constraint set with the unilateral constraints ``closed`` (indices into
-    ``cons.unilateral``) as holonomic rows after the others (kind ``"unilateral"``),
-    and no unilateral constraint left apart: the equations while those gaps are closed.
+@dataclass(frozen=True)
+class ClosedGaps:
+    """Which unilateral constraints hold as rows of a model, and how their friction
+    acts there (indices into ``ConstraintSet.unilateral``, each in increasing order).
+
+    Attributes
+    ----------
+    closed
+        The gaps closed: holonomic rows after the bilateral ones.
+    held
+        Closed gaps whose sliding velocities are rows too, after the gaps (kind
+        ``"friction"``): a rough contact's or a sticking one's, held at 0 while it is
+        closed; in the time-stepping mode's model every frictional gap's, never
+        enforced there (its ``A`` rows are read).
+    sliding
+        Closed gaps sliding with Coulomb friction: their friction force along each
+        sliding velocity is an input of the model (:func:`friction_inputs`), which the
+        run sets to ``-mu`` times the normal force along the sliding direction.
+
+    Examples
+    --------
+    >>> ClosedGaps((0, 2), held=(2,))
+    ClosedGaps(closed=(0, 2), held=(2,), sliding=())
+    """
+
+    closed: tuple[int, ...]
+    held: tuple[int, ...] = ()
+    sliding: tuple[int, ...] = ()
+
+
+def friction_inputs(rows: Sequence[UnilateralRow], sliding: Sequence[int]
+                    ) -> tuple[sp.Symbol, ...]:
+    """The input symbols of the friction forces of the ``sliding`` gaps, one per sliding
+    velocity (``<name>_friction_force_<k>``), in order.
+
+    Examples
+    --------
+    >>> floor = UnilateralRow("floor", sp.Symbol("y"), (), 0, 0.0, 1e-6, 0.3,
+    ...                       ((sp.Symbol("x"), (1,), 0),))
+    >>> friction_inputs([floor], [0])
+    (floor_friction_force_1,)
+    """
+    return tuple(sp.Symbol(f"{rows[i].name}_friction_force_{k + 1}")
+                 for i in sliding for k in range(len(rows[i].tangents)))
+
+
+def with_gaps(cons: ConstraintSet, which: ClosedGaps) -> ConstraintSet:
+    """The constraint set with the unilateral constraints ``which.closed`` as holonomic
+    rows after the others (kind ``"unilateral"``), then the sliding velocities of the
+    ``which.held`` ones (kind ``"friction"``, named ``<name>_friction_<k>``), and no
+    unilateral constraint left apart: the equations while those gaps are closed.
 
     Parameters
     ----------
     cons
         A constraint set with unilateral constraints.
-    closed
-        Which of them are closed, in increasing order.
-    tangents
-        Also the sliding velocities of the closed gaps with friction, as Pfaffian rows
-        after them (kind ``"friction"``, named ``<name>_friction_<k>``): rows whose
-        ``A`` the time-stepping mode reads, never enforced as constraints.
+    which
+        Which of them are closed and which hold their sliding velocities
+        (:class:`ClosedGaps`; its ``sliding`` gaps add no row).
 
     Examples
     --------
     >>> from dalembert.model.coordinates import build_coordinates, coordinates
     >>> x, y = coordinates("x y")
     >>> cons = build_constraints([Unilateral(y, name="floor")], build_coordinates([x, y]))
-    >>> cons.m, with_gaps(cons, (0,)).names, with_gaps(cons, (0,)).holonomic_rows
+    >>> closed = with_gaps(cons, ClosedGaps((0,)))
+    >>> cons.m, closed.names, closed.holonomic_rows
     (0, ('floor',), (0,))
     """
-    rows = [cons.unilateral[i] for i in closed]
+    rows = [cons.unilateral[i] for i in which.closed]
     m = cons.m
     extra = [(u.name, "unilateral", u.gap, u.A, u.b) for u in rows]
-    if tangents:
-        extra += [(f"{u.name}_friction_{k + 1}", "friction", expr, A_row, b)
-                  for u in rows if u.friction > 0
-                  for k, (expr, A_row, b) in enumerate(u.tangents)]
+    extra += [(f"{u.name}_friction_{k + 1}", "friction", expr, A_row, b)
+              for i in which.held for u in (cons.unilateral[i],) if u.friction > 0
+              for k, (expr, A_row, b) in enumerate(u.tangents)]
     A = cons.A.col_join(sp.Matrix([list(e[3]) for e in extra])) if extra else cons.A
     return replace(
         cons, names=cons.names + tuple(e[0] for e in extra),
@@ -249,7 +292,6 @@ def with_gaps(cons: ConstraintSet, closed: tuple[int, ...],
         exprs=cons.exprs + tuple(e[2] for e in extra), A=A,
         b=cons.b.col_join(sp.Matrix(len(extra), 1, [e[4] for e in extra])),
         holonomic_rows=cons.holonomic_rows + tuple(range(m, m + len(rows))), unilateral=())
-
 
 
 def _unilateral_row(c: Unilateral, i: int, coords: Coordinates) -> UnilateralRow:

@@ -431,7 +431,7 @@ class Multibody:
         return System.from_definition(MultibodyDefinition(self), parameters=self.defaults)
 
     def with_contacts_closed(self, closed: tuple[int, ...],
-                             tangents: bool = False) -> Multibody:
+                             held: tuple[int, ...] = ()) -> Multibody:
         """This mechanism with the contacts ``closed`` (indices) as joints after its own,
         and no contact left apart: the mechanism while they hold.
 
@@ -439,10 +439,11 @@ class Multibody:
         ----------
         closed
             Indices into :attr:`contacts`.
-        tangents
-            Also the sliding velocities of the closed contacts with friction, as joints
-            of Pfaffian rows after them (:class:`~.contacts.Sliding`: rows the
-            time-stepping mode reads for friction, never enforced).
+        held
+            Closed contacts whose sliding velocities (those with friction) are joints
+            of Pfaffian rows after them (:class:`~.contacts.Sliding`): a rough or
+            sticking contact's, or the rows the time-stepping mode reads for
+            friction, never enforced there.
 
         Examples
         --------
@@ -455,8 +456,7 @@ class Multibody:
         closed_mb = copy.copy(self)
         closed_mb.__dict__ = {k: v for k, v in self.__dict__.items()
                               if not isinstance(getattr(type(self), k, None), cached_property)}
-        sliding = [s for k in closed if tangents
-                   for s in (self.contacts[k].sliding,) if s is not None]
+        sliding = [s for k in held for s in (self.contacts[k].sliding,) if s is not None]
         closed_mb.joints = (*self.joints, *(self.contacts[k].joint for k in closed),
                             *sliding)
         closed_mb.contacts = ()

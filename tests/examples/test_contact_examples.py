@@ -39,7 +39,7 @@ LIMITS = {
                     "max rod length residual": 1e-12,
                     "height of the chain at the end": 1e-8},
     rolling_sphere: {"rolling speed / (5/7 v0) - 1": 1e-12,
-                     "rolling starts, error (s)": 2e-3,  # within a step (1e-3)
+                     "rolling starts, error (s)": 1e-12,
                      "angular momentum about the contact, relative error": 1e-12,
                      "deepest point below the floor": 1e-14},
 }

@@ -45,18 +45,23 @@ import numpy as np
 from ...codegen.compiled import NumericModel
 from ...errors import ContactError, InputError, TimeLimitExceeded
 from ...inputs import InputSignal
+from ...model.constraints import ClosedGaps
 from ...options import ImpactLaw
 from ..impact import Impact, impact
+from ..kkt.sparse import matvec
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.sampled import sampled_schedule
 from ..running.segments import Schedule, Segment, SegmentedRun, SegmentState, _Record
 from ..running.watchdog import watching
+from .friction import SlidingForces, choose_friction, friction_at, sliding_velocity
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .laws import closed_gaps, resolve_impact
 
 #: Switches within rounding of one instant before the run is called a chattering cascade.
 MAX_SWITCHES_AT_ONCE = 100
+#: Rounds of choosing the closed gaps and their friction in turn at a switch.
+MAX_FRICTION_ROUNDS = 10
 #: A value an event takes at its segment's start instead of one at or below 0 (see the
 #: module docstring): positive, below any value that matters.
 STARTS_OPEN = 1e-300
@@ -198,15 +203,19 @@ class ContactRun:
 
 @dataclass
 class SegmentStart:
-    """The current segment's start time, which the gap events read (they are made once
-    per set of closed gaps and serve every segment with that set)."""
+    """The current segment's start time and its sliding contacts' directions there,
+    which the events and the friction forces read (they are made once per set of
+    closed gaps and serve every segment with that set)."""
 
     t: float = np.nan
+    directions: dict[int, np.ndarray] = field(default_factory=dict)
 
 
-#: ``start(closed, t, y, events)``: the data of a run of the model with the gaps
-#: ``closed`` closed, from ``(t, y)``, watching ``events`` after the user's.
-StartSegments = Callable[[tuple[int, ...], float, np.ndarray, tuple[Callable, ...]], RunData]
+#: ``start(closed, t, y, events, forces)``: the data of a run of the model of the closed
+#: set ``closed``, from ``(t, y)``, watching ``events`` after the user's, its sliding
+#: contacts' friction forces (its last inputs) given by ``forces`` (``None``: none).
+StartSegments = Callable[[ClosedGaps, float, np.ndarray, tuple[Callable, ...],
+                          SlidingForces | None], RunData]
 
 
 def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
@@ -255,7 +264,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             f"(gap {g[k]:.6g} < 0): start with every gap >= 0")
     history = ContactHistory(gaps.names)
     segment_start = SegmentStart()
-    made: dict[tuple[int, ...], RunData] = {}
+    made: dict[ClosedGaps, RunData] = {}
+    watched: dict[ClosedGaps, tuple[tuple[str, int], ...]] = {}
+    forces: dict[ClosedGaps, SlidingForces | None] = {}
     record = _Record()
     hold = Hold.of(signal, t_span, n)
     held = hold.sample(t, y) if hold.sampled else None
@@ -266,17 +277,23 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             return held
         return None if signal is None else signal(t, q, qd)
 
-    y, closed = _switch(full, gaps, history, t, y, law, inputs_at, opening=None)
+    y, which, directions = _switch(full, gaps, history, t, y, law, inputs_at, None, None)
+    closed = which.closed
     history.switches.append(Switch(t, closed, y[:n].copy(), y[n:].copy()))
     at_once, last_switch = 0, t
     while True:
-        data = made.get(closed)
+        data = made.get(which)
         if data is None:
-            data = made[closed] = start(closed, t, y, _gap_events(gaps, closed, full,
-                                                                  segment_start))
+            forces[which] = SlidingForces(full.for_run(), gaps, which,
+                                          segment_start.directions,
+                                          signal) if which.sliding else None
+            events, watched[which] = _contact_events(gaps, which, full, segment_start)
+            data = made[which] = start(which, t, y, events, forces[which])
         if held is not None:
             data.hold_inputs(held)
         segment_start.t = t
+        segment_start.directions.clear()
+        segment_start.directions.update(directions)
         end = hold.next_instant(t, tf)
         # an output time at an inner instant is the next segment's (after the sample)
         last = end if end == tf else end - hold.tolerance
@@ -284,10 +301,10 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         run_at = asked if asked is None or end == tf else np.append(asked, end)
         segment = data.segment((t, end), y, run_at, False)
         result = segment.run()
-        fired = _gap_fired(result, user_events)
+        fired = _contact_fired(result, user_events)
         keep = np.flatnonzero(result.t < fired[0]) if fired is not None else \
             np.arange(len(result.t)) if end == tf else np.flatnonzero(result.t < end)
-        outputs = _outputs(full.m, gaps, closed, dynamics)
+        outputs = _outputs(full, gaps, which, dynamics, forces[which])
         final_sample = fired is None and end == tf and hold.is_instant(tf) and \
             len(keep) > 0 and result.t[keep[-1]] == tf
         shown = keep[:-1] if final_sample else keep
@@ -311,10 +328,12 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                            SegmentState(y_end, held, closed), outputs)
             break
         if fired is None:  # a sample instant: new inputs, and maybe other contacts
-            te, ye, opening = end, result.y[-1], None
+            te, ye, opening, slipping = end, result.y[-1], None, None
         else:
-            te, ye, k = fired
-            opening = k if k in closed else None
+            te, ye, event = fired
+            kind, k = watched[which][event]
+            opening = k if kind == "separating" else None
+            slipping = k if kind == "slipping" else None
             at_once = at_once + 1 if te - last_switch <= 1e-12 * (1.0 + abs(te)) else 0
             if at_once > MAX_SWITCHES_AT_ONCE:
                 result.status, result.message = "failed", (
@@ -326,7 +345,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             with watching(data.watchdog):  # the inputs are called at a switch
                 if fired is None:
                     held = hold.sample(te, ye)
-                y, closed = _switch(full, gaps, history, te, ye, law, inputs_at, opening)
+                y, which, directions = _switch(full, gaps, history, te, ye, law, inputs_at,
+                                               opening, slipping)
+                closed = which.closed
         except ContactError as exc:
             result.status, result.message, result.error = "failed", str(exc), exc
             break
@@ -409,10 +430,14 @@ class Hold:
 def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
             y: np.ndarray, law: ImpactLaw,
             inputs_at: Callable[[float, np.ndarray, np.ndarray], np.ndarray | None],
-            opening: int | None) -> tuple[np.ndarray, tuple[int, ...]]:
-    """The state after a switch at ``t`` and the gaps closed from there: the impact of
-    the touching gaps (if any approaches), then the closed set (``opening``: the gap
-    whose multiplier reached 0, left open), under the inputs ``inputs_at`` gives."""
+            opening: int | None, slipping: int | None
+            ) -> tuple[np.ndarray, ClosedGaps, dict[int, np.ndarray]]:
+    """The state after a switch at ``t``, the closed set from there and its sliding
+    contacts' directions: the impact of the touching gaps (if any approaches), then
+    the closed gaps (``opening``: the gap whose multiplier reached 0, left open) and
+    which of them stick or slide (``slipping``: the gap whose sticking force reached
+    the cone, made to slide), in turn until they agree, under the inputs
+    ``inputs_at`` gives."""
     n = full.n
     q, qd = y[:n], y[n:]
     inputs = inputs_at(t, q, qd)
@@ -425,21 +450,32 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         history.impacts.append(ImpactRecord(t, outcome.impulses, outcome.energy_lost,
                                             qd.copy(), outcome.qd))
         qd = outcome.qd
-    closed = closed_gaps(full, gaps, t, q, qd, touching,
-                         () if opening is None else (opening,))
+    exclude = () if opening is None else (opening,)
+    closed = closed_gaps(full, gaps, t, q, qd, touching, exclude,
+                         friction_at(full, gaps, t, q, qd))
     grip = _grip(full, gaps, t, q, qd, closed)
     if grip is not None:  # a rough contact closing while sliding stops sliding at once
         history.impacts.append(ImpactRecord(t, grip.impulses[gaps.rows],
                                             grip.energy_lost, qd.copy(), grip.qd))
         qd = grip.qd
-    return np.concatenate([q, qd]), closed
+    for _ in range(MAX_FRICTION_ROUNDS):
+        friction = choose_friction(full, gaps, t, q, qd, closed,
+                                   friction_at(full, gaps, t, q, qd), slipping)
+        again = closed_gaps(full, gaps, t, q, qd, touching, exclude, friction)
+        if again == closed:
+            which = friction.of(closed)
+            return np.concatenate([q, _held_still(full, gaps, t, q, qd, which)]), which, \
+                {k: friction.directions[k] for k in which.sliding}
+        closed = again
+    raise ContactError(f"at t={t:.6g} the closed contacts and their friction (sticking "
+                       f"or sliding) did not settle in {MAX_FRICTION_ROUNDS} rounds")
 
 
 def _grip(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
           closed: tuple[int, ...]) -> Impact | None:
     """The impact of the rough gaps among ``closed`` that slide (their sliding
     velocities' rows acting, ``e = 0``), or ``None`` where none does."""
-    rows = gaps.rough_rows(closed)
+    rows = gaps.held_rows(ClosedGaps(closed, tuple(k for k in closed if k in gaps.rough)))
     if not len(rows):
         return None
     rates = row_rates(full, t, q, qd)[rows]
@@ -448,30 +484,75 @@ def _grip(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarra
     return impact(full, t, q, qd, gaps.acting(full.m, np.array(closed, dtype=int)))
 
 
-def _gap_events(gaps: Gaps, closed: tuple[int, ...], full: NumericModel,
-                start: SegmentStart) -> tuple[Callable, ...]:
-    """One terminal event per gap: an open one's value, a closed one's multiplier (its
-    place among the rows of the model with ``closed`` closed), each falling through 0."""
+def _held_still(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
+                which: ClosedGaps) -> np.ndarray:
+    """``qd`` with the sliding velocities of the gaps that start sticking set to 0: a
+    stop is found where the sliding velocity along its direction is 0, which in space
+    leaves a rounding-level part across it (below the speed a contact counts as at
+    rest at, :data:`~dalembert.solvers.contact.gaps.TOUCH_RTOL`)."""
+    rows = gaps.held_rows(which)
+    if not len(rows) or not np.any(row_rates(full, t, q, qd)[rows]):
+        return qd
+    return impact(full, t, q, qd, gaps.acting(full.m, np.array(which.closed, dtype=int),
+                                             which.held)).qd
+
+
+def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
+                    start: SegmentStart
+                    ) -> tuple[tuple[Callable, ...], tuple[tuple[str, int], ...]]:
+    """The terminal events of a segment of the closed set ``which``, each falling
+    through 0, and what each is (``(kind, gap)``):
+
+    - per gap, an open one's value (``"closing"``), a closed one's multiplier
+      (``"separating"``; its place among the rows of the model of ``which``);
+    - per sticking gap, ``mu lambda_n - |lambda_t|`` (``"slipping"``: its force leaves
+      the cone);
+    - per sliding gap, its sliding velocity along its direction at the segment's start
+      (``"sticking"``: it stops)."""
+    closed = which.closed
     first = gaps.first
     events: list[Callable] = []
-    for k in range(gaps.count):
-        if k in closed:
-            row = first + closed.index(k)
+    kinds: list[tuple[str, int]] = []
 
-            def event(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
-                      row: int = row) -> float:
-                # below 0 by more than rounding: a contact pushing with no force stays
-                band = FORCE_RTOL * (1.0 + np.abs(lam).max())
-                return _open_at_start(start, t, float(lam[row]) + band)
-        else:
-            def event(t: float, q: np.ndarray, qd: np.ndarray, *,  # type: ignore[misc]
-                      k: int = k) -> float:
-                return _open_at_start(start, t, float(gaps.values(full, t, q)[k]))
-        event.__name__ = f"{gaps.names[k]} {'separating' if k in closed else 'closing'}"
+    def add(event: Callable, kind: str, k: int) -> None:
+        event.__name__ = f"{gaps.names[k]} {kind}"
         event.terminal = True  # type: ignore[attr-defined]
         event.direction = -1  # type: ignore[attr-defined]
         events.append(event)
-    return tuple(events)
+        kinds.append((kind, k))
+
+    for k in range(gaps.count):
+        if k in closed:
+            def separating(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
+                           row: int = first + closed.index(k)) -> float:
+                # below 0 by more than rounding: a contact pushing with no force stays
+                band = FORCE_RTOL * (1.0 + np.abs(lam).max())
+                return _open_at_start(start, t, float(lam[row]) + band)
+            add(separating, "separating", k)
+        else:
+            def closing(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
+                return _open_at_start(start, t, float(gaps.values(full, t, q)[k]))
+            add(closing, "closing", k)
+    assert gaps.friction is not None  # made by Gaps.of
+    held_at = first + len(closed)
+    for k in which.held:
+        rows = np.arange(held_at, held_at + len(gaps.tangents[k]))
+        held_at += len(rows)
+        if gaps.friction[k] == np.inf:
+            continue
+
+        def slipping(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
+                     rows: np.ndarray = rows, row: int = first + closed.index(k),
+                     mu: float = float(gaps.friction[k])) -> float:
+            return _open_at_start(start, t, mu * float(lam[row])
+                                  - float(np.linalg.norm(lam[rows])))
+        add(slipping, "slipping", k)
+    for k in which.sliding:
+        def sticking(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
+            s = sliding_velocity(full, gaps, k, t, q, qd)
+            return _open_at_start(start, t, float(s @ start.directions[k]))
+        add(sticking, "sticking", k)
+    return tuple(events), tuple(kinds)
 
 
 def _open_at_start(start: SegmentStart, t: float, value: float) -> float:
@@ -482,9 +563,10 @@ def _open_at_start(start: SegmentStart, t: float, value: float) -> float:
     return STARTS_OPEN if value == 0.0 or (t == start.t and value < 0.0) else value
 
 
-def _gap_fired(result: IntegrationResult, user_events: int
-               ) -> tuple[float, np.ndarray, int] | None:
-    """``(t, y, gap)`` of the gap event that ended the segment, or ``None``."""
+def _contact_fired(result: IntegrationResult, user_events: int
+                   ) -> tuple[float, np.ndarray, int] | None:
+    """``(t, y, event)`` of the contact event that ended the segment (its place among
+    the contact events), or ``None``."""
     if result.status != "event":
         return None
     times = [(float(te[-1]), k) for k, te in enumerate(result.t_events) if len(te)]
@@ -494,18 +576,31 @@ def _gap_fired(result: IntegrationResult, user_events: int
     return t_end, result.y_events[k][-1], k - user_events
 
 
-def _outputs(m: int, gaps: Gaps, closed: tuple[int, ...], dynamics: bool
+def _outputs(full: NumericModel, gaps: Gaps, which: ClosedGaps, dynamics: bool,
+             forces: SlidingForces | None
              ) -> Callable[[Segment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
     """The outputs of a segment, its multipliers placed by row of the model with every
-    gap (0 on the open gaps), the same arrays for every segment."""
-    rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(closed, dtype=int),
-                           gaps.rough_rows(closed)])
+    gap (0 on the open gaps; a sliding contact's friction forces in its sliding
+    velocities' rows, and in the constraint forces), the same arrays for every
+    segment."""
+    m, n = full.m, full.n
+    rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(which.closed, dtype=int),
+                           gaps.held_rows(which)]).astype(int)
+    sliding = gaps.held_rows(ClosedGaps(which.closed, which.sliding))
+    pattern = full.pattern
 
     def outputs(segment: Segment, t: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
         assert isinstance(segment, RunSegment)  # the driver makes every segment
         out = dict(segment.outputs(t, y, dynamics=dynamics))
         lam = np.zeros((len(t), m))
-        lam[:, rows.astype(int)] = out["multipliers"]
+        lam[:, rows] = out["multipliers"]
+        if forces is not None and dynamics:
+            for i, (ti, yi) in enumerate(zip(t, y)):
+                q, qd = yi[:n], yi[n:]
+                lam[i, sliding] = forces(float(ti), q, qd)
+                Av, _ = full.velocity_sparse(float(ti), q)
+                out["constraint_forces"][i] = matvec(pattern.A_cols, pattern.A_rows, Av,
+                                                     lam[i], n)
         out["multipliers"] = lam
         # the mark of near-singular configurations, which a segment without rows lacks
         out.setdefault("near_singular", np.zeros(len(t), dtype=bool))

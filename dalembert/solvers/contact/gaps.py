@@ -8,7 +8,7 @@ accelerations from that model's generated functions.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -16,6 +16,7 @@ import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...errors import ContactError
+from ...model.constraints import ClosedGaps
 from ..kkt.sparse import matvec
 
 if TYPE_CHECKING:
@@ -114,41 +115,48 @@ class Gaps:
         """The gaps' rows in the model."""
         return np.arange(self.first, self.first + self.count)
 
-    def acting(self, m: int, chosen: np.ndarray) -> np.ndarray:
+    def acting(self, m: int, chosen: np.ndarray, held: Collection[int] = ()) -> np.ndarray:
         """The rows of the model that act with the gaps ``chosen`` closed (a boolean
         mask over its ``m`` rows): the bilateral ones, the chosen gaps and the sliding
         velocities' rows of the rough ones among them (``friction=math.inf``: held
-        at 0 while closed; a finite friction's rows never act as constraints).
+        at 0 while closed) and of those in ``held`` (sticking).
 
         Examples
         --------
-        >>> gaps = Gaps(("a", "b"), 1, np.zeros(2), np.ones(2), np.array([np.inf, 0.0]),
-        ...             (np.array([3]), np.array([], dtype=int)))
-        >>> gaps.acting(4, np.array([0])).tolist()
-        [True, True, False, True]
+        >>> gaps = Gaps(("a", "b"), 1, np.zeros(2), np.ones(2), np.array([np.inf, 0.3]),
+        ...             (np.array([3]), np.array([4])))
+        >>> gaps.acting(5, np.array([0, 1])).tolist()
+        [True, True, True, True, False]
+        >>> gaps.acting(5, np.array([0, 1]), held=(1,)).tolist()
+        [True, True, True, True, True]
         """
         mask = np.zeros(m, dtype=bool)
         mask[:self.first] = True
         mask[self.first + chosen] = True
         for k in chosen:
-            if self.friction is not None and self.friction[k] == np.inf:
+            if self.friction is not None and (self.friction[k] == np.inf or k in held):
                 mask[self.tangents[k]] = True
         return mask
 
-    def rough_rows(self, closed: Sequence[int]) -> np.ndarray:
-        """The sliding velocities' rows of the rough gaps among ``closed``, in the
-        order the model with those gaps closed has them (after the gaps).
+    @property
+    def rough(self) -> tuple[int, ...]:
+        """The rough gaps (``friction=math.inf``: they never slide)."""
+        if self.friction is None:
+            return ()
+        return tuple(int(k) for k in np.flatnonzero(self.friction == np.inf))
+
+    def held_rows(self, closed: ClosedGaps) -> np.ndarray:
+        """The sliding velocities' rows of the gaps ``closed.held``, in the order the
+        model of that closed set has them (after the gaps).
 
         Examples
         --------
         >>> gaps = Gaps(("a", "b"), 1, np.zeros(2), np.ones(2), np.array([np.inf, 0.0]),
         ...             (np.array([3]), np.array([], dtype=int)))
-        >>> gaps.rough_rows((0, 1)).tolist(), gaps.rough_rows((1,)).tolist()
-        ([3], [])
+        >>> gaps.held_rows(ClosedGaps((0, 1), held=(0,))).tolist()
+        [3]
         """
-        if self.friction is None:
-            return np.zeros(0, dtype=int)
-        found = [self.tangents[k] for k in closed if self.friction[k] == np.inf]
+        found = [self.tangents[k] for k in closed.held]
         return np.concatenate(found).astype(int) if found else np.zeros(0, dtype=int)
 
     def values(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:

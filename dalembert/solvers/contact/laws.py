@@ -47,6 +47,7 @@ from ...options import IMPACT_LAWS, ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.factorization import kkt_factorization
 from ..kkt.sparse import matvec
+from .friction import Friction, solve_sliding
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps
 
 __all__ = ["IMPACT_LAWS", "ImpactLaw", "ImpactOutcome", "closed_gaps", "resolve_impact"]
@@ -151,8 +152,8 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
 
 
 def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                qd: np.ndarray, touching: np.ndarray,
-                exclude: Iterable[int] = ()) -> tuple[int, ...]:
+                qd: np.ndarray, touching: np.ndarray, exclude: Iterable[int] = (),
+                friction: Friction | None = None) -> tuple[int, ...]:
     """The gaps that are closed from ``(t, q, qd)`` on: among the touching gaps at rest
     (rate 0 to rounding; ``exclude`` left open), a set whose multipliers push and whose
     others do not accelerate into their obstacles.
@@ -167,6 +168,10 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         Which gaps touch.
     exclude
         Gaps to leave open (one that is separating at this instant).
+    friction
+        How each frictional gap acts where it is closed (held, or sliding:
+        :class:`~dalembert.solvers.contact.friction.Friction`); ``None``: the rough
+        ones held, no other friction.
 
     Raises
     ------
@@ -194,19 +199,20 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     candidates = np.flatnonzero(resting)
     if not len(candidates):
         return ()
-    Mv, f, Av, c = full.kkt_sparse(t, q, qd)
+    values = full.kkt_sparse(t, q, qd)
+    f, Av, c = values[1:]
     kkt = kkt_factorization(full.pattern)
     pattern = full.pattern
+    friction = friction or Friction(set(gaps.rough))
 
     def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each candidate's violation (positive: wrong) with ``chosen`` closed: a
         closed gap pulling, an open one accelerating into its obstacle."""
-        mask = gaps.acting(full.m, chosen)
         try:
-            kkt.factor(np.concatenate([Mv, Av]), mask)
+            qdd, lam = solve_sliding(full, gaps, t, q, qd, friction.of(chosen.tolist()),
+                                     friction.directions, kkt, values)
         except SingularSystemError:  # dependent contact rows: another set will do
             return np.full(len(candidates), np.inf), np.zeros(len(candidates))
-        qdd, lam = kkt.solve(np.concatenate([f, c]))
         accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
         force, gap_accel = lam[gaps.rows], accel[gaps.rows]
         scale = FORCE_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(lam).max(initial=0.0))

@@ -1,0 +1,273 @@
+"""Coulomb friction in the event-driven mode: each closed contact sticks or slides.
+
+A closed contact with a finite coefficient ``mu`` either **sticks**, its sliding
+velocities held at 0 by rows of the segment's model (a rough contact's rows) with a
+force as large as that takes while it stays in the cone ``|lambda_t| <= mu lambda_n``,
+or **slides**, its friction force ``F = -mu lambda_n d`` along the sliding direction
+``d``. A sliding contact's force depends on its normal multiplier, so the KKT matrix
+of the segment is not symmetric:
+
+    M qdd = f + A^T lambda + sum_k D_k lambda_k,    D_k = -mu_k A_t(k)^T d_k,
+
+with ``A_t(k)`` the contact's sliding velocities' rows. It is solved with the one
+symmetric factorization of the rows that hold (bilateral, closed gaps, held sliding
+velocities) by a low-rank correction: the solution without friction and one solve
+per sliding contact, then a ``k x k`` system for the normal forces (:func:`solve_sliding`).
+The segment's model takes the friction forces as inputs
+(:func:`~dalembert.model.constraints.friction_inputs`), which :class:`SlidingForces`
+gives at each state.
+
+A segment ends (terminal events, located to rounding) where a sticking contact's
+force reaches the cone (it slips) and where a sliding contact's sliding velocity,
+along its direction at the segment's start, reaches 0 (it stops, and sticks if the
+force that takes lies in the cone). In the plane a sliding direction is constant
+within a segment, so the friction force is smooth there and the stop is found to
+rounding; in space the direction turns with the motion, and a segment also ends if
+it turns by a right angle.
+
+At a switch :func:`choose_friction` decides: a contact sliding goes on sliding; one
+at rest sticks if its sticking force lies in the cone, and otherwise slides in the
+direction that force cannot hold (``d = -lambda_t / |lambda_t|``, exact with one
+sliding velocity; with two, the direction of the excess, which is exact where the
+contact's tangential mass is isotropic).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...codegen.compiled import NumericModel
+from ...inputs import InputSignal
+from ...model.constraints import ClosedGaps
+from ..kkt.factorization import KKTFactorization, kkt_factorization
+from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
+
+
+@dataclass
+class Friction:
+    """How each frictional gap acts where it is closed: held (rough, or sticking) or
+    sliding along a unit direction of its sliding velocities.
+
+    Attributes
+    ----------
+    held
+        Gaps whose sliding velocities are held at 0 (rough ones always).
+    directions
+        The sliding direction of each sliding gap (a unit vector, one entry per
+        sliding velocity).
+    """
+
+    held: set[int] = field(default_factory=set)
+    directions: dict[int, np.ndarray] = field(default_factory=dict)
+
+    def of(self, closed: Sequence[int]) -> ClosedGaps:
+        """The closed set ``closed`` with this friction."""
+        return ClosedGaps(tuple(closed), tuple(k for k in closed if k in self.held),
+                          tuple(k for k in closed if k in self.directions))
+
+
+def sliding_velocity(full: NumericModel, gaps: Gaps, k: int, t: float, q: np.ndarray,
+                     qd: np.ndarray) -> np.ndarray:
+    """The sliding velocities of gap ``k`` (its tangent rows' rates in ``full``)."""
+    return row_rates(full, t, q, qd)[gaps.tangents[k]]
+
+
+def friction_directions(full: NumericModel, gaps: Gaps, k: int, t: float,
+                        q: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``-mu A_t^T d``: the generalized force of gap ``k``'s friction per unit normal
+    force, sliding along ``d``."""
+    pattern = full.pattern
+    Av, _ = full.velocity_sparse(t, q)
+    weights = np.zeros(full.m)
+    weights[gaps.tangents[k]] = d
+    out = np.zeros(full.n)
+    np.add.at(out, pattern.A_cols, weights[pattern.A_rows] * Av)
+    assert gaps.friction is not None
+    return -gaps.friction[k] * out
+
+
+def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                  qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
+                  kkt: KKTFactorization | None = None,
+                  values: tuple[np.ndarray, ...] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """``qdd`` and the multipliers of every row of ``full`` (0 on the rows that do
+    not act) with the gaps ``which.closed`` closed, the sliding velocities of
+    ``which.held`` held and the gaps ``which.sliding`` sliding along ``directions``
+    (see the module docstring); the sliding gaps' friction forces in their tangent
+    rows' places.
+
+    Parameters
+    ----------
+    full, gaps
+        The model with every gap a row and its sliding velocities after them.
+    t, q, qd
+        The state (the inputs as ``full`` holds them).
+    which
+        The rows acting and the sliding gaps.
+    directions
+        Each sliding gap's unit direction.
+    kkt
+        A factorization object of ``full``'s pattern to reuse (made if ``None``).
+    values
+        ``full.kkt_sparse(t, q, qd)`` if the caller has it.
+
+    Raises
+    ------
+    SingularSystemError
+        The rows that act are dependent.
+    """
+    Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
+    kkt = kkt or kkt_factorization(full.pattern)
+    kkt.factor(np.concatenate([Mv, Av]), gaps.acting(full.m, np.array(which.closed, dtype=int),
+                                                     which.held))
+    qdd, lam = kkt.solve(np.concatenate([f, c]))
+    sliding = which.sliding
+    if not sliding:
+        return qdd, lam
+    zeros = np.zeros(full.m)
+    D = [friction_directions(full, gaps, k, t, q, directions[k]) for k in sliding]
+    responses = [kkt.solve(np.concatenate([d, zeros])) for d in D]
+    normal = gaps.first + np.array(sliding, dtype=int)
+    # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
+    R = np.array([lam_k[normal] for _, lam_k in responses]).T
+    N = np.linalg.solve(np.eye(len(sliding)) - R, lam[normal])
+    for n_k, (qdd_k, lam_k) in zip(N, responses):
+        qdd = qdd + n_k * qdd_k
+        lam = lam + n_k * lam_k
+    assert gaps.friction is not None
+    for k, n_k in zip(sliding, N):
+        lam[gaps.tangents[k]] = -gaps.friction[k] * n_k * directions[k]
+    return qdd, lam
+
+
+def current_direction(s: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """The sliding direction of sliding velocities ``s`` in a segment that started
+    sliding along ``start``: ``s / |s|``, kept at ``start`` where ``s`` no longer runs
+    along it (past its stop, where an integrator's trial stage may look), so the
+    friction force stays smooth up to the stop."""
+    size = float(np.linalg.norm(s))
+    if size == 0.0 or float(s @ start) <= 0.0:
+        return start
+    return s / size
+
+
+class SlidingForces:
+    """The friction forces of a segment's sliding gaps at a state, as the inputs of the
+    model of its closed set (a :class:`~dalembert.inputs.InputSignal` source).
+
+    Parameters
+    ----------
+    full
+        The model with every gap a row (a run's own copy: its inputs are set here).
+    gaps
+        Where its gaps are.
+    which
+        The segment's closed set.
+    starts
+        Each sliding gap's direction at the current segment's start (read at each
+        call: one object serves every segment with this set).
+    user
+        The user's inputs at a state, or ``None``.
+    """
+
+    def __init__(self, full: NumericModel, gaps: Gaps, which: ClosedGaps,
+                 starts: dict[int, np.ndarray], user: InputSignal | None) -> None:
+        self.full, self.gaps, self.which = full, gaps, which
+        self.starts, self.user = starts, user
+        self.kkt = kkt_factorization(full.pattern)
+
+    def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        full, gaps = self.full, self.gaps
+        if self.user is not None:
+            full.set_inputs(self.user(t, q, qd))
+        rates = row_rates(full, t, q, qd)
+        directions = {k: current_direction(rates[gaps.tangents[k]], self.starts[k])
+                      for k in self.which.sliding}
+        _, lam = solve_sliding(full, gaps, t, q, qd, self.which, directions, self.kkt)
+        return np.concatenate([lam[gaps.tangents[k]] for k in self.which.sliding])
+
+
+def friction_at(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                qd: np.ndarray) -> Friction:
+    """The friction of every gap as its velocities show it: a finite one sliding (its
+    direction) where its sliding velocities are not 0, else held, as a rough one."""
+    if gaps.friction is None:
+        return Friction()
+    mu = gaps.friction
+    speed = TOUCH_RTOL * (1.0 + np.abs(qd).max(initial=0.0))
+    rates = row_rates(full, t, q, qd)
+    found = Friction(set(gaps.rough))
+    for k in np.flatnonzero((mu > 0) & (mu < np.inf)):
+        s = rates[gaps.tangents[k]]
+        size = float(np.linalg.norm(s))
+        if size > speed:
+            found.directions[int(k)] = s / size
+        else:
+            found.held.add(int(k))
+    return found
+
+
+def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                    qd: np.ndarray, closed: tuple[int, ...], start: Friction,
+                    slipping: int | None = None) -> Friction:
+    """Which closed frictional gaps stick and which slide from ``(t, q, qd)`` on (see
+    the module docstring): the held ones of ``start`` whose sticking force leaves the
+    cone slide, one at a time, the worst first; ``slipping``, a gap whose force has
+    just reached the cone, slides.
+
+    Parameters
+    ----------
+    full, gaps
+        The model with every gap a row and its sliding velocities.
+    t, q, qd
+        The state after the switch.
+    closed
+        The closed gaps.
+    start
+        The friction as the velocities show it (:func:`friction_at`).
+    slipping
+        A held gap made to slide (its sticking force on the cone).
+
+    Examples
+    --------
+    A unit block at rest on a floor, pushed along it by 4 N against ``mu g = 2.943``:
+
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> x, y = coordinates("x y")
+    >>> block = System([x, y], kinetic=(x.diff()**2 + y.diff()**2) / 2,
+    ...                potential=9.81 * y - 4.0 * x,
+    ...                constraints=[Unilateral(y, "floor", friction=0.3, tangents=[x.diff()])])
+    >>> full = block._closed(ClosedGaps((0,), held=(0,))).numeric()
+    >>> gaps = Gaps.of(block.definition.unilateral, 0, [0.0])
+    >>> rest = np.zeros(2)
+    >>> chosen = choose_friction(full, gaps, 0.0, rest, rest, (0,),
+    ...                          friction_at(full, gaps, 0.0, rest, rest))
+    >>> chosen.held, chosen.directions
+    (set(), {0: array([1.])})
+    """
+    assert gaps.friction is not None
+    mu = gaps.friction
+    chosen = Friction(set(start.held), dict(start.directions))
+    resting = [k for k in closed if k in chosen.held and mu[k] < np.inf]
+    kkt = kkt_factorization(full.pattern)
+    while resting:
+        _, lam = solve_sliding(full, gaps, t, q, qd, chosen.of(closed), chosen.directions, kkt)
+        scale = FORCE_RTOL * (1.0 + np.abs(lam).max(initial=0.0))
+        excess = {k: np.linalg.norm(lam[gaps.tangents[k]]) - mu[k] * lam[gaps.first + k]
+                  for k in resting}
+        if slipping in excess:
+            excess[slipping] = np.inf
+        worst = max(excess, key=excess.__getitem__)
+        force = lam[gaps.tangents[worst]]
+        size = float(np.linalg.norm(force))
+        if excess[worst] <= scale or size == 0.0:
+            break
+        chosen.directions[worst] = -force / size
+        chosen.held.discard(worst)
+        resting.remove(worst)
+        slipping = None
+    return chosen

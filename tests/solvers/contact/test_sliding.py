@@ -1,0 +1,169 @@
+"""Coulomb friction in the event-driven contact mode (``solvers/contact/friction.py``).
+
+References: closed forms of constant-force motions, and (for a puck whose sliding
+direction turns) the sliding equations ``v' = F / m - mu g v / |v|`` integrated by
+SciPy apart from the library.
+
+- a block sliding on a floor decelerates at ``mu g`` and stops at ``v0 / (mu g)``,
+  after ``v0^2 / (2 mu g)``;
+- a block sent up an incline decelerates at ``g (sin(a) + mu cos(a))``, stops, then
+  sticks if ``tan(a) < mu`` and otherwise slides back at ``g (sin(a) - mu cos(a))``;
+- a block pushed by a force ``k t`` sticks until ``k t = mu m g`` and then moves by
+  ``k (t - t_s)^3 / 6``;
+- a sphere launched sliding without spin rolls from ``2 v0 / (7 mu g)`` at ``5/7 v0``,
+  its angular momentum about the contact line conserved.
+
+Each transition is an event located to rounding, so times and states match the
+closed forms to rounding, not to a step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+from dalembert import System, Unilateral, coordinates
+
+g, mu = 9.81, 0.3
+X, Y, Z, TH = coordinates("x y z theta")
+
+
+def block(alpha: float = 0.0, **extra) -> System:
+    """A unit block on a floor ``y >= 0`` tilted by ``alpha`` (``x`` down the slope)."""
+    return System([X, Y], kinetic=(X.diff() ** 2 + Y.diff() ** 2) / 2,
+                  potential=g * (Y * np.cos(alpha) - X * np.sin(alpha)),
+                  constraints=[Unilateral(Y, name="floor", friction=mu,
+                                          tangents=[X.diff()])], **extra)
+
+
+def switch_times(traj) -> list[float]:
+    return [s.t for s in traj.contacts.switches[1:]]
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_a_sliding_block_stops_at_v0_over_mu_g_and_sticks(backend):
+    v0 = 2.0
+    traj = block().simulate((0.0, 1.0), {"x": 0.0, "y": 0.0}, {"x": v0}, backend=backend)
+    assert traj.success, traj.message
+    stop = v0 / (mu * g)
+    (t_stop,) = switch_times(traj)
+    assert abs(t_stop - stop) < 1e-13
+    sliding = traj.t < t_stop  # the point at the switch shows the state after it
+    assert np.abs(traj["x_dot"][sliding] - (v0 - mu * g * traj.t[sliding])).max() < 1e-13
+    assert np.abs(traj["x_dot"][~sliding]).max() < 1e-14
+    assert abs(traj["x"][-1] - v0**2 / (2 * mu * g)) < 1e-13
+    friction, normal = traj.multiplier("floor_friction_1"), traj.multiplier("floor")
+    assert np.abs(normal - g).max() < 1e-12
+    assert np.abs(friction[sliding] + mu * g).max() < 1e-12  # -mu N, against the motion
+    assert np.abs(friction[~sliding]).max() < 1e-12  # stuck on a level floor: no force
+    # the friction force is in the constraint forces: the floor's total force on x
+    assert np.abs(traj.constraint_forces[sliding, 0] + mu * g).max() < 1e-12
+
+
+@pytest.mark.parametrize("alpha", [0.2, 0.4])  # tan 0.2 = 0.203 < 0.3 < tan 0.4 = 0.423
+def test_a_block_sent_up_an_incline_stops_then_sticks_or_slides_back(alpha):
+    v0, t_end = 1.0, 1.0
+    traj = block(alpha).simulate((0.0, t_end), {"x": 0.0, "y": 0.0}, {"x": -v0})
+    assert traj.success, traj.message
+    up = g * (np.sin(alpha) + mu * np.cos(alpha))
+    t_stop, x_stop = v0 / up, -v0**2 / (2 * up)
+    assert abs(switch_times(traj)[0] - t_stop) < 1e-13
+    after = traj.t >= switch_times(traj)[0]
+    if np.tan(alpha) < mu:  # it sticks, held by friction g sin(alpha) up the slope
+        assert np.abs(traj["x"][after] - x_stop).max() < 1e-13
+        assert np.abs(traj.multiplier("floor_friction_1")[after] + g * np.sin(alpha)).max() \
+            < 1e-12
+    else:
+        down = g * (np.sin(alpha) - mu * np.cos(alpha))
+        s = traj.t[after] - t_stop
+        assert np.abs(traj["x_dot"][after] - down * s).max() < 1e-12
+        assert np.abs(traj["x"][after] - (x_stop + down * s**2 / 2)).max() < 1e-12
+        assert np.abs(traj.multiplier("floor_friction_1")[after]
+                      + mu * g * np.cos(alpha)).max() < 1e-12
+
+
+def test_a_block_pushed_harder_and_harder_slips_where_the_push_reaches_mu_m_g():
+    u, k = sp.Symbol("u"), 5.0
+    pushed = block(inputs=[u], generalized_forces=[u, 0])
+    traj = pushed.simulate((0.0, 1.0), {"x": 0.0, "y": 0.0}, inputs={"u": lambda t: k * t})
+    assert traj.success, traj.message
+    t_slip = mu * g / k
+    (t_switch,) = switch_times(traj)
+    assert abs(t_switch - t_slip) < 1e-13
+    stuck = traj.t < t_switch
+    assert np.abs(traj["x"][stuck]).max() < 1e-15
+    # held by friction -k t until then, inside the cone
+    assert np.abs(traj.multiplier("floor_friction_1")[stuck] + k * traj.t[stuck]).max() < 1e-12
+    s = traj.t[~stuck] - t_slip
+    assert np.abs(traj["x"][~stuck] - k * s**3 / 6).max() < 1e-12
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_a_sphere_launched_sliding_rolls_from_2_v0_over_7_mu_g_at_five_sevenths(backend):
+    m, r, v0 = 1.0, 0.1, 2.0
+    inertia = 2 / 5 * m * r**2
+    sphere = System([X, Y, TH], kinetic=m / 2 * (X.diff() ** 2 + Y.diff() ** 2)
+                    + inertia / 2 * TH.diff() ** 2, potential=m * g * Y,
+                    constraints=[Unilateral(Y - r, name="floor", friction=mu,
+                                            tangents=[X.diff() + r * TH.diff()])])
+    traj = sphere.simulate((0.0, 0.8), {"y": r}, {"x": v0}, backend=backend)
+    assert traj.success, traj.message
+    t_roll = 2 * v0 / (7 * mu * g)
+    assert abs(switch_times(traj)[0] - t_roll) < 1e-13
+    rolling = traj.t >= switch_times(traj)[0]
+    slip = traj["x_dot"] + r * traj["theta_dot"]
+    assert np.abs(slip[rolling]).max() < 1e-14
+    assert np.abs(traj["x_dot"][rolling] - 5 / 7 * v0).max() < 1e-13
+    about = m * r * traj["x_dot"] - inertia * traj["theta_dot"]
+    assert np.abs(about - m * r * v0).max() < 1e-14
+    assert np.abs(traj.multiplier("floor_friction_1")[~rolling] + mu * m * g).max() < 1e-12
+
+
+def test_a_puck_pushed_sideways_curves_stops_and_sticks():
+    """Two sliding velocities: the sliding direction turns under a side force below
+    ``mu m g``, against the sliding equations integrated by SciPy."""
+    push = 0.5 * mu * g
+    puck = System([X, Y, Z], kinetic=(X.diff() ** 2 + Y.diff() ** 2 + Z.diff() ** 2) / 2,
+                  potential=g * Y - push * Z,
+                  constraints=[Unilateral(Y, name="floor", friction=mu,
+                                          tangents=[X.diff(), Z.diff()])])
+    traj = puck.simulate((0.0, 1.5), {"x": 0.0, "y": 0.0, "z": 0.0}, {"x": 2.0},
+                         rtol=1e-11, atol=1e-13)
+    assert traj.success, traj.message
+
+    def sliding(t, s):
+        vx, vz = s[:2]
+        speed = np.hypot(vx, vz)
+        return [-mu * g * vx / speed, push - mu * g * vz / speed, vx, vz]
+
+    def stops(t, s):
+        return np.hypot(s[0], s[1]) - 1e-12
+    stops.terminal = True
+    ref = solve_ivp(sliding, (0.0, 1.5), [2.0, 0.0, 0.0, 0.0], method="DOP853",
+                    rtol=1e-13, atol=1e-15, events=stops)
+    t_stop = ref.t_events[0][0]
+    (t_switch,) = switch_times(traj)
+    assert abs(t_switch - t_stop) < 1e-9
+    assert abs(traj["x"][-1] - ref.y[2, -1]) < 1e-9
+    assert abs(traj["z"][-1] - ref.y[3, -1]) < 1e-9
+    after = traj.t >= t_switch
+    assert np.abs(traj["z_dot"][after]).max() < 1e-14  # stuck, the side force held
+    held = np.hypot(traj.multiplier("floor_friction_1"), traj.multiplier("floor_friction_2"))
+    assert np.abs(held[after] - push).max() < 1e-12
+    assert (held <= mu * traj.multiplier("floor") + 1e-12).all()  # in the cone throughout
+
+
+def test_friction_event_driven_refusals_are_named():
+    from dalembert.multibody import Ground, Multibody, Particle, plane_contact
+
+    ball = Particle("ball", 1.0)
+    mb = Multibody([ball], contacts=[plane_contact("floor", Ground(), ball, friction=0.3)])
+    with pytest.raises(ValueError, match="'floor' has finite friction, which runs in the "
+                                         "time-stepping contact mode for a Multibody"):
+        mb.simulate((0.0, 0.1), {})
+    with pytest.raises(ValueError, match="sampled inputs"):
+        u = sp.Symbol("u")
+        block(inputs=[u], generalized_forces=[u, 0]).simulate(
+            (0.0, 0.1), {"x": 0.0, "y": 0.0}, inputs={"u": 1.0}, sample_time=0.05)
