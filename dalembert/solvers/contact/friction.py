@@ -42,7 +42,9 @@ import numpy as np
 from ...codegen.compiled import NumericModel
 from ...inputs import InputSignal
 from ...model.constraints import ClosedGaps
+from ..impact import Impact
 from ..kkt.factorization import KKTFactorization, kkt_factorization
+from ..kkt.sparse import matvec
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 
 
@@ -271,3 +273,56 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         resting.remove(worst)
         slipping = None
     return chosen
+
+
+def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                   qd: np.ndarray, candidates: np.ndarray, e: np.ndarray) -> Impact:
+    """An impact on the gaps ``candidates`` with Coulomb friction: normal impulses
+    ``P_n >= 0`` setting each acting gap's rate after to ``-e`` times its rate before
+    (Newton's law; free to open faster), each contact's tangential impulse in the disk
+    of radius ``mu P_n``, stopping its sliding or opposing the sliding it leaves
+    (Moreau's impact law), as the time-stepping mode's impulses are found
+    (:func:`~dalembert.solvers.contact.time_stepping.solve_friction` on the Delassus
+    matrix of those rows, the bilateral ones holding).
+
+    Parameters
+    ----------
+    full, gaps
+        The model with every gap a row and its sliding velocities.
+    t, q, qd
+        The instant and the state before.
+    candidates
+        The gaps that may act (indices).
+    e
+        Newton's coefficient of every gap (0 where it does not approach).
+    """
+    from .time_stepping import solve_friction
+
+    n, m, pattern = full.n, full.m, full.pattern
+    Mv, _, Av, _ = full.kkt_sparse(t, q, qd)
+    _, b = full.velocity_sparse(t, q)
+    kkt = kkt_factorization(pattern)
+    kkt.factor(np.concatenate([Mv, Av]), gaps.acting(m, np.zeros(0, dtype=int)))
+    assert gaps.friction is not None
+    normal = gaps.first + candidates
+    rows = np.concatenate([normal, *(gaps.tangents[k] for k in candidates)]).astype(int)
+    A = pattern.dense_A(Av)
+    unit = np.zeros((n + m, len(rows)))
+    unit[:n] = A[rows].T  # a unit impulse on each row
+    response, _ = kkt.solve(unit)
+    W = A[rows] @ response
+    free = A[rows] @ qd + b[rows]
+    free[:len(normal)] += e[candidates] * np.minimum(free[:len(normal)], 0.0)
+    groups, at = [], len(normal)
+    for k in candidates:
+        groups.append(np.arange(at, at + len(gaps.tangents[k])))
+        at += len(gaps.tangents[k])
+    # a rough contact grips with any impulse its normal one allows (none without one)
+    mu = np.minimum(gaps.friction[candidates], np.finfo(float).max)
+    impulse = solve_friction(W, free, mu, groups)
+    after = qd + response @ impulse
+    impulses = np.zeros(m)
+    impulses[rows] = impulse
+    lost = float(full.energies(t, q, qd)[0] - full.energies(t, q, after)[0])
+    return Impact(after, impulses, matvec(pattern.A_cols, pattern.A_rows, Av, impulses, n),
+                  lost)

@@ -47,7 +47,7 @@ from ...options import IMPACT_LAWS, ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.factorization import kkt_factorization
 from ..kkt.sparse import matvec
-from .friction import Friction, solve_sliding
+from .friction import Friction, coulomb_impact, solve_sliding
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps
 
 __all__ = ["IMPACT_LAWS", "ImpactLaw", "ImpactOutcome", "closed_gaps", "resolve_impact"]
@@ -143,7 +143,11 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         candidates = touching if law == "simultaneous" else approaching
         # Newton's law on the approaching gaps; a slow one is plastic (see rest_speed)
         e = np.where(approaching & (-before >= gaps.rest_speed), gaps.restitution, 0.0)
-        after = _complementary(full, gaps, t, q, v, before, np.flatnonzero(candidates), e)
+        chosen = np.flatnonzero(candidates)
+        sliding = gaps.friction is not None and bool(
+            np.any((gaps.friction[chosen] > 0) & (gaps.friction[chosen] < np.inf)))
+        after = coulomb_impact(full, gaps, t, q, v, chosen, e) if sliding else \
+            _complementary(full, gaps, t, q, v, before, chosen, e)
         v = after.qd
         total += after.impulses[gaps.rows]
         stages += 1

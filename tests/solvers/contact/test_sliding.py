@@ -167,3 +167,32 @@ def test_friction_event_driven_refusals_are_named():
         u = sp.Symbol("u")
         block(inputs=[u], generalized_forces=[u, 0]).simulate(
             (0.0, 0.1), {"x": 0.0, "y": 0.0}, inputs={"u": 1.0}, sample_time=0.05)
+
+
+@pytest.mark.parametrize("mu_impact", [0.05, 0.3])
+def test_a_ball_landing_without_spin_takes_a_coulomb_impulse(mu_impact):
+    """A sphere dropped from ``h`` moving at ``v`` without spin lands with the normal
+    impulse ``m (1 + e) sqrt(2 g h)``; friction's impulse stops its sliding where
+    ``mu P_n >= 2/7 m v`` (then ``x' = 5/7 v``, rolling), else takes ``mu P_n`` off
+    its speed and spins it by ``mu P_n r / I``."""
+    m, r, v, h, e = 1.0, 0.1, 2.0, 0.5, 0.5
+    inertia = 2 / 5 * m * r**2
+    ball = System([X, Y, TH], kinetic=m / 2 * (X.diff() ** 2 + Y.diff() ** 2)
+                  + inertia / 2 * TH.diff() ** 2, potential=m * g * Y,
+                  constraints=[Unilateral(Y - r, name="floor", restitution=e,
+                                          friction=mu_impact,
+                                          tangents=[X.diff() + r * TH.diff()])])
+    traj = ball.simulate((0.0, 0.4), {"y": r + h}, {"x": v})
+    assert traj.success, traj.message
+    first = traj.contacts.impacts[0]
+    assert abs(first.t - np.sqrt(2 * h / g)) < 1e-13
+    falling = np.sqrt(2 * g * h)
+    normal = m * (1 + e) * falling
+    assert abs(first.impulses[0] - normal) < 1e-12
+    if mu_impact * normal >= 2 / 7 * m * v:  # it grips: rolling as it leaves
+        expected = [5 / 7 * v, e * falling, -5 / 7 * v / r]
+    else:
+        expected = [v - mu_impact * normal / m, e * falling, -mu_impact * normal * r / inertia]
+    assert np.abs(first.qd_after - expected).max() < 1e-12
+    kinetic = lambda qd: m / 2 * (qd[0] ** 2 + qd[1] ** 2) + inertia / 2 * qd[2] ** 2  # noqa: E731
+    assert abs(first.energy_lost - (kinetic(first.qd_before) - kinetic(first.qd_after))) < 1e-12
