@@ -1053,11 +1053,12 @@ class System:
 
     def _check_sliding_event_driven(self, name: str, options: SimulationOptions) -> None:
         """Refuse what finite friction does not do in the event-driven mode yet."""
-        if not isinstance(self._definition, SymbolicDefinition):
-            raise ValueError(f"the contact {name!r} has finite friction, which runs in the "
-                             "time-stepping contact mode for a Multibody for now: give "
-                             "contact_mode='time-stepping' (or friction=math.inf for a rough "
-                             "contact that never slides, event-driven)")
+        spatial = [u.name for u in self._unilateral
+                   if 0 < u.friction < math.inf and not getattr(u, "independent_tangents", True)]
+        if spatial:
+            raise ValueError(f"the contact {spatial[0]!r} has finite friction between spheres "
+                             "in space, whose three sliding velocities cannot all be held "
+                             "still (they span a plane): give contact_mode='time-stepping'")
         if options.inputs is not None and options.inputs.sample_time is not None:
             raise ValueError(f"the unilateral constraint {name!r} has finite friction, which "
                              "does not run with sampled inputs (sample_time=) in the "

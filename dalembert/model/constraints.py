@@ -14,8 +14,9 @@ constraint set in which some gaps are closed, as holonomic rows after the others
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import sympy as sp
 
@@ -240,10 +241,21 @@ class ClosedGaps:
     sliding: tuple[int, ...] = ()
 
 
-def friction_inputs(rows: Sequence[UnilateralRow], sliding: Sequence[int]
+class WithTangents(Protocol):
+    """A contact with sliding velocities (a :class:`UnilateralRow`, a Multibody's
+    contact)."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def tangents(self) -> Sequence[object]: ...
+
+
+def friction_inputs(rows: Sequence[WithTangents], sliding: Iterable[int]
                     ) -> tuple[sp.Symbol, ...]:
-    """The input symbols of the friction forces of the ``sliding`` gaps, one per sliding
-    velocity (``<name>_friction_force_<k>``), in order.
+    """The input symbols of the friction forces of the ``sliding`` contacts, one per
+    sliding velocity (``<name>_friction_force_<k>``), in order.
 
     Examples
     --------

@@ -17,7 +17,7 @@ import sympy as sp
 
 from ..codegen.numpy_printer import expression_values
 from ..errors import ConstraintError, InitialConditionError, ModelError
-from ..model.constraints import Holonomic, Pfaffian
+from ..model.constraints import Holonomic, Pfaffian, friction_inputs
 from ..model.coordinates import t
 from ..model.forces import PointForce
 from ..model.parameters import resolve_parameters
@@ -25,7 +25,7 @@ from ..model.values import CoordinateValues
 from ..system import System
 from ..trajectory import Trajectory
 from .bodies import Body, Ground, MovingBody, PlanarBody, RigidBody, check_bodies, check_inertias
-from .contacts import Contact
+from .contacts import Contact, SlidingFriction
 from .diagnostics import check_initial_joint_points, check_joint_points, check_mobility
 from .drawing import stick_figure
 from .drivers import Actuator, Driver, JointSpring
@@ -129,6 +129,8 @@ class Multibody:
         self.inputs = tuple(inputs)
         self.contacts = _pieces(contacts, "contacts", "Contact objects "
                                 "(dalembert.multibody.plane_contact, sphere_contact)")
+        #: A closed set's sliding contacts' friction (:meth:`with_contacts_closed`).
+        self.sliding_friction: tuple[SlidingFriction, ...] = ()
         self.name = name
         self.gravity = array(gravity, (3,), "gravity (world components)")
         self.defaults = dict(parameters or {})
@@ -411,6 +413,7 @@ class Multibody:
         loads = [load.generalized_forces() for load in self.torques]
         loads += [spring.generalized_forces() for spring in self.joint_springs]
         loads += [actuator.generalized_forces() for actuator in self.actuators]
+        loads += [friction.generalized_forces() for friction in self.sliding_friction]
         for forces in loads:
             for coord, value in forces.items():
                 Q[coord] = Q.get(coord, sp.S.Zero) + value
@@ -430,8 +433,8 @@ class Multibody:
         """
         return System.from_definition(MultibodyDefinition(self), parameters=self.defaults)
 
-    def with_contacts_closed(self, closed: tuple[int, ...],
-                             held: tuple[int, ...] = ()) -> Multibody:
+    def with_contacts_closed(self, closed: tuple[int, ...], held: tuple[int, ...] = (),
+                             sliding: tuple[int, ...] = ()) -> Multibody:
         """This mechanism with the contacts ``closed`` (indices) as joints after its own,
         and no contact left apart: the mechanism while they hold.
 
@@ -444,6 +447,10 @@ class Multibody:
             of Pfaffian rows after them (:class:`~.contacts.Sliding`): a rough or
             sticking contact's, or the rows the time-stepping mode reads for
             friction, never enforced there.
+        sliding
+            Closed contacts sliding: their friction forces are loads
+            (:class:`~.contacts.SlidingFriction`) whose values are inputs after the
+            mechanism's own (:func:`~dalembert.model.constraints.friction_inputs`).
 
         Examples
         --------
@@ -456,9 +463,14 @@ class Multibody:
         closed_mb = copy.copy(self)
         closed_mb.__dict__ = {k: v for k, v in self.__dict__.items()
                               if not isinstance(getattr(type(self), k, None), cached_property)}
-        sliding = [s for k in held for s in (self.contacts[k].sliding,) if s is not None]
+        rows = [s for k in held for s in (self.contacts[k].sliding,) if s is not None]
         closed_mb.joints = (*self.joints, *(self.contacts[k].joint for k in closed),
-                            *sliding)
+                            *rows)
+        closed_mb.sliding_friction = tuple(
+            SlidingFriction(self.contacts[k], friction_inputs(self.contacts, [k]))
+            for k in sliding)
+        closed_mb.inputs = (*self.inputs, *(f for friction in closed_mb.sliding_friction
+                                            for f in friction.forces))
         closed_mb.contacts = ()
         closed_mb._bound = {}
         return closed_mb

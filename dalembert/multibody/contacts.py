@@ -72,6 +72,13 @@ class Contact:
         return self.joint.body_a, self.joint.body_b
 
     @property
+    def independent_tangents(self) -> bool:
+        """Whether the sliding velocities are independent rows (all but a sphere's on
+        a sphere in space: three world components of a velocity in a plane), which a
+        sticking contact holds at 0."""
+        return self.sliding is None or self.sliding.kind != "sphere" or self.sliding.planar
+
+    @property
     def tangents(self) -> tuple[sp.Expr, ...]:
         """The sliding velocities at the contact (none without friction), as for
         :class:`~dalembert.Unilateral`: one per row of :attr:`sliding`."""
@@ -572,3 +579,41 @@ def joint_limit(name: str, joint: Joint, lower: float, upper: float, *,
     0.5
     """
     return _contact(name, JointStop(name, joint, lower, upper), restitution, rest_speed)
+
+
+@dataclass(frozen=True)
+class SlidingFriction:
+    """The friction forces of a sliding contact as loads: each sliding velocity's force
+    ``F_k`` (an input symbol) on the two bodies' material points at the contact, whose
+    generalized force is ``F_k`` times the sliding velocity's coefficients of the
+    coordinates' rates (the virtual power of the pair of forces).
+
+    Attributes
+    ----------
+    contact
+        The contact.
+    forces
+        One input symbol per sliding velocity (:attr:`Contact.tangents`).
+
+    Examples
+    --------
+    >>> ball = Particle("ball", 1.0)
+    >>> floor = plane_contact("floor", Ground(), ball, friction=0.3)
+    >>> F = sp.symbols("F1 F2")
+    >>> SlidingFriction(floor, F).generalized_forces()
+    {ball_x(t): F1, ball_y(t): F2}
+    """
+
+    contact: Contact
+    forces: tuple[sp.Symbol, ...]
+
+    def generalized_forces(self) -> dict[object, sp.Expr]:
+        Q: dict[object, sp.Expr] = {}
+        coordinates = [c for body in self.contact.bodies if not isinstance(body, Ground)
+                       for c in body.coordinates]
+        for force, velocity in zip(self.forces, self.contact.tangents):
+            for c in coordinates:
+                weight = velocity.diff(c.diff(t))  # the velocity is linear in the rates
+                if weight != 0:
+                    Q[c] = Q.get(c, sp.S.Zero) + force * weight
+        return Q

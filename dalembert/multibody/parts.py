@@ -344,7 +344,8 @@ def _freeze(value: object) -> object:
 
 def _load_part(mb: Multibody, offsets: dict[int, Indices]) -> Part | None:
     """Forces, torques and springs as one part in the coordinates they involve."""
-    if not (mb.forces or mb.torques or mb.springs or mb.joint_springs or mb.actuators):
+    if not (mb.forces or mb.torques or mb.springs or mb.joint_springs or mb.actuators
+            or mb.sliding_friction):
         return None
     potential = sp.Add(*(s.potential() for s in mb.springs),
                        *(s.potential() for s in mb.joint_springs))

@@ -109,9 +109,8 @@ class MultibodyDefinition:
     def with_gaps_closed(self, which: ClosedGaps) -> MultibodyDefinition:
         """The definition of the Multibody with the contacts ``which.closed`` as joints
         (and the sliding velocities of ``which.held`` as joints after them)."""
-        if which.sliding:  # checked at the door (System._run_contacts)
-            raise NotImplementedError("a Multibody's sliding friction in the event-driven mode")
-        return MultibodyDefinition(self.multibody.with_contacts_closed(which.closed, which.held))
+        return MultibodyDefinition(self.multibody.with_contacts_closed(
+            which.closed, which.held, which.sliding))
 
     @property
     def model(self) -> Model:

@@ -201,10 +201,6 @@ def test_friction_bad_input_is_named():
         disk_contact("rim", Ground(), ball, 0.3)
     with pytest.raises(ModelError, match="radius"):
         disk_contact("rim", Ground(), disk, 0.0, axis=axis)
-    mb = Multibody([ball], contacts=[plane_contact("floor", Ground(), ball, friction=mu)])
-    q0, qd0 = mb.initial_state(positions={"ball": (0, 0, 0.5)})
-    with pytest.raises(ValueError, match=r"friction.*time-stepping"):
-        mb.simulate((0.0, 0.1), q0, qd0)  # event-driven: friction refused
 
 
 @pytest.mark.parametrize("alpha", [0.2, 0.4])

@@ -155,16 +155,9 @@ def test_a_puck_pushed_sideways_curves_stops_and_sticks():
     assert (held <= mu * traj.multiplier("floor") + 1e-12).all()  # in the cone throughout
 
 
-def test_friction_event_driven_refusals_are_named():
-    from dalembert.multibody import Ground, Multibody, Particle, plane_contact
-
-    ball = Particle("ball", 1.0)
-    mb = Multibody([ball], contacts=[plane_contact("floor", Ground(), ball, friction=0.3)])
-    with pytest.raises(ValueError, match="'floor' has finite friction, which runs in the "
-                                         "time-stepping contact mode for a Multibody"):
-        mb.simulate((0.0, 0.1), {})
+def test_friction_with_sampled_inputs_event_driven_is_refused():
+    u = sp.Symbol("u")
     with pytest.raises(ValueError, match="sampled inputs"):
-        u = sp.Symbol("u")
         block(inputs=[u], generalized_forces=[u, 0]).simulate(
             (0.0, 0.1), {"x": 0.0, "y": 0.0}, inputs={"u": 1.0}, sample_time=0.05)
 
