@@ -979,7 +979,6 @@ class System:
         (:mod:`dalembert.solvers.contact.driver`), each set of closed gaps run as the
         System with those gaps closed."""
         from .solvers.contact.driver import run_contacts
-        from .solvers.contact.friction import SlidingForces
         from .solvers.contact.gaps import Gaps
 
         options = plan.options
@@ -994,9 +993,12 @@ class System:
             raise ValueError(f"the unilateral constraint {rough[0]!r} is rough "
                              "(friction=math.inf), which runs in the event-driven contact "
                              "mode: give a finite friction coefficient for time-stepping")
-        sliding = [u.name for u in rows if 0 < u.friction < math.inf]
-        if sliding and not stepping:
-            self._check_sliding_event_driven(sliding[0], options)
+        spatial = [u.name for u in rows
+                   if 0 < u.friction < math.inf and not u.independent_tangents]
+        if spatial and not stepping:
+            raise ValueError(f"the contact {spatial[0]!r} has finite friction between spheres "
+                             "in space, whose three sliding velocities cannot all be held "
+                             "still (they span a plane): give contact_mode='time-stepping'")
         parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
         # every gap a row, and the sliding velocities of those with friction after them
         every = self._closed(ClosedGaps(tuple(range(len(rows))),
@@ -1009,23 +1011,14 @@ class System:
         deadline = None if options.timeout is None else time.monotonic() + options.timeout
 
         def start(which: ClosedGaps, t: float, y: np.ndarray, events: tuple[Callable, ...],
-                  forces: SlidingForces | None) -> RunData:
+                  inputs: InputSignal | None) -> RunData:
             system = self._closed(which)
             output = replace(options.output, events=user + events)
             left = None if deadline is None else max(deadline - time.monotonic(), 1e-9)
             segment = replace(options, t_span=(t, tf), output=output, timeout=left,
-                              inputs=with_friction(options.inputs, system, forces))
+                              inputs=options.inputs if inputs is None else inputs)
             layout = StateLayout(len(self.coordinate_names))
             return system._plan(segment, *layout.split(y), parameters, None).start()
-
-        def with_friction(signal: InputSignal | None, system: System,
-                          forces: SlidingForces | None) -> InputSignal | None:
-            """The segment's inputs: the user's, then its sliding friction forces."""
-            if forces is None:
-                return signal
-            names = [u.name for u in system.definition.inputs]
-            base = signal or InputSignal((), ())
-            return base.extended(names[len(base.names):], forces, "the sliding friction")
 
         if stepping:
             from .solvers.contact.rotations import Rotations
@@ -1050,20 +1043,6 @@ class System:
         return replace(traj, contacts=history,
                        energy_conserved=traj.energy_conserved
                        and not any(i.energy_lost for i in history.impacts))
-
-    def _check_sliding_event_driven(self, name: str, options: SimulationOptions) -> None:
-        """Refuse what finite friction does not do in the event-driven mode yet."""
-        spatial = [u.name for u in self._unilateral
-                   if 0 < u.friction < math.inf and not getattr(u, "independent_tangents", True)]
-        if spatial:
-            raise ValueError(f"the contact {spatial[0]!r} has finite friction between spheres "
-                             "in space, whose three sliding velocities cannot all be held "
-                             "still (they span a plane): give contact_mode='time-stepping'")
-        if options.inputs is not None and options.inputs.sample_time is not None:
-            raise ValueError(f"the unilateral constraint {name!r} has finite friction, which "
-                             "does not run with sampled inputs (sample_time=) in the "
-                             "event-driven contact mode yet: give "
-                             "contact_mode='time-stepping'")
 
     # -- rest and small oscillations -------------------------------------------------
     def equilibrium(self, guess: Any, **options: Any) -> Equilibrium:

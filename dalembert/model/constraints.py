@@ -129,6 +129,12 @@ class UnilateralRow:
     friction: float = 0.0
     tangents: tuple[tuple[sp.Expr, tuple[sp.Expr, ...], sp.Expr], ...] = ()
 
+    @property
+    def independent_tangents(self) -> bool:
+        """Taken as independent: the user's sliding velocities (dependent ones make a
+        sticking contact's rows dependent, which its run reports)."""
+        return True
+
 
 @dataclass(frozen=True)
 class ConstraintSet:
@@ -264,8 +270,20 @@ def friction_inputs(rows: Sequence[WithTangents], sliding: Iterable[int]
     >>> friction_inputs([floor], [0])
     (floor_friction_force_1,)
     """
-    return tuple(sp.Symbol(f"{rows[i].name}_friction_force_{k + 1}")
+    return tuple(sp.Symbol(friction_force_name(rows[i].name, k))
                  for i in sliding for k in range(len(rows[i].tangents)))
+
+
+def friction_force_name(contact: str, k: int) -> str:
+    """The name of the input that is contact ``contact``'s friction force along its
+    sliding velocity ``k`` (from 0) while it slides.
+
+    Examples
+    --------
+    >>> friction_force_name("floor", 0)
+    'floor_friction_force_1'
+    """
+    return f"{contact}_friction_force_{k + 1}"
 
 
 def with_gaps(cons: ConstraintSet, which: ClosedGaps) -> ConstraintSet:

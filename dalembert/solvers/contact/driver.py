@@ -44,8 +44,8 @@ import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...errors import ContactError, InputError, TimeLimitExceeded
-from ...inputs import InputSignal
-from ...model.constraints import ClosedGaps
+from ...inputs import InputSignal, Source
+from ...model.constraints import ClosedGaps, friction_force_name
 from ...options import ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.sparse import matvec
@@ -211,11 +211,12 @@ class SegmentStart:
     directions: dict[int, np.ndarray] = field(default_factory=dict)
 
 
-#: ``start(closed, t, y, events, forces)``: the data of a run of the model of the closed
-#: set ``closed``, from ``(t, y)``, watching ``events`` after the user's, its sliding
-#: contacts' friction forces (its last inputs) given by ``forces`` (``None``: none).
+#: ``start(closed, t, y, events, inputs)``: the data of a run of the model of the closed
+#: set ``closed``, from ``(t, y)``, watching ``events`` after the user's, its inputs
+#: given by ``inputs`` (``None``: the run's own; with sliding contacts, the user's and
+#: then the friction forces, at every evaluation).
 StartSegments = Callable[[ClosedGaps, float, np.ndarray, tuple[Callable, ...],
-                          SlidingForces | None], RunData]
+                          InputSignal | None], RunData]
 
 
 def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
@@ -277,6 +278,11 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             return held
         return None if signal is None else signal(t, q, qd)
 
+    def held_sample(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The sample held now (a sampled run's inputs between its instants)."""
+        assert held is not None
+        return held
+
     y, which, directions = _switch(full, gaps, history, t, y, law, inputs_at, None, None)
     closed = which.closed
     history.switches.append(Switch(t, closed, y[:n].copy(), y[n:].copy()))
@@ -286,10 +292,12 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         if data is None:
             forces[which] = SlidingForces(full.for_run(), gaps, which,
                                           segment_start.directions,
-                                          signal) if which.sliding else None
+                                          inputs_at) if which.sliding else None
             events, watched[which] = _contact_events(gaps, which, full, segment_start)
-            data = made[which] = start(which, t, y, events, forces[which])
-        if held is not None:
+            data = made[which] = start(which, t, y, events,
+                                       _segment_inputs(gaps, which, forces[which], signal,
+                                                       held_sample if hold.sampled else None))
+        if held is not None and not which.sliding:  # a sliding set's inputs ask for it
             data.hold_inputs(held)
         segment_start.t = t
         segment_start.directions.clear()
@@ -323,7 +331,8 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                 except (InputError, TimeLimitExceeded) as exc:
                     _stopped_sampling(result, tf, exc)
                     break
-                data.hold_inputs(held)
+                if not which.sliding:
+                    data.hold_inputs(held)
                 record.add(segment, result.t[keep[-1:]], y_end[None, :],
                            SegmentState(y_end, held, closed), outputs)
             break
@@ -364,6 +373,26 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     joined.result.y_events = joined.result.y_events[:user_events]
     joined.result.stats["n_impacts"] = len(history.impacts)
     return ContactRun(joined, history)
+
+
+def _segment_inputs(gaps: Gaps, which: ClosedGaps, forces: SlidingForces | None,
+                    signal: InputSignal | None, held_sample: Source | None
+                    ) -> InputSignal | None:
+    """The inputs of the segments of ``which`` at every evaluation: the user's (the
+    held sample ``held_sample`` gives, if sampled), then the sliding contacts' friction
+    forces; ``None`` without sliding contacts (the run's own inputs)."""
+    if forces is None:
+        return None
+    if signal is None:
+        user = InputSignal((), ())
+    elif held_sample is not None:
+        user = InputSignal(signal.names, ((held_sample, tuple(range(len(signal.names))),
+                                           "the held sample"),))
+    else:
+        user = signal
+    names = [friction_force_name(gaps.names[k], j) for k in which.sliding
+             for j in range(len(gaps.tangents[k]))]
+    return user.extended(names, forces, "the sliding friction")
 
 
 def _stopped_sampling(result: IntegrationResult, t: float, exc: BaseException,

@@ -34,13 +34,12 @@ contact's tangential mass is isotropic).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...inputs import InputSignal
 from ...model.constraints import ClosedGaps
 from ..impact import Impact
 from ..kkt.factorization import KKTFactorization, kkt_factorization
@@ -173,19 +172,22 @@ class SlidingForces:
         Each sliding gap's direction at the current segment's start (read at each
         call: one object serves every segment with this set).
     user
-        The user's inputs at a state, or ``None``.
+        The user's inputs at a state (the held sample, if sampled; ``None``: the
+        model has none).
     """
 
     def __init__(self, full: NumericModel, gaps: Gaps, which: ClosedGaps,
-                 starts: dict[int, np.ndarray], user: InputSignal | None) -> None:
+                 starts: dict[int, np.ndarray],
+                 user: Callable[[float, np.ndarray, np.ndarray], np.ndarray | None]) -> None:
         self.full, self.gaps, self.which = full, gaps, which
         self.starts, self.user = starts, user
         self.kkt = kkt_factorization(full.pattern)
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         full, gaps = self.full, self.gaps
-        if self.user is not None:
-            full.set_inputs(self.user(t, q, qd))
+        inputs = self.user(t, q, qd)
+        if inputs is not None:
+            full.set_inputs(inputs)
         rates = row_rates(full, t, q, qd)
         directions = {k: current_direction(rates[gaps.tangents[k]], self.starts[k])
                       for k in self.which.sliding}

@@ -155,11 +155,23 @@ def test_a_puck_pushed_sideways_curves_stops_and_sticks():
     assert (held <= mu * traj.multiplier("floor") + 1e-12).all()  # in the cone throughout
 
 
-def test_friction_with_sampled_inputs_event_driven_is_refused():
+def test_a_sampled_push_slides_a_block_which_stops_after_the_push_ends():
+    """A push of ``2 mu m g`` held by a zero-order hold (samples every 0.1 s, the push
+    off from t = 0.25): sliding at ``mu g`` until the sample at 0.3 turns it off, then
+    slowing at ``mu g`` to rest at 0.6, where it sticks."""
     u = sp.Symbol("u")
-    with pytest.raises(ValueError, match="sampled inputs"):
-        block(inputs=[u], generalized_forces=[u, 0]).simulate(
-            (0.0, 0.1), {"x": 0.0, "y": 0.0}, inputs={"u": 1.0}, sample_time=0.05)
+    pushed = block(inputs=[u], generalized_forces=[u, 0])
+    traj = pushed.simulate((0.0, 1.0), {"x": 0.0, "y": 0.0},
+                           inputs={"u": lambda t: 2 * mu * g if t < 0.25 else 0.0},
+                           sample_time=0.1)
+    assert traj.success, traj.message
+    a = mu * g
+    x, v, t = traj["x"], traj["x_dot"], traj.t
+    pushing, slowing, resting = t <= 0.3, (t > 0.3) & (t < 0.6), t >= 0.6
+    assert np.abs(v[pushing] - a * t[pushing]).max() < 1e-12
+    assert np.abs(v[slowing] - a * (0.6 - t[slowing])).max() < 1e-12
+    assert np.abs(x[resting] - a * 0.3**2).max() < 1e-12 and np.abs(v[resting]).max() < 1e-12
+    assert abs(switch_times(traj)[-1] - 0.6) < 1e-12  # stopping is the last switch
 
 
 @pytest.mark.parametrize("mu_impact", [0.05, 0.3])
