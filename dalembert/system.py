@@ -1018,7 +1018,9 @@ class System:
             segment = replace(options, t_span=(t, tf), output=output, timeout=left,
                               inputs=options.inputs if inputs is None else inputs)
             layout = StateLayout(len(self.coordinate_names))
-            return system._plan(segment, *layout.split(y), parameters, None).start()
+            with warnings.catch_warnings():  # held sliding velocities may be dependent
+                warnings.simplefilter("ignore", RedundantConstraintsWarning)
+                return system._plan(segment, *layout.split(y), parameters, None).start()
 
         if stepping:
             from .solvers.contact.rotations import Rotations

@@ -114,8 +114,7 @@ def plane_contact(name: str, plane_body: Body, body: Body, *, normal: Vector = (
         Coulomb's coefficient ``mu >= 0`` (0: frictionless), along the sliding velocity
         of the touching point (the sphere's lowest point) over the plane: two
         directions of the plane, one (in the plane of motion) between planar bodies.
-        Runs in the time-stepping contact mode; ``math.inf`` is a rough contact
-        (never sliding), event-driven.
+        ``math.inf`` is a rough contact (never sliding).
 
     Examples
     --------

@@ -71,3 +71,34 @@ def test_finite_friction_between_spheres_in_space_is_refused_event_driven():
     with pytest.raises(ValueError, match=r"'touch' has finite friction between spheres in "
                                          r"space.*contact_mode='time-stepping'"):
         mb.simulate((0.0, 0.1), q0, qd0)
+
+
+def test_a_box_sliding_on_four_corners_stops_flat_at_v0_over_mu_g():
+    """Four coplanar corner contacts: their normal forces and, once it sticks, their
+    friction forces are statically indeterminate; the motion is not. Sliding at
+    ``v0`` (along x and y), the box decelerates at ``mu g`` and stops at
+    ``|v0| / (mu g)``, ``|v0|^2 / (2 mu g)`` away, without tipping."""
+    a, b, c = 0.4, 0.3, 0.2
+    box = RigidBody("box", 1.0, np.diag([(b * b + c * c) / 3, (a * a + c * c) / 3,
+                                         (a * a + b * b) / 3]))
+    corners = [plane_contact(f"c{i}", Ground(), box, point=(sx * a, sy * b, -c), friction=mu)
+               for i, (sx, sy) in enumerate([(1, 1), (1, -1), (-1, 1), (-1, -1)])]
+    mb = Multibody([box], contacts=corners)
+    v0 = np.array([2.0, 0.5])
+    q0, qd0 = mb.initial_state(positions={"box": (0, 0, c)}, velocities={"box": (*v0, 0)})
+    traj = mb.simulate((0.0, 1.0), q0, qd0)
+    assert traj.success, traj.message
+    speed = np.linalg.norm(v0)
+    (t_stop,) = [s.t for s in traj.contacts.switches[1:]]
+    assert abs(t_stop - speed / (mu * g)) < 1e-12
+    travel = v0 * speed / (2 * mu * g)
+    assert abs(traj["box_x"][-1] - travel[0]) < 1e-12
+    assert abs(traj["box_y"][-1] - travel[1]) < 1e-12
+    assert np.abs(traj["box_z"] - c).max() < 1e-12
+    normal = sum(traj.multiplier(f"c{i}_1") for i in range(4))
+    assert np.abs(normal - g).max() < 1e-10  # the weight, however it is shared
+    friction = np.hypot(sum(traj.multiplier(f"c{i}_friction_1") for i in range(4)),
+                        sum(traj.multiplier(f"c{i}_friction_2") for i in range(4)))
+    sliding = traj.t < t_stop
+    assert np.abs(friction[sliding] - mu * g).max() < 1e-10
+    assert np.abs(friction[~sliding]).max() < 1e-10  # at rest on a level floor

@@ -54,7 +54,14 @@ from ..running.run_data import RunData, RunSegment
 from ..running.sampled import sampled_schedule
 from ..running.segments import Schedule, Segment, SegmentedRun, SegmentState, _Record
 from ..running.watchdog import watching
-from .friction import SlidingForces, choose_friction, friction_at, sliding_velocity
+from .friction import (
+    SlidingForces,
+    acting_rows,
+    choose_friction,
+    friction_at,
+    held_forces,
+    sliding_velocity,
+)
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .laws import closed_gaps, resolve_impact
 
@@ -504,13 +511,22 @@ def _grip(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarra
           closed: tuple[int, ...]) -> Impact | None:
     """The impact of the rough gaps among ``closed`` that slide (their sliding
     velocities' rows acting, ``e = 0``), or ``None`` where none does."""
-    rows = gaps.held_rows(ClosedGaps(closed, tuple(k for k in closed if k in gaps.rough)))
+    rough = ClosedGaps(closed, tuple(k for k in closed if k in gaps.rough))
+    rows = gaps.held_rows(rough)
     if not len(rows):
         return None
     rates = row_rates(full, t, q, qd)[rows]
     if np.abs(rates).max() <= TOUCH_RTOL * (1.0 + np.abs(qd).max()):
         return None
-    return impact(full, t, q, qd, gaps.acting(full.m, np.array(closed, dtype=int)))
+    return impact(full, t, q, qd, acting_rows(full, gaps, t, q, rough))
+
+
+def _segment_rows(gaps: Gaps, which: ClosedGaps) -> np.ndarray:
+    """The rows of the model with every gap that the rows of the model of ``which``
+    are, in its order: the bilateral ones, the closed gaps, the held sliding
+    velocities."""
+    return np.concatenate([np.arange(gaps.first), gaps.first + np.array(which.closed, dtype=int),
+                           gaps.held_rows(which)]).astype(int)
 
 
 def _held_still(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
@@ -522,8 +538,7 @@ def _held_still(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.
     rows = gaps.held_rows(which)
     if not len(rows) or not np.any(row_rates(full, t, q, qd)[rows]):
         return qd
-    return impact(full, t, q, qd, gaps.acting(full.m, np.array(which.closed, dtype=int),
-                                             which.held)).qd
+    return impact(full, t, q, qd, acting_rows(full, gaps, t, q, which)).qd
 
 
 def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
@@ -540,6 +555,7 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
       (``"sticking"``: it stops)."""
     closed = which.closed
     first = gaps.first
+    rows_of = _segment_rows(gaps, which)
     events: list[Callable] = []
     kinds: list[tuple[str, int]] = []
 
@@ -563,18 +579,17 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                 return _open_at_start(start, t, float(gaps.values(full, t, q)[k]))
             add(closing, "closing", k)
     assert gaps.friction is not None  # made by Gaps.of
-    held_at = first + len(closed)
     for k in which.held:
-        rows = np.arange(held_at, held_at + len(gaps.tangents[k]))
-        held_at += len(rows)
         if gaps.friction[k] == np.inf:
             continue
 
-        def slipping(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
-                     rows: np.ndarray = rows, row: int = first + closed.index(k),
+        def slipping(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *, k: int = k,
                      mu: float = float(gaps.friction[k])) -> float:
-            return _open_at_start(start, t, mu * float(lam[row])
-                                  - float(np.linalg.norm(lam[rows])))
+            every = np.zeros(full.m)
+            every[rows_of] = lam
+            force = held_forces(full, gaps, t, q, which, every)[k]
+            return _open_at_start(start, t, mu * float(every[first + k])
+                                  - float(np.linalg.norm(force)))
         add(slipping, "slipping", k)
     for k in which.sliding:
         def sticking(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
@@ -613,8 +628,7 @@ def _outputs(full: NumericModel, gaps: Gaps, which: ClosedGaps, dynamics: bool,
     velocities' rows, and in the constraint forces), the same arrays for every
     segment."""
     m, n = full.m, full.n
-    rows = np.concatenate([np.arange(gaps.first), gaps.first + np.array(which.closed, dtype=int),
-                           gaps.held_rows(which)]).astype(int)
+    rows = _segment_rows(gaps, which)
     sliding = gaps.held_rows(ClosedGaps(which.closed, which.sliding))
     pattern = full.pattern
 
@@ -623,6 +637,11 @@ def _outputs(full: NumericModel, gaps: Gaps, which: ClosedGaps, dynamics: bool,
         out = dict(segment.outputs(t, y, dynamics=dynamics))
         lam = np.zeros((len(t), m))
         lam[:, rows] = out["multipliers"]
+        if which.held and dynamics:  # dependent held rows: their forces shared by load
+            for i, (ti, yi) in enumerate(zip(t, y)):
+                for k, force in held_forces(full, gaps, float(ti), yi[:n], which,
+                                            lam[i]).items():
+                    lam[i, gaps.tangents[k]] = force
         if forces is not None and dynamics:
             for i, (ti, yi) in enumerate(zip(t, y)):
                 q, qd = yi[:n], yi[n:]

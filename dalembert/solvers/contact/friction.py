@@ -40,7 +40,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...codegen.compiled import NumericModel
+from ...errors import SingularSystemError
 from ...model.constraints import ClosedGaps
+from ...numerics.rank import RANK_RTOL, dependent_rows
 from ..impact import Impact
 from ..kkt.factorization import KKTFactorization, kkt_factorization
 from ..kkt.sparse import matvec
@@ -90,16 +92,80 @@ def friction_directions(full: NumericModel, gaps: Gaps, k: int, t: float,
     return -gaps.friction[k] * out
 
 
+def acting_rows(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                which: ClosedGaps) -> np.ndarray:
+    """The rows of ``full`` that act with the closed set ``which`` (a boolean mask),
+    the gap rows and held sliding velocities that depend on the rows before them left
+    out. A body resting on several contacts holds them all with fewer independent
+    rows (a box on two corners in the plane, on four in space): its contact forces
+    are not unique, and the rows left out carry none here (:func:`held_forces` shares
+    the friction of held ones; a segment's run gives minimum-norm multipliers)."""
+    mask = gaps.acting(full.m, np.array(which.closed, dtype=int), which.held)
+    contact = np.flatnonzero(mask[gaps.first:]) + gaps.first
+    if len(contact) < 2:
+        return mask
+    Av, _ = full.velocity_sparse(t, q)
+    A = full.pattern.dense_A(Av)
+    order = np.concatenate([np.arange(gaps.first), contact])  # bilateral rows first
+    for i in dependent_rows(A[order]):
+        if order[i] >= gaps.first:
+            mask[order[i]] = False
+    return mask
+
+
+def held_forces(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                which: ClosedGaps, lam: np.ndarray) -> dict[int, np.ndarray]:
+    """The friction forces of the held gaps of ``which`` (rough or sticking), from the
+    multipliers ``lam`` of every row of ``full``: where their rows are dependent, the
+    friction they exert together (``A_t^T lambda_t``, unique) is shared in proportion
+    to their normal forces, the least-squares distribution weighted by ``1 / lambda_n``
+    (with one sliding velocity per contact and equal rows, each contact then uses the
+    same fraction of its cone), which is the unique one where they are independent.
+
+    Examples
+    --------
+    Two corners of a box sliding along one row, pressed by 3 and 1, holding 2 in all:
+
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> x, y = coordinates("x y")
+    >>> both = System([x, y], kinetic=(x.diff()**2 + y.diff()**2) / 2, constraints=[
+    ...     Unilateral(y, "a", friction=0.5, tangents=[x.diff()]),
+    ...     Unilateral(y, "b", friction=0.5, tangents=[x.diff()])])
+    >>> full = both._closed(ClosedGaps((0, 1), held=(0, 1))).numeric()
+    >>> gaps = Gaps.of(both.definition.unilateral, 0, [0.0, 0.0])
+    >>> lam = np.array([3.0, 1.0, 1.0, 1.0])
+    >>> {k: f.round(12).tolist() for k, f in held_forces(full, gaps, 0.0, np.zeros(2),
+    ...                                                  ClosedGaps((0, 1), (0, 1)), lam).items()}
+    {0: [1.5], 1: [0.5]}
+    """
+    held = [k for k in which.held if len(gaps.tangents[k])]
+    if not held:
+        return {}
+    rows = np.concatenate([gaps.tangents[k] for k in held]).astype(int)
+    Av, _ = full.velocity_sparse(t, q)
+    A = full.pattern.dense_A(Av)[rows]
+    normal = np.concatenate([np.full(len(gaps.tangents[k]), max(lam[gaps.first + k], 0.0))
+                             for k in held])
+    root = np.sqrt(normal)
+    share = root * np.linalg.lstsq(A.T * root, A.T @ lam[rows], rcond=RANK_RTOL)[0]
+    out, at = {}, 0
+    for k in held:
+        out[k] = share[at:at + len(gaps.tangents[k])]
+        at += len(gaps.tangents[k])
+    return out
+
+
 def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
                   qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
                   kkt: KKTFactorization | None = None,
-                  values: tuple[np.ndarray, ...] | None = None
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  values: tuple[np.ndarray, ...] | None = None,
+                  acting: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``qdd`` and the multipliers of every row of ``full`` (0 on the rows that do
     not act) with the gaps ``which.closed`` closed, the sliding velocities of
     ``which.held`` held and the gaps ``which.sliding`` sliding along ``directions``
     (see the module docstring); the sliding gaps' friction forces in their tangent
-    rows' places.
+    rows' places (held rows that depend on the others left out: 0 there, see
+    :func:`held_forces`).
 
     Parameters
     ----------
@@ -115,6 +181,8 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         A factorization object of ``full``'s pattern to reuse (made if ``None``).
     values
         ``full.kkt_sparse(t, q, qd)`` if the caller has it.
+    acting
+        The rows that act (:func:`acting_rows`) if the caller has them.
 
     Raises
     ------
@@ -123,8 +191,8 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     """
     Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
     kkt = kkt or kkt_factorization(full.pattern)
-    kkt.factor(np.concatenate([Mv, Av]), gaps.acting(full.m, np.array(which.closed, dtype=int),
-                                                     which.held))
+    kkt.factor(np.concatenate([Mv, Av]), acting if acting is not None
+               else acting_rows(full, gaps, t, q, which))
     qdd, lam = kkt.solve(np.concatenate([f, c]))
     sliding = which.sliding
     if not sliding:
@@ -135,7 +203,10 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     normal = gaps.first + np.array(sliding, dtype=int)
     # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
     R = np.array([lam_k[normal] for _, lam_k in responses]).T
-    N = np.linalg.solve(np.eye(len(sliding)) - R, lam[normal])
+    try:
+        N = np.linalg.solve(np.eye(len(sliding)) - R, lam[normal])
+    except np.linalg.LinAlgError as exc:  # their normal forces are not unique
+        raise SingularSystemError("the sliding contacts' normal rows are dependent") from exc
     for n_k, (qdd_k, lam_k) in zip(N, responses):
         qdd = qdd + n_k * qdd_k
         lam = lam + n_k * lam_k
@@ -182,6 +253,9 @@ class SlidingForces:
         self.full, self.gaps, self.which = full, gaps, which
         self.starts, self.user = starts, user
         self.kkt = kkt_factorization(full.pattern)
+        #: The rows acting, found at the first state (which held rows depend on the
+        #: others does not change while the set is closed).
+        self.acting: np.ndarray | None = None
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         full, gaps = self.full, self.gaps
@@ -191,7 +265,10 @@ class SlidingForces:
         rates = row_rates(full, t, q, qd)
         directions = {k: current_direction(rates[gaps.tangents[k]], self.starts[k])
                       for k in self.which.sliding}
-        _, lam = solve_sliding(full, gaps, t, q, qd, self.which, directions, self.kkt)
+        if self.acting is None:
+            self.acting = acting_rows(full, gaps, t, q, self.which)
+        _, lam = solve_sliding(full, gaps, t, q, qd, self.which, directions, self.kkt,
+                               acting=self.acting)
         return np.concatenate([lam[gaps.tangents[k]] for k in self.which.sliding])
 
 
@@ -258,17 +335,24 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     chosen = Friction(set(start.held), dict(start.directions))
     resting = [k for k in closed if k in chosen.held and mu[k] < np.inf]
     kkt = kkt_factorization(full.pattern)
+    # where a contact slips, the others on the cone with it slip too (a body on several
+    # contacts whose shared force reaches their cones at once): else each would slip
+    # alone at the same instant, the others holding, one after another without end
+    at_limit = slipping is not None
     while resting:
-        _, lam = solve_sliding(full, gaps, t, q, qd, chosen.of(closed), chosen.directions, kkt)
-        scale = FORCE_RTOL * (1.0 + np.abs(lam).max(initial=0.0))
-        excess = {k: np.linalg.norm(lam[gaps.tangents[k]]) - mu[k] * lam[gaps.first + k]
+        which = chosen.of(closed)
+        _, lam = solve_sliding(full, gaps, t, q, qd, which, chosen.directions, kkt)
+        forces = held_forces(full, gaps, t, q, which, lam)
+        size_of = 1.0 + np.abs(lam).max(initial=0.0)
+        allowed = -TOUCH_RTOL * size_of if at_limit else FORCE_RTOL * size_of
+        excess = {k: np.linalg.norm(forces[k]) - mu[k] * lam[gaps.first + k]
                   for k in resting}
         if slipping in excess:
             excess[slipping] = np.inf
         worst = max(excess, key=excess.__getitem__)
-        force = lam[gaps.tangents[worst]]
+        force = forces[worst]
         size = float(np.linalg.norm(force))
-        if excess[worst] <= scale or size == 0.0:
+        if excess[worst] <= allowed or size == 0.0:
             break
         chosen.directions[worst] = -force / size
         chosen.held.discard(worst)

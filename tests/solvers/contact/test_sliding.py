@@ -174,6 +174,75 @@ def test_a_sampled_push_slides_a_block_which_stops_after_the_push_ends():
     assert abs(switch_times(traj)[-1] - 0.6) < 1e-12  # stopping is the last switch
 
 
+def box_on_two_corners(alpha: float = 0.0, push: sp.Symbol | None = None) -> System:
+    """A planar box (half width ``B``, half height ``H``, unit mass) standing on its two
+    bottom corners, each a frictional contact, on a floor tilted by ``alpha``; pushed
+    along it by the input ``push`` at its centre of mass, if given. Its corners slide
+    along one row (they move together): their friction is statically indeterminate
+    while they stick."""
+    inertia = ((2 * B) ** 2 + (2 * H) ** 2) / 12
+    corners = []
+    for name, side in (("front", 1), ("back", -1)):
+        px = X + side * B * sp.cos(TH) + H * sp.sin(TH)
+        py = Y + side * B * sp.sin(TH) - H * sp.cos(TH)
+        corners.append(Unilateral(py, name=name, friction=mu, tangents=[px.diff()]))
+    return System([X, Y, TH], kinetic=(X.diff() ** 2 + Y.diff() ** 2) / 2
+                  + inertia / 2 * TH.diff() ** 2,
+                  potential=g * (Y * np.cos(alpha) - X * np.sin(alpha)), constraints=corners,
+                  inputs=[] if push is None else [push],
+                  generalized_forces=None if push is None else [push, 0, 0])
+
+
+B, H = 0.5, 0.2
+
+
+def test_a_box_sliding_on_two_corners_loads_its_front_corner_and_stops():
+    """Friction ``mu m g`` at the floor, ``H`` below the centre, tips the box forward:
+    the front corner carries ``m g / 2 + mu m g H / (2 B)``, the back one the rest."""
+    v0 = 2.0
+    traj = box_on_two_corners().simulate((0.0, 1.0), {"x": 0.0, "y": H, "theta": 0.0},
+                                         {"x": v0})
+    assert traj.success, traj.message
+    (t_stop,) = switch_times(traj)
+    assert abs(t_stop - v0 / (mu * g)) < 1e-13
+    sliding = traj.t < t_stop
+    front, back = traj.multiplier("front"), traj.multiplier("back")
+    assert np.abs(front[sliding] - (g / 2 + mu * g * H / (2 * B))).max() < 1e-12
+    assert np.abs(back[sliding] - (g / 2 - mu * g * H / (2 * B))).max() < 1e-12
+    for name, normal in (("front", front), ("back", back)):  # each on its cone
+        assert np.abs(traj.multiplier(f"{name}_friction_1")[sliding]
+                      + mu * normal[sliding]).max() < 1e-12
+    assert np.abs(traj["theta"]).max() < 1e-14
+    assert abs(traj["x"][-1] - v0**2 / (2 * mu * g)) < 1e-13
+
+
+def test_a_box_on_two_corners_pushed_harder_and_harder_slips_on_both_at_once():
+    u, k = sp.Symbol("u"), 5.0
+    traj = box_on_two_corners(push=u).simulate(
+        (0.0, 1.0), {"x": 0.0, "y": H, "theta": 0.0}, inputs={"u": lambda t: k * t})
+    assert traj.success, traj.message
+    (t_slip,) = switch_times(traj)
+    assert abs(t_slip - mu * g / k) < 1e-13
+    moving = traj.t > t_slip
+    assert np.abs(traj["x"][~moving]).max() < 1e-15
+    assert np.abs(traj["x"][moving] - k * (traj.t[moving] - t_slip) ** 3 / 6).max() < 1e-12
+
+
+@pytest.mark.parametrize("alpha", [0.2, 0.4])
+def test_a_box_on_two_corners_on_an_incline_sticks_or_slides(alpha):
+    traj = box_on_two_corners(alpha).simulate((0.0, 0.5),
+                                              {"x": 0.0, "y": H, "theta": 0.0})
+    assert traj.success, traj.message
+    if np.tan(alpha) < mu:  # held, each corner using tan(alpha) of its normal force
+        assert np.abs(traj["x"]).max() < 1e-14
+        for name in ("front", "back"):
+            ratio = traj.multiplier(f"{name}_friction_1") / traj.multiplier(name)
+            assert np.abs(ratio + np.tan(alpha)).max() < 1e-12
+    else:
+        a = g * (np.sin(alpha) - mu * np.cos(alpha))
+        assert np.abs(traj["x"] - a * traj.t**2 / 2).max() < 1e-12
+
+
 @pytest.mark.parametrize("mu_impact", [0.05, 0.3])
 def test_a_ball_landing_without_spin_takes_a_coulomb_impulse(mu_impact):
     """A sphere dropped from ``h`` moving at ``v`` without spin lands with the normal
