@@ -1018,8 +1018,11 @@ class System:
             segment = replace(options, t_span=(t, tf), output=output, timeout=left,
                               inputs=options.inputs if inputs is None else inputs)
             layout = StateLayout(len(self.coordinate_names))
-            with warnings.catch_warnings():  # held sliding velocities may be dependent
+            # a switch's state, ours, not the user's: held sliding velocities may be
+            # dependent, and gaps closing within the touching tolerance are projected
+            with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RedundantConstraintsWarning)
+                warnings.simplefilter("ignore", InitialConditionsAdjusted)
                 return system._plan(segment, *layout.split(y), parameters, None).start()
 
         if stepping:

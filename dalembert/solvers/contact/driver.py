@@ -210,12 +210,14 @@ class ContactRun:
 
 @dataclass
 class SegmentStart:
-    """The current segment's start time and its sliding contacts' directions there,
-    which the events and the friction forces read (they are made once per set of
+    """The current segment's start time, its sliding contacts' directions and its open
+    gaps below 0 there, which the events and the friction forces read (they are made once per set of
     closed gaps and serve every segment with that set)."""
 
     t: float = np.nan
     directions: dict[int, np.ndarray] = field(default_factory=dict)
+    #: The open gaps below 0 at the start (within the touching tolerance), by gap.
+    floors: dict[int, float] = field(default_factory=dict)
 
 
 #: ``start(closed, t, y, events, inputs)``: the data of a run of the model of the closed
@@ -309,6 +311,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         segment_start.t = t
         segment_start.directions.clear()
         segment_start.directions.update(directions)
+        below = gaps.values(full, t, y[:n])
+        segment_start.floors = {k: float(below[k]) for k in range(gaps.count)
+                                if k not in closed and below[k] < 0.0}
         end = hold.next_instant(t, tf)
         # an output time at an inner instant is the next segment's (after the sample)
         last = end if end == tf else end - hold.tolerance
@@ -317,6 +322,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         segment = data.segment((t, end), y, run_at, False)
         result = segment.run()
         fired = _contact_fired(result, user_events)
+        # the contact events differ from set to set: a joined run shows the user's
+        result.t_events = result.t_events[:user_events]
+        result.y_events = result.y_events[:user_events]
         keep = np.flatnonzero(result.t < fired[0]) if fired is not None else \
             np.arange(len(result.t)) if end == tf else np.flatnonzero(result.t < end)
         outputs = _outputs(full, gaps, which, dynamics, forces[which])
@@ -376,8 +384,6 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         if fired is not None:
             last_switch = te
     joined = record.joined(len(y0), t0)
-    joined.result.t_events = joined.result.t_events[:user_events]
-    joined.result.y_events = joined.result.y_events[:user_events]
     joined.result.stats["n_impacts"] = len(history.impacts)
     return ContactRun(joined, history)
 
@@ -486,6 +492,11 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         history.impacts.append(ImpactRecord(t, outcome.impulses, outcome.energy_lost,
                                             qd.copy(), outcome.qd))
         qd = outcome.qd
+    settled = _settle(full, gaps, t, q, qd, touching)
+    if settled is not None:
+        history.impacts.append(ImpactRecord(t, settled.impulses[gaps.rows],
+                                            settled.energy_lost, qd.copy(), settled.qd))
+        qd = settled.qd
     exclude = () if opening is None else (opening,)
     closed = closed_gaps(full, gaps, t, q, qd, touching, exclude,
                          friction_at(full, gaps, t, q, qd))
@@ -505,6 +516,24 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         closed = again
     raise ContactError(f"at t={t:.6g} the closed contacts and their friction (sticking "
                        f"or sliding) did not settle in {MAX_FRICTION_ROUNDS} rounds")
+
+
+def _settle(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
+            touching: np.ndarray) -> Impact | None:
+    """A plastic impact on every touching gap at once where two or more touch and each
+    moves (closing or opening) slower than its rest speed, or ``None``: a body settling
+    on several contacts (a block rocking down onto its base) impacts them in turn
+    infinitely often in a finite time, as a bouncing ball does on one; below the rest
+    speed it comes to rest on them all (its energy, within the rest speeds, recorded
+    as lost)."""
+    if touching.sum() < 2:
+        return None
+    rates = gaps.rates(full, t, q, qd)[touching]
+    if np.abs(rates).max() <= TOUCH_RTOL * (1.0 + np.abs(qd).max()) or \
+            np.any(np.abs(rates) >= gaps.rest_speed[touching]):
+        return None
+    which = ClosedGaps(tuple(int(k) for k in np.flatnonzero(touching)))
+    return impact(full, t, q, qd, acting_rows(full, gaps, t, q, which))
 
 
 def _grip(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
@@ -576,7 +605,11 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
             add(separating, "separating", k)
         else:
             def closing(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
-                return _open_at_start(start, t, float(gaps.values(full, t, q)[k]))
+                # below where it started, if that was below 0: a gap that opens from a
+                # contact held to the projection's tolerance, or left at rounding below
+                # 0, must not close again in the first tiny step
+                value = float(gaps.values(full, t, q)[k]) - start.floors.get(k, 0.0)
+                return _open_at_start(start, t, value)
             add(closing, "closing", k)
     assert gaps.friction is not None  # made by Gaps.of
     for k in which.held:

@@ -270,3 +270,33 @@ def test_a_ball_landing_without_spin_takes_a_coulomb_impulse(mu_impact):
     assert np.abs(first.qd_after - expected).max() < 1e-12
     kinetic = lambda qd: m / 2 * (qd[0] ** 2 + qd[1] ** 2) + inertia / 2 * qd[2] ** 2  # noqa: E731
     assert abs(first.energy_lost - (kinetic(first.qd_before) - kinetic(first.qd_after))) < 1e-12
+
+
+def test_housners_block_rocks_as_on_rough_ground_where_friction_holds_its_corners():
+    """A corner landing with ``mu`` above what the impact needs grips as a rough one:
+    each impact keeps Housner's ``1 - 3/2 sin(alpha)^2`` of the angular velocity."""
+    from test_rough import HOUSNER, block, tilted  # the rough block's model and start
+
+    traj = block(0.5).simulate((0.0, 2.5), tilted(-0.1))
+    assert traj.success, traj.message
+    impacts = traj.contacts.impacts
+    assert len(impacts) >= 3
+    for hit in impacts[:3]:
+        assert hit.qd_after[2] / hit.qd_before[2] == pytest.approx(HOUSNER, rel=1e-10)
+
+
+def test_a_block_rocking_and_sliding_settles_flat_on_both_corners():
+    """With ``mu = 0.1`` its corners slide as it rocks; the rocking dies out in
+    impacts ever closer together (infinitely many in a finite time, rigidly), until
+    every corner moves slower than its rest speed and the block rests flat on both,
+    each carrying half its weight. Friction and the impacts only take energy."""
+    from test_rough import G, M, block, tilted
+
+    traj = block(0.1).simulate((0.0, 2.5), tilted(-0.1), t_eval=np.linspace(0.0, 2.5, 501))
+    assert traj.success, traj.message
+    assert traj.contacts.closed_at(traj.t[-1:]).all()  # both corners at the end
+    assert abs(traj["theta"][-1]) < 1e-9
+    for name in ("right", "left"):
+        assert abs(traj.multiplier(name)[-1] - M * G / 2) < 1e-9
+    total = traj.energy + traj.contacts.energy_lost_by(traj.t)
+    assert np.all(np.diff(total) <= 1e-9 * abs(total[0]))
