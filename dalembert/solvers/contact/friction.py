@@ -86,10 +86,8 @@ def friction_directions(full: NumericModel, gaps: Gaps, k: int, t: float,
     Av, _ = full.velocity_sparse(t, q)
     weights = np.zeros(full.m)
     weights[gaps.tangents[k]] = d
-    out = np.zeros(full.n)
-    np.add.at(out, pattern.A_cols, weights[pattern.A_rows] * Av)
     assert gaps.friction is not None
-    return -gaps.friction[k] * out
+    return -gaps.friction[k] * matvec(pattern.A_cols, pattern.A_rows, Av, weights, full.n)
 
 
 def acting_rows(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
