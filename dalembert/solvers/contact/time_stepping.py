@@ -40,13 +40,14 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...errors import ContactError, InputError
+from ...errors import ContactError, InputError, TimeLimitExceeded
 from ...inputs import InputSignal
 from ...numerics.gauss_newton import gauss_newton
 from ..kkt.factorization import kkt_factorization
@@ -54,6 +55,7 @@ from ..kkt.sparse import matvec
 from ..outputs import output_arrays
 from ..projection import project_velocities
 from ..running.integrate import IntegrationResult
+from ..running.watchdog import GRACE, Watchdog, watching, where_stopped
 from .driver import ContactHistory, Hold, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
 from .rotations import Rotations
@@ -177,7 +179,8 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
                       y0: np.ndarray, h: float, t_eval: np.ndarray | None,
                       signal: InputSignal | None = None,
-                      rotations: Rotations | None = None) -> SteppedRun:
+                      rotations: Rotations | None = None,
+                      deadline: float | None = None) -> SteppedRun:
     """Run ``t_span`` with Moreau-Jean steps of ``h`` (see the module docstring).
 
     Parameters
@@ -201,6 +204,11 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     rotations
         Where the coordinates are unit quaternions (turned, not moved along a line,
         by a step); ``None``: nowhere.
+    deadline
+        The ``time.monotonic()`` past which the run stops (the run's ``timeout``),
+        status ``"timeout"``, the steps done kept: checked after each step, and a
+        :class:`~dalembert.solvers.running.watchdog.Watchdog` stops a function of the
+        user's (an input) that does not return. ``None``: no limit.
     """
     t0, tf = t_span
     n, m = full.n, full.m
@@ -222,7 +230,10 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     held = [hold.sample(t0, np.concatenate([q, v]))] if hold.sampled else []
     closed_before: tuple[int, ...] = ()
     status, message = "finished", "the integration reached the end of t_span"
-    try:
+    stop: list[str] = []  # the status and message of a run stopped between steps
+
+    def _steps() -> None:
+        nonlocal q, v, closed_before
         for t, end in itertools.pairwise(grid):
             h = end - t
             if held:
@@ -234,8 +245,8 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
                     held.append(hold.sample(end, np.concatenate([q_next, v_next]))
                                 if hold.is_instant(end) else held[-1])
                 except InputError as exc:  # the point is the sample's: not recorded
-                    status, message = "failed", f"integration stopped at t={end:.6g}: {exc}"
-                    break
+                    stop[:] = ["failed", f"integration stopped at t={end:.6g}: {exc}"]
+                    return
             v = turn.carry(q, v, q_next)  # the velocity before, at the new positions
             q = q_next
             closed = tuple(int(i) for i in np.flatnonzero(P[gaps.rows] > 0.0))
@@ -253,10 +264,34 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
             times.append(end)
             states.append(np.concatenate([q, v]))
             forces.append(P / h)
+            if deadline is not None and end < tf and time.monotonic() > deadline:
+                stop[:] = ["timeout", f"stopped at t={end:.6g}: the run's time limit "
+                           "(timeout=) passed"]
+                return
+
+    watchdog = None if deadline is None else Watchdog(deadline)
+    try:
+        with watching(watchdog):
+            _steps()
+    except TimeLimitExceeded as exc:  # an input that did not return: the steps done kept
+        assert watchdog is not None
+        watchdog.disarm()
+        status, message = "timeout", (
+            f"stopped at t={times[-1]:.6g}: the run's time limit (timeout=) passed "
+            f"while a function of yours, {where_stopped(exc) or 'an input'}, had not "
+            f"returned; it was stopped {GRACE:g} s later")
     except ContactError as exc:
         status, message = "failed", str(exc)
     except KeyboardInterrupt:
         status, message = "interrupted", f"interrupted by the user at t={times[-1]:.6g}"
+    # a step cut short (the watchdog's exception between two of its records): the
+    # points of the steps completed
+    done = min(len(times), len(states), len(forces), len(accelerations))
+    del times[done:], states[done:], forces[done:], accelerations[done:]
+    if held:
+        del held[done:]
+    if stop:
+        status, message = stop[0], stop[1]
     t_all, y_all = np.array(times), np.array(states)
     f_all, a_all = np.array(forces), np.array(accelerations)
     u_all = np.array(held) if hold.sampled else None
