@@ -125,7 +125,7 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     """The contact impulses with Coulomb friction: ``k`` normal impulses first (an LCP
     as in :func:`solve_lcp`), then each contact's tangential ones, in the disk of
     radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
-    leave, or holding it at 0 (sticking): ``w = W P + q``. Solved by projected
+    leave, or holding it at 0 (sticking): ``w = W P + q`` (:func:`_coulomb`). Solved by projected
     Gauss-Seidel over the contacts (each contact's tangential block at once) until the
     impulses change by less than rounding.
 
@@ -166,14 +166,43 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
             rows = tangents[c]
             if len(rows):
                 block = W[np.ix_(rows, rows)]
-                trial = P[rows] - np.linalg.lstsq(block, W[rows] @ P + q[rows],
-                                                  rcond=None)[0]
-                size, radius = np.linalg.norm(trial), mu[c] * P[c]
-                P[rows] = trial if size <= radius else trial * (radius / size)
+                rest = W[rows] @ P + q[rows] - block @ P[rows]  # without its own
+                P[rows] = _coulomb(block, rest, mu[c] * P[c])
         if np.abs(P - before).max(initial=0.0) <= 1e-14 * (1.0 + np.abs(P).max(initial=0.0)):
             return P
     raise ContactError(f"the contact impulses with friction of a step ({k} contacts) did "
                        f"not converge in {MAX_SWEEPS} sweeps")
+
+
+def _coulomb(block: np.ndarray, rest: np.ndarray, radius: float) -> np.ndarray:
+    """One contact's tangential impulse ``p``: sticking (``block p + rest = 0``) if that
+    lies in the disk of ``radius``, else on its rim opposing the sliding velocity it
+    leaves, ``p = -radius w / |w|``, ``w = block p + rest``. Not the sticking impulse
+    scaled onto the rim: with an anisotropic ``block`` (a box's corner, whose rotation
+    couples its two tangents) that one pushes askew, yawing a sliding box and
+    braking it by less than ``mu N``. With ``p = -w / s`` (``s = |w| / radius``):
+    ``p = -(s + block)^-1 rest``, whose size falls with ``s``; ``s`` by bisection.
+
+    >>> block, rest = np.diag([1.0, 4.0]), np.array([2.0, 2.0])
+    >>> p = _coulomb(block, rest, 0.1)
+    >>> w = block @ p + rest
+    >>> bool(np.allclose(p, -0.1 * w / np.linalg.norm(w), rtol=0, atol=1e-15))
+    True
+    """
+    stick = -np.linalg.lstsq(block, rest, rcond=None)[0]
+    if np.linalg.norm(stick) <= radius or radius <= 0.0:
+        return stick if radius > 0.0 else np.zeros_like(rest)
+    values, vectors = np.linalg.eigh(block)
+    along = vectors.T @ rest
+    low, high = 0.0, float(np.linalg.norm(rest)) / radius  # at high: size <= radius
+    for _ in range(200):
+        mid = (low + high) / 2
+        if mid in (low, high):
+            break
+        size = np.linalg.norm(along / (mid + np.maximum(values, 0.0)))
+        low, high = (mid, high) if size > radius else (low, mid)
+    p = -vectors @ (along / (high + np.maximum(values, 0.0)))
+    return p * (radius / np.linalg.norm(p))  # on the rim to rounding
 
 
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
