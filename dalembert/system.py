@@ -1031,7 +1031,7 @@ class System:
 
             stepped = run_time_stepping(full, gaps, (t0, tf), plan.y0, options.contact_step,
                                         options.output.t_eval, options.inputs,
-                                        Rotations(self.definition.quaternions))
+                                        Rotations(self.definition.quaternions), deadline)
             result, derived, history = stepped.result, stepped.derived, stepped.history
             applied = stepped.inputs  # the samples held (None: the inputs at each point)
         else:

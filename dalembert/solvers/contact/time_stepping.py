@@ -40,13 +40,14 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
-from ...errors import ContactError, InputError
+from ...errors import ContactError, InputError, TimeLimitExceeded
 from ...inputs import InputSignal
 from ...numerics.gauss_newton import gauss_newton
 from ..kkt.factorization import kkt_factorization
@@ -54,6 +55,7 @@ from ..kkt.sparse import matvec
 from ..outputs import output_arrays
 from ..projection import project_velocities
 from ..running.integrate import IntegrationResult
+from ..running.watchdog import GRACE, Watchdog, watching, where_stopped
 from .driver import ContactHistory, Hold, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
 from .rotations import Rotations
@@ -123,7 +125,7 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     """The contact impulses with Coulomb friction: ``k`` normal impulses first (an LCP
     as in :func:`solve_lcp`), then each contact's tangential ones, in the disk of
     radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
-    leave, or holding it at 0 (sticking): ``w = W P + q``. Solved by projected
+    leave, or holding it at 0 (sticking): ``w = W P + q`` (:func:`_coulomb`). Solved by projected
     Gauss-Seidel over the contacts (each contact's tangential block at once) until the
     impulses change by less than rounding.
 
@@ -164,20 +166,50 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
             rows = tangents[c]
             if len(rows):
                 block = W[np.ix_(rows, rows)]
-                trial = P[rows] - np.linalg.lstsq(block, W[rows] @ P + q[rows],
-                                                  rcond=None)[0]
-                size, radius = np.linalg.norm(trial), mu[c] * P[c]
-                P[rows] = trial if size <= radius else trial * (radius / size)
+                rest = W[rows] @ P + q[rows] - block @ P[rows]  # without its own
+                P[rows] = _coulomb(block, rest, mu[c] * P[c])
         if np.abs(P - before).max(initial=0.0) <= 1e-14 * (1.0 + np.abs(P).max(initial=0.0)):
             return P
     raise ContactError(f"the contact impulses with friction of a step ({k} contacts) did "
                        f"not converge in {MAX_SWEEPS} sweeps")
 
 
+def _coulomb(block: np.ndarray, rest: np.ndarray, radius: float) -> np.ndarray:
+    """One contact's tangential impulse ``p``: sticking (``block p + rest = 0``) if that
+    lies in the disk of ``radius``, else on its rim opposing the sliding velocity it
+    leaves, ``p = -radius w / |w|``, ``w = block p + rest``. Not the sticking impulse
+    scaled onto the rim: with an anisotropic ``block`` (a box's corner, whose rotation
+    couples its two tangents) that one pushes askew, yawing a sliding box and
+    braking it by less than ``mu N``. With ``p = -w / s`` (``s = |w| / radius``):
+    ``p = -(s + block)^-1 rest``, whose size falls with ``s``; ``s`` by bisection.
+
+    >>> block, rest = np.diag([1.0, 4.0]), np.array([2.0, 2.0])
+    >>> p = _coulomb(block, rest, 0.1)
+    >>> w = block @ p + rest
+    >>> bool(np.allclose(p, -0.1 * w / np.linalg.norm(w), rtol=0, atol=1e-15))
+    True
+    """
+    stick = -np.linalg.lstsq(block, rest, rcond=None)[0]
+    if np.linalg.norm(stick) <= radius or radius <= 0.0:
+        return stick if radius > 0.0 else np.zeros_like(rest)
+    values, vectors = np.linalg.eigh(block)
+    along = vectors.T @ rest
+    low, high = 0.0, float(np.linalg.norm(rest)) / radius  # at high: size <= radius
+    for _ in range(200):
+        mid = (low + high) / 2
+        if mid in (low, high):
+            break
+        size = np.linalg.norm(along / (mid + np.maximum(values, 0.0)))
+        low, high = (mid, high) if size > radius else (low, mid)
+    p = -vectors @ (along / (high + np.maximum(values, 0.0)))
+    return p * (radius / np.linalg.norm(p))  # on the rim to rounding
+
+
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
                       y0: np.ndarray, h: float, t_eval: np.ndarray | None,
                       signal: InputSignal | None = None,
-                      rotations: Rotations | None = None) -> SteppedRun:
+                      rotations: Rotations | None = None,
+                      deadline: float | None = None) -> SteppedRun:
     """Run ``t_span`` with Moreau-Jean steps of ``h`` (see the module docstring).
 
     Parameters
@@ -201,6 +233,11 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     rotations
         Where the coordinates are unit quaternions (turned, not moved along a line,
         by a step); ``None``: nowhere.
+    deadline
+        The ``time.monotonic()`` past which the run stops (the run's ``timeout``),
+        status ``"timeout"``, the steps done kept: checked after each step, and a
+        :class:`~dalembert.solvers.running.watchdog.Watchdog` stops a function of the
+        user's (an input) that does not return. ``None``: no limit.
     """
     t0, tf = t_span
     n, m = full.n, full.m
@@ -222,7 +259,10 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     held = [hold.sample(t0, np.concatenate([q, v]))] if hold.sampled else []
     closed_before: tuple[int, ...] = ()
     status, message = "finished", "the integration reached the end of t_span"
-    try:
+    stop: list[str] = []  # the status and message of a run stopped between steps
+
+    def _steps() -> None:
+        nonlocal q, v, closed_before
         for t, end in itertools.pairwise(grid):
             h = end - t
             if held:
@@ -234,8 +274,8 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
                     held.append(hold.sample(end, np.concatenate([q_next, v_next]))
                                 if hold.is_instant(end) else held[-1])
                 except InputError as exc:  # the point is the sample's: not recorded
-                    status, message = "failed", f"integration stopped at t={end:.6g}: {exc}"
-                    break
+                    stop[:] = ["failed", f"integration stopped at t={end:.6g}: {exc}"]
+                    return
             v = turn.carry(q, v, q_next)  # the velocity before, at the new positions
             q = q_next
             closed = tuple(int(i) for i in np.flatnonzero(P[gaps.rows] > 0.0))
@@ -253,10 +293,34 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
             times.append(end)
             states.append(np.concatenate([q, v]))
             forces.append(P / h)
+            if deadline is not None and end < tf and time.monotonic() > deadline:
+                stop[:] = ["timeout", f"stopped at t={end:.6g}: the run's time limit "
+                           "(timeout=) passed"]
+                return
+
+    watchdog = None if deadline is None else Watchdog(deadline)
+    try:
+        with watching(watchdog):
+            _steps()
+    except TimeLimitExceeded as exc:  # an input that did not return: the steps done kept
+        assert watchdog is not None
+        watchdog.disarm()
+        status, message = "timeout", (
+            f"stopped at t={times[-1]:.6g}: the run's time limit (timeout=) passed "
+            f"while a function of yours, {where_stopped(exc) or 'an input'}, had not "
+            f"returned; it was stopped {GRACE:g} s later")
     except ContactError as exc:
         status, message = "failed", str(exc)
     except KeyboardInterrupt:
         status, message = "interrupted", f"interrupted by the user at t={times[-1]:.6g}"
+    # a step cut short (the watchdog's exception between two of its records): the
+    # points of the steps completed
+    done = min(len(times), len(states), len(forces), len(accelerations))
+    del times[done:], states[done:], forces[done:], accelerations[done:]
+    if held:
+        del held[done:]
+    if stop:
+        status, message = stop[0], stop[1]
     t_all, y_all = np.array(times), np.array(states)
     f_all, a_all = np.array(forces), np.array(accelerations)
     u_all = np.array(held) if hold.sampled else None

@@ -106,3 +106,20 @@ def test_a_long_chain_lying_on_the_table_stays_at_rest():
     # sliding on at the sideways speed: horizontal momentum is kept (no friction)
     assert np.abs(traj.qd[flat, :count].sum(axis=1) - count * 0.4).max() < 1e-12
 
+
+
+def test_time_stepping_stops_at_its_time_limit_keeping_the_steps_done():
+    """A run far too long for its ``timeout`` stops with status ``"timeout"`` and a
+    warning, returning the points computed: before the first impact they follow the
+    free fall's closed form (the step is exact for a constant force)."""
+    from dalembert.errors import IntegrationWarning
+
+    with pytest.warns(IntegrationWarning, match="time limit"):
+        traj = BALL.simulate((0.0, 1e4), {"y": h0}, contact_mode="time-stepping",
+                             contact_step=1e-4, timeout=0.5)
+    assert traj.status == "timeout"
+    assert "time limit (timeout=)" in traj.message
+    assert 0.0 < traj.t[-1] < 1e4 and len(traj.t) >= 2
+    falling = traj.t < np.sqrt(2 * h0 / g) - 1e-3
+    assert np.allclose(traj["y"][falling], h0 - g * traj.t[falling] ** 2 / 2,
+                       atol=1e-12, rtol=0)
