@@ -33,6 +33,7 @@ falls by exactly the work ``int C Ldot^2 dt`` they absorb.
 from __future__ import annotations
 
 import numpy as np
+
 from ..multibody import (
     Ground,
     Multibody,
