@@ -60,6 +60,7 @@ EXAMPLES: dict[str, str] = {
     "newtons-cradle": "newtons_cradle",
     "falling-chain": "falling_chain",
     "rolling-sphere": "rolling_sphere",
+    "flyball-governor": "flyball_governor",
 }
 
 

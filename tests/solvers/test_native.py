@@ -50,14 +50,21 @@ def relative(x, reference):
     return np.abs(x - reference).max(initial=0.0) / max(1.0, np.abs(reference).max(initial=0.0))
 
 
+#: Looser agreement where the example's own data make the KKT matrix ill-conditioned:
+#: the flyball governor's shaft turns with I_zz = 5e-6 kg m^2 beside 5.3 kg arms, and
+#: its K = 8e5 springs at the perturbed states give multipliers ~1e4 (measured 3e-11).
+DENSE_TOL = {"flyball-governor": 1e-10}
+
+
 @pytest.mark.parametrize("name", [n for n in EXAMPLES if n != "four-bar"])
 def test_solve_matches_dense_reference(name):
     num, report = initial(name)
     solver = native_solver(num, np.concatenate([report.q, report.qd]))
+    tol = DENSE_TOL.get(name, 1e-12)
     for t, q, qd in states(num, report):
         qdd, lam = solver.solve(t, q, qd)
         qdd_ref, lam_ref = solve_kkt(*num.kkt_blocks(t, q, qd))
-        assert relative(qdd, qdd_ref) < 1e-12 and relative(lam, lam_ref) < 1e-12
+        assert relative(qdd, qdd_ref) < tol and relative(lam, lam_ref) < tol
 
 
 def test_masses_that_change_between_solves_are_factored_again():
