@@ -14,7 +14,7 @@ solves them too. Measured on:
   ``W = [[4, -2], [-2, 4]] / m``; closed form: each impulse ``m (1 + e) / 2``.
 - Random well-conditioned SPD LCPs of sizes 2 to 64 (``W = B B^T / n + I``, ``q`` normal).
 - The Delassus LCPs of the falling 16-link chain's Moreau-Jean steps (captured from
-  the run by wrapping :func:`~dalembert.solvers.contact.time_stepping.solve_lcp`).
+  the run by wrapping :func:`~dalembert.solvers.contact.impulses.solve_lcp`).
 
 For each: the natural residual ``max |min(P, W P + q)|`` (0 at a solution), the
 difference to the exact solution (``solve_lcp``, principal pivoting, checked against the
@@ -69,21 +69,21 @@ def chain_lcps(step: float = 2e-3, keep: int = 40) -> list[tuple[np.ndarray, np.
     over the run, the largest first)."""
     import contact  # the chain as the contact benchmark builds it
 
-    from dalembert.solvers.contact import time_stepping
+    from dalembert.solvers.contact import impulses
 
     captured: list[tuple[np.ndarray, np.ndarray]] = []
-    original = time_stepping.solve_lcp
+    original = impulses.solve_lcp
 
     def capture(W: np.ndarray, q: np.ndarray) -> np.ndarray:
         captured.append((W.copy(), q.copy()))
         return original(W, q)
 
     _, simulate = contact.dalembert_chain()
-    time_stepping.solve_lcp = capture
+    impulses.solve_lcp = capture
     try:
         simulate(step)
     finally:
-        time_stepping.solve_lcp = original
+        impulses.solve_lcp = original
     sizes = np.array([len(q) for _, q in captured])
     order = np.argsort(-sizes, kind="stable")
     chosen = sorted(order[:: max(1, len(order) // keep)][:keep])
@@ -103,7 +103,7 @@ def compare(W: np.ndarray, q: np.ndarray) -> dict:
     """Both solvers on one LCP: residuals, difference, CPU seconds."""
     import qpsolvers
 
-    from dalembert.solvers.contact.time_stepping import solve_lcp
+    from dalembert.solvers.contact.impulses import solve_lcp
 
     exact, exact_s = best_time(solve_lcp, W, q)
     out = {"size": len(q), "exact_residual": residual(W, q, exact), "exact_s": exact_s}
@@ -132,7 +132,7 @@ def summary(rows: list[dict]) -> dict:
 
 def run(chain_step: float = 2e-3) -> dict:
     """Every family: its cases' records and a summary (worst accuracy, median time)."""
-    from dalembert.solvers.contact.time_stepping import solve_lcp
+    from dalembert.solvers.contact.impulses import solve_lcp
 
     record: dict = {"clarabel_settings": CLARABEL_SETTINGS}
     checks = {}

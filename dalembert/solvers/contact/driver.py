@@ -505,9 +505,9 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         history.impacts.append(ImpactRecord(t, grip.impulses[gaps.rows],
                                             grip.energy_lost, qd.copy(), grip.qd))
         qd = grip.qd
+    seen = friction_at(full, gaps, t, q, qd)  # the velocities stay through the rounds
     for _ in range(MAX_FRICTION_ROUNDS):
-        friction = choose_friction(full, gaps, t, q, qd, closed,
-                                   friction_at(full, gaps, t, q, qd), slipping)
+        friction = choose_friction(full, gaps, t, q, qd, closed, seen, slipping)
         again = closed_gaps(full, gaps, t, q, qd, touching, exclude, friction)
         if again == closed:
             which = friction.of(closed)

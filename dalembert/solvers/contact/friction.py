@@ -47,6 +47,7 @@ from ..impact import Impact
 from ..kkt.factorization import KKTFactorization, kkt_factorization
 from ..kkt.sparse import matvec
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
+from .impulses import contact_impulses
 
 
 @dataclass
@@ -78,12 +79,11 @@ def sliding_velocity(full: NumericModel, gaps: Gaps, k: int, t: float, q: np.nda
     return row_rates(full, t, q, qd)[gaps.tangents[k]]
 
 
-def friction_directions(full: NumericModel, gaps: Gaps, k: int, t: float,
-                        q: np.ndarray, d: np.ndarray) -> np.ndarray:
+def friction_directions(full: NumericModel, gaps: Gaps, k: int, Av: np.ndarray,
+                        d: np.ndarray) -> np.ndarray:
     """``-mu A_t^T d``: the generalized force of gap ``k``'s friction per unit normal
-    force, sliding along ``d``."""
+    force, sliding along ``d`` (``Av``: the values of ``full``'s rows)."""
     pattern = full.pattern
-    Av, _ = full.velocity_sparse(t, q)
     weights = np.zeros(full.m)
     weights[gaps.tangents[k]] = d
     assert gaps.friction is not None
@@ -196,7 +196,7 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     if not sliding:
         return qdd, lam
     zeros = np.zeros(full.m)
-    D = [friction_directions(full, gaps, k, t, q, directions[k]) for k in sliding]
+    D = [friction_directions(full, gaps, k, Av, directions[k]) for k in sliding]
     responses = [kkt.solve(np.concatenate([d, zeros])) for d in D]
     normal = gaps.first + np.array(sliding, dtype=int)
     # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
@@ -366,8 +366,8 @@ def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     (Newton's law; free to open faster), each contact's tangential impulse in the disk
     of radius ``mu P_n``, stopping its sliding or opposing the sliding it leaves
     (Moreau's impact law), as the time-stepping mode's impulses are found
-    (:func:`~dalembert.solvers.contact.time_stepping.solve_friction` on the Delassus
-    matrix of those rows, the bilateral ones holding).
+    (:func:`~dalembert.solvers.contact.impulses.contact_impulses`, the bilateral rows
+    holding).
 
     Parameters
     ----------
@@ -380,33 +380,15 @@ def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     e
         Newton's coefficient of every gap (0 where it does not approach).
     """
-    from .time_stepping import solve_friction
-
     n, m, pattern = full.n, full.m, full.pattern
     Mv, _, Av, _ = full.kkt_sparse(t, q, qd)
     _, b = full.velocity_sparse(t, q)
     kkt = kkt_factorization(pattern)
     kkt.factor(np.concatenate([Mv, Av]), gaps.acting(m, np.zeros(0, dtype=int)))
-    assert gaps.friction is not None
-    normal = gaps.first + candidates
-    rows = np.concatenate([normal, *(gaps.tangents[k] for k in candidates)]).astype(int)
-    A = pattern.dense_A(Av)
-    unit = np.zeros((n + m, len(rows)))
-    unit[:n] = A[rows].T  # a unit impulse on each row
-    response, _ = kkt.solve(unit)
-    W = A[rows] @ response
-    free = A[rows] @ qd + b[rows]
-    free[:len(normal)] += e[candidates] * np.minimum(free[:len(normal)], 0.0)
-    groups, at = [], len(normal)
-    for k in candidates:
-        groups.append(np.arange(at, at + len(gaps.tangents[k])))
-        at += len(gaps.tangents[k])
-    # a rough contact grips with any impulse its normal one allows (none without one)
-    mu = np.minimum(gaps.friction[candidates], np.finfo(float).max)
-    impulse = solve_friction(W, free, mu, groups)
-    after = qd + response @ impulse
+    found = contact_impulses(gaps, kkt, pattern.dense_A(Av), b, candidates, qd, qd, e)
+    after = qd + found.velocity
     impulses = np.zeros(m)
-    impulses[rows] = impulse
+    impulses[found.rows] = found.impulse
     lost = float(full.energies(t, q, qd)[0] - full.energies(t, q, after)[0])
     return Impact(after, impulses, matvec(pattern.A_cols, pattern.A_rows, Av, impulses, n),
                   lost)

@@ -16,7 +16,8 @@ contact alike, with impulses over the step in place of forces:
    from the complementarity problem ``0 <= P_c  _|_  U+ + e U >= 0`` (``U`` the
    gaps' rates, Newton's law at the velocity level): with the Delassus matrix
    ``W = A_c K^-1 A_c^T`` (one KKT factorization, one solve per contact) it is a small
-   dense LCP, solved by principal pivoting (:func:`solve_lcp`);
+   dense LCP, solved by principal pivoting
+   (:func:`~dalembert.solvers.contact.impulses.solve_lcp`);
 4. ``q+ = q_m + h/2 v+`` (the quaternions turned again), then the positions
    projected onto the bilateral rows and
    the gaps that went below 0 (least change), and the velocities onto the bilateral
@@ -58,12 +59,9 @@ from ..running.integrate import IntegrationResult
 from ..running.watchdog import GRACE, Watchdog, watching, where_stopped
 from .driver import ContactHistory, Hold, ImpactRecord, Switch
 from .gaps import TOUCH_RTOL, Gaps
+from .impulses import contact_impulses
 from .rotations import Rotations
 
-#: Principal pivots of :func:`solve_lcp` per contact before it gives up.
-PIVOTS_PER_CONTACT = 50
-#: Projected Gauss-Seidel sweeps of :func:`solve_friction` before it gives up.
-MAX_SWEEPS = 10_000
 #: Rounds of the position projection after a step (each a Gauss-Newton projection on
 #: the rows held so far), and Gauss-Newton iterations in each.
 PROJECTION_ITERATIONS = 8
@@ -78,131 +76,6 @@ class SteppedRun:
     derived: dict[str, np.ndarray]
     history: ContactHistory
     inputs: np.ndarray | None = None
-
-
-def solve_lcp(W: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """``P >= 0`` with ``w = W P + q >= 0`` and ``P . w = 0`` (``W`` symmetric positive
-    semidefinite: a Delassus matrix), by Murty's principal pivoting with the least-index
-    rule (finite for positive definite ``W``).
-
-    Parameters
-    ----------
-    W
-        The ``(k, k)`` matrix.
-    q
-        The ``k`` constants.
-
-    Raises
-    ------
-    ContactError
-        No solution found (a singular ``W`` whose pivoting cycles).
-
-    Examples
-    --------
-    >>> solve_lcp(np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-3.0, 1.0]))
-    array([1.5, 0. ])
-    """
-    k = len(q)
-    chosen = np.zeros(k, dtype=bool)
-    scale = TOUCH_RTOL * (1.0 + np.abs(q).max(initial=0.0))
-    for _ in range(PIVOTS_PER_CONTACT * max(k, 1)):
-        P = np.zeros(k)
-        if chosen.any():
-            sub = W[np.ix_(chosen, chosen)]
-            P[chosen] = np.linalg.lstsq(sub, -q[chosen], rcond=None)[0]
-        w = W @ P + q
-        wrong = np.where(chosen, -scale > P, w < -scale)
-        if not wrong.any():
-            return np.maximum(P, 0.0)
-        first = int(np.argmax(wrong))
-        chosen[first] = not chosen[first]
-    raise ContactError(f"the contact impulses of a step ({k} contacts) were not found: "
-                       "principal pivoting did not end")
-
-
-def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
-                   tangents: list[np.ndarray]) -> np.ndarray:
-    """The contact impulses with Coulomb friction: ``k`` normal impulses first (an LCP
-    as in :func:`solve_lcp`), then each contact's tangential ones, in the disk of
-    radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
-    leave, or holding it at 0 (sticking): ``w = W P + q`` (:func:`_coulomb`). Solved by projected
-    Gauss-Seidel over the contacts (each contact's tangential block at once) until the
-    impulses change by less than rounding.
-
-    Parameters
-    ----------
-    W, q
-        The Delassus matrix over the normal rows then the tangent rows, and the
-        velocities without impulses (Newton's law folded into the normal ones).
-    mu
-        Each contact's coefficient.
-    tangents
-        Each contact's tangent rows' places in ``W`` (empty without friction).
-
-    Raises
-    ------
-    ContactError
-        No convergence in :data:`MAX_SWEEPS` sweeps.
-
-    Examples
-    --------
-    A unit mass pressed on a floor with an impulse 1 (its normal velocity -1 without
-    impulse), sliding at 2: friction 0.5 takes 0.5 of its speed; at 0.1 m/s it sticks:
-
-    >>> W = np.eye(2)
-    >>> solve_friction(W, np.array([-1.0, 2.0]), np.array([0.5]), [np.array([1])])
-    array([ 1. , -0.5])
-    >>> solve_friction(W, np.array([-1.0, 0.1]), np.array([0.5]), [np.array([1])])
-    array([ 1. , -0.1])
-    """
-    k = len(mu)
-    P = np.zeros(len(q))
-    diagonal = np.diag(W).copy()
-    for _ in range(MAX_SWEEPS):
-        before = P.copy()
-        for c in range(k):
-            if diagonal[c] > 0:
-                P[c] = max(0.0, P[c] - (W[c] @ P + q[c]) / diagonal[c])
-            rows = tangents[c]
-            if len(rows):
-                block = W[np.ix_(rows, rows)]
-                rest = W[rows] @ P + q[rows] - block @ P[rows]  # without its own
-                P[rows] = _coulomb(block, rest, mu[c] * P[c])
-        if np.abs(P - before).max(initial=0.0) <= 1e-14 * (1.0 + np.abs(P).max(initial=0.0)):
-            return P
-    raise ContactError(f"the contact impulses with friction of a step ({k} contacts) did "
-                       f"not converge in {MAX_SWEEPS} sweeps")
-
-
-def _coulomb(block: np.ndarray, rest: np.ndarray, radius: float) -> np.ndarray:
-    """One contact's tangential impulse ``p``: sticking (``block p + rest = 0``) if that
-    lies in the disk of ``radius``, else on its rim opposing the sliding velocity it
-    leaves, ``p = -radius w / |w|``, ``w = block p + rest``. Not the sticking impulse
-    scaled onto the rim: with an anisotropic ``block`` (a box's corner, whose rotation
-    couples its two tangents) that one pushes askew, yawing a sliding box and
-    braking it by less than ``mu N``. With ``p = -w / s`` (``s = |w| / radius``):
-    ``p = -(s + block)^-1 rest``, whose size falls with ``s``; ``s`` by bisection.
-
-    >>> block, rest = np.diag([1.0, 4.0]), np.array([2.0, 2.0])
-    >>> p = _coulomb(block, rest, 0.1)
-    >>> w = block @ p + rest
-    >>> bool(np.allclose(p, -0.1 * w / np.linalg.norm(w), rtol=0, atol=1e-15))
-    True
-    """
-    stick = -np.linalg.lstsq(block, rest, rcond=None)[0]
-    if np.linalg.norm(stick) <= radius or radius <= 0.0:
-        return stick if radius > 0.0 else np.zeros_like(rest)
-    values, vectors = np.linalg.eigh(block)
-    along = vectors.T @ rest
-    low, high = 0.0, float(np.linalg.norm(rest)) / radius  # at high: size <= radius
-    for _ in range(200):
-        mid = (low + high) / 2
-        if mid in (low, high):
-            break
-        size = np.linalg.norm(along / (mid + np.maximum(values, 0.0)))
-        low, high = (mid, high) if size > radius else (low, mid)
-    p = -vectors @ (along / (high + np.maximum(values, 0.0)))
-    return p * (radius / np.linalg.norm(p))  # on the rim to rounding
 
 
 def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float],
@@ -390,33 +263,13 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
     # above it: counted, else it would fall a step and be caught every other step)
     near = np.flatnonzero(g <= TOUCH_RTOL * (1.0 + np.abs(qm).max(initial=0.0)))
     if len(near):
-        normal = gaps.first + near
-        sliding = [gaps.tangents[k] if gaps.tangents else np.zeros(0, dtype=int)
-                   for k in near]
-        rows = np.concatenate([normal, *sliding]).astype(int)
         A = pattern.dense_A(Av)
-        gaps.check_finite(A[normal].sum(axis=1), tm)
-        unit = np.zeros((n + m, len(rows)))
-        unit[:n] = A[rows].T  # a unit impulse on each contact's row
-        response, reaction = kkt.solve(unit)  # the velocity change and bilateral impulses
-        W = A[rows] @ response
-        rate = A[normal] @ v + b[normal]
-        free = A[rows] @ v_free + b[rows]
-        e = gaps.restitution[near]
-        free[:len(near)] += e * np.minimum(rate, 0.0)  # Newton's law on the normals
-        if len(rows) == len(near):  # no friction: the exact LCP
-            impulse = solve_lcp(W, free)
-        else:
-            assert gaps.friction is not None  # tangent rows come with coefficients
-            groups, at = [], len(near)
-            for tangents in sliding:
-                groups.append(np.arange(at, at + len(tangents)))
-                at += len(tangents)
-            impulse = solve_friction(W, free, gaps.friction[near], groups)
-        v_free = v_free + response @ impulse
-        P[rows] = impulse
-        pushing = near[impulse[:len(near)] > 0.0]
-        P[bilateral] += (reaction @ impulse)[bilateral]
+        gaps.check_finite(A[gaps.first + near].sum(axis=1), tm)
+        found = contact_impulses(gaps, kkt, A, b, near, v, v_free, gaps.restitution)
+        v_free = v_free + found.velocity
+        P[found.rows] = found.impulse
+        pushing = near[found.impulse[:len(near)] > 0.0]
+        P[bilateral] += found.reaction[bilateral]
     q_next = _project(full, gaps, t + h, turn.advance(qm, v_free, h / 2), pushing)
     return q_next, project_velocities(full, t + h, q_next, turn.carry(qm, v_free, q_next),
                                       rows=np.flatnonzero(bilateral)), P

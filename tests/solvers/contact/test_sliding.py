@@ -102,12 +102,12 @@ def test_a_block_pushed_harder_and_harder_slips_where_the_push_reaches_mu_m_g():
 
 @pytest.mark.parametrize("backend", ["c", "python"])
 def test_a_sphere_launched_sliding_rolls_from_2_v0_over_7_mu_g_at_five_sevenths(backend):
-    m, r, v0 = 1.0, 0.1, 2.0
+    from dalembert.examples import rolling_sphere  # the gallery's sphere: m = 1, mu = 0.3
+
+    m, r, v0 = 1.0, rolling_sphere.RADIUS, rolling_sphere.V0
+    assert mu == rolling_sphere.MU
     inertia = 2 / 5 * m * r**2
-    sphere = System([X, Y, TH], kinetic=m / 2 * (X.diff() ** 2 + Y.diff() ** 2)
-                    + inertia / 2 * TH.diff() ** 2, potential=m * g * Y,
-                    constraints=[Unilateral(Y - r, name="floor", friction=mu,
-                                            tangents=[X.diff() + r * TH.diff()])])
+    sphere = rolling_sphere.build(m_value=m, g_value=g)
     traj = sphere.simulate((0.0, 0.8), {"y": r}, {"x": v0}, backend=backend)
     assert traj.success, traj.message
     t_roll = 2 * v0 / (7 * mu * g)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from dalembert import Holonomic, System, Unilateral, coordinates
-from dalembert.solvers.contact.time_stepping import solve_lcp
+from dalembert.solvers.contact.impulses import solve_lcp
 
 g, e, h0 = 9.81, 0.8, 1.0
 (Y,) = coordinates("y")
