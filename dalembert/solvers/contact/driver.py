@@ -38,6 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -49,6 +50,7 @@ from ...model.constraints import ClosedGaps, friction_force_name
 from ...options import ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.sparse import matvec
+from ..native.screens import ConeScreen, ForceScreen, PositionScreen, RateScreen, Screen
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.sampled import sampled_schedule
@@ -297,6 +299,12 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     history.switches.append(Switch(t, closed, y[:n].copy(), y[n:].copy()))
     at_once, last_switch = 0, t
     while True:
+        segment_start.t = t
+        segment_start.directions.clear()
+        segment_start.directions.update(directions)
+        below = gaps.values(full, t, y[:n])
+        segment_start.floors = {k: float(below[k]) for k in range(gaps.count)
+                                if k not in closed and below[k] < 0.0}
         data = made.get(which)
         if data is None:
             forces[which] = SlidingForces(full.for_run(), gaps, which,
@@ -308,12 +316,6 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                                                        held_sample if hold.sampled else None))
         if held is not None and not which.sliding:  # a sliding set's inputs ask for it
             data.hold_inputs(held)
-        segment_start.t = t
-        segment_start.directions.clear()
-        segment_start.directions.update(directions)
-        below = gaps.values(full, t, y[:n])
-        segment_start.floors = {k: float(below[k]) for k in range(gaps.count)
-                                if k not in closed and below[k] < 0.0}
         end = hold.next_instant(t, tf)
         # an output time at an inner instant is the next segment's (after the sample)
         last = end if end == tf else end - hold.tolerance
@@ -581,28 +583,36 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
     - per sticking gap, ``mu lambda_n - |lambda_t|`` (``"slipping"``: its force leaves
       the cone);
     - per sliding gap, its sliding velocity along its direction at the segment's start
-      (``"sticking"``: it stops)."""
+      (``"sticking"``: it stops).
+
+    Each carries its screen (:mod:`~dalembert.solvers.native.screens`), so that the
+    segments' steps run in C between switches."""
     closed = which.closed
     first = gaps.first
     rows_of = _segment_rows(gaps, which)
+    place = {int(row): i for i, row in enumerate(rows_of)}  # a row's place in the segment's
+    gap_at = len(full.holonomic_rows) - gaps.count  # the first gap's place in psi
     events: list[Callable] = []
     kinds: list[tuple[str, int]] = []
 
-    def add(event: Callable, kind: str, k: int) -> None:
+    def add(event: Callable, kind: str, k: int, screen: Callable[[], Screen]) -> None:
         event.__name__ = f"{gaps.names[k]} {kind}"
         event.terminal = True  # type: ignore[attr-defined]
         event.direction = -1  # type: ignore[attr-defined]
+        event.screen = screen  # type: ignore[attr-defined]
         events.append(event)
         kinds.append((kind, k))
 
     for k in range(gaps.count):
         if k in closed:
+            row = first + closed.index(k)
+
             def separating(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *,
-                           row: int = first + closed.index(k)) -> float:
+                           row: int = row) -> float:
                 # below 0 by more than rounding: a contact pushing with no force stays
                 band = FORCE_RTOL * (1.0 + np.abs(lam).max())
                 return _open_at_start(start, t, float(lam[row]) + band)
-            add(separating, "separating", k)
+            add(separating, "separating", k, partial(ForceScreen, row))
         else:
             def closing(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
                 # below where it started, if that was below 0: a gap that opens from a
@@ -610,26 +620,44 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                 # 0, must not close again in the first tiny step
                 value = float(gaps.values(full, t, q)[k]) - start.floors.get(k, 0.0)
                 return _open_at_start(start, t, value)
-            add(closing, "closing", k)
+            add(closing, "closing", k, partial(_gap_screen, full, gap_at + k, start, k))
     assert gaps.friction is not None  # made by Gaps.of
     for k in which.held:
         if gaps.friction[k] == np.inf:
             continue
+        mu = float(gaps.friction[k])
 
         def slipping(t: float, q: np.ndarray, qd: np.ndarray, lam: np.ndarray, *, k: int = k,
-                     mu: float = float(gaps.friction[k])) -> float:
+                     mu: float = mu) -> float:
             every = np.zeros(full.m)
             every[rows_of] = lam
             force = held_forces(full, gaps, t, q, which, every)[k]
             return _open_at_start(start, t, mu * float(every[first + k])
                                   - float(np.linalg.norm(force)))
-        add(slipping, "slipping", k)
+        # the held forces are the multipliers where the rows are independent (the
+        # screens of multipliers are only used then)
+        add(slipping, "slipping", k, partial(
+            ConeScreen, place[first + k], tuple(place[int(r)] for r in gaps.tangents[k]), mu))
     for k in which.sliding:
         def sticking(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
             s = sliding_velocity(full, gaps, k, t, q, qd)
             return _open_at_start(start, t, float(s @ start.directions[k]))
-        add(sticking, "sticking", k)
+        add(sticking, "sticking", k, partial(
+            _sliding_screen, full, tuple(int(r) for r in gaps.tangents[k]), start, k))
     return tuple(events), tuple(kinds)
+
+
+def _gap_screen(full: NumericModel, at: int, start: SegmentStart, k: int) -> PositionScreen:
+    """The screen of gap ``k``'s closing event (its value at ``at`` in ``full``'s
+    ``psi``) as the current segment starts."""
+    return PositionScreen(full, at, start.floors.get(k, 0.0))
+
+
+def _sliding_screen(full: NumericModel, rows: tuple[int, ...], start: SegmentStart,
+                    k: int) -> RateScreen:
+    """The screen of sliding gap ``k``'s sticking event (its sliding velocities, the
+    rows ``rows`` of ``full``) as the current segment starts."""
+    return RateScreen(full, rows, tuple(float(w) for w in start.directions[k]))
 
 
 def _open_at_start(start: SegmentStart, t: float, value: float) -> float:

@@ -7,11 +7,12 @@ its sources, hand-written, compiled together once per machine and cached like
 generated code, see :mod:`.library`), calling the model's generated C functions
 through pointers.
 
-What runs where: with the step projection and without events or dense output,
-whole stretches of the loop run in C (``dl_rk_run``, :mod:`.run`): steps, the
-projection of each step's end, the outputs at ``t_eval`` (the step's interpolant
-as SciPy makes it, projected) and the restart, returning to Python every fraction
-of a second; a step C cannot finish is taken the step-by-step way. Otherwise
+What runs where: with the step projection and without dense output or events
+(but those C screens, :mod:`.screens`: the contact events), whole stretches of the
+loop run in C (``dl_rk_run``, :mod:`.run`): steps, the projection of each step's
+end, the outputs at ``t_eval`` (the step's interpolant as SciPy makes it,
+projected) and the restart, returning to Python every fraction of a second; a step
+C cannot finish, or whose end a screen flags, is taken the step-by-step way. Otherwise
 Python sees each accepted step (:mod:`.runge_kutta`: the steps in C, SciPy's
 solver object around them) and the regular loop does the rest. Radau's steps run in
 C too (:mod:`.radau`, whole stretches of them as well), its Newton systems reduced to

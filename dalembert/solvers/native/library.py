@@ -28,14 +28,15 @@ INPUTS_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, _f64)
 #: NOT_FINITE: a step would start from a time, step size, state or derivative that is
 #: not finite; INPUT: the inputs' callback failed; NEAR_SINGULAR: a stretch ended after
 #: a step that ended near a singular configuration; STIFF: a stretch ended after the step
-#: that made the stiffness detector say stiff).
+#: that made the stiffness detector say stiff; EVENT: a stretch ended before a step
+#: whose end a screen of its events flags).
 (OK, SINGULAR_MASS, SINGULAR_CONSTRAINTS, STEP_TOO_SMALL, PROJECTION, OUTPUTS, RANK_CHANGED,
- NOT_FINITE, INPUT, NEAR_SINGULAR, STIFF) = range(11)
+ NOT_FINITE, INPUT, NEAR_SINGULAR, STIFF, EVENT) = range(12)
 CODES = {"DL_OK": OK, "DL_SINGULAR_MASS": SINGULAR_MASS,
          "DL_SINGULAR_CONSTRAINTS": SINGULAR_CONSTRAINTS, "DL_STEP_TOO_SMALL": STEP_TOO_SMALL,
          "DL_PROJECTION": PROJECTION, "DL_OUTPUTS": OUTPUTS, "DL_RANK_CHANGED": RANK_CHANGED,
          "DL_NOT_FINITE": NOT_FINITE, "DL_INPUT": INPUT, "DL_NEAR_SINGULAR": NEAR_SINGULAR,
-         "DL_STIFF": STIFF}
+         "DL_STIFF": STIFF, "DL_EVENT": EVENT}
 #: The places of the generated functions in ``dl_model.fn`` (``DL_FN_<NAME>``): the
 #: registry's ``native`` numbers; ``DL_FN_COUNT`` places in all, functions of at most
 #: ``DL_MAX_ARGS`` arguments for ``dl_call``.
@@ -44,8 +45,8 @@ FN_COUNT, MAX_ARGS = 5, 8
 FUNCTION_CODES = {**{f"DL_FN_{name.upper()}": k for name, k in FUNCTIONS.items()},
                   "DL_FN_COUNT": FN_COUNT, "DL_MAX_ARGS": MAX_ARGS}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
-SOURCES = ("kkt.c", "outputs.c", "projection.c", "runge_kutta.c", "radau.c", "functions.c",
-           "layout.c")
+SOURCES = ("kkt.c", "outputs.c", "projection.c", "screens.c", "runge_kutta.c", "radau.c",
+           "functions.c", "layout.c")
 HEADER = "runtime.h"
 
 
@@ -112,13 +113,29 @@ class Stepper(ctypes.Structure):
                     "stiff_after", "calm_after", "stiff_count", "calm_count"))]
 
 
+class Screens(ctypes.Structure):
+    """``dl_screens``: the screens of a stretch's events (:mod:`.screens`)."""
+
+    _fields_ = [("position", Function), ("velocity", Function),
+                *((name, _ptr) for name in ("p", "psi", "vel")),
+                ("n_position", _i64), ("pos_at", _ptr), ("pos_floor", _ptr),
+                ("n_rate", _i64),
+                *((name, _ptr) for name in ("rate_start", "rate_value", "rate_col",
+                                            "rate_weight")),
+                ("n_force", _i64), ("force_row", _ptr), ("n_cone", _i64),
+                *((name, _ptr) for name in ("cone_normal", "cone_start", "cone_tangent",
+                                            "cone_mu")),
+                ("margin", _f64), ("force_rtol", _f64), ("lambda", _ptr), ("ydot", _ptr)]
+
+
 class Run(ctypes.Structure):
     _fields_ = [("t_eval", _ptr), ("n_eval", _i64), ("next_eval", _i64), ("holonomic", _ptr),
                 ("max_newton", _i64), ("max_full", _i64), ("position_tol", _f64),
                 ("accept_tol", _f64), ("max_steps", _i64), ("max_seconds", _f64),
                 ("capacity", _i64), ("t_out", _ptr), ("y_out", _ptr), ("n_steps", _i64),
                 ("n_out", _i64), ("t_old", _f64),
-                *((name, _ptr) for name in ("y_new", "y_end", "rows")), ("near2", _f64)]
+                *((name, _ptr) for name in ("y_new", "y_end", "rows")), ("near2", _f64),
+                ("screens", _ptr)]
 
 
 class Newton(ctypes.Structure):
@@ -154,7 +171,8 @@ class RadauState(ctypes.Structure):
 MIRRORS: dict[str, type[ctypes.Structure]] = {
     "dl_function": Function, "dl_model": Model, "dl_factor": Factor, "dl_data": Data,
     "dl_tableau": Tableau,
-    "dl_stepper": Stepper, "dl_run": Run, "dl_newton": Newton, "dl_radau": RadauState}
+    "dl_stepper": Stepper, "dl_run": Run, "dl_screens": Screens, "dl_newton": Newton,
+    "dl_radau": RadauState}
 
 
 class LayoutError(c_backend.CompileError):

@@ -427,8 +427,8 @@ int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau 
 /* ---- whole stretches: step, projection, outputs, restart ---------------------------- */
 
 /* One step from (st->t, y, f) finished as the Python loop finishes it (integrate.py):
- * the end projected into run->y_end and f there into f_end (SciPy's restart), the
- * outputs in (t_old, t_new] written after row run->n_out (the step's interpolant,
+ * the end projected into run->y_end and f there into f_end (SciPy's restart; DL_EVENT
+ * if a screen flags the end), the outputs in (t_old, t_new] written after row run->n_out (the step's interpolant,
  * projected; the one at t_new is the projected end). On DL_OK the outputs are counted;
  * on any other status nothing is, and the caller restores st's scalars. */
 static int radau_finish(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
@@ -444,7 +444,10 @@ static int radau_finish(const dl_model *md, dl_data *d, const dl_newton *nw, dl_
     return status;
   const double conditioning = d->conditioning;
   st->nfev++;
-  if ((status = dl_rhs(md, d, t_new, run->y_end, f_end, NULL)) != DL_OK) return status;
+  const dl_screens *sc = run->screens;
+  double *lambda = sc && (sc->n_force || sc->n_cone) ? sc->lambda : NULL;
+  if ((status = dl_rhs(md, d, t_new, run->y_end, f_end, lambda)) != DL_OK) return status;
+  if (sc && screened(md, d, sc, t_new, run->y_end, lambda)) return DL_EVENT;
   for (int64_t k = 0; k < count; ++k) {
     const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
     double *row = run->y_out + (run->n_out + k) * ns;

@@ -17,7 +17,7 @@ which takes it the step-by-step way (the Python projector then stands in).
 from __future__ import annotations
 
 import ctypes
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 
 import numpy as np
@@ -27,6 +27,7 @@ from ...numerics.singular import SCREEN
 from ..steppers.scipy_ivp import step_size, step_start, take_state
 from ..steppers.stiffness import StiffnessState
 from . import library
+from .screens import Screen, ScreenTable
 from .turns import outside_python
 
 #: The budget of one call: seconds on the wall clock (it returns after the step that
@@ -47,7 +48,8 @@ class _Stretches:
     it returns.
     """
 
-    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None, work_rows: int) -> None:
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None, work_rows: int,
+                 screens: ScreenTable | None) -> None:
         self.solver, native, n_state = solver, solver._native, solver.n
         rows = max(ROWS[0], min(ROWS[1], BUFFER_DOUBLES // n_state))
         if t_eval is not None:  # no more than the output times (a large buffer is mapped anew)
@@ -65,7 +67,9 @@ class _Stretches:
             position_tol=position_tol, accept_tol=accept_tol, max_steps=MAX_STEPS,
             max_seconds=MAX_SECONDS, capacity=rows, t_out=self._t_out.ctypes.data,
             y_out=self._y_out.ctypes.data, y_new=y_new, y_end=y_end,
-            rows=interpolant, near2=SCREEN)
+            rows=interpolant, near2=SCREEN,
+            screens=None if screens is None else screens.address)
+        self._screens = screens  # kept alive while C may read it
         self._nfev = 0
         self._pending = False
         self.near_singular = False
@@ -85,8 +89,9 @@ class _Stretches:
         """Steps from the solver's state until ``t_bound`` or the budget of one call
         (``max_steps``: fewer steps than the usual budget).
 
-        ``False`` if C could not finish the next step: the caller takes it (from the
-        solver's state after :meth:`take`, which must follow, after a Ctrl-C too).
+        ``False`` if C could not finish the next step, or a screen of the events
+        flags it: the caller takes it (from the solver's state after :meth:`take`,
+        which must follow, after a Ctrl-C too).
         What the inputs' function raised (an :class:`~dalembert.errors.InputError`, a
         Ctrl-C landing in it) is raised again here, :meth:`take` still to follow.
         """
@@ -126,8 +131,9 @@ class StretchRunner(_Stretches):
     ``NativeRK23``) in C by ``dl_rk_run``, with outputs at ``t_eval`` (or at every step
     end if ``None``)."""
 
-    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
-        super().__init__(solver, t_eval, solver._n_rows)
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
+                 screens: ScreenTable | None = None) -> None:
+        super().__init__(solver, t_eval, solver._n_rows, screens)
         native = solver._native
         self._K = solver.stage_storage()
         self._call = partial(native.lib.dl_rk_run, *native._at, *solver._fixed,
@@ -163,8 +169,10 @@ class RadauStretchRunner(_Stretches):
     ``t_eval`` (or at every step end if ``None``): the step's interpolant and the end
     projected, the restart from ``f`` at the projected end (SciPy's restart)."""
 
-    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None) -> None:
-        super().__init__(solver, t_eval, 2)  # the step's f and f at the projected end
+    def __init__(self, solver: OdeSolver, t_eval: np.ndarray | None,
+                 screens: ScreenTable | None = None) -> None:
+        # the step's f and f at the projected end
+        super().__init__(solver, t_eval, 2, screens)
         native = solver._native
         self._f, self._Z = np.empty(solver.n), np.empty((3, solver.n))
         self._call = partial(native.lib.dl_radau_run, *native._at, *solver._fixed,
@@ -191,7 +199,8 @@ class RadauStretchRunner(_Stretches):
         return st.nfev - self._counts[0]
 
 
-def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches | None:
+def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None,
+                   screens: Sequence[Screen] = ()) -> _Stretches | None:
     """The runner of ``solver``'s stretches in C (its class decides which), or ``None``
     for a solver that steps in Python (``method="auto"`` may switch to one).
 
@@ -201,6 +210,9 @@ def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches |
         A native solver: a Runge-Kutta one or :class:`~.radau.NativeRadau`.
     t_eval
         The output times (``None``: every step end).
+    screens
+        The screens of the run's events (:mod:`.screens`): a step whose end one flags
+        is left to the caller.
 
     Examples
     --------
@@ -212,7 +224,12 @@ def stretch_runner(solver: OdeSolver, t_eval: np.ndarray | None) -> _Stretches |
     from .runge_kutta import NATIVE_METHODS
 
     if isinstance(solver, NativeRadau):
-        return RadauStretchRunner(solver, t_eval)
+        return RadauStretchRunner(solver, t_eval, _table(solver, screens))
     if isinstance(solver, tuple(NATIVE_METHODS.values())):
-        return StretchRunner(solver, t_eval)
+        return StretchRunner(solver, t_eval, _table(solver, screens))
     return None
+
+
+def _table(solver: OdeSolver, screens: Sequence[Screen]) -> ScreenTable | None:
+    """The screens' table over the native solver's model, or ``None`` for none."""
+    return ScreenTable(screens, solver._native) if screens else None

@@ -204,7 +204,7 @@ static void interpolate(const dl_tableau *tb, int64_t n_state, double t_old, dou
 }
 
 /* One step from (st->t, y, K[0] = f(t, y)), finished as the Python loop finishes it:
- * the end projected into y_end, the outputs in (t_old, t_new] written after row
+ * the end projected into y_end (DL_EVENT if a screen flags it), the outputs in (t_old, t_new] written after row
  * run->n_out (interpolated and projected; the one at t_new is the projected end). On
  * DL_OK the outputs are counted (n_out, next_eval) and the caller restarts from y_end;
  * on any other status run is as before and the caller restores st. */
@@ -219,6 +219,8 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
   int64_t hi, count;
   if ((status = end_of_step(md, d, run, t_new, st->direction, &hi, &count)) != DL_OK)
     return status;
+  const double conditioning = d->conditioning;  /* the projection's (a screen may solve) */
+  if (run->screens && screened(md, d, run->screens, t_new, run->y_end, NULL)) return DL_EVENT;
   int made = 0;
   for (int64_t k = 0; k < count; ++k) {
     const double s = every_step ? t_new : run->t_eval[run->next_eval + k];
@@ -237,7 +239,7 @@ static int finish_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_
   }
   run->next_eval = hi;
   run->n_out += count;
-  return d->conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
+  return conditioning < run->near2 ? DL_NEAR_SINGULAR : DL_OK;
 }
 
 /* The stiffness detector's memory after an accepted step (steppers/stiffness.py's

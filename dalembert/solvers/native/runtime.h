@@ -12,6 +12,7 @@
  *                  right-hand sides over any active rows (dl_kkt_factor, dl_kkt_solve)
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
+ *   screens.c      the screens of a stretch's events
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
  *   radau.c        implicit steps: Radau IIA on the KKT-sized Newton systems (band LU)
  *   functions.c    any generated function of the model's array, called by its place
@@ -33,10 +34,11 @@
  * would start from a time, step size, state or derivative that is not finite;
  * DL_NEAR_SINGULAR: a stretch ended after a step that ended near a singular
  * configuration (the caller measures and decides, numerics/singular.py); DL_STIFF: a
- * stretch ended after the step that made the stiffness detector say stiff. */
+ * stretch ended after the step that made the stiffness detector say stiff; DL_EVENT: a
+ * stretch ended before a step whose end a screen flags (an event may lie in it). */
 enum { DL_OK = 0, DL_SINGULAR_MASS = 1, DL_SINGULAR_CONSTRAINTS = 2, DL_STEP_TOO_SMALL = 3,
        DL_PROJECTION = 4, DL_OUTPUTS = 5, DL_RANK_CHANGED = 6, DL_NOT_FINITE = 7,
-       DL_INPUT = 8, DL_NEAR_SINGULAR = 9, DL_STIFF = 10 };
+       DL_INPUT = 8, DL_NEAR_SINGULAR = 9, DL_STIFF = 10, DL_EVENT = 11 };
 
 typedef void (*scatter_state)(const int64_t *, const void *, const void *, const double *,
                               const double *, const double *, const double *, double *);
@@ -174,6 +176,39 @@ typedef struct {
   int64_t stiff_after, calm_after, stiff_count, calm_count;
 } dl_stepper;
 
+/* The screens of a stretch's events (screens.c, native/screens.py): values C can
+ * evaluate at a step's projected end that are below their margin wherever the
+ * events (Python functions, terminal, falling through 0, positive at the start) may
+ * have fired in the step. A flagged step ends the stretch before it is counted
+ * (DL_EVENT): the caller takes it itself and locates the events. Each value:
+ *   position: psi[pos_at[k]] - pos_floor[k] of the watched model, margin
+ *             margin (1 + max |q|);
+ *   rate:     sum over e in [rate_start[k], rate_start[k+1]) of rate_weight[e] times
+ *             vel[rate_value[e]] (times qd[rate_col[e]] if >= 0), the watched
+ *             model's velocity values [A values, b], margin margin (1 + max |qd|);
+ *   force:    lambda[force_row[k]] of the run's own model, margin
+ *             force_rtol (1 + max |lambda|);
+ *   cone:     cone_mu[k] lambda[cone_normal[k]] - |lambda[cone_tangent[j]]| over j in
+ *             [cone_start[k], cone_start[k+1]), margin as force. */
+typedef struct {
+  dl_function position, velocity;  /* the watched model's (only what is used is set) */
+  const double *p;                 /* its parameter vector */
+  double *psi, *vel;               /* work: their values */
+  int64_t n_position;
+  const int64_t *pos_at;
+  const double *pos_floor;
+  int64_t n_rate;
+  const int64_t *rate_start, *rate_value, *rate_col;
+  const double *rate_weight;
+  int64_t n_force;
+  const int64_t *force_row;
+  int64_t n_cone;
+  const int64_t *cone_normal, *cone_start, *cone_tangent;
+  const double *cone_mu;
+  double margin, force_rtol;
+  double *lambda, *ydot;           /* work: the run's model's m and 2 n */
+} dl_screens;
+
 /* One call of dl_rk_run: where the outputs go, how to project, when to return. */
 typedef struct {
   const double *t_eval;       /* n_eval output times in the direction of integration, or
@@ -191,6 +226,7 @@ typedef struct {
   double *y_new, *y_end;      /* work, n_state each */
   double *rows;               /* work: the interpolant, max(n_P, n_D + 3) rows of n_state */
   double near2;               /* a step ending with conditioning below this ends the call */
+  const dl_screens *screens;  /* the events' screens, or NULL: none */
 } dl_run;
 
 /* The reduced Newton matrix of an implicit step (radau.c, native/radau.py): where each
@@ -323,6 +359,11 @@ int dl_radau_step(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau 
                   const double *y, const double *f, double *y_new, double *f_new, double *Z);
 int dl_radau_run(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *st,
                  dl_run *run, double *y, double *f, double *Z);
+
+/* screens.c: 1 when a screen of the stretch flags the end (t, y) of a step (lambda:
+ * the multipliers there, or NULL: solved here if a screen needs them) */
+DL_INTERNAL int screened(const dl_model *md, dl_data *d, const dl_screens *sc, double t,
+                         const double *y, const double *lambda);
 
 /* functions.c */
 int dl_call(const dl_model *md, const dl_data *d, int64_t which, const double *const *args,

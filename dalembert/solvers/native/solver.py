@@ -188,7 +188,7 @@ class NativeSolver:
             raise NotApplicable(f"the model's {name} were not generated in C")
         # the shared model gains a function the loop's own code never calls: any run
         # reading it finds it set, or had set it itself (the same values)
-        self.model.fn[place] = _function(name, handle)
+        self.model.fn[place] = c_function(name, handle)
 
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """``[qd, qdd]`` at ``(t, y)``, ``y = [q, qd]``."""
@@ -304,7 +304,7 @@ class _SharedModel:
         model.baumgarte, model.dropped_rtol = baumgarte, DROPPED_ROW_RTOL
         for name, h in handles.items():
             if name != "kkt" and h is not None:
-                model.fn[library.FUNCTIONS[name]] = _function(name, h)
+                model.fn[library.FUNCTIONS[name]] = c_function(name, h)
         kkt, m, parts, start = handles["kkt"], num.m, tables.parts, tables.start
         #: the sizes of the solve's layout [blocks, u, a]; part_at: their places in the
         #: KKT values' buffer when the kkt function writes there (else buffers apart)
@@ -312,12 +312,12 @@ class _SharedModel:
         model.kkt_in_layout = bool(kkt.K and kkt.targets)
         if model.kkt_in_layout:  # the targets remapped: each value lands where it is read
             c_at = start["a"] + parts["a"]
-            model.fn[library.FUNCTIONS["kkt"]] = _function(
+            model.fn[library.FUNCTIONS["kkt"]] = c_function(
                 "kkt", kkt, tables.address["kkt_targets"], c_at + m)
             self.part_at = {name: start[name] for name in parts}
             self.values_size, self.c_at = c_at + m, c_at
         else:  # [M, f, A, c], moved into the layout by load_kkt
-            model.fn[library.FUNCTIONS["kkt"]] = _function("kkt", kkt)
+            model.fn[library.FUNCTIONS["kkt"]] = c_function("kkt", kkt)
             self.part_at = {}
             self.values_size, self.c_at = kkt.size, kkt.size - m
         #: where each of the kkt function's values [M, f, A, c] is in a run's buffer
@@ -325,7 +325,7 @@ class _SharedModel:
         self.model = model
 
 
-def _function(name: str, h, target: int | None = None, size: int | None = None
+def c_function(name: str, h, target: int | None = None, size: int | None = None
               ) -> library.Function:
     """The generated function ``name`` as ``dl_model.fn`` holds it."""
     return library.Function(h.address or None, h.K or None, h.index or None,

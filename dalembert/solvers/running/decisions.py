@@ -18,6 +18,7 @@ from ...codegen.compiled import NumericModel
 from ...options import IDA, Backend, Baumgarte, Output, Projection, SimulationOptions
 from ..initialization import InitializationReport
 from ..native import NATIVE_METHODS, NativeRadau, NotApplicable, native_solver
+from ..native.screens import screenable
 from ..steppers.scipy_ivp import ControlledSteps, LinearizedRadau, controlled_class
 
 Loop = Literal["c", "python"]
@@ -192,13 +193,15 @@ def choose_solver(options: SimulationOptions, native: bool,
 
 
 def choose_stretches(stepper: type[OdeSolver] | None, projection: bool,
-                     output: Output) -> bool:
+                     output: Output, every_row_kept: bool = True) -> bool:
     """Whether whole stretches of steps run in C: with a C stepper, the C loop's
-    projection, and neither events nor dense output.
+    projection, no dense output, and no events but those C screens
+    (:func:`~dalembert.solvers.native.screens.screenable`; ``every_row_kept``: no
+    constraint row is dropped as dependent).
 
     >>> from dalembert.options import simulation_options
     >>> choose_stretches(None, True, simulation_options((0.0, 1.0)).output)
     False
     """
-    return stepper is not None and projection and not output.events \
-        and not output.dense_output
+    return stepper is not None and projection and not output.dense_output \
+        and screenable(output.events, every_row_kept)

@@ -64,7 +64,8 @@ def integrate(
         Show a progress bar.
     stretches
         Run whole stretches of steps in C (:class:`~.loop.StretchLoop`): only for a
-        native solver with its native projection, no events, no dense output.
+        native solver with its native projection, no dense output, and no events but
+        screened ones (:mod:`~dalembert.solvers.native.screens`).
     diagnose
         ``diagnose(t, y)``: what is not finite at a state, for the message of a run
         that meets a NaN or an infinity (:mod:`~dalembert.solvers.running.nonfinite`).
@@ -119,7 +120,7 @@ def integrate(
                 solver = method(fun, t0, y0, tf, **solver_options)
                 if stretches and project is not None:
                     loop = StretchLoop(solver, times, project, diagnose, singular, careful,
-                                       runaway, switch)
+                                       runaway, switch, events)
                 else:
                     loop = PythonLoop(solver, times, events, project, dense_output,
                                       diagnose, singular, careful, runaway, switch)

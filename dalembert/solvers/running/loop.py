@@ -22,6 +22,7 @@ from scipy.integrate import OdeSolver
 from ...errors import DalembertError
 from ...numerics.singular import COLLAPSE_RATIO, COLLAPSE_STEPS, JUMP_RETRIES
 from ..native.run import stretch_runner
+from ..native.screens import screens_of
 from ..singular.careful import CarefulSteps, RetakeStep
 from ..singular.watch import Runaway, Singularity, StepCollapse
 from ..steppers.dense_output import DenseRecorder
@@ -536,8 +537,10 @@ class StretchLoop(PythonLoop):
     :func:`~dalembert.solvers.native.run.stretch_runner`, returning to Python every
     fraction of a second; a step C cannot finish is taken the Python
     way (a step from values that are not finite among them: the Python loop then
-    stops with its diagnosis). Only for a native solver with its native
-    projection, no events and no dense output (the plan checks). Same steps and
+    stops with its diagnosis), and so is a step whose end a screen of the events
+    flags (:mod:`~dalembert.solvers.native.screens`: the Python way locates the
+    events in it). Only for a native solver with its native projection, no dense
+    output and no events but screened ones (the plan checks). Same steps and
     states as :class:`PythonLoop` (tested). Near a singular configuration (measured
     after every stretch) the steps are taken the Python way, carefully (``careful``,
     :mod:`~dalembert.solvers.singular.careful`), until the state is clear of it.
@@ -547,10 +550,15 @@ class StretchLoop(PythonLoop):
                  project: Projector, diagnose: Diagnosis | None = None,
                  singular: Singularity | None = None,
                  careful: CarefulSteps | None = None,
-                 runaway: Runaway | None = None, switch: StiffSwitch | None = None) -> None:
-        super().__init__(solver, t_eval, (), project, False, diagnose, singular, careful,
+                 runaway: Runaway | None = None, switch: StiffSwitch | None = None,
+                 events: Sequence[Callable] = ()) -> None:
+        super().__init__(solver, t_eval, events, project, False, diagnose, singular, careful,
                          runaway, switch)
-        self.runner = stretch_runner(solver, self.t_eval)
+        screens = screens_of(self.events)
+        if screens is None:
+            raise ValueError("the loop in C runs screened events only")
+        self._screens = screens  # as they stand at the segment's start
+        self.runner = stretch_runner(solver, self.t_eval, screens)
 
     def advance(self) -> None:
         if self.runner is None or self.solver is not self.native or \
@@ -565,7 +573,11 @@ class StretchLoop(PythonLoop):
             self.error = exc  # chained to the run's warning
             return self._failed(f"integration failed at t={self.solver.t:.6g}: {exc}")
         self._absorb()
-        if not ran:  # C left the next step to the step-by-step loop
+        if self.events and self.g is not None:  # the events' values where C stopped
+            self.g = self._event_values(self.solver.t, self.solver.y)
+        if self.status is not None:  # an event function failed there
+            return None
+        if not ran:  # C left the next step (or a flagged one) to the step-by-step loop
             return super().advance()
         if self.solver.status == "finished":
             return self.stop("finished", "the integration reached the end of t_span")
@@ -581,7 +593,7 @@ class StretchLoop(PythonLoop):
     def _take_solver(self, new: OdeSolver) -> None:
         self._absorb()  # (taken already after a stretch: nothing twice)
         super()._take_solver(new)
-        self.runner = stretch_runner(new, self.t_eval)
+        self.runner = stretch_runner(new, self.t_eval, self._screens)
 
     def interrupt(self) -> None:
         self._absorb()  # a stretch run in C before the Ctrl-C is kept

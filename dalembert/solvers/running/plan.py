@@ -10,7 +10,7 @@ a function of :mod:`.decisions` returning a typed value)
 - the solver class: SciPy's method, under the chosen step-size controller
   (:mod:`~dalembert.solvers.steppers.scipy_ivp`), stepping in C where the loop is;
 - whether whole stretches of steps run in C (:class:`~.loop.StretchLoop`): with
-  the C loop's projection and neither events nor dense output;
+  the C loop's projection, no dense output and no events but screened ones;
 - the stabilization and the constraint rows kept.
 
 The resulting :class:`SimulationPlan` is constant (a frozen dataclass holding the
@@ -172,6 +172,6 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         stepper=chosen.stepper, python_solver=chosen.python_solver,
         python_options=chosen.python_options,
         stretches=choose_stretches(chosen.stepper, stabilization.projection,
-                                   options.output),
+                                   options.output, kept is None),
         kept=kept, gain=stabilization.gain, projection=stabilization.projection,
         implicit=implicit)

@@ -1,0 +1,201 @@
+"""Screens: the events of a run checked in C, so that they do not push it out of C.
+
+An event is a Python function; the loop in C cannot call it at every step's end
+without paying Python's price at every step. Where an event's value is something the
+generated functions give (a constraint's value or rate, a multiplier, the friction
+cone's margin: the contact events), it carries a *screen* saying so (its ``screen``
+attribute, like SciPy's ``terminal`` and ``direction``: a function returning one of
+the values below, as they stand when a stretch starts). C evaluates the screens at
+each step's projected end (``screens.c``); a value below its small margin flags the
+step, and the stretch ends before it (``DL_EVENT``): the caller takes that step with
+the event functions and locates the events as the Python loop does. A screen is only a
+filter: the events and their roots are the Python functions', so a run with screens
+fires the same events as one without (tested).
+
+Screens are for terminal events that fall through 0 and are positive at every step's
+end before they fire (the contact events are so made): then "below the margin at a
+step's end" catches every step in which such an event fires.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...codegen.compiled import NumericModel
+from . import library
+from .solver import NativeSolver, c_function
+
+#: The margin of the position and rate screens, relative to ``1 + max |q|`` and
+#: ``1 + max |qd|``: their values are the event functions' own, from the same generated
+#: code, up to the rounding of a sum.
+MARGIN = 1e-12
+#: The margin of the force and cone screens, relative to ``1 + max |lambda|``: C's
+#: multipliers and the Python solve's differ by rounding times the KKT matrix's
+#: condition (far below this); a step flagged in vain costs one step in Python.
+FORCE_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class PositionScreen:
+    """``psi[at] - floor`` of the model ``watched`` (a holonomic constraint's value)."""
+
+    watched: NumericModel
+    at: int
+    floor: float = 0.0
+
+
+@dataclass(frozen=True)
+class RateScreen:
+    """``weights . (A qd + b)[rows]`` of the model ``watched`` (constraint rows' rates)."""
+
+    watched: NumericModel
+    rows: tuple[int, ...]
+    weights: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class ForceScreen:
+    """The multiplier of the run's own row ``row``."""
+
+    row: int
+
+
+@dataclass(frozen=True)
+class ConeScreen:
+    """``mu lambda[normal] - |lambda[tangents]|`` of the run's own rows."""
+
+    normal: int
+    tangents: tuple[int, ...]
+    mu: float
+
+
+Screen = PositionScreen | RateScreen | ForceScreen | ConeScreen
+
+
+def screens_of(events: Sequence[Callable]) -> list[Screen] | None:
+    """The screens of ``events`` as they stand now, or ``None`` if one has none.
+
+    Parameters
+    ----------
+    events
+        Event functions (a screened one has a ``screen()`` attribute).
+
+    Examples
+    --------
+    >>> def wall(t, y):
+    ...     return y[0]
+    >>> screens_of([wall]) is None
+    True
+    >>> wall.screen = lambda: ForceScreen(0)
+    >>> screens_of([wall])
+    [ForceScreen(row=0)]
+    """
+    found = []
+    for event in events:
+        screen = getattr(event, "screen", None)
+        if screen is None:
+            return None
+        found.append(screen())
+    return found
+
+
+def screenable(events: Sequence[Callable], every_row_kept: bool) -> bool:
+    """Whether the loop in C can screen ``events`` (every one has a screen; one on a
+    multiplier only where every row of the model is kept: where some are dropped as
+    dependent, the events' multipliers are the minimum-norm ones, not the run's).
+
+    Parameters
+    ----------
+    events
+        The run's event functions.
+    every_row_kept
+        No constraint row of the run's model is dropped as dependent.
+
+    Examples
+    --------
+    >>> screenable([], True)
+    True
+    """
+    screens = screens_of(events)
+    return screens is not None and (every_row_kept or not any(
+        isinstance(s, (ForceScreen, ConeScreen)) for s in screens))
+
+
+class ScreenTable:
+    """The ``dl_screens`` of a stretch runner: the screens of its events and their
+    arrays (kept alive while C may read them).
+
+    Parameters
+    ----------
+    screens
+        The events' screens (:func:`screens_of`).
+    native
+        The run's C solver (its model's rows are the force and cone screens' rows).
+    """
+
+    def __init__(self, screens: Sequence[Screen], native: NativeSolver) -> None:
+        self._keep: list[np.ndarray] = []
+        s = self.struct = library.Screens(margin=MARGIN, force_rtol=FORCE_RTOL)
+        watched = {id(x.watched): x.watched for x in screens
+                   if isinstance(x, (PositionScreen, RateScreen))}
+        if len(watched) > 1:
+            raise ValueError("the screens of one run watch one model")
+        positions = [x for x in screens if isinstance(x, PositionScreen)]
+        rates = [x for x in screens if isinstance(x, RateScreen)]
+        forces = [x for x in screens if isinstance(x, ForceScreen)]
+        cones = [x for x in screens if isinstance(x, ConeScreen)]
+        if watched:
+            (model,) = watched.values()
+            functions = model.compiled.functions
+            s.p = self._array(model.p, np.float64, copy=False)
+            if positions:
+                s.position = c_function("position", functions["position"].native)
+                s.psi = self._zeros(len(model.holonomic_rows))
+                s.n_position = len(positions)
+                s.pos_at = self._array([x.at for x in positions])
+                s.pos_floor = self._array([x.floor for x in positions], np.float64)
+            if rates:
+                s.velocity = c_function("velocity", functions["velocity"].native)
+                s.vel = self._zeros(len(model.pattern.A_rows) + model.m)
+                self._rates(s, rates, model)
+        s.n_force = len(forces)
+        s.force_row = self._array([x.row for x in forces])
+        s.n_cone = len(cones)
+        s.cone_normal = self._array([x.normal for x in cones])
+        s.cone_start = self._array(np.cumsum([0] + [len(x.tangents) for x in cones]))
+        s.cone_tangent = self._array([j for x in cones for j in x.tangents])
+        s.cone_mu = self._array([x.mu for x in cones], np.float64)
+        setattr(s, "lambda", self._zeros(native.m))  # (a keyword in Python)
+        s.ydot = self._zeros(2 * native.n)
+        self.address = ctypes.addressof(s)
+
+    def _rates(self, s: library.Screens, rates: Sequence[RateScreen],
+               model: NumericModel) -> None:
+        """The rate screens' terms: per row of a screen, its ``A`` values (times ``qd``
+        at their columns) and its ``b`` (the velocity function's values after them)."""
+        rows, cols = np.asarray(model.pattern.A_rows), np.asarray(model.pattern.A_cols)
+        start, value, col, weight = [0], [], [], []
+        for x in rates:
+            for r, w in zip(x.rows, x.weights):
+                entries = np.flatnonzero(rows == r)
+                value += [*entries.tolist(), len(rows) + r]
+                col += [*cols[entries].tolist(), -1]
+                weight += [w] * (len(entries) + 1)
+            start.append(len(value))
+        s.n_rate = len(rates)
+        s.rate_start, s.rate_value = self._array(start), self._array(value)
+        s.rate_col, s.rate_weight = self._array(col), self._array(weight, np.float64)
+
+    def _array(self, values, dtype=np.int64, copy: bool = True) -> int:
+        array = np.ascontiguousarray(values, dtype=dtype)
+        if not copy and array is not values:
+            raise ValueError("the watched model's parameters must be a float64 vector")
+        self._keep.append(array)
+        return array.ctypes.data
+
+    def _zeros(self, size: int) -> int:
+        return self._array(np.zeros(max(int(size), 1)), np.float64)
