@@ -54,7 +54,7 @@ TOOLS = [f"dalembert-{m}" for m in METHODS] + PEERS
 TARGETS = (1e-3, 1e-6)
 REFERENCE = HERE / "results" / "stiff_reference.json"
 #: Each attempt also keeps its angle error and counts (the ladder keeps the energy's).
-ladder.KEPT = (*ladder.KEPT, "angle_error", "n_steps", "steps", "njev", "nlu")
+ladder.KEPT = (*ladder.KEPT, "angle_error", "n_steps", "steps", "njev", "nlu", "n_switches")
 #: Tolerance ladder of dalembert's methods (atol = rtol / 100), as the suite's.
 RTOLS = (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 1e-7, 1e-8, 1e-9,
          1e-10, 1e-11, 1e-12)
@@ -115,7 +115,8 @@ def prepare_dalembert(method: str, k: float, c: float, ref: np.ndarray) -> Prepa
             else bool(traj.status == 0)
         return {"setting": {"method": method, "rtol": rtol, "atol": rtol / 100},
                 "simulate_s": wall, "cpu_s": cpu_s, "finished": bool(finished),
-                **{key: int(traj.stats[key]) for key in ("nfev", "njev", "nlu", "n_steps")
+                **{key: int(traj.stats[key]) for key in ("nfev", "njev", "nlu", "n_steps",
+                                                           "n_switches")
                    if key in traj.stats},
                 "evaluations": int(traj.stats.get("nfev", 0)),
                 "residual": float(traj.position_residual.max()),

@@ -153,7 +153,7 @@ class RunData:
         if issubclass(explicit, IDA):
             return None
         explicit_class: type[OdeSolver] = explicit  # (closures keep no narrowing)
-        explicit_options.pop("detector", None)  # going back is for good
+        explicit_options.pop("detector", None)  # the switch arms it after a wait
 
         def make_implicit(t: float, y: np.ndarray, t_bound: float,
                           h_abs: float) -> OdeSolver:

@@ -4,13 +4,38 @@ The run starts with DOP853 under Hairer's stiffness detector
 (:mod:`~dalembert.solvers.steppers.stiffness`, its limit lowered: :data:`DETECTOR`).
 When the detector says stiff, the loop hands the run, at the state reached, to Radau
 (in C on the KKT structure where it applies), its first step the explicit one. After
-``TRIAL_STEPS`` implicit steps the switch is judged: if the step Radau has grown to is
-``COST_RATIO`` times the explicit step it replaced, the run stays with Radau; if it is
-still growing (by ``GROWING`` over the last judgement) the trial goes on; otherwise the
-implicit steps do not pay (a mildly stiff problem, where DOP853 at its stability limit
-is cheaper) and the run goes back to DOP853 for good. A run switches at most twice: a
-problem that turns non-stiff again later is left to Radau (the explicit method is not
-tried again).
+``TRIAL_STEPS`` implicit steps the trial is judged on the step Radau has grown to: if it
+is ``COST_RATIO`` times the explicit step it replaced, the run stays with Radau for the
+rest of the segment; if it is still growing (by ``GROWING`` over the last judgement) the
+trial goes on; otherwise the run goes back to DOP853.
+
+Going back is not for good (as in LSODA, which keeps testing for a switch): the
+detector is switched off and armed again, with a fresh memory, after
+``RETRY_WAIT x 2^(n-1) x shortfall`` explicit steps, ``n`` the failed trials so far and
+``shortfall = COST_RATIO x h_explicit / h_implicit`` how far the trial fell short.
+Measured reasons:
+
+- A stiff problem can start with a fast transient that a trial cannot outgrow: on the
+  16-link spring chain at k = 1e6 (``bench/stiff.py``) at rtol 1.5e-5 Radau's steps at
+  t = 0.01 were 0.66 times DOP853's stable step, twice it from about t = 0.25 on, five
+  times it later. Sent back for good, the run paid DOP853's 12,000 steps (three times
+  Radau's time); trying again after the wait, it switched at t = 0.27 and stayed with
+  Radau (2,249 steps; Radau alone 2,204).
+- A false alarm on a problem that is not stiff ends with Radau's step far below the
+  explicit one (0.1-0.25 of it on the gallery's hanging chain at rtol 1e-6 and 1e-8),
+  a transient that is dying out near it (0.66-1.9 on the chain): the shortfall puts
+  the next alarm out of reach of the first and keeps the second close. With the wait
+  doubling only, the hanging chain over 20 s had four trials instead of one (3.9-4.3 %
+  more evaluations than DOP853's run, against 0.9-1.6 % with one).
+- The waits double (and the shortfall of a failed trial is above 1): a problem that
+  stays mildly stiff (its trials fail) has at most ``log2(N / RETRY_WAIT + 1) + 1``
+  trials in ``N`` explicit steps, each about ``TRIAL_STEPS`` implicit steps, so its
+  extra work is bounded and falls, relative to the run, as the run grows.
+
+A segment settled with Radau does not go back to DOP853 if the problem turns non-stiff
+later. A false alarm costs one trial (the detector's limit of 1 fires on some gallery
+models at rtol 1e-3; lowering its 15 steps to 8 or 5 to detect sooner made more of
+them fire, at rtol 1e-6 and 1e-8 too).
 
 :class:`StiffSwitch` holds the policy and its memory for one run segment; the loops
 (:mod:`.loop`) call :meth:`StiffSwitch.after` after each unit of work.
@@ -25,14 +50,15 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from ..steppers.scipy_ivp import ControlledSteps, step_size
-from ..steppers.stiffness import StiffnessDetector
+from ..steppers.stiffness import StiffnessDetector, StiffnessState
 
 #: The detector of ``method="auto"``: Hairer's test with a lower limit than DOP853's
 #: 6.1 (its stability limit on the negative real axis). A stiff spring with light
 #: damping puts its modes near the imaginary axis, where DOP853's steps stay at
 #: ``h |lambda|`` about 1.4 (measured on the elastic pendulum at k = 1e8: DOP853 took
-#: 13,889 steps at rtol 1e-8, Radau 1,301); no gallery model reaches 1 for 15 steps at
-#: rtol 1e-6 or 1e-8. A false alarm costs one trial of ``TRIAL_STEPS`` Radau steps.
+#: 13,889 steps at rtol 1e-8, Radau 1,301). Of the gallery's models at rtol 1e-6 and
+#: 1e-8 only the hanging chain reaches 1 for 15 steps; at rtol 1e-3 six of them do. A
+#: false alarm costs a trial of ``TRIAL_STEPS`` Radau steps.
 DETECTOR = StiffnessDetector(limit=1.0)
 #: Implicit steps after a switch before it is judged.
 TRIAL_STEPS = 20
@@ -44,6 +70,9 @@ GROWING = 1.5
 #: about as much as one or two of DOP853 (12 right-hand sides); measured on the 16-link
 #: spring chain (bench/README.md, "method='auto'").
 COST_RATIO = 2.0
+#: Explicit steps after the first failed trial (times its shortfall) before the detector
+#: is armed again; doubled after each failed trial (see the module).
+RETRY_WAIT = 100
 
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
 #: (``h_abs``: its first step, or 0 to let it choose).
@@ -52,12 +81,13 @@ SolverFactory = Callable[[float, np.ndarray, float, float], OdeSolver]
 
 @dataclass
 class StiffSwitch:
-    """The switching of one run segment (see the module).
+    """The switching of one run segment (see the module): a value with its memory.
 
     Parameters
     ----------
     implicit, explicit
-        The factories of the implicit solver and of the explicit one (going back).
+        The factories of the implicit solver and of the explicit one (going back; made
+        without a detector: the switch arms one when its wait is over).
     implicit_name
         The implicit method's name, for the run's record.
 
@@ -79,20 +109,27 @@ class StiffSwitch:
     switches: list[tuple[float, str]] = field(default_factory=list)
     _trial: tuple[float, int, float] | None = None  # t, steps and explicit step at the switch
     _judged: float = 0.0  # the implicit step at the last judgement (0: none yet)
-    _settled: bool = False
+    _settled: bool = False  # the implicit method kept for the rest of the segment
+    _detector: StiffnessDetector | None = None  # the explicit solver's, kept while it waits
+    _rearm_at: int | None = None  # the step count at which the detector is armed again
+    _wait: int = field(default_factory=lambda: RETRY_WAIT)  # the next failed trial's wait
 
     def steps_to_judgement(self, n_steps: int) -> int | None:
-        """How many more steps before the switch is judged (``None``: none is due), so
-        that a stretch of steps in C ends there.
+        """How many more steps before the switch is judged or the detector armed again
+        (``None``: neither is due), so that a stretch of steps in C ends there.
 
         Parameters
         ----------
         n_steps
             The steps the run has taken.
         """
-        if self._trial is None or self._settled:
+        if self._settled:
             return None
-        return max(1, TRIAL_STEPS - (n_steps - self._trial[1]))
+        if self._trial is not None:
+            return max(1, TRIAL_STEPS - (n_steps - self._trial[1]))
+        if self._rearm_at is not None:
+            return max(1, self._rearm_at - n_steps)
+        return None
 
     def after(self, solver: OdeSolver, n_steps: int) -> OdeSolver | None:
         """The solver to continue with after a unit of work (``None``: the same).
@@ -107,12 +144,7 @@ class StiffSwitch:
         if self._settled:
             return None
         if self._trial is None:
-            if not (isinstance(solver, ControlledSteps) and solver.stiff):
-                return None
-            h_explicit = step_size(solver)
-            self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
-            self.switches.append((solver.t, self.implicit_name))
-            return self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
+            return self._explicit_after(solver, n_steps)
         _, steps0, h_explicit = self._trial
         if n_steps - steps0 < TRIAL_STEPS:
             return None
@@ -123,6 +155,30 @@ class StiffSwitch:
         if h_implicit > GROWING * self._judged:  # still growing: another trial
             self._trial, self._judged = (solver.t, n_steps, h_explicit), h_implicit
             return None
-        self._settled = True
+        # back to the explicit method, its detector armed again after a wait that grows
+        # with the failed trials and with how far the implicit step fell short
+        shortfall = COST_RATIO * h_explicit / max(h_implicit, 1e-300)
+        self._trial = None
+        self._rearm_at = n_steps + int(min(self._wait * shortfall, 1e12))
+        self._wait *= 2
         self.switches.append((solver.t, "DOP853"))
         return self.explicit(solver.t, solver.y, solver.t_bound, h_explicit)
+
+    def _explicit_after(self, solver: OdeSolver, n_steps: int) -> OdeSolver | None:
+        """The explicit method's turn: arm its detector when the wait is over, switch
+        when the detector says stiff."""
+        if not isinstance(solver, ControlledSteps):
+            return None
+        if self._rearm_at is not None:
+            if n_steps < self._rearm_at:
+                return None
+            solver.detector, solver.stiffness = self._detector, StiffnessState()
+            self._rearm_at = None
+            return None
+        if not solver.stiff:
+            return None
+        h_explicit = step_size(solver)
+        self._detector = solver.detector
+        self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
+        self.switches.append((solver.t, self.implicit_name))
+        return self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)

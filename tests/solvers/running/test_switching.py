@@ -4,7 +4,10 @@ References: the elastic pendulum of ``test_elastic_pendulum.py`` (checked there 
 its polar-coordinate model at k = 1e3 and 1e6) at k = 1e8, integrated by DOP853 at rtol
 1e-12 (the polar model's own reference takes minutes at this stiffness), for runs that
 switch; DOP853's own run for one that does not; the detector's estimate against
-``h |lambda|`` of a linear problem; the switch back, forced, against the same reference.
+``h |lambda|`` of a linear problem; the switch back, forced, against the same reference;
+a stiff spring chain whose first trial fails against DOP853 at rtol 1e-10 (its steps
+held at the stability limit, so the tight tolerance costs no more steps); the waits of
+the policy against the rule the module states.
 """
 
 from __future__ import annotations
@@ -19,10 +22,11 @@ from scipy.integrate import DOP853
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from test_elastic_pendulum import T_END, TH0, build, cartesian, r0
 
-from dalembert.examples import cartesian_pendulum
+from dalembert.examples import cartesian_pendulum, hanging_chain
+from dalembert.multibody import JointSpring, Multibody, chain
 from dalembert.solvers.running import switching
 from dalembert.solvers.steppers.scipy_ivp import ControlledDOP853
-from dalembert.solvers.steppers.stiffness import StiffnessDetector
+from dalembert.solvers.steppers.stiffness import StiffnessDetector, StiffnessState
 
 K = 1e8
 
@@ -68,14 +72,123 @@ def test_a_non_stiff_run_is_dop853s():
 
 def test_going_back_when_radau_does_not_pay(elastic, monkeypatch):
     """Where Radau's steps are not ``COST_RATIO`` times DOP853's the run goes back to
-    DOP853 after the trial steps (forced here by an unreachable ratio), for good, and
-    still meets the reference."""
+    DOP853 after the trial steps (forced here by an unreachable ratio: its shortfall
+    puts the next trial beyond the run) and still meets the reference."""
     system, q0, expected = elastic
     monkeypatch.setattr(switching, "COST_RATIO", 1e9)
     traj = system.simulate((0.0, T_END), q0, method="auto", rtol=1e-8, atol=1e-10,
                            t_eval=[T_END])
     assert traj.success and traj.stats["n_switches"] == 2
     assert np.abs(end_of(traj) - expected).max() < 1e-8
+
+
+class _Implicit:
+    """A stand-in for the implicit solver of a trial: only its state and step are read."""
+
+    def __init__(self, t: float, h_abs: float) -> None:
+        self.t, self.y, self.t_bound, self.h_abs = t, np.zeros(1), 10.0, h_abs
+
+
+def test_the_wait_grows_with_failed_trials_and_their_shortfall():
+    """After a failed trial the detector is off for ``RETRY_WAIT x 2^(n-1) x shortfall``
+    explicit steps (the module's rule), then armed with a fresh memory; a trial whose
+    implicit step reaches ``COST_RATIO`` times the explicit one settles the run."""
+    detector = StiffnessDetector(limit=1.0)
+    made: list[str] = []
+
+    def explicit(t, y, t_bound, h):
+        made.append("explicit")
+        solver = ControlledDOP853(lambda t, y: -y, t, np.ones(1), t_bound, first_step=h)
+        return solver
+
+    def implicit(t, y, t_bound, h):
+        made.append("implicit")
+        return _Implicit(t, h)
+
+    switch = switching.StiffSwitch(implicit, explicit)
+    first = ControlledDOP853(lambda t, y: -y, 0.0, np.ones(1), 10.0, first_step=0.01,
+                             detector=detector)
+    first.stiffness = StiffnessState(detector.stiff_after, 0)  # the detector fires
+    h_explicit = switching.step_size(first)
+    trial = switch.after(first, 30)
+    assert made == ["implicit"] and switch.steps_to_judgement(30) == switching.TRIAL_STEPS
+    trial.h_abs = h_explicit / 2  # shrunk below the explicit step, and not growing
+    back = switch.after(trial, 30 + switching.TRIAL_STEPS)
+    assert made[-1] == "explicit" and back.detector is None
+    shortfall = switching.COST_RATIO * 2  # COST_RATIO h_explicit / (h_explicit / 2)
+    rearm = 30 + switching.TRIAL_STEPS + switching.RETRY_WAIT * shortfall
+    assert switch.steps_to_judgement(rearm - 1) == 1
+    assert switch.after(back, int(rearm) - 1) is None and back.detector is None
+    assert switch.after(back, int(rearm)) is None
+    assert back.detector is detector and back.stiffness == StiffnessState()
+    # the second trial falls short by COST_RATIO only: the wait doubled, times that
+    back.stiffness = StiffnessState(detector.stiff_after, 0)
+    h2 = switching.step_size(back)
+    trial = switch.after(back, int(rearm) + 5)
+    trial.h_abs = h2
+    again = switch.after(trial, int(rearm) + 5 + switching.TRIAL_STEPS)
+    assert made[-1] == "explicit"
+    at = int(rearm) + 5 + switching.TRIAL_STEPS
+    assert switch.steps_to_judgement(at) == 2 * switching.RETRY_WAIT * switching.COST_RATIO
+    # the third pays and settles: nothing is due any more
+    switch.after(again, at + 2 * switching.RETRY_WAIT * int(switching.COST_RATIO))
+    again.stiffness = StiffnessState(detector.stiff_after, 0)
+    trial = switch.after(again, at + 1000)
+    trial.h_abs = switching.COST_RATIO * switching.step_size(again)
+    assert switch.after(trial, at + 1000 + switching.TRIAL_STEPS) is None
+    assert switch.steps_to_judgement(at + 2000) is None
+    assert [m for _, m in switch.switches] == ["Radau", "DOP853"] * 2 + ["Radau"]
+
+
+def spring_chain(links: int = 4, k: float = 1e6, c: float = 17.5) -> Multibody:
+    """A planar chain hung from a pin with a torsional spring and damper on every joint
+    but the pin (``c``: the fastest mode's damping ratio about 0.05 at k = 1e6)."""
+    base = chain(links, 1.0, 1.0, 0.05, joint="revolute", planar=True)
+    springs = [JointSpring(f"spring{i + 1}", base.joints[i], k, c)
+               for i in range(1, links)]
+    return Multibody(base.bodies, base.joints, gravity=(0.0, -9.81, 0.0),
+                     joint_springs=springs, name="spring chain")
+
+
+def test_a_stiff_start_with_a_transient_is_tried_again():
+    """Released 30 degrees from hanging, the stiff chain's first Radau steps resolve a
+    fast transient and stay below DOP853's stable step: the first trial fails; the
+    detector, armed again, switches once more and Radau then pays and keeps the run
+    (DOP853 to the first trial, Radau, DOP853, Radau: three switches), which meets DOP853
+    at a tight tolerance with far fewer steps."""
+    mb = spring_chain()
+    names = [b.name for b in mb.bodies]
+    down = np.array([-np.sin(np.radians(30.0)), -np.cos(np.radians(30.0))])
+    q0, qd0 = mb.initial_state(positions={n: (j + 0.5) * down for j, n in enumerate(names)},
+                               orientations=dict.fromkeys(names, -np.radians(30.0)))
+
+    def angles(traj):
+        return np.array([traj[f"{n}_theta"][-1] for n in names])
+
+    auto = mb.simulate((0.0, 10.0), q0, qd0, method="auto", rtol=1e-6, atol=1e-8,
+                       t_eval=[10.0])
+    reference = mb.simulate((0.0, 10.0), q0, qd0, rtol=1e-10, atol=1e-12, t_eval=[10.0])
+    assert auto.success and auto.stats["n_switches"] == 3
+    assert np.abs(angles(auto) - angles(reference)).max() < 1e-4
+    assert auto.stats["n_steps"] < reference.stats["n_steps"] / 5
+
+
+def test_a_false_alarm_goes_back_with_bounded_extra_work():
+    """The hanging chain is not stiff, but at rtol 1e-8 the detector fires: the trial
+    fails far short and the run goes back to DOP853 for the rest of 20 s (the shortfall
+    sets the next alarm beyond it), its evaluations within 5 % of DOP853's and its end
+    as accurate (against DOP853 at rtol 1e-12)."""
+    system = hanging_chain.build()
+    span = (0.0, 10 * hanging_chain.T_END)
+    options = dict(rtol=1e-8, atol=1e-10, t_eval=[span[1]])
+    auto = system.simulate(span, **hanging_chain.INITIAL, method="auto", **options)
+    explicit = system.simulate(span, **hanging_chain.INITIAL, **options)
+    reference = system.simulate(span, **hanging_chain.INITIAL, rtol=1e-12, atol=1e-14,
+                                t_eval=[span[1]])
+    assert auto.success and auto.stats["n_switches"] in (0, 2)  # ends with DOP853
+    assert auto.stats["nfev"] < 1.05 * explicit.stats["nfev"]
+    error = np.abs(auto.q[-1] - reference.q[-1]).max()
+    assert error < 3 * max(np.abs(explicit.q[-1] - reference.q[-1]).max(), 1e-10)
 
 
 def test_the_detector_measures_h_lambda():
