@@ -106,11 +106,6 @@ class UnilateralLaw(Protocol):
     @property
     def friction(self) -> float: ...
 
-    @property
-    def independent_tangents(self) -> bool:
-        """Whether its sliding velocities are independent rows, which a sticking
-        contact holds at 0."""
-
 
 class SymbolicDefinition:
     """The definition of a System given by its energies, forces and constraints.

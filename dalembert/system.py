@@ -993,12 +993,6 @@ class System:
             raise ValueError(f"the unilateral constraint {rough[0]!r} is rough "
                              "(friction=math.inf), which runs in the event-driven contact "
                              "mode: give a finite friction coefficient for time-stepping")
-        spatial = [u.name for u in rows
-                   if 0 < u.friction < math.inf and not u.independent_tangents]
-        if spatial and not stepping:
-            raise ValueError(f"the contact {spatial[0]!r} has finite friction between spheres "
-                             "in space, whose three sliding velocities cannot all be held "
-                             "still (they span a plane): give contact_mode='time-stepping'")
         parameters = {s.name: float(v) for s, v in zip(self.parameters, plan.parameters)}
         # every gap a row, and the sliding velocities of those with friction after them
         every = self._closed(ClosedGaps(tuple(range(len(rows))),

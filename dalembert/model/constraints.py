@@ -129,12 +129,6 @@ class UnilateralRow:
     friction: float = 0.0
     tangents: tuple[tuple[sp.Expr, tuple[sp.Expr, ...], sp.Expr], ...] = ()
 
-    @property
-    def independent_tangents(self) -> bool:
-        """Taken as independent: the user's sliding velocities (dependent ones make a
-        sticking contact's rows dependent, which its run reports)."""
-        return True
-
 
 @dataclass(frozen=True)
 class ConstraintSet:

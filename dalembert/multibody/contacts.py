@@ -72,13 +72,6 @@ class Contact:
         return self.joint.body_a, self.joint.body_b
 
     @property
-    def independent_tangents(self) -> bool:
-        """Whether the sliding velocities are independent rows (all but a sphere's on
-        a sphere in space: three world components of a velocity in a plane), which a
-        sticking contact holds at 0."""
-        return self.sliding is None or self.sliding.kind != "sphere" or self.sliding.planar
-
-    @property
     def tangents(self) -> tuple[sp.Expr, ...]:
         """The sliding velocities at the contact (none without friction), as for
         :class:`~dalembert.Unilateral`: one per row of :attr:`sliding`."""
@@ -164,9 +157,10 @@ def sphere_contact(name: str, body_a: Body, body_b: Body, radius_a: float,
         Coulomb's coefficient ``mu >= 0`` (0: frictionless), along the sliding velocity
         at the point of contact: in space its three world components projected on the
         tangent plane (no two fixed directions stay tangent to a sphere everywhere),
-        between planar bodies its component in the plane of motion. Runs in the
-        time-stepping contact mode; ``math.inf`` (rough, never sliding, event-driven)
-        between planar bodies only.
+        between planar bodies its component in the plane of motion; ``math.inf`` is a
+        rough contact (never sliding). In space the three rows are of rank 2: a
+        sticking or rough contact holds them as dependent rows, which the run
+        solves with the independent ones.
 
     Examples
     --------
@@ -186,12 +180,6 @@ def sphere_contact(name: str, body_a: Body, body_b: Body, radius_a: float,
     rough = not isinstance(friction, bool) and isinstance(friction, (int, float)) \
         and friction > 0
     joint = (SphereGap if rough else Distance)(name, body_a, body_b, total, point_a, point_b)
-    if friction == math.inf and not all(isinstance(b, (PlanarBody, Ground))
-                                        for b in (body_a, body_b)):
-        raise ModelError(f"contact {name!r}: a rough sphere contact (friction=math.inf) "
-                         "runs between planar bodies only: in space its three sliding "
-                         "rows are dependent (rank 2); give a finite friction "
-                         "(time-stepping)")
     return _contact(name, joint, restitution, rest_speed, friction,
                     lambda: Sliding(name, "sphere", body_a, body_b, point_a=point_a,
                                     point_b=point_b, radius=size_a))
@@ -233,8 +221,7 @@ def disk_contact(name: str, plane_body: Body, disk_body: Body, radius: float, *,
     friction
         Coulomb's coefficient ``mu >= 0`` (0: frictionless), along the sliding velocity
         of the rim's lowest point over the plane (two directions of the plane; one
-        between planar bodies). Runs in the time-stepping contact mode; ``math.inf``
-        is a rough contact (never sliding), event-driven.
+        between planar bodies). ``math.inf`` is a rough contact (never sliding).
 
     Examples
     --------

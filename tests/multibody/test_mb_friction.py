@@ -316,12 +316,6 @@ def test_a_rough_disk_rolls_without_slipping_event_driven():
     np.testing.assert_allclose(traj.multiplier("rim_1"), m * g, rtol=1e-9)
 
 
-def test_a_rough_sphere_contact_in_space_is_refused():
-    with pytest.raises(ModelError, match="rough sphere contact"):
-        sphere_contact("touch", Particle("a", 1.0), Particle("b", 1.0), 0.1, 0.1,
-                       friction=np.inf)
-
-
 @pytest.mark.parametrize("mode", ["event-driven", "time-stepping"])
 def test_a_disk_landing_flat_ends_the_run_naming_the_contact(mode):
     """Lying flat, a disk's rim has no lowest point and its gap no derivative: the run

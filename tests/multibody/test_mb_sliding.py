@@ -4,8 +4,12 @@ sliding contacts' friction as loads, ``multibody/contacts.py`` ``SlidingFriction
 References (closed forms): a disk launched sliding upright without spin rolls from
 ``t = v0 / (3 mu g)`` at ``2/3 v0`` (its moment about the axis ``m r^2 / 2``); a sphere
 launched sliding in any direction on a plane rolls from ``2 |v0| / (7 mu g)`` at
-``5/7 v0`` (its sliding velocity keeps its direction and shrinks at ``7/2 mu g``). The
-bodies turn through quaternions, so the values hold to the integration's tolerance.
+``5/7 v0`` (its sliding velocity keeps its direction and shrinks at ``7/2 mu g``); a
+ball rolling off a rough dome from rest at ``theta0`` leaves it at
+``cos(theta) = 10/17 cos(theta0)``. A particle sliding on a sphere in space (its
+sliding velocity three world components of rank 2) against its sliding equations
+integrated by SciPy. The bodies turn through quaternions, so the values hold to the
+integration's tolerance.
 """
 
 from __future__ import annotations
@@ -63,14 +67,87 @@ def test_a_sphere_launched_sliding_sideways_rolls_at_five_sevenths():
     assert np.abs(force[~rolling] - mu * g).max() < 1e-10
 
 
-def test_finite_friction_between_spheres_in_space_is_refused_event_driven():
-    a, b = Particle("a", 1.0), Particle("b", 1.0)
-    mb = Multibody([a, b], contacts=[sphere_contact("touch", a, b, 0.1, 0.1, friction=0.3)],
-                   gravity=(0, 0, 0))
-    q0, qd0 = mb.initial_state(positions={"a": (0, 0, 0), "b": (0.3, 0, 0)})
-    with pytest.raises(ValueError, match=r"'touch' has finite friction between spheres in "
-                                         r"space.*contact_mode='time-stepping'"):
-        mb.simulate((0.0, 0.1), q0, qd0)
+DOME, BEAD = 1.0, 0.05  # radii of a fixed sphere and of a particle's sphere on it
+REACH = DOME + BEAD
+
+
+def on_the_dome(theta0: float, v0: float = 0.0):
+    """A particle (a sphere of radius ``BEAD``) on a fixed sphere, ``theta0`` from its
+    top in the x-z plane, moving at ``v0`` along y; its contact's sliding velocity is
+    three world components of rank 2."""
+    bead = Particle("p", 1.0)
+    mb = Multibody([bead], contacts=[sphere_contact("dome", Ground(), bead, DOME, BEAD,
+                                                    friction=mu)])
+    r0 = REACH * np.array([np.sin(theta0), 0.0, np.cos(theta0)])
+    q0, qd0 = mb.initial_state(positions={"p": tuple(r0)}, velocities={"p": (0, v0, 0)})
+    return mb, q0, qd0, r0
+
+
+def test_a_particle_sliding_on_a_sphere_in_space_stops_and_sticks():
+    """Against the sliding equations in Cartesian coordinates, integrated by SciPy:
+    ``a = g + (N/m) (n - mu v/|v|)`` with ``N/m = g n_z - |v|^2 / L`` (the normal force
+    that keeps it on the sphere); it stops where ``tan(theta) < mu`` and sticks."""
+    from scipy.integrate import solve_ivp
+
+    mb, q0, qd0, r0 = on_the_dome(0.1, 0.3)
+    traj = mb.simulate((0.0, 0.5), q0, qd0)
+    assert traj.success, traj.message
+
+    def sliding(t, s):
+        r, v = s[:3], s[3:]
+        n = r / np.linalg.norm(r)
+        normal = g * n[2] - v @ v / np.linalg.norm(r)
+        return np.r_[v, np.array([0.0, 0.0, -g]) + normal * (n - mu * v / np.linalg.norm(v))]
+
+    def stops(t, s):
+        return np.linalg.norm(s[3:]) - 1e-12
+    stops.terminal = True
+    ref = solve_ivp(sliding, (0.0, 0.5), np.r_[r0, 0.0, 0.3, 0.0], method="DOP853",
+                    rtol=1e-13, atol=1e-15, events=stops)
+    (stop,) = [s.t for s in traj.contacts.switches[1:]]
+    assert abs(stop - ref.t_events[0][0]) < 1e-9
+    assert np.abs(traj.q[-1] - ref.y[:3, -1]).max() < 1e-9
+    assert np.abs(traj.qd[traj.t >= stop]).max() < 1e-12  # stuck: tan(0.1) < mu
+
+
+@pytest.mark.parametrize("theta0", [0.2, 0.5])  # tan 0.2 < mu = 0.3 < tan 0.5
+def test_a_particle_at_rest_on_a_sphere_sticks_or_slides_down(theta0):
+    """From rest it sticks where ``tan(theta0) < mu``; else it slides down its meridian,
+    ``L theta'' = g sin(theta) - mu (g cos(theta) - L theta'^2)``."""
+    from scipy.integrate import solve_ivp
+
+    mb, q0, qd0, r0 = on_the_dome(theta0)
+    traj = mb.simulate((0.0, 0.4), q0, qd0)
+    assert traj.success, traj.message
+    if np.tan(theta0) < mu:
+        assert np.abs(traj.q[-1] - r0).max() < 1e-12
+        return
+    ref = solve_ivp(lambda t, s: [s[1], (g * np.sin(s[0]) - mu * (g * np.cos(s[0])
+                                                                   - REACH * s[1] ** 2)) / REACH],
+                    (0.0, 0.4), [theta0, 0.0], method="DOP853", rtol=1e-13, atol=1e-15)
+    theta = ref.y[0, -1]
+    assert np.abs(traj.q[-1] - REACH * np.array([np.sin(theta), 0.0, np.cos(theta)])).max() \
+        < 1e-9
+
+
+def test_a_ball_rolls_off_a_rough_dome_at_cos_theta_ten_seventeenths():
+    """A ball (radius r, moment ``2/5 m r^2``) rolling without slipping from rest at
+    ``theta0`` on a fixed sphere: ``7/10 v^2 = g L (cos(theta0) - cos(theta))`` and it
+    leaves where ``g cos(theta) = v^2 / L``, at ``cos(theta) = 10/17 cos(theta0)``."""
+    r = 0.1
+    ball = RigidBody("ball", 1.0, np.eye(3) * 2 / 5 * r**2)
+    mb = Multibody([ball], contacts=[sphere_contact("dome", Ground(), ball, DOME, r,
+                                                    friction=np.inf)])
+    reach, theta0 = DOME + r, 0.05
+    q0, qd0 = mb.initial_state(
+        positions={"ball": (reach * np.sin(theta0), 0.0, reach * np.cos(theta0))})
+    traj = mb.simulate((0.0, 1.6), q0, qd0)
+    assert traj.success, traj.message
+    leaves = traj.contacts.switches[1]
+    assert leaves.closed == ()
+    x, _, z = leaves.q[:3]
+    assert abs(z / np.hypot(x, z) - 10 / 17 * np.cos(theta0)) < 1e-10
+    assert abs(leaves.q[1]) < 1e-12  # it rolls down its meridian
 
 
 def test_a_box_sliding_on_four_corners_stops_flat_at_v0_over_mu_g():

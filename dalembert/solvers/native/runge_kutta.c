@@ -117,14 +117,22 @@ int dl_rk_step(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper 
   double h_abs = st->h_abs;
   if (h_abs > st->max_step) h_abs = st->max_step;
   else if (h_abs < min_step) h_abs = min_step;
-  int rejected = 0;
+  int rejected = 0, rank_missed = 0;
   for (;;) {
-    if (h_abs < min_step) return DL_STEP_TOO_SMALL;
+    if (h_abs < min_step) return rank_missed ? DL_RANK_CHANGED : DL_STEP_TOO_SMALL;
     double t_new = t + h_abs * st->direction;
     if (st->direction * (t_new - st->t_bound) > 0) t_new = st->t_bound;
     const double h = t_new - t;
     h_abs = fabs(h);
     const int status = rk_attempt(md, d, tb, st, h, y, K, y_new, stage);
+    if (status == DL_RANK_CHANGED) {
+      /* a stage or the end where the dropped rows no longer follow from the kept ones:
+       * off the motion (a step too long) or a real change of rank, which a step short
+       * enough to end before it tells apart (it is taken; the next one meets it) */
+      h_abs *= st->min_factor;
+      rejected = rank_missed = 1;
+      continue;
+    }
     if (status != DL_OK) return status;
     for (int64_t i = 0; i < n_state; ++i) {
       const double big = fabs(y[i]) > fabs(y_new[i]) ? fabs(y[i]) : fabs(y_new[i]);
