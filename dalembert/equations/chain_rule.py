@@ -3,15 +3,15 @@
 SymPy's ``diff`` starts afresh on every call: differentiating the rows of a
 spring's force by every coordinate differentiates the spring's length, a square
 root of a long polynomial in the bodies' poses, once per row and coordinate, and
-asks every new product for its assumptions (is it even? an integer?) on the way.
+walks every subexpression again for its symbols on the way.
 A :class:`Differentiator` keeps every derivative it has taken, keyed by
 subexpression and variable, and the symbols of every subexpression, so a shared
 part is differentiated once per variable and one that does not contain the
 variable is skipped without a look inside. Sums, products, constant powers and
 functions of one or more arguments (``sin``, ``sqrt``, ``atan2``...) follow the
-chain rule here; anything else (``Abs``, ``Piecewise``, ``Derivative``...) is left
-to SymPy. The results equal SymPy's derivatives (they may be arranged
-differently).
+chain rule here, applied as SymPy applies it, so that the results are the very
+expressions SymPy's ``diff`` gives (and the code generated from them is the
+same); anything else (``Abs``, ``Piecewise``, ``Derivative``...) is left to SymPy.
 """
 
 from __future__ import annotations
@@ -98,6 +98,7 @@ class Differentiator:
         if expr.is_Add:
             return sp.Add(*(self.diff(a, v) for a in args))
         if expr.is_Mul:
+            # the product rule as SymPy's Mul applies it (one product per factor)
             terms = []
             for i, a in enumerate(args):
                 d = self.diff(a, v)
@@ -107,15 +108,17 @@ class Differentiator:
         if expr.is_Pow:
             base, exp = args
             if v not in self.free_symbols(exp):
-                return sp.Mul(exp, base ** (exp - 1), self.diff(base, v))
+                # SymPy's arrangement, so that the result is the very expression its
+                # diff gives: base**exp * (d base * exp / base)
+                return expr * (self.diff(base, v) * exp / base)
         elif (isinstance(expr, sp.Function) and not isinstance(expr, AppliedUndef)
               and type(expr)._eval_derivative is _CHAIN_RULE):
             terms = []
             try:
                 for i, a in enumerate(args):
                     d = self.diff(a, v)
-                    if d != 0:
-                        terms.append(sp.Mul(expr.fdiff(i + 1), d))
+                    if not d.is_zero:
+                        terms.append(expr.fdiff(i + 1) * d)
             except ArgumentIndexError:  # no closed-form partial: SymPy's own rule
                 return expr.diff(v)
             return sp.Add(*terms)
