@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .lagrange import Equations
 from .chain_rule import Differentiator
+from .lagrange import Equations
 from .sparse import SparseEntries, jacobian_entries, nonzero_entries
 
 

@@ -125,19 +125,35 @@ def derivative(expr: sp.Expr, v: sp.Symbol) -> sp.Expr:
 
 
 def rate(
-    expr: sp.Expr, q: Sequence[sp.Symbol], qd: Sequence[sp.Symbol], time: sp.Symbol
+    expr: sp.Expr, q: Sequence[sp.Symbol], qd: Sequence[sp.Symbol], time: sp.Symbol,
+    differentiator: Differentiator | None = None,
 ) -> tuple[sp.Expr, sp.Expr]:
     """``(sum_k d expr/d q_k qd_k, d expr/d time)``: the parts of ``d expr/dt``.
 
     The first is what ``expr.jacobian(q) * qd`` gives for a one-row ``expr``.
 
+    Parameters
+    ----------
+    expr
+        The expression.
+    q, qd
+        The coordinates and their rates.
+    time
+        The time symbol.
+    differentiator
+        As for :func:`gradient`.
+
+    Examples
+    --------
     >>> x, xd, t = sp.symbols("x x_dot t")
     >>> rate(x**2 * t, [x], [xd], t)
     (2*t*x*x_dot, x**2)
     """
-    grad = gradient(expr, q)
+    grad = gradient(expr, q, differentiator)
     convective = sp.Add(*(d * qd[k] for k, d in grad.items()))
-    return convective, derivative(expr, time)
+    explicit = derivative(expr, time) if differentiator is None \
+        else differentiator.diff(expr, time)
+    return convective, explicit
 
 
 def dense(entries: SparseEntries, rows: int, cols: int) -> sp.Matrix:
