@@ -71,3 +71,35 @@ def test_what_does_not_contain_the_variable_is_zero_without_a_look_inside():
     assert d.diff(L * sp.sin(x), a) == 0
     assert d.free_symbols(L * sp.sin(x)) == {x, y, z}
     assert d.free_symbols(sp.Derivative(sp.Function("u")(x), x) * y) == {x, y}
+
+
+def test_residual_and_lagrange_derivations_are_those_of_sympys_diff():
+    """A spring of rest length ``l0`` and a damper on a particle in the plane on a
+    rheonomic rod: the shared derivatives of the residuals' Jacobians and of the
+    equations are entry for entry the expressions of SymPy's ``diff`` alone."""
+    from dalembert import Holonomic, PointForce, System, coordinates
+    from dalembert import t as time
+    from dalembert.equations.residual import residual_jacobian_entries, residuals
+    from dalembert.equations.sparse import jacobian_entries, rate
+
+    p, q = coordinates("p q")
+    k, c, l0, w = sp.symbols("k c l0 w", positive=True)
+    pd, qd = p.diff(), q.diff()
+    length = sp.sqrt(p**2 + q**2)
+    damper = -c * (p * pd + q * qd) / length**2
+    system = System([p, q], kinetic=(pd**2 + qd**2) / 2 + sp.sin(w * time) * pd,
+                    potential=k / 2 * (length - l0) ** 2,
+                    forces=[PointForce([damper * p, damper * q, 0], [p, q, 0])],
+                    constraints=[Holonomic(p - sp.cos(q) - time, name="rod")])
+    eqs = system.equations()
+    found = residual_jacobian_entries(eqs)
+    r1, r2 = residuals(eqs)
+    for rows, block in ((r1, "r1"), (r2, "r2")):
+        for variables, by in ((eqs.q, "q"), (eqs.qd, "qd")):
+            assert getattr(found, f"{block}_{by}") == jacobian_entries(rows, variables)
+    # f by SymPy's diff alone: dL/dq - d/dt dL/dqd + Q
+    L, coords = system.model.lagrangian, system.model.coords
+    for j, (qj, qdj) in enumerate(zip(coords.q, coords.qd)):
+        momentum = sp.diff(L, qdj)
+        convective, explicit = rate(momentum, coords.q, coords.qd, time)
+        assert eqs.f[j] == sp.diff(L, qj) - convective - explicit + system.model.Q[j]
