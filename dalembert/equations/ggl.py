@@ -12,7 +12,8 @@ A Newton iteration on it needs, beyond the KKT residuals' Jacobians
 (:mod:`.residual`), ``d (A qd + b)/dq`` (``m x n``) and ``d (A^T lambda)/dq``
 (``n x n``, with ``lambda`` any row vector: ``mu`` placed on the holonomic rows).
 Both are derived exactly, as sparse entries, each term differentiated only by the
-symbols it contains (:mod:`.sparse`).
+symbols it contains (:mod:`.sparse`) and each shared subexpression once
+(:mod:`.chain_rule`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .chain_rule import Differentiator
 from .lagrange import Equations
 from .sparse import SparseEntries, jacobian_entries, nonzero_entries
 
@@ -63,4 +65,5 @@ def ggl_jacobian_entries(eqs: Equations) -> GGLJacobianEntries:
         force_terms[j].append(a * lam[k])
     velocity = [sp.Add(*terms) + eqs.b[k] for k, terms in enumerate(velocity_terms)]
     force = [sp.Add(*terms) for terms in force_terms]
-    return GGLJacobianEntries(jacobian_entries(velocity, q), jacobian_entries(force, q))
+    d = Differentiator()  # the entries of A recur in both
+    return GGLJacobianEntries(jacobian_entries(velocity, q, d), jacobian_entries(force, q, d))

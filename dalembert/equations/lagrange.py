@@ -20,6 +20,7 @@ import sympy as sp
 from ..errors import ModelError
 from ..model.coordinates import Coordinates, t
 from ..model.model import Model
+from .chain_rule import Differentiator
 from .printing import equations_latex, equations_text
 from .sparse import SparseEntries, dense, gradient, nonzero_entries, rate
 
@@ -69,7 +70,9 @@ def derive_equations(model: Model) -> Equations:
 
     Every derivative is taken term by term and only by the symbols a term
     contains (:mod:`dalembert.equations.sparse`), so the cost grows with the
-    size of the Lagrangian and the constraints, not with ``n^2``.
+    size of the Lagrangian and the constraints, not with ``n^2``; a subexpression
+    met again (a momentum's part in its rate) is differentiated once
+    (:mod:`dalembert.equations.chain_rule`).
 
     >>> from dalembert import System, coordinates
     >>> x, = coordinates("x")
@@ -81,31 +84,34 @@ def derive_equations(model: Model) -> Equations:
     """
     coords = model.coords
     n = coords.n
-    M, f = _dynamics(model)
+    # one for all: the momenta's parts recur in M, in f and in their rates
+    d = Differentiator()
+    M, f = _dynamics(model, d)
     _require_quadratic(M, model)
     cons = model.constraints
-    c = _constraint_rates(cons.A, cons.b, coords)
+    c = _constraint_rates(cons.A, cons.b, coords, d)
     lam = tuple(sp.Symbol(f"lambda_{i + 1}") for i in range(cons.m))
     return Equations(model, dense(M, n, n), sp.Matrix(n, 1, f), cons.A, cons.b, c, lam)
 
 
-def _dynamics(model: Model) -> tuple[SparseEntries, list[sp.Expr]]:
+def _dynamics(model: Model, d: Differentiator) -> tuple[SparseEntries, list[sp.Expr]]:
     """``M`` (nonzero entries) and ``f`` from ``p = dL/dqd``, row by row."""
     coords = model.coords
     q, qd = coords.q, coords.qd
-    momenta = gradient(model.lagrangian, qd)
-    forces = gradient(model.lagrangian, q)
+    momenta = gradient(model.lagrangian, qd, d)
+    forces = gradient(model.lagrangian, q, d)
     M: SparseEntries = {}
     f = []
     for j in range(coords.n):
         p = momenta.get(j, sp.S.Zero)
-        M.update({(j, k): e for k, e in gradient(p, qd).items()})
-        convective, explicit = rate(p, q, qd, t)
+        M.update({(j, k): e for k, e in gradient(p, qd, d).items()})
+        convective, explicit = rate(p, q, qd, t, d)
         f.append(forces.get(j, sp.S.Zero) - convective - explicit + model.Q[j])
     return M, f
 
 
-def _constraint_rates(A: sp.Matrix, b: sp.Matrix, coords: Coordinates) -> sp.Matrix:
+def _constraint_rates(A: sp.Matrix, b: sp.Matrix, coords: Coordinates,
+                      d: Differentiator) -> sp.Matrix:
     """``c = -(d/dq (A qd + b)) qd - d/dt (A qd + b)``, each row from its own symbols."""
     rows: dict[int, list[sp.Expr]] = {i: [] for i in range(A.rows)}
     for (i, j), a in nonzero_entries(A).items():
@@ -113,7 +119,7 @@ def _constraint_rates(A: sp.Matrix, b: sp.Matrix, coords: Coordinates) -> sp.Mat
     c = []
     for i, products in rows.items():
         g = sp.Add(*products) + b[i]
-        convective, explicit = rate(g, coords.q, coords.qd, t)
+        convective, explicit = rate(g, coords.q, coords.qd, t, d)
         c.append(-(convective + explicit))
     return sp.Matrix(A.rows, 1, c)
 

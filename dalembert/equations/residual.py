@@ -12,7 +12,9 @@ and a Newton iteration on them needs ``d r1/dq``, ``d r1/dqd``, ``d r2/dq`` and
 the KKT blocks already generated). Each is derived exactly, as sparse entries in
 ``qdd`` and ``lambda`` (their symbols are ``coords.qdd`` and the equations'
 ``multipliers``), each term differentiated only by the symbols it contains
-(:mod:`.sparse`).
+(:mod:`.sparse`), and every subexpression the residuals share (a spring's length in
+each of its force's rows, an entry of ``M`` in ``d r1/dq`` by every coordinate it
+holds) differentiated once by each variable (:mod:`.chain_rule`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .chain_rule import Differentiator
 from .lagrange import Equations
 from .sparse import SparseEntries, jacobian_entries, nonzero_entries
 
@@ -87,5 +90,6 @@ def residual_jacobian_entries(eqs: Equations) -> ResidualJacobianEntries:
     """
     q, qd = eqs.q, eqs.qd
     r1, r2 = residuals(eqs)
-    return ResidualJacobianEntries(jacobian_entries(r1, q), jacobian_entries(r1, qd),
-                                   jacobian_entries(r2, q), jacobian_entries(r2, qd))
+    d = Differentiator()
+    return ResidualJacobianEntries(jacobian_entries(r1, q, d), jacobian_entries(r1, qd, d),
+                                   jacobian_entries(r2, q, d), jacobian_entries(r2, qd, d))

@@ -16,58 +16,95 @@ from collections.abc import Sequence
 
 import sympy as sp
 
+from .chain_rule import Differentiator
+
 #: Nonzero entries of a matrix, keyed by ``(row, column)``.
 SparseEntries = dict[tuple[int, int], sp.Expr]
 
 
-def gradient(expr: sp.Expr, variables: Sequence[sp.Symbol]) -> dict[int, sp.Expr]:
+def gradient(expr: sp.Expr, variables: Sequence[sp.Symbol],
+             differentiator: Differentiator | None = None) -> dict[int, sp.Expr]:
     """Nonzero partial derivatives of ``expr``, keyed by the variable's position.
 
     Each term of a sum is differentiated only by the variables it contains.
 
+    Parameters
+    ----------
+    expr
+        The expression.
+    variables
+        The symbols to differentiate by.
+    differentiator
+        Where the terms that are not monomials are differentiated: one shared by
+        many expressions differentiates their common subexpressions once
+        (:mod:`.chain_rule`). Without it, SymPy's ``diff``.
+
+    Examples
+    --------
     >>> x, y, z = sp.symbols("x y z")
     >>> gradient(x**2 * y + sp.sin(z) + 3, [x, y, z])
     {0: 2*x*y, 1: x**2, 2: cos(z)}
     >>> gradient(y, [x])
     {}
+    >>> gradient(sp.sqrt(x**2 + y**2) * z, [x, z], Differentiator())
+    {0: x*z/sqrt(x**2 + y**2), 1: sqrt(x**2 + y**2)}
     """
     index = {v: k for k, v in enumerate(variables)}
     parts: dict[int, list[sp.Expr]] = defaultdict(list)
     for term in sp.Add.make_args(expr):
-        for v in term.free_symbols:
+        symbols = term.free_symbols if differentiator is None \
+            else differentiator.free_symbols(term)
+        for v in symbols:
             k = index.get(v)
             if k is not None:
-                parts[k].append(_monomial_derivative(term, v))
+                parts[k].append(_monomial_derivative(term, v, differentiator))
     out = {k: sp.Add(*parts[k]) for k in sorted(parts)}
     return {k: d for k, d in out.items() if d != 0}
 
 
-def jacobian_entries(rows: Sequence[sp.Expr],
-                     variables: Sequence[sp.Symbol]) -> SparseEntries:
+def jacobian_entries(rows: Sequence[sp.Expr], variables: Sequence[sp.Symbol],
+                     differentiator: Differentiator | None = None) -> SparseEntries:
     """The nonzero entries of ``d rows / d variables``, row-major (:func:`gradient` of
     each row).
 
+    Parameters
+    ----------
+    rows
+        The expressions.
+    variables
+        The symbols to differentiate by.
+    differentiator
+        As for :func:`gradient`.
+
+    Examples
+    --------
     >>> x, y = sp.symbols("x y")
     >>> jacobian_entries([x * y, y**2], [x, y])
     {(0, 0): y, (0, 1): x, (1, 1): 2*y}
     """
-    return {(i, j): d for i, row in enumerate(rows) for j, d in gradient(row, variables).items()}
+    return {(i, j): d for i, row in enumerate(rows)
+            for j, d in gradient(row, variables, differentiator).items()}
 
 
-def _monomial_derivative(term: sp.Expr, v: sp.Symbol) -> sp.Expr:
+def _monomial_derivative(term: sp.Expr, v: sp.Symbol,
+                         differentiator: Differentiator | None = None) -> sp.Expr:
     """``term.diff(v)``, built directly when ``term`` is ``number * symbol powers``.
 
     Multibody energies are sums of such monomials; building the result skips
-    SymPy's general ``Derivative`` machinery, the bulk of the cost.
+    SymPy's general ``Derivative`` machinery, the bulk of the cost. Other terms go
+    to ``differentiator`` when given.
     """
+    def general() -> sp.Expr:
+        return term.diff(v) if differentiator is None else differentiator.diff(term, v)
+
     if not term.is_Mul:
-        return term.diff(v)
+        return general()
     coeff, monomial = term.as_coeff_Mul()
     rest, power = [], None
     for f in sp.Mul.make_args(monomial):
         base, exp = (f.base, f.exp) if f.is_Pow else (f, sp.S.One)
         if not (base.is_Symbol and exp.is_Integer and exp > 0):
-            return term.diff(v)
+            return general()
         if base == v:
             power = exp
         else:
@@ -88,19 +125,35 @@ def derivative(expr: sp.Expr, v: sp.Symbol) -> sp.Expr:
 
 
 def rate(
-    expr: sp.Expr, q: Sequence[sp.Symbol], qd: Sequence[sp.Symbol], time: sp.Symbol
+    expr: sp.Expr, q: Sequence[sp.Symbol], qd: Sequence[sp.Symbol], time: sp.Symbol,
+    differentiator: Differentiator | None = None,
 ) -> tuple[sp.Expr, sp.Expr]:
     """``(sum_k d expr/d q_k qd_k, d expr/d time)``: the parts of ``d expr/dt``.
 
     The first is what ``expr.jacobian(q) * qd`` gives for a one-row ``expr``.
 
+    Parameters
+    ----------
+    expr
+        The expression.
+    q, qd
+        The coordinates and their rates.
+    time
+        The time symbol.
+    differentiator
+        As for :func:`gradient`.
+
+    Examples
+    --------
     >>> x, xd, t = sp.symbols("x x_dot t")
     >>> rate(x**2 * t, [x], [xd], t)
     (2*t*x*x_dot, x**2)
     """
-    grad = gradient(expr, q)
+    grad = gradient(expr, q, differentiator)
     convective = sp.Add(*(d * qd[k] for k, d in grad.items()))
-    return convective, derivative(expr, time)
+    explicit = derivative(expr, time) if differentiator is None \
+        else differentiator.diff(expr, time)
+    return convective, explicit
 
 
 def dense(entries: SparseEntries, rows: int, cols: int) -> sp.Matrix:
