@@ -270,8 +270,8 @@ it has no 'meta' member (Trajectory.save writes one)
                       switch_qd=(switches, n))
         present = [name in members for name in OPTIONAL_CONTACT_ARRAYS]
         if any(present) and not all(present):
-            missing = OPTIONAL_CONTACT_ARRAYS[present.index(False)]
-            raise bad(f"the array {missing!r}", "is missing (it comes with "
+            absent = OPTIONAL_CONTACT_ARRAYS[present.index(False)]
+            raise bad(f"the array {absent!r}", "is missing (it comes with "
                       f"{OPTIONAL_CONTACT_ARRAYS[present.index(True)]!r})")
         if all(present):
             sizes = members["contact_tangents"]

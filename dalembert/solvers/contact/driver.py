@@ -36,6 +36,7 @@ message naming the contacts: a switch with no solution (a
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -227,7 +228,7 @@ class ContactHistory:
         friction = arrays.get("impact_friction_impulses",
                               np.zeros((len(arrays["impact_t"]), int(ends[-1]))))
         impacts = [ImpactRecord(float(t), p, float(e), b, a,
-                                tuple(np.array(f[i:j]) for i, j in zip(ends[:-1], ends[1:])))
+                                tuple(np.array(f[i:j]) for i, j in itertools.pairwise(ends)))
                    for t, p, e, b, a, f in zip(
                        arrays["impact_t"], arrays["impact_impulses"],
                        arrays["impact_energy_lost"], arrays["impact_qd_before"],
