@@ -117,3 +117,17 @@ def test_friction_impulses_are_saved_and_loaded(tmp_path):
     assert read.contacts.impacts[0].friction_impulses[0].shape == (0,)
     with pytest.raises(TrajectoryFileError, match="'contact_tangents' is missing"):
         type(traj).load(half)
+
+
+def test_a_time_step_landing_records_its_friction_impulse():
+    """Moreau-Jean: ``M (v+ - v-) = h f + A^T P``; nothing but friction acts along
+    ``x``, so its impulse is ``m`` times the jump of ``x'``, in the cone of ``P_n``."""
+    m, mu = 1.0, 0.3
+    traj = ball(mu, m).simulate((0.0, 0.35), {"y": 0.6}, {"x": 2.0},
+                                contact_mode="time-stepping", contact_step=1e-3)
+    assert traj.success, traj.message
+    hit = traj.contacts.impacts[0]
+    (friction,) = hit.friction_impulses
+    assert friction.shape == (1,) and friction[0] < 0.0
+    assert abs(m * (hit.qd_after[0] - hit.qd_before[0]) - friction[0]) < 1e-12
+    assert abs(friction[0]) <= mu * hit.impulses[0] * (1 + 1e-12)
