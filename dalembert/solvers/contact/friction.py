@@ -387,8 +387,9 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     cross product of ``d`` and ``a_t(d)``, sampled around the circle, its sign
     changes where ``a_t . d > 0`` refined by Brent's method; the root nearest
     ``guess`` is taken (at a contact whose force has just reached its cone, ``a_t``
-    is 0 along ``guess``, which is then the root: the onset there). Other counts keep
-    ``guess``.
+    is 0 along ``guess``, which is then the root: the onset there). Other counts
+    keep ``guess``, as does a contact whose ``a_t`` does not depend on ``d`` (other
+    held rows fix its contact point) or that has no such root.
 
     Parameters
     ----------
@@ -459,6 +460,10 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     sampled = [accel(a) for a in angles]
     signs = [float(np.cos(a) * v[1] - np.sin(a) * v[0]) for a, v in zip(angles, sampled)]
     scale = 1.0 + max(float(np.linalg.norm(v)) for v in sampled)
+    if max(float(np.linalg.norm(v - sampled[0])) for v in sampled) <= TOUCH_RTOL * scale:
+        # its friction does not move it (other held rows fix its contact point): any
+        # root would be rounding's
+        return guess
     roots = []
     for i in range(len(angles) - 1):
         f0, f1 = signs[i], signs[i + 1]
