@@ -108,8 +108,8 @@ class Trajectory:
         constraint; ``None``: not known), set by the System: :meth:`summary` calls a
         change of ``T + V`` an error only where it is conserved.
     contacts
-        With unilateral constraints: the impacts (time, impulse on each contact,
-        energy lost, velocities before and after) and the contacts closed over time
+        With unilateral constraints: the impacts (time, normal and friction impulse
+        on each contact, energy lost, velocities before and after) and the contacts closed over time
         (:class:`~dalembert.solvers.contact.driver.ContactHistory`; ``closed_at(t)``);
         ``multipliers`` then have a column per unilateral constraint too (0 while open).
 

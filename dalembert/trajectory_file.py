@@ -2,8 +2,9 @@
 
 A trajectory file is a NumPy ``.npz`` archive: one ``.npy`` member per array of
 :data:`ARRAYS`, ``t_events_<k>`` and ``y_events_<k>`` per event function, those of
-:data:`CONTACT_ARRAYS` for a run with unilateral constraints, and ``meta``, a JSON text
-of the names, status, message, statistics and initialization report (:data:`METADATA`).
+:data:`CONTACT_ARRAYS` (and :data:`OPTIONAL_CONTACT_ARRAYS`) for a run with unilateral
+constraints, and ``meta``, a JSON text of the names, status, message, statistics and
+initialization report (:data:`METADATA`).
 
 Writing goes to a temporary file beside the target (locked while it is written),
 synced, then renamed over the target: the file appears whole or not at all, and a
@@ -56,6 +57,10 @@ OPTIONAL_ARRAYS = ("inputs", "near_singular")
 #: then, the state there); written with ``contact_names`` in the metadata.
 CONTACT_ARRAYS = ("impact_t", "impact_impulses", "impact_energy_lost", "impact_qd_before",
                   "impact_qd_after", "switch_t", "switch_closed", "switch_q", "switch_qd")
+#: A run with unilateral constraints may also have (files of earlier versions lack them)
+#: the friction impulse of each impact (every contact's sliding velocities side by side)
+#: and how many sliding velocities each contact has; they come together.
+OPTIONAL_CONTACT_ARRAYS = ("impact_friction_impulses", "contact_tangents")
 #: How a trajectory can end (its ``status``).
 STATUSES = ("finished", "event", "failed", "interrupted", "timeout")
 #: The metadata fields and their JSON types.
@@ -78,8 +83,8 @@ ABANDONED_AFTER = 60.0
 #: function (4 990 of them). Checked from the zip directory before it is parsed.
 MAX_MEMBERS = 10_000
 
-_MEMBER = re.compile(
-    rf"(meta|{'|'.join((*ARRAYS, *OPTIONAL_ARRAYS, *CONTACT_ARRAYS))}|[ty]_events_\d+)\.npy")
+_NAMES = (*ARRAYS, *OPTIONAL_ARRAYS, *CONTACT_ARRAYS, *OPTIONAL_CONTACT_ARRAYS)
+_MEMBER = re.compile(rf"(meta|{'|'.join(_NAMES)}|[ty]_events_\d+)\.npy")
 #: What reading a damaged, encrypted or oddly compressed member raises.
 _UNREADABLE = (ValueError, OSError, EOFError, RuntimeError, NotImplementedError,
                zipfile.BadZipFile)
@@ -214,7 +219,8 @@ def read(path: Path, max_bytes: int | None = None) -> dict[str, Any]:
     dict
         The arrays of :data:`ARRAYS`, the :data:`METADATA` fields (names as
         tuples), ``t_events`` and ``y_events``: the keywords of a ``Trajectory``; with
-        ``contact_names``, ``contacts``: the arrays of :data:`CONTACT_ARRAYS` by name.
+        ``contact_names``, ``contacts``: the arrays of :data:`CONTACT_ARRAYS` (and
+        of :data:`OPTIONAL_CONTACT_ARRAYS` where the file has them) by name.
 
     Raises
     ------
@@ -262,6 +268,18 @@ it has no 'meta' member (Trajectory.save writes one)
                       impact_qd_after=(impacts, n), switch_t=(switches,),
                       switch_closed=(switches, g), switch_q=(switches, n),
                       switch_qd=(switches, n))
+        present = [name in members for name in OPTIONAL_CONTACT_ARRAYS]
+        if any(present) and not all(present):
+            absent = OPTIONAL_CONTACT_ARRAYS[present.index(False)]
+            raise bad(f"the array {absent!r}", "is missing (it comes with "
+                      f"{OPTIONAL_CONTACT_ARRAYS[present.index(True)]!r})")
+        if all(present):
+            sizes = members["contact_tangents"]
+            if sizes.shape != (g,) or sizes.dtype.kind not in "iu" or np.any(sizes < 0):
+                raise bad("the array 'contact_tangents'", f"holds {sizes.dtype} of shape "
+                          f"{sizes.shape}, not a count >= 0 per contact ({g})")
+            shapes.update(contact_tangents=(g,),
+                          impact_friction_impulses=(impacts, int(sizes.sum())))
     n_events = sum(1 for name in members if name.startswith("t_events_"))
     for e in range(n_events):
         events = members.get(f"t_events_{e}")
@@ -289,7 +307,9 @@ it has no 'meta' member (Trajectory.save writes one)
     fields["y_events"] = [members[f"y_events_{e}"] for e in range(n_events)]
     if contacts is not None:
         fields["contacts"] = {"names": tuple(contacts),
-                              **{name: members[name] for name in CONTACT_ARRAYS}}
+                              **{name: members[name] for name in CONTACT_ARRAYS},
+                              **{name: members[name] for name in OPTIONAL_CONTACT_ARRAYS
+                                 if name in members}}
     return fields
 
 

@@ -36,6 +36,7 @@ message naming the contacts: a switch with no solution (a
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
@@ -85,11 +86,26 @@ class ImpactRecord:
     t
         Its instant.
     impulses
-        The impulse on each gap (0 where it did not act).
+        The normal impulse on each gap (0 where it did not act).
     energy_lost
         ``T- - T+``.
     qd_before, qd_after
         The velocities before and after.
+    friction_impulses
+        Each gap's friction impulse, one entry per sliding velocity (its tangent rows,
+        in the order of its ``tangents``; 0 where it did not act, empty for a gap
+        without friction; empty tuple: none recorded). The generalized impulse of the
+        impact is ``A_n^T impulses + sum_k A_t(k)^T friction_impulses[k]`` (and the
+        bilateral rows'), ``M (qd_after - qd_before)``.
+
+    Examples
+    --------
+    A ball landing on a floor that grips it (one sliding velocity):
+
+    >>> hit = ImpactRecord(0.3, np.array([3.0]), 1.5, np.array([2.0, -2.0]),
+    ...                    np.array([1.4, 1.0]), (np.array([-0.6]),))
+    >>> hit.friction_impulses[0].tolist()
+    [-0.6]
     """
 
     t: float
@@ -97,6 +113,7 @@ class ImpactRecord:
     energy_lost: float
     qd_before: np.ndarray
     qd_after: np.ndarray
+    friction_impulses: tuple[np.ndarray, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -131,26 +148,51 @@ class ContactHistory:
         Every impact, in time order.
     switches
         The start and every switch (:class:`Switch`): the gaps closed from then on.
+    tangents
+        How many sliding velocities each gap has (the length of its friction
+        impulses; empty: none has any; a file of an earlier version reads as none).
     """
 
     names: tuple[str, ...]
     impacts: list[ImpactRecord] = field(default_factory=list)
     switches: list[Switch] = field(default_factory=list)
+    tangents: tuple[int, ...] = ()
+
+    def friction_impulses(self, impact: ImpactRecord) -> tuple[np.ndarray, ...]:
+        """The friction impulse of each gap at ``impact`` (zeros where it recorded
+        none).
+
+        Examples
+        --------
+        >>> history = ContactHistory(("floor",), tangents=(2,))
+        >>> hit = ImpactRecord(0.0, np.ones(1), 0.0, np.zeros(3), np.zeros(3))
+        >>> history.friction_impulses(hit)[0].tolist()
+        [0.0, 0.0]
+        """
+        if impact.friction_impulses:
+            return impact.friction_impulses
+        return tuple(np.zeros(k) for k in self.tangents or (0,) * len(self.names))
 
     def arrays(self, n: int) -> dict[str, np.ndarray]:
         """The history as arrays (``n`` coordinates), as a trajectory file keeps it
-        (:data:`~dalembert.trajectory_file.CONTACT_ARRAYS`)."""
+        (:data:`~dalembert.trajectory_file.CONTACT_ARRAYS`; the friction impulses in
+        ``impact_friction_impulses``, every gap's sliding velocities side by side, and
+        their count per gap in ``contact_tangents``)."""
         g = len(self.names)
         closed = np.zeros((len(self.switches), g), dtype=bool)
         for k, switch in enumerate(self.switches):
             closed[k, list(switch.closed)] = True
         impacts = self.impacts
+        sizes = self.tangents or (0,) * g
 
         def rows(values: list[np.ndarray], width: int) -> np.ndarray:
             return np.array(values, dtype=float).reshape(len(values), width)
 
+        friction = [np.concatenate([np.zeros(0), *self.friction_impulses(i)]) for i in impacts]
         return {"impact_t": np.array([i.t for i in impacts], dtype=float),
                 "impact_impulses": rows([i.impulses for i in impacts], g),
+                "impact_friction_impulses": rows(friction, sum(sizes)),
+                "contact_tangents": np.array(sizes, dtype=np.int64),
                 "impact_energy_lost": np.array([i.energy_lost for i in impacts], dtype=float),
                 "impact_qd_before": rows([i.qd_before for i in impacts], n),
                 "impact_qd_after": rows([i.qd_after for i in impacts], n),
@@ -170,14 +212,33 @@ class ContactHistory:
         >>> again = ContactHistory.from_arrays({"names": history.names, **history.arrays(1)})
         >>> again.switches[0].closed, again.impacts
         ((0,), [])
+
+        The friction impulses, split by gap (arrays of an earlier version, without
+        them, give zeros):
+
+        >>> hit = ImpactRecord(0.3, np.array([3.0, 0.0]), 1.5, np.zeros(3), np.ones(3),
+        ...                    (np.array([-0.6, 0.2]), np.zeros(0)))
+        >>> history = ContactHistory(("floor", "wall"), [hit], [], (2, 0))
+        >>> again = ContactHistory.from_arrays({"names": history.names,
+        ...                                     **history.arrays(3)})
+        >>> [f.tolist() for f in again.impacts[0].friction_impulses]
+        [[-0.6, 0.2], []]
         """
-        impacts = [ImpactRecord(float(t), p, float(e), b, a) for t, p, e, b, a in zip(
-            arrays["impact_t"], arrays["impact_impulses"], arrays["impact_energy_lost"],
-            arrays["impact_qd_before"], arrays["impact_qd_after"])]
+        g = len(arrays["names"])
+        sizes = tuple(int(k) for k in arrays.get("contact_tangents", np.zeros(g, dtype=int)))
+        ends = np.cumsum((0, *sizes))
+        friction = arrays.get("impact_friction_impulses",
+                              np.zeros((len(arrays["impact_t"]), int(ends[-1]))))
+        impacts = [ImpactRecord(float(t), p, float(e), b, a,
+                                tuple(np.array(f[i:j]) for i, j in itertools.pairwise(ends)))
+                   for t, p, e, b, a, f in zip(
+                       arrays["impact_t"], arrays["impact_impulses"],
+                       arrays["impact_energy_lost"], arrays["impact_qd_before"],
+                       arrays["impact_qd_after"], friction)]
         switches = [Switch(float(t), tuple(int(k) for k in np.flatnonzero(c)), q, qd)
                     for t, c, q, qd in zip(arrays["switch_t"], arrays["switch_closed"],
                                            arrays["switch_q"], arrays["switch_qd"])]
-        return cls(tuple(arrays["names"]), impacts, switches)
+        return cls(tuple(arrays["names"]), impacts, switches, sizes)
 
     @property
     def impact_times(self) -> np.ndarray:
@@ -274,7 +335,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         raise ContactError(
             f"the unilateral constraint {gaps.names[k]!r} is violated at the start "
             f"(gap {g[k]:.6g} < 0): start with every gap >= 0")
-    history = ContactHistory(gaps.names)
+    history = ContactHistory(gaps.names, tangents=gaps.sizes)
     segment_start = SegmentStart()
     made: dict[ClosedGaps, RunData] = {}
     watched: dict[ClosedGaps, tuple[tuple[str, int], ...]] = {}
@@ -492,12 +553,14 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
     outcome = resolve_impact(full, gaps, t, q, qd, touching, law)
     if outcome.stages:
         history.impacts.append(ImpactRecord(t, outcome.impulses, outcome.energy_lost,
-                                            qd.copy(), outcome.qd))
+                                            qd.copy(), outcome.qd,
+                                            outcome.friction_impulses))
         qd = outcome.qd
     settled = _settle(full, gaps, t, q, qd, touching)
     if settled is not None:
         history.impacts.append(ImpactRecord(t, settled.impulses[gaps.rows],
-                                            settled.energy_lost, qd.copy(), settled.qd))
+                                            settled.energy_lost, qd.copy(), settled.qd,
+                                            gaps.tangential(settled.impulses)))
         qd = settled.qd
     exclude = () if opening is None else (opening,)
     closed = closed_gaps(full, gaps, t, q, qd, touching, exclude,
@@ -505,7 +568,8 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
     grip = _grip(full, gaps, t, q, qd, closed)
     if grip is not None:  # a rough contact closing while sliding stops sliding at once
         history.impacts.append(ImpactRecord(t, grip.impulses[gaps.rows],
-                                            grip.energy_lost, qd.copy(), grip.qd))
+                                            grip.energy_lost, qd.copy(), grip.qd,
+                                            gaps.tangential(grip.impulses)))
         qd = grip.qd
     seen = friction_at(full, gaps, t, q, qd)  # the velocities stay through the rounds
     for _ in range(MAX_FRICTION_ROUNDS):

@@ -27,9 +27,12 @@ it turns by a right angle.
 
 At a switch :func:`choose_friction` decides: a contact sliding goes on sliding; one
 at rest sticks if its sticking force lies in the cone, and otherwise slides in the
-direction that force cannot hold (``d = -lambda_t / |lambda_t|``, exact with one
-sliding velocity; with two, the direction of the excess, which is exact where the
-contact's tangential mass is isotropic).
+direction its contact point accelerates in under the friction that opposes it
+(:func:`slip_direction`): with one sliding velocity the direction that force cannot
+hold (``d = -lambda_t / |lambda_t|``); with two, the unit ``d`` with ``a_t(d)``
+along ``d``, a root in its angle, which is the direction of the excess only where
+the contact's tangential mass is isotropic (a cylinder lying on a floor, rolling one
+way and sliding the other, is not).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import brentq
 
 from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
@@ -48,6 +52,10 @@ from ..kkt.factorization import KKTFactorization, kkt_factorization
 from ..kkt.sparse import matvec
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .impulses import contact_impulses
+
+#: Samples of the slip direction's angle per half turn, to bracket its roots
+#: (:func:`slip_direction`).
+SLIP_SAMPLES = 24
 
 
 @dataclass
@@ -295,8 +303,8 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
                     slipping: int | None = None) -> Friction:
     """Which closed frictional gaps stick and which slide from ``(t, q, qd)`` on (see
     the module docstring): the held ones of ``start`` whose sticking force leaves the
-    cone slide, one at a time, the worst first; ``slipping``, a gap whose force has
-    just reached the cone, slides.
+    cone slide, one at a time, the worst first, along :func:`slip_direction`;
+    ``slipping``, a gap whose force has just reached the cone, slides.
 
     Parameters
     ----------
@@ -352,11 +360,123 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         size = float(np.linalg.norm(force))
         if excess[worst] <= allowed or size == 0.0:
             break
-        chosen.directions[worst] = -force / size
         chosen.held.discard(worst)
+        chosen.directions[worst] = -force / size
+        chosen.directions[worst] = slip_direction(full, gaps, t, q, qd, chosen.of(closed),
+                                                  chosen.directions, worst, -force / size,
+                                                  kkt)
         resting.remove(worst)
         slipping = None
     return chosen
+
+
+def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                   qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
+                   k: int, guess: np.ndarray, kkt: KKTFactorization | None = None
+                   ) -> np.ndarray:
+    """The direction in which gap ``k``, at rest, starts to slide with the closed set
+    ``which`` (``k`` among its sliding gaps, the others' directions in
+    ``directions``): the unit ``d`` along which its tangential acceleration points
+    under its friction force ``-mu lambda_n d`` (``a_t(d) = s d``, ``s > 0``), the
+    normal force and every other force solved with it (:func:`solve_sliding`).
+
+    With one sliding velocity that is ``guess``, the direction of the sticking force
+    the contact cannot hold (``-lambda_t / |lambda_t|``), and so it is where the
+    contact's tangential mass (the block ``W_tt`` of its sliding velocities in the
+    Delassus matrix) is isotropic. With two it is a root in the angle of ``d``: the
+    cross product of ``d`` and ``a_t(d)``, sampled around the circle, its sign
+    changes where ``a_t . d > 0`` refined by Brent's method; the root nearest
+    ``guess`` is taken (at a contact whose force has just reached its cone, ``a_t``
+    is 0 along ``guess``, which is then the root: the onset there). Other counts
+    keep ``guess``, as does a contact whose ``a_t`` does not depend on ``d`` (other
+    held rows fix its contact point) or that has no such root.
+
+    Parameters
+    ----------
+    full, gaps
+        The model with every gap a row and its sliding velocities.
+    t, q, qd
+        The state (the inputs as ``full`` holds them).
+    which
+        The closed set, ``k`` sliding.
+    directions
+        Each sliding gap's unit direction (``k``'s is replaced by the trial ones).
+    k
+        The gap starting to slide.
+    guess
+        The direction of its excess sticking force (a unit vector).
+    kkt
+        A factorization object of ``full``'s pattern to reuse.
+
+    Examples
+    --------
+    A cylinder (``I = m r^2 / 2``) lying on a floor, its axis along ``y``, pushed at
+    its axis by 12 N at 0.5 rad from ``x``: along ``x`` its contact point has three
+    times the inverse mass it has along ``y``, so it slides at 42.8 degrees, not
+    along the excess force (58.6 degrees):
+
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> x, y, z, th = coordinates("x y z theta")
+    >>> push = 12.0 * np.array([np.cos(0.5), np.sin(0.5)])
+    >>> cylinder = System([x, y, z, th], kinetic=(x.diff()**2 + y.diff()**2
+    ...                   + z.diff()**2) / 2 + 0.02 / 2 * th.diff()**2,
+    ...                   potential=9.81 * z - push[0] * x - push[1] * y,
+    ...                   constraints=[Unilateral(z - 0.2, "floor", friction=0.3,
+    ...                       tangents=[x.diff() + 0.2 * th.diff(), y.diff()])])
+    >>> which = ClosedGaps((0,), sliding=(0,))
+    >>> full = cylinder._closed(ClosedGaps((0,), held=(0,))).numeric()
+    >>> gaps = Gaps.of(cylinder.definition.unilateral, 0, [0.0])
+    >>> q, rest = np.array([0.0, 0.0, 0.2, 0.0]), np.zeros(4)
+    >>> excess = np.array([push[0] / 3, push[1]]) / np.hypot(push[0] / 3, push[1])
+    >>> d = slip_direction(full, gaps, 0.0, q, rest, which, {0: excess}, 0, excess)
+    >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
+    42.8019
+    """
+    rows = gaps.tangents[k]
+    if len(rows) != 2:
+        return guess
+    values = full.kkt_sparse(t, q, qd)
+    _, _, Av, c = values
+    pattern = full.pattern
+    kkt = kkt or kkt_factorization(pattern)
+    acting = acting_rows(full, gaps, t, q, which)
+    trial = dict(directions)
+
+    def unit(angle: float) -> np.ndarray:
+        return np.array([np.cos(angle), np.sin(angle)])
+
+    def accel(angle: float) -> np.ndarray:
+        trial[k] = unit(angle)
+        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, trial, kkt, values, acting)
+        return (matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c)[rows]
+
+    def cross(angle: float) -> float:
+        a = accel(angle)
+        return float(np.cos(angle) * a[1] - np.sin(angle) * a[0])
+
+    start = float(np.arctan2(guess[1], guess[0]))
+    # a whole turn centred on the guess, which is a sample (a root there is exact)
+    angles = start + np.linspace(-np.pi, np.pi, 2 * SLIP_SAMPLES + 1)
+    sampled = [accel(a) for a in angles]
+    signs = [float(np.cos(a) * v[1] - np.sin(a) * v[0]) for a, v in zip(angles, sampled)]
+    scale = 1.0 + max(float(np.linalg.norm(v)) for v in sampled)
+    if max(float(np.linalg.norm(v - sampled[0])) for v in sampled) <= TOUCH_RTOL * scale:
+        # its friction does not move it (other held rows fix its contact point): any
+        # root would be rounding's
+        return guess
+    roots = []
+    for i in range(len(angles) - 1):
+        f0, f1 = signs[i], signs[i + 1]
+        if f0 == 0.0 or f0 * f1 < 0.0:
+            angle = angles[i] if f0 == 0.0 else \
+                brentq(cross, angles[i], angles[i + 1], xtol=1e-15, rtol=1e-15)
+            # sliding along d, not against it (a_t = s d with s < 0 is no solution)
+            if float(accel(angle) @ unit(angle)) >= -TOUCH_RTOL * scale:
+                roots.append(float(angle))
+    if not roots:  # no direction it can slide in (a contact problem without a solution)
+        return guess
+    best = min(roots, key=lambda a: abs(a - start))
+    return unit(best)
 
 
 def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,

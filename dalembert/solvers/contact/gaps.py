@@ -159,6 +159,27 @@ class Gaps:
         found = [self.tangents[k] for k in closed.held]
         return np.concatenate(found).astype(int) if found else np.zeros(0, dtype=int)
 
+    @property
+    def sizes(self) -> tuple[int, ...]:
+        """How many sliding velocities each gap has (0 without friction)."""
+        return tuple(len(t) for t in self.tangents) if self.tangents else (0,) * self.count
+
+    def tangential(self, values: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Each gap's entries of ``values`` (one per row of the model) in its sliding
+        velocities' rows (an empty array where it has none): its friction impulse or
+        force.
+
+        Examples
+        --------
+        >>> gaps = Gaps(("a", "b"), 0, np.zeros(2), np.ones(2), np.array([0.3, 0.0]),
+        ...             (np.array([2, 3]), np.array([], dtype=int)))
+        >>> [v.tolist() for v in gaps.tangential(np.array([5.0, 6.0, 0.5, -0.5]))]
+        [[0.5, -0.5], []]
+        """
+        if not self.tangents:
+            return tuple(np.zeros(0) for _ in range(self.count))
+        return tuple(np.array(values[rows], dtype=float) for rows in self.tangents)
+
     def values(self, full: NumericModel, t: float, q: np.ndarray) -> np.ndarray:
         """``g(q, t)``, one per gap (the last entries of the model's ``psi``)."""
         return full.position_constraint(t, q)[-self.count:]

@@ -67,6 +67,9 @@ class ImpactOutcome:
         The velocities after.
     impulses
         The impulse on each gap (0 where it did not act).
+    friction_impulses
+        Each gap's friction impulse: its impulse in its sliding velocities' rows (one
+        entry per sliding velocity; 0 where it did not act, empty without friction).
     generalized_impulse
         ``M (qd+ - qd-)``, by coordinate.
     energy_lost
@@ -77,6 +80,7 @@ class ImpactOutcome:
 
     qd: np.ndarray
     impulses: np.ndarray
+    friction_impulses: tuple[np.ndarray, ...]
     generalized_impulse: np.ndarray
     energy_lost: float
     stages: int
@@ -127,6 +131,7 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     """
     v = np.asarray(qd, dtype=float)
     total = np.zeros(gaps.count)
+    every = np.zeros(full.m)  # every row's impulse, summed over the stages
     stages = 0
     while True:
         before = gaps.rates(full, t, q, v)
@@ -150,9 +155,11 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
             _complementary(full, gaps, t, q, v, before, chosen, e)
         v = after.qd
         total += after.impulses[gaps.rows]
+        every += after.impulses
         stages += 1
     lost = float(full.energies(t, q, qd)[0] - full.energies(t, q, v)[0])
-    return ImpactOutcome(v, total, _momentum_change(full, t, q, qd, v), lost, stages)
+    return ImpactOutcome(v, total, gaps.tangential(every),
+                         _momentum_change(full, t, q, qd, v), lost, stages)
 
 
 def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,

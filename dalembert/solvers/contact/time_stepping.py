@@ -124,7 +124,7 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
     kkt = kkt_factorization(pattern)
     bilateral = np.zeros(m, dtype=bool)
     bilateral[:gaps.first] = True
-    history = ContactHistory(gaps.names)
+    history = ContactHistory(gaps.names, tangents=gaps.sizes)
     q, v = np.array(y0[:n], dtype=float), np.array(y0[n:], dtype=float)
     history.switches.append(Switch(t0, (), q.copy(), v.copy()))
     times, states, forces = [t0], [np.concatenate([q, v])], [np.zeros(m)]
@@ -157,7 +157,8 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
             # opened and closed again at rest within the cascade)
             if new and (gaps.rates(full, end, q, v)[new] < -gaps.rest_speed[new]).any():
                 lost = float(full.energies(end, q, v)[0] - full.energies(end, q, v_next)[0])
-                history.impacts.append(ImpactRecord(end, P[gaps.rows], lost, v, v_next))
+                history.impacts.append(ImpactRecord(end, P[gaps.rows], lost, v, v_next,
+                                                    gaps.tangential(P)))
             if closed != closed_before:
                 history.switches.append(Switch(end, closed, q.copy(), v_next.copy()))
                 closed_before = closed

@@ -1,0 +1,89 @@
+"""The direction a contact at rest starts to slide in, with two sliding velocities.
+
+Reference: a solid cylinder (mass ``m``, radius ``r``, ``I = m r^2 / 2``) lying on a
+floor, its axis along ``y`` (held level: it rolls along ``x``, slides along ``y``),
+pushed at its axis from rest by a constant horizontal force ``F``. In its minimal
+coordinates ``x, y, theta`` (``z = r``), with the friction force ``f`` at the contact,
+
+    m x'' = F_x + f_x,   m y'' = F_y + f_y,   I theta'' = r f_x,
+
+so the contact point's acceleration is ``a = (F_x / m + k f_x / m, F_y / m + f_y / m)``,
+``k = 1 + m r^2 / I = 3``: its tangential mass is three times smaller along ``x``.
+Rolling without sliding needs ``f = -(F_x / k, F_y)``, within the cone
+``|f| <= mu m g`` (so a push ``|F| > mu m g`` may still roll it). Beyond, it slides
+with ``f = -mu m g d`` along ``d = a / |a|``: ``a = s d`` with ``s > 0`` gives
+``d = (F_x / m / (s + k mu g), F_y / m / (s + mu g))``, and ``|d| = 1`` is the quartic
+
+    (F_x/m)^2 (s + mu g)^2 + (F_y/m)^2 (s + k mu g)^2 = (s + k mu g)^2 (s + mu g)^2
+
+in ``s``; the direction of the excess force, ``(F_x / k, F_y)``, differs from ``d``
+(by 16 degrees for the 12 N push below). The force stays constant and so does ``d``:
+the motion is ``x = x'' t^2 / 2`` and so on.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dalembert import System, Unilateral, coordinates
+
+M, R, G, MU = 1.0, 0.2, 9.81, 0.3
+INERTIA = M * R**2 / 2
+K = 1 + M * R**2 / INERTIA
+X, Y, Z, TH = coordinates("x y z theta")
+
+
+def cylinder(push: np.ndarray) -> System:
+    return System([X, Y, Z, TH], kinetic=M / 2 * (X.diff() ** 2 + Y.diff() ** 2
+                                                  + Z.diff() ** 2) + INERTIA / 2 * TH.diff() ** 2,
+                  potential=M * G * Z - push[0] * X - push[1] * Y,
+                  constraints=[Unilateral(Z - R, name="floor", friction=MU,
+                                          tangents=[X.diff() + R * TH.diff(), Y.diff()])])
+
+
+def sliding_direction(push: np.ndarray) -> np.ndarray:
+    """``d`` from the quartic's positive root (see the module docstring)."""
+    ax, ay = push / M
+    b1, b2 = np.poly1d([1.0, MU * G]), np.poly1d([1.0, K * MU * G])
+    quartic = (b2 * b1) ** 2 - ax**2 * b1**2 - ay**2 * b2**2
+    (s,) = [float(v.real) for v in quartic.roots if abs(v.imag) < 1e-9 and v.real > 0]
+    return np.array([ax / (s + K * MU * G), ay / (s + MU * G)])
+
+
+@pytest.mark.parametrize(("force", "angle"), [(12.0, 0.5), (5.0, 0.6), (20.0, 2.0)])
+def test_a_cylinder_pushed_beyond_its_cone_slides_where_its_contact_accelerates(force, angle):
+    push = force * np.array([np.cos(angle), np.sin(angle)])
+    assert np.hypot(push[0] / K, push[1]) > MU * M * G  # it cannot roll
+    d = sliding_direction(push)
+    assert abs(np.linalg.norm(d) - 1.0) < 1e-14
+    friction = -MU * M * G * d
+    qdd = np.array([(push[0] + friction[0]) / M, (push[1] + friction[1]) / M, 0.0,
+                    R * friction[0] / INERTIA])
+    t = np.linspace(0.0, 0.3, 7)
+    traj = cylinder(push).simulate((0.0, 0.3), {"z": R}, t_eval=t)
+    assert traj.success, traj.message
+    assert len(traj.contacts.switches) == 1  # it slides from the start to the end
+    forces = np.column_stack([traj.multiplier("floor_friction_1"),
+                              traj.multiplier("floor_friction_2")])
+    assert np.abs(forces - friction).max() < 1e-10  # from the start on
+    # later on, friction follows the sliding velocity's direction, in which the
+    # rolling x' + r theta' cancels about two digits
+    assert np.abs(traj.qdd - qdd).max() < 1e-10 * np.abs(qdd).max()
+    assert np.abs(traj.qdd[0] - qdd).max() < 1e-12 * np.abs(qdd).max()  # the onset
+    assert np.abs(traj.q[:, [0, 1, 3]] - np.outer(t**2 / 2, qdd[[0, 1, 3]])).max() < 1e-10
+    slip = np.column_stack([traj["x_dot"] + R * traj["theta_dot"], traj["y_dot"]])[1:]
+    assert np.abs(slip / np.linalg.norm(slip, axis=1)[:, None] - d).max() < 1e-10
+
+
+def test_a_cylinder_pushed_harder_than_mu_m_g_may_still_roll():
+    """Its contact holds ``(F_x / 3, F_y)``: within the cone though ``|F|`` is not."""
+    push = 4.0 * np.array([np.cos(0.3), np.sin(0.3)])
+    assert np.linalg.norm(push) > MU * M * G > np.hypot(push[0] / K, push[1])
+    t = np.linspace(0.0, 0.3, 7)
+    traj = cylinder(push).simulate((0.0, 0.3), {"z": R}, t_eval=t)
+    assert traj.success, traj.message
+    rolling = push[0] / (M + INERTIA / R**2)
+    assert np.abs(traj["x"] - rolling * t**2 / 2).max() < 1e-12
+    assert np.abs(traj["y"]).max() < 1e-12
+    assert np.abs(traj.multiplier("floor_friction_2") + push[1]).max() < 1e-12
