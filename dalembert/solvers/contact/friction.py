@@ -361,7 +361,7 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         if excess[worst] <= allowed or size == 0.0:
             break
         chosen.held.discard(worst)
-        chosen.directions[worst] = -force / size
+        chosen.directions[worst] = -force / size  # sliding, for the set slip_direction sees
         chosen.directions[worst] = slip_direction(full, gaps, t, q, qd, chosen.of(closed),
                                                   chosen.directions, worst, -force / size,
                                                   kkt)
