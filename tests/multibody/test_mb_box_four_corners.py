@@ -74,7 +74,9 @@ def test_a_box_on_an_incline_sticks_or_slides(alpha):
     R = elementary_rotation("y", -alpha)
     q0, qd0 = mb.initial_state(positions={"box": R @ np.array([0.0, 0.0, C / 2])},
                                orientations={"box": R})
-    traj = mb.simulate((0.0, 0.2), q0, qd0, contact_mode="time-stepping",
+    # 50 steps: each takes hundreds of Gauss-Seidel sweeps here (the four corners'
+    # impulses are not unique and converge slowly along the ones that change nothing)
+    traj = mb.simulate((0.0, 0.05), q0, qd0, contact_mode="time-stepping",
                        contact_step=H)
     assert traj.success, traj.message
     velocity = np.column_stack([traj[f"box_{c}_dot"] for c in "xyz"])

@@ -258,13 +258,15 @@ def test_a_parallelogram_four_bar_passes_its_dead_centres(backend):
 def test_a_rod_shrinking_to_zero_stops_within_seconds_naming_it(backend):
     """A Cartesian pendulum whose rod length 1 - t/2 reaches zero at t = 2: the
     constraint's gradient vanishes there. The run stops just before, naming the rod
-    (it used to take millions of steps without a word)."""
+    (it used to take millions of steps without a word). Started at t = 1.5, a quarter
+    of the rod left: the steps collapse in the last thousandth either way (from t = 0
+    the Python loop's careful steps took 36 s)."""
     x, y = coordinates("x y")
     rod = System([x, y], kinetic=(x.diff() ** 2 + y.diff() ** 2) / 2, potential=G * y,
                  constraints=[Holonomic(x**2 + y**2 - (1 - time_symbol / 2) ** 2, name="rod")])
     with pytest.warns(IntegrationWarning) as caught:
-        traj = rod.simulate((0, 3.0), {x: 1.0, y: 0.0}, {x: -0.5}, backend=backend)
-    assert traj.stats["n_steps"] < 100_000  # about 22,000 (millions before)
+        traj = rod.simulate((1.5, 3.0), {x: 0.25, y: 0.0}, {x: -0.5}, backend=backend)
+    assert traj.stats["n_steps"] < 50_000  # about 12,000 (millions before)
     assert not traj.success and 1.99 < traj.t[-1] < 2.0
     message = str(caught[-1].message)
     assert "the norm of rod fell" in message and "singular configuration" in message
