@@ -27,7 +27,7 @@ import numpy as np
 
 from ...codegen.compiled import NumericModel
 from . import library
-from .solver import NativeSolver, c_function
+from .solver import NativeSolver, Pinned, c_function
 
 #: The margin of the position and rate screens, relative to ``1 + max |q|`` and
 #: ``1 + max |qd|``: their values are the event functions' own, from the same generated
@@ -138,7 +138,7 @@ class ScreenTable:
     """
 
     def __init__(self, screens: Sequence[Screen], native: NativeSolver) -> None:
-        self._keep: list[np.ndarray] = []
+        self._pinned = pin = Pinned()
         s = self.struct = library.Screens(margin=MARGIN, force_rtol=FORCE_RTOL)
         watched = {id(x.watched): x.watched for x in screens
                    if isinstance(x, (PositionScreen, RateScreen))}
@@ -151,26 +151,28 @@ class ScreenTable:
         if watched:
             (model,) = watched.values()
             functions = model.compiled.functions
-            s.p = self._array(model.p, np.float64, copy=False)
+            s.p = pin.array(model.p, np.float64)
+            if pin.arrays[-1] is not model.p:  # C must read the vector the run writes
+                raise ValueError("the watched model's parameters must be a float64 vector")
             if positions:
                 s.position = c_function("position", functions["position"].native)
-                s.psi = self._zeros(len(model.holonomic_rows))
+                s.psi = pin.zeros(len(model.holonomic_rows))
                 s.n_position = len(positions)
-                s.pos_at = self._array([x.at for x in positions])
-                s.pos_floor = self._array([x.floor for x in positions], np.float64)
+                s.pos_at = pin.array([x.at for x in positions])
+                s.pos_floor = pin.array([x.floor for x in positions], np.float64)
             if rates:
                 s.velocity = c_function("velocity", functions["velocity"].native)
-                s.vel = self._zeros(len(model.pattern.A_rows) + model.m)
+                s.vel = pin.zeros(len(model.pattern.A_rows) + model.m)
                 self._rates(s, rates, model)
         s.n_force = len(forces)
-        s.force_row = self._array([x.row for x in forces])
+        s.force_row = pin.array([x.row for x in forces])
         s.n_cone = len(cones)
-        s.cone_normal = self._array([x.normal for x in cones])
-        s.cone_start = self._array(np.cumsum([0] + [len(x.tangents) for x in cones]))
-        s.cone_tangent = self._array([j for x in cones for j in x.tangents])
-        s.cone_mu = self._array([x.mu for x in cones], np.float64)
-        setattr(s, "lambda", self._zeros(native.m))  # (a keyword in Python)
-        s.ydot = self._zeros(2 * native.n)
+        s.cone_normal = pin.array([x.normal for x in cones])
+        s.cone_start = pin.array(np.cumsum([0] + [len(x.tangents) for x in cones]))
+        s.cone_tangent = pin.array([j for x in cones for j in x.tangents])
+        s.cone_mu = pin.array([x.mu for x in cones], np.float64)
+        setattr(s, "lambda", pin.zeros(native.m))  # (a keyword in Python)
+        s.ydot = pin.zeros(2 * native.n)
         self.address = ctypes.addressof(s)
 
     def _rates(self, s: library.Screens, rates: Sequence[RateScreen],
@@ -187,15 +189,6 @@ class ScreenTable:
                 weight += [w] * (len(entries) + 1)
             start.append(len(value))
         s.n_rate = len(rates)
-        s.rate_start, s.rate_value = self._array(start), self._array(value)
-        s.rate_col, s.rate_weight = self._array(col), self._array(weight, np.float64)
+        s.rate_start, s.rate_value = self._pinned.array(start), self._pinned.array(value)
+        s.rate_col, s.rate_weight = self._pinned.array(col), self._pinned.array(weight, np.float64)
 
-    def _array(self, values, dtype=np.int64, copy: bool = True) -> int:
-        array = np.ascontiguousarray(values, dtype=dtype)
-        if not copy and array is not values:
-            raise ValueError("the watched model's parameters must be a float64 vector")
-        self._keep.append(array)
-        return array.ctypes.data
-
-    def _zeros(self, size: int) -> int:
-        return self._array(np.zeros(max(int(size), 1)), np.float64)

@@ -33,6 +33,50 @@ _MESSAGES = {
 }
 
 
+class Pinned:
+    """The arrays a C struct points to, kept alive with it: each added as a
+    contiguous array of its type, its address returned for the struct.
+
+    Examples
+    --------
+    >>> pinned = Pinned()
+    >>> address = pinned.array([1, 2, 3])
+    >>> pinned.arrays[-1].ctypes.data == address, pinned.arrays[-1].dtype
+    (True, dtype('int64'))
+    >>> _ = pinned.zeros(0)
+    >>> pinned.arrays[-1].tolist()
+    [0.0]
+    """
+
+    def __init__(self) -> None:
+        self.arrays: list[np.ndarray] = []
+
+    def array(self, values, dtype=np.int64) -> int:
+        """The address of ``values`` as a contiguous array of ``dtype`` (``values``
+        itself if it is one already: C then reads and writes that array).
+
+        Parameters
+        ----------
+        values
+            An array or a sequence.
+        dtype
+            Its type in C.
+        """
+        array = np.ascontiguousarray(values, dtype=dtype)
+        self.arrays.append(array)
+        return array.ctypes.data
+
+    def zeros(self, size: int) -> int:
+        """The address of ``size`` doubles (at least one), zeroed.
+
+        Parameters
+        ----------
+        size
+            How many.
+        """
+        return self.array(np.zeros(max(int(size), 1)), np.float64)
+
+
 class NativeSolver:
     """The right-hand side ``y' = F(t, y)`` and the step projection, evaluated in C.
 
@@ -83,7 +127,7 @@ class NativeSolver:
             ("native model", kept_key, float(baumgarte), generated),
             lambda: _SharedModel(tables, self.structure, num, handles, baumgarte))
         self.model = self.shared.model
-        self._keep: list[object] = []  # every array the run's struct points to (kept alive)
+        self._pinned = Pinned()  # every array the run's struct points to
         self.data = self._data()
         self._at = (ctypes.addressof(self.model), ctypes.addressof(self.data))
         self._holonomic_mask = tables.address["holonomic_mask"]
@@ -93,34 +137,27 @@ class NativeSolver:
         self._callback: object = None
         self.set_inputs(None)
 
-    def _array(self, values, dtype=np.int64) -> int:
-        array = np.ascontiguousarray(values, dtype=dtype)
-        self._keep.append(array)
-        return array.ctypes.data
-
-    def _buffer(self, size: int) -> int:
-        # zeroed: kkt.c's pair vectors rely on it (load_pairs writes only A's slots)
-        return self._array(np.zeros(max(int(size), 1)), np.float64)
-
     def _data(self) -> library.Data:
         """This run's ``dl_data``: its parameter vector and work arrays."""
         num, s, shared = self.num, self.structure, self.shared
         n, m = self.n, self.m
         # the vector itself (no copy): the inputs' callback writes into it
         self._parameters = num.p
-        data = library.Data(p=self._array(num.p, np.float64), conditioning=np.inf)
+        data = library.Data(p=self._pinned.array(num.p, np.float64), conditioning=np.inf)
         sizes = {"vel_values": len(num.pattern.A_rows) + m, "psi": len(num.holonomic_rows),
                  "lambda": m, "qdd": n, "q_trial": n, "error_work": 4 * n,
                  "gram_diagonal": m, **work_sizes(s, n, m)}
         for name, size in sizes.items():
             owner, _, field = name.rpartition(".")
-            setattr(data.factor if owner else data, field, self._buffer(size))
-        data.factor.mask = self._array(np.zeros(max(m, 1)), np.uint8)
-        values = self._buffer(shared.values_size)
+            # zeroed: kkt.c's pair vectors rely on it (load_pairs writes only A's slots)
+            setattr(data.factor if owner else data, field, self._pinned.zeros(size))
+        data.factor.mask = self._pinned.array(np.zeros(max(m, 1)), np.uint8)
+        values = self._pinned.zeros(shared.values_size)
         data.values, data.c = values, values + DOUBLE * shared.c_at
         for name, size in shared.parts.items():  # the solve's layout [blocks, u, a]
             at = shared.part_at.get(name)
-            setattr(data, name, self._buffer(size) if at is None else values + DOUBLE * at)
+            setattr(data, name, self._pinned.zeros(size) if at is None
+                    else values + DOUBLE * at)
         return data
 
     def _check(self, status: int) -> None:
@@ -146,7 +183,7 @@ class NativeSolver:
         slots = slice(start, start + len(self.num.compiled.input_names))
         state = np.zeros(2 * n)  # C copies [q, qd] here before each call
         q, qd = state[:n], state[n:]
-        self.data.input_state = self._array(state, np.float64)
+        self.data.input_state = self._pinned.array(state, np.float64)
 
         def inputs(t: float) -> int:
             try:
