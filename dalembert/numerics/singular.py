@@ -57,6 +57,11 @@ RUNAWAY_WINDOWS = 3
 #: quantity of the model grows without bound as the time nears a finite limit: the run
 #: would crawl toward it for hours).
 RUNAWAY_STEPS = 1e8
+#: Steps that collapsed away from any singular configuration have *stalled* when, in
+#: ``RUNAWAY_WINDOWS`` windows in a row, shrinking or not, the rest of the run would
+#: take more than this many steps at their mean (days in Python, hours in C): a stiff
+#: stretch an explicit method cannot step through, or a force that is not smooth.
+STALL_STEPS = 1e10
 #: A projection that moves a step's end by more than this many times the step's
 #: tolerance (its error norm; an ordinary step's correction stays under 1, and near a
 #: singular configuration an exact projection's grows like the drift over the

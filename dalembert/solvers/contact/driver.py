@@ -37,7 +37,7 @@ message naming the contacts: a switch with no solution (a
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Container
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -51,7 +51,7 @@ from ...model.constraints import ClosedGaps, friction_force_name
 from ...options import ImpactLaw
 from ..impact import Impact, impact
 from ..kkt.sparse import matvec
-from ..native.screens import ConeScreen, ForceScreen, PositionScreen, RateScreen, Screen
+from ..native.screens import ConeScreen, ForceScreen, Never, PositionScreen, RateScreen, Screen
 from ..running.integrate import IntegrationResult
 from ..running.run_data import RunData, RunSegment
 from ..running.sampled import sampled_schedule
@@ -65,7 +65,7 @@ from .friction import (
     held_forces,
     sliding_velocity,
 )
-from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
+from .gaps import FORCE_RTOL, ONSET_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .laws import closed_gaps, resolve_impact
 
 #: Switches within rounding of one instant before the run is called a chattering cascade.
@@ -281,6 +281,9 @@ class SegmentStart:
     directions: dict[int, np.ndarray] = field(default_factory=dict)
     #: The open gaps below 0 at the start (within the touching tolerance), by gap.
     floors: dict[int, float] = field(default_factory=dict)
+    #: The sliding gaps starting to slide from rest, by gap: the speed along their
+    #: start direction where their onset ends (see :func:`_onset`).
+    onset: dict[int, float] = field(default_factory=dict)
 
 
 #: ``start(closed, t, y, events, inputs)``: the data of a run of the model of the closed
@@ -359,6 +362,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     closed = which.closed
     history.switches.append(Switch(t, closed, y[:n].copy(), y[n:].copy()))
     at_once, last_switch = 0, t
+    ended: set[int] = set()  # the gaps whose onset has ended since the last switch
     while True:
         segment_start.t = t
         segment_start.directions.clear()
@@ -366,15 +370,20 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         below = gaps.values(full, t, y[:n])
         segment_start.floors = {k: float(below[k]) for k in range(gaps.count)
                                 if k not in closed and below[k] < 0.0}
+        segment_start.onset.clear()
+        segment_start.onset.update(_onset(full, gaps, which, t, y, ended))
         data = made.get(which)
         if data is None:
             forces[which] = SlidingForces(full.for_run(), gaps, which,
-                                          segment_start.directions,
+                                          segment_start.directions, segment_start.onset,
                                           inputs_at) if which.sliding else None
             events, watched[which] = _contact_events(gaps, which, full, segment_start)
             data = made[which] = start(which, t, y, events,
                                        _segment_inputs(gaps, which, forces[which], signal,
                                                        held_sample if hold.sampled else None))
+        sliding = forces[which]
+        if sliding is not None:
+            sliding.restart()
         if held is not None and not which.sliding:  # a sliding set's inputs ask for it
             data.hold_inputs(held)
         end = hold.next_instant(t, tf)
@@ -419,6 +428,11 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         else:
             te, ye, event = fired
             kind, k = watched[which][event]
+            if kind == "slid":  # the same closed set, k sliding along its velocity
+                directions = _slid_directions(full, gaps, which, te, ye, segment_start, k)
+                ended.add(k)
+                t, y = te, ye
+                continue
             opening = k if kind == "separating" else None
             slipping = k if kind == "slipping" else None
             at_once = at_once + 1 if te - last_switch <= 1e-12 * (1.0 + abs(te)) else 0
@@ -443,6 +457,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             break
         if fired is not None or closed != was:
             history.switches.append(Switch(te, closed, y[:n].copy(), y[n:].copy()))
+        ended.clear()
         t = te
         if fired is not None:
             last_switch = te
@@ -647,7 +662,9 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
     - per sticking gap, ``mu lambda_n - |lambda_t|`` (``"slipping"``: its force leaves
       the cone);
     - per sliding gap, its sliding velocity along its direction at the segment's start
-      (``"sticking"``: it stops).
+      (``"sticking"``: it stops); while it starts to slide from rest with two sliding
+      velocities (:func:`_onset`), the speed where its onset ends less that velocity
+      (``"slid"``: it slides along its velocity from there).
 
     Each carries its screen (:mod:`~dalembert.solvers.native.screens`), so that the
     segments' steps run in C between switches."""
@@ -659,7 +676,7 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
     events: list[Callable] = []
     kinds: list[tuple[str, int]] = []
 
-    def add(event: Callable, kind: str, k: int, screen: Callable[[], Screen]) -> None:
+    def add(event: Callable, kind: str, k: int, screen: Callable[[], Screen | None]) -> None:
         event.__name__ = f"{gaps.names[k]} {kind}"
         event.terminal = True  # type: ignore[attr-defined]
         event.direction = -1  # type: ignore[attr-defined]
@@ -708,7 +725,51 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
             return _open_at_start(start, t, float(s @ start.directions[k]))
         add(sticking, "sticking", k, partial(
             _sliding_screen, full, tuple(int(r) for r in gaps.tangents[k]), start, k))
+        if len(gaps.tangents[k]) != 2:
+            continue
+
+        def slid(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
+            speed = start.onset.get(k)
+            if speed is None:
+                return 1.0  # not starting from rest in this segment: never fires
+            s = sliding_velocity(full, gaps, k, t, q, qd)
+            return _open_at_start(start, t, speed - float(s @ start.directions[k]))
+        # an onset's steps are taken in Python (its friction is found anew at each
+        # evaluation there): unscreened, and not watched in the other segments
+        add(slid, "slid", k, partial(_onset_screen, start, k))
     return tuple(events), tuple(kinds)
+
+
+def _onset_screen(start: SegmentStart, k: int) -> Never | None:
+    """The screen of sliding gap ``k``'s ``"slid"`` event as the current segment
+    starts: none in its onset (whose steps Python takes), else it cannot fire."""
+    return None if k in start.onset else Never()
+
+
+def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.ndarray,
+           ended: Container[int]) -> dict[int, float]:
+    """The sliding gaps of ``which`` with two sliding velocities that start to slide
+    from rest at ``(t, y)`` (sliding slower than
+    :data:`~dalembert.solvers.contact.gaps.ONSET_RTOL` relative to ``1 + max |qd|``;
+    not those in ``ended``, whose onset has ended since the last switch), with that
+    speed: their friction takes the direction their contact point accelerates in
+    (:func:`~dalembert.solvers.contact.friction.consistent_direction`) until they
+    slide that fast along their start direction."""
+    n = full.n
+    q, qd = y[:n], y[n:]
+    speed = ONSET_RTOL * (1.0 + np.abs(qd).max(initial=0.0))
+    rates = row_rates(full, t, q, qd)
+    return {k: speed for k in which.sliding if len(gaps.tangents[k]) == 2
+            and k not in ended and float(np.linalg.norm(rates[gaps.tangents[k]])) < speed}
+
+
+def _slid_directions(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float,
+                     y: np.ndarray, start: SegmentStart, k: int) -> dict[int, np.ndarray]:
+    """The sliding directions from ``(t, y)``, where gap ``k``'s onset has ended: its
+    velocity's direction, the others' as they were."""
+    n = full.n
+    s = row_rates(full, t, y[:n], y[n:])[gaps.tangents[k]]
+    return {**start.directions, k: s / float(np.linalg.norm(s))}
 
 
 def _gap_screen(full: NumericModel, at: int, start: SegmentStart, k: int) -> PositionScreen:

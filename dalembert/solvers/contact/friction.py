@@ -37,7 +37,7 @@ way and sliding the other, is not).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,6 +56,10 @@ from .impulses import contact_impulses
 #: Samples of the slip direction's angle per half turn, to bracket its roots
 #: (:func:`slip_direction`).
 SLIP_SAMPLES = 24
+#: :func:`consistent_direction`'s secant method: the second angle's offset from the
+#: first (radians) and the most iterations (it converges in a few from the last one).
+CONSISTENT_START = 1e-6
+CONSISTENT_ITERATIONS = 20
 
 
 @dataclass
@@ -248,34 +252,48 @@ class SlidingForces:
     starts
         Each sliding gap's direction at the current segment's start (read at each
         call: one object serves every segment with this set).
+    onset
+        The sliding gaps that start to slide from rest in the current segment (as
+        ``starts``), which take :func:`consistent_direction`.
     user
         The user's inputs at a state (the held sample, if sampled; ``None``: the
         model has none).
     """
 
     def __init__(self, full: NumericModel, gaps: Gaps, which: ClosedGaps,
-                 starts: dict[int, np.ndarray],
+                 starts: dict[int, np.ndarray], onset: Container[int],
                  user: Callable[[float, np.ndarray, np.ndarray], np.ndarray | None]) -> None:
         self.full, self.gaps, self.which = full, gaps, which
-        self.starts, self.user = starts, user
+        self.starts, self.onset, self.user = starts, onset, user
         self.kkt = kkt_factorization(full.pattern)
         #: The rows acting, found at the first state (which held rows depend on the
         #: others does not change while the set is closed).
         self.acting: np.ndarray | None = None
+        #: The last consistent direction found, by gap (see :meth:`restart`).
+        self.last: dict[int, np.ndarray] = {}
+
+    def restart(self) -> None:
+        """Forget the last consistent directions (a segment starts)."""
+        self.last.clear()
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        full, gaps = self.full, self.gaps
+        full, gaps, which = self.full, self.gaps, self.which
         inputs = self.user(t, q, qd)
         if inputs is not None:
             full.set_inputs(inputs)
         rates = row_rates(full, t, q, qd)
         directions = {k: current_direction(rates[gaps.tangents[k]], self.starts[k])
-                      for k in self.which.sliding}
+                      for k in which.sliding}
         if self.acting is None:
-            self.acting = acting_rows(full, gaps, t, q, self.which)
-        _, lam = solve_sliding(full, gaps, t, q, qd, self.which, directions, self.kkt,
+            self.acting = acting_rows(full, gaps, t, q, which)
+        for k in which.sliding:
+            if k in self.onset:
+                directions[k] = self.last[k] = consistent_direction(
+                    full, gaps, t, q, qd, which, directions, k,
+                    self.last.get(k, self.starts[k]), self.kkt)
+        _, lam = solve_sliding(full, gaps, t, q, qd, which, directions, self.kkt,
                                acting=self.acting)
-        return np.concatenate([lam[gaps.tangents[k]] for k in self.which.sliding])
+        return np.concatenate([lam[gaps.tangents[k]] for k in which.sliding])
 
 
 def friction_at(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
@@ -432,23 +450,9 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
     42.8019
     """
-    rows = gaps.tangents[k]
-    if len(rows) != 2:
+    if len(gaps.tangents[k]) != 2:
         return guess
-    values = full.kkt_sparse(t, q, qd)
-    _, _, Av, c = values
-    pattern = full.pattern
-    kkt = kkt or kkt_factorization(pattern)
-    acting = acting_rows(full, gaps, t, q, which)
-    trial = dict(directions)
-
-    def unit(angle: float) -> np.ndarray:
-        return np.array([np.cos(angle), np.sin(angle)])
-
-    def accel(angle: float) -> np.ndarray:
-        trial[k] = unit(angle)
-        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, trial, kkt, values, acting)
-        return (matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c)[rows]
+    accel = _tangential_acceleration(full, gaps, t, q, qd, which, directions, k, kkt)
 
     def cross(angle: float) -> float:
         a = accel(angle)
@@ -471,12 +475,116 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
             angle = angles[i] if f0 == 0.0 else \
                 brentq(cross, angles[i], angles[i + 1], xtol=1e-15, rtol=1e-15)
             # sliding along d, not against it (a_t = s d with s < 0 is no solution)
-            if float(accel(angle) @ unit(angle)) >= -TOUCH_RTOL * scale:
+            if float(accel(angle) @ _unit(angle)) >= -TOUCH_RTOL * scale:
                 roots.append(float(angle))
     if not roots:  # no direction it can slide in (a contact problem without a solution)
         return guess
     best = min(roots, key=lambda a: abs(a - start))
-    return unit(best)
+    return _unit(best)
+
+
+def consistent_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                         qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
+                         k: int, previous: np.ndarray, kkt: KKTFactorization | None = None
+                         ) -> np.ndarray:
+    """The direction of gap ``k``'s friction while it starts to slide from rest: the
+    unit ``d`` along which its tangential acceleration points (``a_t(d) = s d``, as
+    :func:`slip_direction` finds it at the onset), followed from ``previous`` (the
+    last one found) by the secant method on its angle.
+
+    Why not the sliding velocity's direction ``v / |v|``: near ``v = 0`` that turns
+    at a rate of about ``|a_t| / |v|`` towards this one wherever the contact's
+    tangential mass is anisotropic (a cylinder rolling one way and sliding the
+    other), a stiffness without bound that stalls an explicit method at the onset.
+    The motion follows this direction within ``O(|v|)`` there (its slow manifold), so
+    the segment takes it while ``|v|`` is below a small speed
+    (:data:`~dalembert.solvers.contact.gaps.ONSET_RTOL`), then ``v / |v|``.
+
+    Parameters
+    ----------
+    full, gaps
+        The model with every gap a row and its sliding velocities.
+    t, q, qd
+        The state (the inputs as ``full`` holds them).
+    which
+        The closed set, ``k`` sliding (with two sliding velocities).
+    directions
+        Each sliding gap's unit direction (``k``'s is replaced by the trial ones).
+    k
+        The gap starting to slide.
+    previous
+        A unit direction near the one sought.
+    kkt
+        A factorization object of ``full``'s pattern to reuse.
+
+    Examples
+    --------
+    The cylinder of :func:`slip_direction`'s example, from its direction rounded:
+
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> x, y, z, th = coordinates("x y z theta")
+    >>> push = 12.0 * np.array([np.cos(0.5), np.sin(0.5)])
+    >>> cylinder = System([x, y, z, th], kinetic=(x.diff()**2 + y.diff()**2
+    ...                   + z.diff()**2) / 2 + 0.02 / 2 * th.diff()**2,
+    ...                   potential=9.81 * z - push[0] * x - push[1] * y,
+    ...                   constraints=[Unilateral(z - 0.2, "floor", friction=0.3,
+    ...                       tangents=[x.diff() + 0.2 * th.diff(), y.diff()])])
+    >>> which = ClosedGaps((0,), sliding=(0,))
+    >>> full = cylinder._closed(ClosedGaps((0,), held=(0,))).numeric()
+    >>> gaps = Gaps.of(cylinder.definition.unilateral, 0, [0.0])
+    >>> q, rest = np.array([0.0, 0.0, 0.2, 0.0]), np.zeros(4)
+    >>> near = np.array([np.cos(0.75), np.sin(0.75)])
+    >>> d = consistent_direction(full, gaps, 0.0, q, rest, which, {0: near}, 0, near)
+    >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
+    42.8019
+    """
+    accel = _tangential_acceleration(full, gaps, t, q, qd, which, directions, k, kkt)
+
+    def cross(angle: float) -> float:
+        a = accel(angle)
+        return float(np.cos(angle) * a[1] - np.sin(angle) * a[0])
+
+    a0 = float(np.arctan2(previous[1], previous[0]))
+    a1 = a0 + CONSISTENT_START
+    c0, c1 = cross(a0), cross(a1)
+    for _ in range(CONSISTENT_ITERATIONS):
+        if c1 == c0:
+            break
+        a0, a1, c0 = a1, a1 - c1 * (a1 - a0) / (c1 - c0), c1
+        if abs(a1 - a0) <= 4 * np.finfo(float).eps * (1.0 + abs(a1)):
+            break
+        c1 = cross(a1)
+    if not np.isfinite(a1) or float(accel(a1) @ _unit(a1)) < 0.0:
+        # lost (no such direction near the last): the whole search
+        return slip_direction(full, gaps, t, q, qd, which, directions, k, previous, kkt)
+    return _unit(a1)
+
+
+def _unit(angle: float) -> np.ndarray:
+    return np.array([np.cos(angle), np.sin(angle)])
+
+
+def _tangential_acceleration(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                             qd: np.ndarray, which: ClosedGaps,
+                             directions: dict[int, np.ndarray], k: int,
+                             kkt: KKTFactorization | None) -> Callable[[float], np.ndarray]:
+    """``a_t(angle)``: gap ``k``'s tangential acceleration (its two sliding
+    velocities' rates) with the closed set ``which``, ``k`` sliding along the unit
+    vector at ``angle`` and the others along ``directions``."""
+    rows = gaps.tangents[k]
+    values = full.kkt_sparse(t, q, qd)
+    _, _, Av, c = values
+    pattern = full.pattern
+    kkt = kkt or kkt_factorization(pattern)
+    acting = acting_rows(full, gaps, t, q, which)
+    trial = dict(directions)
+
+    def accel(angle: float) -> np.ndarray:
+        trial[k] = _unit(angle)
+        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, trial, kkt, values, acting)
+        return (matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c)[rows]
+
+    return accel
 
 
 def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,

@@ -73,11 +73,18 @@ class ConeScreen:
     mu: float
 
 
-Screen = PositionScreen | RateScreen | ForceScreen | ConeScreen
+@dataclass(frozen=True)
+class Never:
+    """An event that cannot fire in this stretch (its value a positive constant there)."""
+
+
+Screen = PositionScreen | RateScreen | ForceScreen | ConeScreen | Never
 
 
 def screens_of(events: Sequence[Callable]) -> list[Screen] | None:
-    """The screens of ``events`` as they stand now, or ``None`` if one has none.
+    """The screens of ``events`` as they stand now, or ``None`` if one has none (no
+    ``screen`` attribute, or one returning ``None``: not screened in this stretch,
+    whose steps are then taken in Python).
 
     Parameters
     ----------
@@ -97,9 +104,10 @@ def screens_of(events: Sequence[Callable]) -> list[Screen] | None:
     found = []
     for event in events:
         screen = getattr(event, "screen", None)
-        if screen is None:
+        now = None if screen is None else screen()
+        if now is None:
             return None
-        found.append(screen())
+        found.append(now)
     return found
 
 
@@ -120,9 +128,12 @@ def screenable(events: Sequence[Callable], every_row_kept: bool) -> bool:
     >>> screenable([], True)
     True
     """
-    screens = screens_of(events)
-    return screens is not None and (every_row_kept or not any(
-        isinstance(s, (ForceScreen, ConeScreen)) for s in screens))
+    screens = [getattr(event, "screen", None) for event in events]
+    now = [None if screen is None else screen() for screen in screens]
+    if any(screen is None for screen in screens):
+        return False
+    # (a screen that is None now is not a multiplier's: see screens_of)
+    return every_row_kept or not any(isinstance(x, (ForceScreen, ConeScreen)) for x in now)
 
 
 class ScreenTable:

@@ -331,6 +331,15 @@ class PythonLoop(SimulationLoop):
                 "another method may get through, or the mechanism may lock here")
         remaining = self.collapse.runaway(solver.t, solver.t_bound)
         if remaining is None:
+            left = self.collapse.stalled(solver.t, solver.t_bound)
+            if left is not None:
+                return self.stop(
+                    "failed", f"integration stopped at t={solver.t:.6g}: the steps have "
+                    f"stalled (the last {COLLAPSE_STEPS} or more averaged "
+                    f"{self.collapse.window_step:.1e}): at that size the rest of the run "
+                    f"would take {left:.1e} steps. A stiff stretch an explicit method "
+                    "cannot step through (try method=\"Radau\"), or a force that is not "
+                    "smooth there")
             return self.collapse.quiet(self.n_steps)
         growing = self.runaway(solver.t, solver.y) if self.runaway is not None else ""
         self.stop(
@@ -554,11 +563,11 @@ class StretchLoop(PythonLoop):
                  events: Sequence[Callable] = ()) -> None:
         super().__init__(solver, t_eval, events, project, False, diagnose, singular, careful,
                          runaway, switch)
-        screens = screens_of(self.events)
-        if screens is None:
-            raise ValueError("the loop in C runs screened events only")
-        self._screens = screens  # as they stand at the segment's start
-        self.runner = stretch_runner(solver, self.t_eval, screens)
+        # as they stand at the segment's start; None: not screened in this segment, whose
+        # steps are all taken the Python way
+        self._screens = screens_of(self.events)
+        self.runner = None if self._screens is None else \
+            stretch_runner(solver, self.t_eval, self._screens)
 
     def advance(self) -> None:
         if self.runner is None or self.solver is not self.native or \
@@ -593,7 +602,8 @@ class StretchLoop(PythonLoop):
     def _take_solver(self, new: OdeSolver) -> None:
         self._absorb()  # (taken already after a stretch: nothing twice)
         super()._take_solver(new)
-        self.runner = stretch_runner(new, self.t_eval, self._screens)
+        if self._screens is not None:
+            self.runner = stretch_runner(new, self.t_eval, self._screens)
 
     def interrupt(self) -> None:
         self._absorb()  # a stretch run in C before the Ctrl-C is kept

@@ -28,6 +28,7 @@ from ...numerics.singular import (
     NEAR,
     RUNAWAY_STEPS,
     RUNAWAY_WINDOWS,
+    STALL_STEPS,
     named,
     near_dependent_rows,
 )
@@ -64,6 +65,7 @@ class StepCollapse:
         #: The mean step of the last window :meth:`note` looked at.
         self.window_step = 0.0
         self._shrinking: list[float] = []  # the mean steps of the windows running away
+        self._stalled = 0  # windows in a row with more than STALL_STEPS left
 
     def note(self, t: float, steps: int) -> bool:
         marks = self._marks
@@ -109,14 +111,48 @@ class StepCollapse:
         True False
         True True
         """
-        remaining = abs(t_bound - t) / self.window_step if self.window_step > 0 \
-            else float("inf")
+        remaining = self._remaining(t, t_bound)
         if remaining <= RUNAWAY_STEPS or (self._shrinking and
                                           self.window_step >= self._shrinking[-1]):
             self._shrinking = []
         if remaining > RUNAWAY_STEPS:
             self._shrinking.append(self.window_step)
         return remaining if len(self._shrinking) >= RUNAWAY_WINDOWS else None
+
+    def stalled(self, t: float, t_bound: float) -> float | None:
+        """After a collapse no singular configuration explains (:meth:`note` said so):
+        the steps the rest of the run would take at the last window's mean step, once
+        that exceeded :data:`~dalembert.numerics.singular.STALL_STEPS` in
+        :data:`~dalembert.numerics.singular.RUNAWAY_WINDOWS` windows in a row, the
+        steps shrinking or not; else ``None``.
+
+        Parameters
+        ----------
+        t
+            The time reached.
+        t_bound
+            The end of the run.
+
+        Examples
+        --------
+        >>> watch = StepCollapse(0.0)
+        >>> watch.note(0.5, 1000)               # steps of 5e-4
+        False
+        >>> t, steps = 0.5, 1000
+        >>> for _ in range(3):                  # windows of 600 steps of 1e-12
+        ...     t, steps = t + 6e-10, steps + 600
+        ...     print(watch.note(t, steps), watch.stalled(t, 1.0) is not None)
+        ...     watch.quiet(steps)
+        True False
+        True False
+        True True
+        """
+        self._stalled = self._stalled + 1 if self._remaining(t, t_bound) > STALL_STEPS else 0
+        return self._remaining(t, t_bound) if self._stalled >= RUNAWAY_WINDOWS else None
+
+    def _remaining(self, t: float, t_bound: float) -> float:
+        """The steps to ``t_bound`` at the last window's mean step."""
+        return abs(t_bound - t) / self.window_step if self.window_step > 0 else float("inf")
 
     def quiet(self, steps: int) -> None:
         """No collapse reported before ``COLLAPSE_STEPS`` more steps (the state was not

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import sympy as sp
 
 from dalembert import System, Unilateral, coordinates
 
@@ -87,3 +88,61 @@ def test_a_cylinder_pushed_harder_than_mu_m_g_may_still_roll():
     assert np.abs(traj["x"] - rolling * t**2 / 2).max() < 1e-12
     assert np.abs(traj["y"]).max() < 1e-12
     assert np.abs(traj.multiplier("floor_friction_2") + push[1]).max() < 1e-12
+
+
+def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_velocity():
+    """A push ``c t`` at 0.5 rad: it rolls (``x'' = c_x t / (m + I / r^2)``) until its
+    sticking force ``(c_x t / 3, c_y t)`` reaches ``mu m g``, then slides with friction
+    ``f = -mu m g s / |s|`` along its sliding velocity ``s = (x' + r theta', y')``,
+    which turns from its onset direction towards the push as the push grows (near
+    ``s = 0`` that direction is stiff: the run must step through it). Against those
+    equations, ``s`` a state of its own (``s_x' = (c_x t + f_x) / m + r^2 f_x / I``),
+    integrated by SciPy's Radau with their exact Jacobian from the closed-form state at
+    the onset, ``s`` seeded with 1e-13 along the onset direction (seeded with 1e-11,
+    or integrated by LSODA or BDF, the reference moves by less than 1e-11)."""
+    from scipy.integrate import solve_ivp
+
+    c = 10.0 * np.array([np.cos(0.5), np.sin(0.5)])
+    onset = MU * M * G / np.hypot(c[0] / K, c[1])
+    rolling = M + INERTIA / R**2
+    x0, xd0 = c[0] * onset**3 / 6 / rolling, c[0] * onset**2 / 2 / rolling
+
+    def equations(t, z):
+        x, y, th, sx, sy, thd = z
+        f = -MU * M * G * np.array([sx, sy]) / np.hypot(sx, sy)
+        return [sx - R * thd, sy, thd, (c[0] * t + f[0]) / M + R**2 * f[0] / INERTIA,
+                (c[1] * t + f[1]) / M, R * f[0] / INERTIA]
+
+    def jacobian(t, z):
+        s = z[3:5]
+        size = np.linalg.norm(s)
+        turn = (np.eye(2) - np.outer(s, s) / size**2) / size  # d(s / |s|) / ds
+        J = np.zeros((6, 6))
+        J[0, 3], J[0, 5], J[1, 4], J[2, 5] = 1.0, -R, 1.0, 1.0
+        J[3, 3:5] = -MU * G * (1.0 + M * R**2 / INERTIA) * turn[0]
+        J[4, 3:5] = -MU * G * turn[1]
+        J[5, 3:5] = -R * MU * M * G * turn[0] / INERTIA
+        return J
+
+    d0 = np.array([c[0] / K, c[1]]) / np.hypot(c[0] / K, c[1])
+    t = np.linspace(0.6, 1.0, 5)
+    reference = solve_ivp(equations, (onset, 1.0), [x0, 0.0, -x0 / R, *(1e-13 * d0), -xd0 / R],
+                          method="Radau", jac=jacobian, rtol=1e-13, atol=1e-16, t_eval=t)
+    assert reference.success
+    X, Y, Z, TH = coordinates("x y z theta")
+    time = sp.Symbol("t")
+    system = System([X, Y, Z, TH], kinetic=M / 2 * (X.diff() ** 2 + Y.diff() ** 2
+                                                    + Z.diff() ** 2) + INERTIA / 2 * TH.diff() ** 2,
+                    potential=M * G * Z - c[0] * time * X - c[1] * time * Y,
+                    constraints=[Unilateral(Z - R, name="floor", friction=MU,
+                                            tangents=[X.diff() + R * TH.diff(), Y.diff()])])
+    traj = system.simulate((0.0, 1.0), {"z": R}, t_eval=t, timeout=120)
+    assert traj.success, traj.message
+    (slip,) = [s.t for s in traj.contacts.switches if s.t > 0]
+    assert abs(slip - onset) < 1e-12
+    assert np.abs(traj.q[:, [0, 1, 3]] - reference.y[:3].T).max() < 2e-11
+    s = np.column_stack([traj["x_dot"] + R * traj["theta_dot"], traj["y_dot"]])
+    assert np.abs(s - reference.y[3:5].T).max() < 2e-11
+    assert np.abs(traj["theta_dot"] - reference.y[5]).max() < 2e-11
+    # by t = 1 it has turned by a tenth of a radian from its onset direction
+    assert np.arccos(s[-1] @ d0 / np.linalg.norm(s[-1])) > 0.1
