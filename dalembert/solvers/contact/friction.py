@@ -197,15 +197,21 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     """
     Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
     kkt = kkt or kkt_factorization(full.pattern)
-    kkt.factor(np.concatenate([Mv, Av]), acting if acting is not None
-               else acting_rows(full, gaps, t, q, which))
+    if acting is None:
+        acting = acting_rows(full, gaps, t, q, which)
+    kkt.factor(np.concatenate([Mv, Av]), acting)
     qdd, lam = kkt.solve(np.concatenate([f, c]))
+    # dependent rows left out: every multiplier the minimum-norm one (a linear map of
+    # the kept rows' ones, so the sliding contacts' normal forces stay linear below)
+    spread = _minimum_norm(full, gaps, Av, which, acting)
     sliding = which.sliding
     if not sliding:
-        return qdd, lam
+        return qdd, spread(lam)
+    lam = spread(lam)
     zeros = np.zeros(full.m)
     D = [friction_directions(full, gaps, k, Av, directions[k]) for k in sliding]
-    responses = [kkt.solve(np.concatenate([d, zeros])) for d in D]
+    responses = [(qdd_k, spread(lam_k)) for qdd_k, lam_k in
+                 (kkt.solve(np.concatenate([d, zeros])) for d in D)]
     normal = gaps.first + np.array(sliding, dtype=int)
     # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
     R = np.array([lam_k[normal] for _, lam_k in responses]).T
@@ -220,6 +226,26 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     for k, n_k in zip(sliding, N):
         lam[gaps.tangents[k]] = -gaps.friction[k] * n_k * directions[k]
     return qdd, lam
+
+
+def _minimum_norm(full: NumericModel, gaps: Gaps, Av: np.ndarray, which: ClosedGaps,
+                  acting: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """The map from multipliers on the rows ``acting`` (0 on the rest) to the
+    minimum-norm ones over every row of the closed set ``which`` with the same force
+    ``A^T lambda``: the projection onto the range of those rows' ``A`` (a segment's
+    run reports these); the identity where no row of the set was left out."""
+    rows = np.flatnonzero(gaps.acting(full.m, np.array(which.closed, dtype=int), which.held))
+    rank = int(np.count_nonzero(acting[rows]))
+    if rank == len(rows):
+        return lambda lam: lam
+    A = full.pattern.dense_A(Av)[rows]
+    U = np.linalg.svd(A, full_matrices=False)[0][:, :rank]  # the range of A
+
+    def spread(lam: np.ndarray) -> np.ndarray:
+        out = lam.copy()
+        out[rows] = U @ (U.T @ lam[rows])
+        return out
+    return spread
 
 
 def current_direction(s: np.ndarray, start: np.ndarray) -> np.ndarray:
