@@ -14,7 +14,8 @@ corners at ``(x_k, y_k, -c/2)``):
   vertical, ``-mu (d_y sum x_k lambda_k - d_x sum y_k lambda_k)``, is 0: it does not
   yaw, along an axis of the box or not;
 - pushed below the cone it stays at rest, the loads as above with ``F`` for
-  ``mu m g``, each corner holding ``F lambda_k / (m g)``: the same fraction of its cone.
+  ``mu m g``, each corner holding ``F lambda_k / (m g)``: the same fraction of its cone;
+- a block on two contacts with the same row: half its weight on each.
 """
 
 from __future__ import annotations
@@ -23,7 +24,11 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from dalembert import System, Unilateral, coordinates
+from dalembert.model.constraints import ClosedGaps
 from dalembert.multibody import Force, Ground, Multibody, RigidBody, plane_contact
+from dalembert.solvers.contact.friction import solve_sliding
+from dalembert.solvers.contact.gaps import Gaps
 
 g, mu = 9.81, 0.5
 A, B, C, M = 0.2, 0.15, 0.1, 2.0
@@ -105,3 +110,20 @@ def test_a_box_pushed_below_the_cone_stays_each_corner_at_the_same_fraction(box,
         for j in (0, 1):  # each holds F / (m g) of its load against the push
             assert np.abs(traj.multiplier(f"c{k}_friction_{j + 1}")
                           + force / (M * g) * lam[k] * d[j]).max() < 1e-10
+
+
+def test_a_block_on_two_equal_contacts_loads_each_with_half_its_weight_sliding():
+    """Two contacts with the same row (rank 1): the minimum-norm normal forces are
+    ``g / 2`` each, whichever row the factorization keeps, and each sliding contact's
+    friction is ``mu g / 2`` of them (the block decelerates at ``mu g``)."""
+    x, y = coordinates("x y")
+    both = System([x, y], kinetic=(x.diff()**2 + y.diff()**2) / 2, potential=g * y,
+                  constraints=[Unilateral(y, name, friction=mu, tangents=[x.diff()])
+                               for name in ("a", "b")])
+    full = both._closed(ClosedGaps((0, 1), held=(0, 1))).numeric()
+    gaps = Gaps.of(both.definition.unilateral, 0, [0.0, 0.0])
+    qdd, lam = solve_sliding(full, gaps, 0.0, np.zeros(2), np.array([1.0, 0.0]),
+                             ClosedGaps((0, 1), sliding=(0, 1)),
+                             {0: np.ones(1), 1: np.ones(1)})
+    assert np.abs(qdd - [-mu * g, 0.0]).max() < 1e-14
+    assert np.abs(lam - [g / 2, g / 2, -mu * g / 2, -mu * g / 2]).max() < 1e-14
