@@ -17,6 +17,18 @@ The segment's model takes the friction forces as inputs
 (:func:`~dalembert.model.constraints.friction_inputs`), which :class:`SlidingForces`
 gives at each state.
 
+A body resting on more contacts than it needs (a box on its four corners: rank 3 of
+four normal rows) holds them with fewer independent rows; the rows that depend on the
+others are left out of the factorization (:func:`acting_rows`), and every multiplier
+of the closed set is then the minimum-norm one giving the same constraint force
+``A^T lambda`` (the projection onto the range of the set's rows, as a segment's run
+reports them). On a rigid body these are the loads of equal springs at the contacts,
+linear in their positions; a sliding contact's friction ``-mu lambda_n d`` takes that
+``lambda_n``, a linear map of the kept rows' multipliers, so the normal forces still
+solve one linear system. The friction the held contacts exert together is shared by
+:func:`held_forces` in proportion to these loads, each using the same fraction of its
+cone where their rows allow it (they reach their cones together).
+
 A segment ends (terminal events, located to rounding) where a sticking contact's
 force reaches the cone (it slips) and where a sliding contact's sliding velocity,
 along its direction at the segment's start, reaches 0 (it stops, and sticks if the
@@ -108,8 +120,9 @@ def acting_rows(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     the gap rows and held sliding velocities that depend on the rows before them left
     out. A body resting on several contacts holds them all with fewer independent
     rows (a box on two corners in the plane, on four in space): its contact forces
-    are not unique, and the rows left out carry none here (:func:`held_forces` shares
-    the friction of held ones; a segment's run gives minimum-norm multipliers)."""
+    are not unique, and a solve with these rows alone leaves 0 on the others;
+    :func:`solve_sliding` gives every row of the set its minimum-norm multiplier, as a
+    segment's run does (:func:`held_forces` shares the friction of held ones)."""
     mask = gaps.acting(full.m, np.array(which.closed, dtype=int), which.held)
     contact = np.flatnonzero(mask[gaps.first:]) + gaps.first
     if len(contact) < 2:
@@ -174,8 +187,10 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     not act) with the gaps ``which.closed`` closed, the sliding velocities of
     ``which.held`` held and the gaps ``which.sliding`` sliding along ``directions``
     (see the module docstring); the sliding gaps' friction forces in their tangent
-    rows' places (held rows that depend on the others left out: 0 there, see
-    :func:`held_forces`).
+    rows' places. Where rows of the set depend on the others (:func:`acting_rows`),
+    its multipliers are the minimum-norm ones with the same ``A^T lambda``, and a
+    sliding gap's friction is ``mu`` times its minimum-norm normal force (held
+    friction shared by load: :func:`held_forces`).
 
     Parameters
     ----------
@@ -201,15 +216,21 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     """
     Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
     kkt = kkt or kkt_factorization(full.pattern)
-    kkt.factor(np.concatenate([Mv, Av]), acting if acting is not None
-               else acting_rows(full, gaps, t, q, which))
+    if acting is None:
+        acting = acting_rows(full, gaps, t, q, which)
+    kkt.factor(np.concatenate([Mv, Av]), acting)
     qdd, lam = kkt.solve(np.concatenate([f, c]))
+    # dependent rows left out: every multiplier the minimum-norm one (a linear map of
+    # the kept rows' ones, so the sliding contacts' normal forces stay linear below)
+    spread = _minimum_norm(full, gaps, Av, which, acting)
     sliding = which.sliding
     if not sliding:
-        return qdd, lam
+        return qdd, spread(lam)
+    lam = spread(lam)
     zeros = np.zeros(full.m)
     D = [friction_directions(full, gaps, k, Av, directions[k]) for k in sliding]
-    responses = [kkt.solve(np.concatenate([d, zeros])) for d in D]
+    responses = [(qdd_k, spread(lam_k)) for qdd_k, lam_k in
+                 (kkt.solve(np.concatenate([d, zeros])) for d in D)]
     normal = gaps.first + np.array(sliding, dtype=int)
     # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
     R = np.array([lam_k[normal] for _, lam_k in responses]).T
@@ -224,6 +245,26 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     for k, n_k in zip(sliding, N):
         lam[gaps.tangents[k]] = -gaps.friction[k] * n_k * directions[k]
     return qdd, lam
+
+
+def _minimum_norm(full: NumericModel, gaps: Gaps, Av: np.ndarray, which: ClosedGaps,
+                  acting: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """The map from multipliers on the rows ``acting`` (0 on the rest) to the
+    minimum-norm ones over every row of the closed set ``which`` with the same force
+    ``A^T lambda``: the projection onto the range of those rows' ``A`` (a segment's
+    run reports these); the identity where no row of the set was left out."""
+    rows = np.flatnonzero(gaps.acting(full.m, np.array(which.closed, dtype=int), which.held))
+    rank = int(np.count_nonzero(acting[rows]))
+    if rank == len(rows):
+        return lambda lam: lam
+    A = full.pattern.dense_A(Av)[rows]
+    U = np.linalg.svd(A, full_matrices=False)[0][:, :rank]  # the range of A
+
+    def spread(lam: np.ndarray) -> np.ndarray:
+        out = lam.copy()
+        out[rows] = U @ (U.T @ lam[rows])
+        return out
+    return spread
 
 
 def current_direction(s: np.ndarray, start: np.ndarray) -> np.ndarray:
