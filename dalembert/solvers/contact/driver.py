@@ -753,7 +753,7 @@ def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.nd
     :data:`~dalembert.solvers.contact.gaps.ONSET_RTOL` relative to ``1 + max |qd|``;
     not those in ``ended``, whose onset has ended since the last switch), with that
     speed: their friction takes the direction their contact point accelerates in
-    (:func:`~dalembert.solvers.contact.friction.consistent_direction`) until they
+    (:func:`~dalembert.solvers.contact.friction.consistent_directions`) until they
     slide that fast along their start direction."""
     n = full.n
     q, qd = y[:n], y[n:]

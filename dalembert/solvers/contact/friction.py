@@ -68,10 +68,12 @@ from .impulses import contact_impulses
 #: Samples of the slip direction's angle per half turn, to bracket its roots
 #: (:func:`slip_direction`).
 SLIP_SAMPLES = 24
-#: :func:`consistent_direction`'s secant method: the second angle's offset from the
-#: first (radians) and the most iterations (it converges in a few from the last one).
-CONSISTENT_START = 1e-6
-CONSISTENT_ITERATIONS = 20
+#: :func:`consistent_directions`' Newton method: the difference step of its Jacobian
+#: and the largest step it takes (radians), and its most iterations (it converges in
+#: two or three from the last directions found).
+CONSISTENT_STEP = 1e-7
+CONSISTENT_TURN = 0.5
+CONSISTENT_ITERATIONS = 12
 
 
 @dataclass
@@ -295,7 +297,7 @@ class SlidingForces:
         call: one object serves every segment with this set).
     onset
         The sliding gaps that start to slide from rest in the current segment (as
-        ``starts``), which take :func:`consistent_direction`.
+        ``starts``), which take :func:`consistent_directions`.
     user
         The user's inputs at a state (the held sample, if sampled; ``None``: the
         model has none).
@@ -327,11 +329,12 @@ class SlidingForces:
                       for k in which.sliding}
         if self.acting is None:
             self.acting = acting_rows(full, gaps, t, q, which)
-        for k in which.sliding:
-            if k in self.onset:
-                directions[k] = self.last[k] = consistent_direction(
-                    full, gaps, t, q, qd, which, directions, k,
-                    self.last.get(k, self.starts[k]), self.kkt)
+        starting = [k for k in which.sliding if k in self.onset]
+        if starting:
+            directions.update({k: self.last.get(k, self.starts[k]) for k in starting})
+            directions = consistent_directions(full, gaps, t, q, qd, which, directions,
+                                               starting, self.kkt)
+            self.last.update({k: directions[k] for k in starting})
         _, lam = solve_sliding(full, gaps, t, q, qd, which, directions, self.kkt,
                                acting=self.acting)
         return np.concatenate([lam[gaps.tangents[k]] for k in which.sliding])
@@ -426,6 +429,13 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
                                                   kkt)
         resting.remove(worst)
         slipping = None
+    # each found with the others fixed as they were then: together (the corners of a
+    # body, whose contact points' accelerations are coupled)
+    started = [k for k in chosen.directions
+               if k not in start.directions and len(gaps.tangents[k]) == 2]
+    if len(started) > 1:
+        chosen.directions = consistent_directions(full, gaps, t, q, qd, chosen.of(closed),
+                                                  chosen.directions, started, kkt)
     return chosen
 
 
@@ -524,21 +534,23 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     return _unit(best)
 
 
-def consistent_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                         qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
-                         k: int, previous: np.ndarray, kkt: KKTFactorization | None = None
-                         ) -> np.ndarray:
-    """The direction of gap ``k``'s friction while it starts to slide from rest: the
-    unit ``d`` along which its tangential acceleration points (``a_t(d) = s d``, as
-    :func:`slip_direction` finds it at the onset), followed from ``previous`` (the
-    last one found) by the secant method on its angle.
+def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                          qd: np.ndarray, which: ClosedGaps,
+                          directions: dict[int, np.ndarray], starting: Sequence[int],
+                          kkt: KKTFactorization | None = None) -> dict[int, np.ndarray]:
+    """The directions of the friction of the gaps ``starting`` while they start to
+    slide from rest together: the unit ``d_k`` along which each one's tangential
+    acceleration points (``a_t(k) = s_k d_k``, ``s_k >= 0``, as
+    :func:`slip_direction` finds one at its onset, the others held), all at once,
+    by Newton's method on their angles from ``directions`` (the last ones found).
 
     Why not the sliding velocity's direction ``v / |v|``: near ``v = 0`` that turns
     at a rate of about ``|a_t| / |v|`` towards this one wherever the contact's
     tangential mass is anisotropic (a cylinder rolling one way and sliding the
-    other), a stiffness without bound that stalls an explicit method at the onset.
-    The motion follows this direction within ``O(|v|)`` there (its slow manifold), so
-    the segment takes it while ``|v|`` is below a small speed
+    other), a stiffness without bound that stalls an explicit method at the onset,
+    and where ``v`` is rounding's it points anywhere (the corners of a box). The
+    motion follows this direction within ``O(|v|)`` there (its slow manifold), so a
+    segment takes it while ``|v|`` is below a small speed
     (:data:`~dalembert.solvers.contact.gaps.ONSET_RTOL`), then ``v / |v|``.
 
     Parameters
@@ -548,19 +560,25 @@ def consistent_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray
     t, q, qd
         The state (the inputs as ``full`` holds them).
     which
-        The closed set, ``k`` sliding (with two sliding velocities).
+        The closed set, the gaps ``starting`` sliding (each with two sliding
+        velocities).
     directions
-        Each sliding gap's unit direction (``k``'s is replaced by the trial ones).
-    k
-        The gap starting to slide.
-    previous
-        A unit direction near the one sought.
+        Each sliding gap's unit direction (those of ``starting``: near the ones
+        sought).
+    starting
+        The gaps starting to slide.
     kkt
         A factorization object of ``full``'s pattern to reuse.
 
+    Returns
+    -------
+    dict
+        ``directions`` with those of ``starting`` replaced (kept where Newton's
+        method finds no such directions near them).
+
     Examples
     --------
-    The cylinder of :func:`slip_direction`'s example, from its direction rounded:
+    The cylinder of :func:`slip_direction`'s example, from a direction 0.2 rad off:
 
     >>> from dalembert import System, Unilateral, coordinates
     >>> x, y, z, th = coordinates("x y z theta")
@@ -574,31 +592,47 @@ def consistent_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray
     >>> full = cylinder._closed(ClosedGaps((0,), held=(0,))).numeric()
     >>> gaps = Gaps.of(cylinder.definition.unilateral, 0, [0.0])
     >>> q, rest = np.array([0.0, 0.0, 0.2, 0.0]), np.zeros(4)
-    >>> near = np.array([np.cos(0.75), np.sin(0.75)])
-    >>> d = consistent_direction(full, gaps, 0.0, q, rest, which, {0: near}, 0, near)
+    >>> near = np.array([np.cos(0.95), np.sin(0.95)])
+    >>> d = consistent_directions(full, gaps, 0.0, q, rest, which, {0: near}, [0])[0]
     >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
     42.8019
     """
-    accel = _tangential_acceleration(full, gaps, t, q, qd, which, directions, k, kkt)
+    values = full.kkt_sparse(t, q, qd)
+    _, _, Av, c = values
+    pattern = full.pattern
+    kkt = kkt or kkt_factorization(pattern)
+    acting = acting_rows(full, gaps, t, q, which)
+    trial = dict(directions)
+    rows = [gaps.tangents[k] for k in starting]
 
-    def cross(angle: float) -> float:
-        a = accel(angle)
-        return float(np.cos(angle) * a[1] - np.sin(angle) * a[0])
+    def residual(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each one's ``a_t`` across its direction, and along it."""
+        for k, angle in zip(starting, angles):
+            trial[k] = _unit(angle)
+        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, trial, kkt, values, acting)
+        rates = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
+        a = np.array([rates[r] for r in rows])
+        return np.cos(angles) * a[:, 1] - np.sin(angles) * a[:, 0], \
+            np.cos(angles) * a[:, 0] + np.sin(angles) * a[:, 1]
 
-    a0 = float(np.arctan2(previous[1], previous[0]))
-    a1 = a0 + CONSISTENT_START
-    c0, c1 = cross(a0), cross(a1)
+    angles = np.array([np.arctan2(directions[k][1], directions[k][0]) for k in starting])
     for _ in range(CONSISTENT_ITERATIONS):
-        if c1 == c0:
+        across, along = residual(angles)
+        J = np.column_stack([(residual(angles + CONSISTENT_STEP * e)[0] - across)
+                             / CONSISTENT_STEP for e in np.eye(len(angles))])
+        step = np.linalg.lstsq(J, -across, rcond=None)[0]
+        if not np.all(np.isfinite(step)) or np.abs(step).max() > CONSISTENT_TURN:
+            break  # not near such directions: keep the last ones
+        angles = angles + step
+        if np.abs(step).max() <= 4 * np.finfo(float).eps * (1.0 + np.abs(angles).max()):
+            if np.all(along >= -TOUCH_RTOL * (1.0 + np.abs(along).max())):
+                return {**directions, **{k: _unit(a) for k, a in zip(starting, angles)}}
             break
-        a0, a1, c0 = a1, a1 - c1 * (a1 - a0) / (c1 - c0), c1
-        if abs(a1 - a0) <= 4 * np.finfo(float).eps * (1.0 + abs(a1)):
-            break
-        c1 = cross(a1)
-    if not np.isfinite(a1) or float(accel(a1) @ _unit(a1)) < 0.0:
-        # lost (no such direction near the last): the whole search
-        return slip_direction(full, gaps, t, q, qd, which, directions, k, previous, kkt)
-    return _unit(a1)
+    if len(starting) == 1:  # the whole search around the circle
+        (k,) = starting
+        return {**directions, k: slip_direction(full, gaps, t, q, qd, which, directions, k,
+                                                directions[k], kkt)}
+    return dict(directions)
 
 
 def _unit(angle: float) -> np.ndarray:

@@ -330,25 +330,29 @@ class PythonLoop(SimulationLoop):
                 f"{found}. The trajectory up to there is returned; a looser rtol or "
                 "another method may get through, or the mechanism may lock here")
         remaining = self.collapse.runaway(solver.t, solver.t_bound)
-        if remaining is None:
-            left = self.collapse.stalled(solver.t, solver.t_bound)
-            if left is not None:
-                return self.stop(
-                    "failed", f"integration stopped at t={solver.t:.6g}: the steps have "
-                    f"stalled (the last {COLLAPSE_STEPS} or more averaged "
-                    f"{self.collapse.window_step:.1e}): at that size the rest of the run "
-                    f"would take {left:.1e} steps. A stiff stretch an explicit method "
-                    "cannot step through (try method=\"Radau\"), or a force that is not "
-                    "smooth there")
+        growing = ""
+        if remaining is not None and self.runaway is not None:
+            growing = self.runaway(solver.t, solver.y)
+        if growing:
+            assert remaining is not None
+            return self.stop(
+                "failed", f"integration stopped at t={solver.t:.6g}: the steps keep "
+                f"shrinking (the last {COLLAPSE_STEPS} or more averaged "
+                f"{self.collapse.window_step:.1e}, each window's less than the one before): "
+                f"at that size the rest of the run would take {remaining:.1e} steps. "
+                f"Something in the model grows without bound as the time nears a limit: "
+                f"{growing}")
+        left = self.collapse.stalled(solver.t, solver.t_bound)
+        if remaining is None and left is None:
             return self.collapse.quiet(self.n_steps)
-        growing = self.runaway(solver.t, solver.y) if self.runaway is not None else ""
         self.stop(
-            "failed", f"integration stopped at t={solver.t:.6g}: the steps keep shrinking "
-            f"(the last {COLLAPSE_STEPS} or more averaged {self.collapse.window_step:.1e}, "
-            f"each window's less than the one before): at that size the rest of the run "
-            f"would take {remaining:.1e} steps. Something in the model grows without bound "
-            f"as the time nears a limit: " + (f"{growing}" if growing else
-                                              "a prescribed motion, an input or a force"))
+            "failed", f"integration stopped at t={solver.t:.6g}: the steps have stalled "
+            f"(the last {COLLAPSE_STEPS} or more averaged {self.collapse.window_step:.1e}): "
+            f"at that size the rest of the run would take {remaining or left:.1e} steps. "
+            "A force that is not smooth there (a sign or an absolute value of a rate: "
+            "dry friction is a Unilateral's), a stiff stretch an explicit method cannot "
+            "step through (try method=\"Radau\"), or a prescribed motion, an input or a "
+            "force growing without bound as the time nears a limit")
 
     def _failed(self, message: str) -> None:
         """Stop with ``message``, or with what is not finite at the step's start."""

@@ -43,3 +43,24 @@ def test_a_driver_diverging_at_a_finite_time_stops_the_run_naming_it(backend):
     prescribed = slider_crank.THETA_0 + 0.01 / (traj.t - T_STAR)
     wrapped = np.angle(np.exp(1j * (traj["crank_theta"] - prescribed)))
     assert np.abs(wrapped).max() < 1e-6
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_a_force_that_is_not_smooth_where_the_motion_stops_stops_the_run_there(backend):
+    """A block pushed by 2 N against a hand-written dry friction ``-5 sign(x')``,
+    launched at 3 m/s: it decelerates at 3 m/s^2 and stops at t = 1 (x = 1.5), where
+    the force flips at every step: the steps stall there instead of crawling for
+    days (the run used to hang)."""
+    import sympy as sp
+
+    from dalembert import coordinates
+
+    (x,) = coordinates("x")
+    block = System([x], kinetic=x.diff() ** 2 / 2, potential=-2.0 * x,
+                   generalized_forces={x: -5.0 * sp.sign(x.diff())})
+    with pytest.warns(IntegrationWarning, match="the steps have stalled") as caught:
+        traj = block.simulate((0, 10.0), {"x": 0.0}, {"x": 3.0}, backend=backend)
+    assert "force that is not smooth" in str(caught[-1].message)
+    assert traj.status == "failed" and abs(traj.t[-1] - 1.0) < 1e-6
+    moving = traj.t <= 1.0
+    assert np.abs(traj["x"][moving] - (3 * traj.t - 1.5 * traj.t**2)[moving]).max() < 1e-12
