@@ -30,8 +30,9 @@ from .gaps import TOUCH_RTOL, Gaps
 PIVOTS_PER_CONTACT = 50
 #: Projected Gauss-Seidel sweeps of :func:`solve_friction` before it gives up.
 MAX_SWEEPS = 10_000
-#: :func:`solve_friction` ends where a sweep changes the velocities by less than this
-#: (relative to their size: rounding) and the laws hold to ``RESIDUAL_RTOL`` there.
+#: :func:`solve_friction` ends where the velocities are within this of where its sweeps
+#: take them (relative to their size: :func:`_settled`) and the laws hold to
+#: ``RESIDUAL_RTOL`` there (:func:`_residual`).
 VELOCITY_RTOL, RESIDUAL_RTOL = 1e-14, 1e-10
 
 
@@ -222,30 +223,51 @@ def _sweeps(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     how many sweeps were made."""
     k = len(mu)
     P = np.zeros(len(q))
-    diagonal = np.diag(W).copy()
-    normal_rows = [W[c] for c in range(k)]
-    # each contact's tangential rows and block decomposed once per solve (a sweep needs
-    # them for every contact: redoing that each sweep was most of its cost)
+    diagonal = np.diag(W).tolist()
+    normal_rows, normal_q = [W[c] for c in range(k)], q[:k].tolist()
+    # each contact's tangential rows without its own columns (the velocities the
+    # others leave it) and its block decomposed, once per solve: a sweep needs them for
+    # every contact, and redoing that each sweep was most of its cost
     blocks = []
     for rows in tangents:
-        block = W[np.ix_(rows, rows)]
-        blocks.append((rows, W[rows], block, _Disk(block) if len(rows) else None))
-    w = q.copy()
-    scale = 1.0 + np.abs(q).max(initial=0.0)
+        if not len(rows):
+            blocks.append(None)
+            continue
+        others = W[rows].copy()
+        others[:, rows] = 0.0
+        contiguous = bool(np.all(np.diff(rows) == 1))
+        place = slice(int(rows[0]), int(rows[-1]) + 1) if contiguous else rows
+        blocks.append((place, others, q[rows], _Disk(W[np.ix_(rows, rows)])))
+    w, scale, change = q.copy(), float(np.abs(q).max(initial=0.0)), math.inf
+    size = np.abs(W)
     for sweep in range(1, MAX_SWEEPS + 1):
         for c in range(k):
             if diagonal[c] > 0:
-                P[c] = max(0.0, P[c] - (normal_rows[c] @ P + q[c]) / diagonal[c])
-            rows, across, block, disk = blocks[c]
-            if disk is not None:
-                rest = across @ P + q[rows] - block @ P[rows]  # without its own
-                P[rows] = disk.impulse(rest.tolist(), mu[c] * P[c])
+                P[c] = max(0.0, P[c] - (normal_rows[c] @ P + normal_q[c]) / diagonal[c])
+            if blocks[c] is not None:
+                place, others, q_rows, disk = blocks[c]
+                rest = others @ P + q_rows
+                P[place] = disk.impulse(rest.tolist(), mu[c] * P[c])
         before, w = w, W @ P + q
         scale = max(scale, float(np.abs(w).max(initial=0.0)))
-        if (np.abs(w - before).max(initial=0.0) <= VELOCITY_RTOL * scale
-                and _residual(W, w, P, mu, tangents) <= RESIDUAL_RTOL * scale):
+        last, change = change, float(np.abs(w - before).max(initial=0.0))
+        if _settled(change, last, scale, size @ np.abs(P)) and (
+                _residual(W, w, P, mu, tangents) <= RESIDUAL_RTOL * scale):
             return P, sweep
     return None, MAX_SWEEPS
+
+
+def _settled(change: float, last: float, scale: float, sizes: np.ndarray) -> bool:
+    """Whether the velocities are where the sweeps take them, to ``VELOCITY_RTOL`` of
+    ``scale`` (the largest velocity seen): their ``change`` over the last sweep
+    (``last`` over the one before) within their rounding (``sizes``: ``|W| |P|``), or
+    within the tolerance with the changes still to come, ``change r / (1 - r)`` at the
+    rate ``r = change / last`` (Gauss-Seidel converges linearly), too."""
+    if change <= 8 * np.finfo(float).eps * (scale + float(sizes.max(initial=0.0))):
+        return True
+    tolerance = VELOCITY_RTOL * scale
+    rate = change / last
+    return change <= tolerance and rate < 1.0 and change * rate <= tolerance * (1 - rate)
 
 
 def _residual(W: np.ndarray, w: np.ndarray, P: np.ndarray, mu: np.ndarray,
