@@ -176,13 +176,15 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
     leave, or holding it at 0 (sticking): ``w = W P + q`` (:class:`_Disk`). Solved by
     projected Gauss-Seidel over the contacts (each contact's tangential block at once),
-    from ``P = 0``, until a sweep changes the velocities ``w`` by less than rounding and
-    they satisfy the laws (:func:`_residual`).
+    from ``P = 0``, until the velocities ``w`` are within :data:`VELOCITY_RTOL` of where
+    the sweeps take them (the changes still to come counted at the rate they fall:
+    :func:`_settled`) and they satisfy the laws (:func:`_residual`).
 
-    The velocities are what the laws fix: where the impulses are not unique (a box on
-    four coplanar corners: four normal rows of rank 3), the impulses returned are the
-    sweeps' iterate there, one of the solutions, which further sweeps would move only
-    along impulses that change no velocity (``W``'s null space).
+    It stops on the velocities, which the laws fix, not on the impulses: where those
+    are not unique (a box on four coplanar corners: four normal rows of rank 3, eight
+    tangent rows of rank 3) the impulses returned are the sweeps' iterate from
+    ``P = 0`` at that point, one of the solutions; the velocities, and the total force
+    and moment they make, are the same for every one.
 
     Parameters
     ----------
