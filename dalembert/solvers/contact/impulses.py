@@ -17,6 +17,7 @@ contacts (Moreau's impact law) solve them (:func:`contact_impulses`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +30,10 @@ from .gaps import TOUCH_RTOL, Gaps
 PIVOTS_PER_CONTACT = 50
 #: Projected Gauss-Seidel sweeps of :func:`solve_friction` before it gives up.
 MAX_SWEEPS = 10_000
+#: :func:`solve_friction` ends where the velocities are within this of where its sweeps
+#: take them (relative to their size: :func:`_settled`) and the laws hold to
+#: ``RESIDUAL_RTOL`` there (:func:`_residual`).
+VELOCITY_RTOL, RESIDUAL_RTOL = 1e-14, 1e-10
 
 
 @dataclass(frozen=True)
@@ -169,9 +174,17 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     """The contact impulses with Coulomb friction: ``k`` normal impulses first (an LCP
     as in :func:`solve_lcp`), then each contact's tangential ones, in the disk of
     radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
-    leave, or holding it at 0 (sticking): ``w = W P + q`` (:func:`_coulomb`). Solved by projected
-    Gauss-Seidel over the contacts (each contact's tangential block at once) until the
-    impulses change by less than rounding.
+    leave, or holding it at 0 (sticking): ``w = W P + q`` (:class:`_Disk`). Solved by
+    projected Gauss-Seidel over the contacts (each contact's tangential block at once),
+    from ``P = 0``, until the velocities ``w`` are within :data:`VELOCITY_RTOL` of where
+    the sweeps take them (the changes still to come counted at the rate they fall:
+    :func:`_settled`) and they satisfy the laws (:func:`_residual`).
+
+    It stops on the velocities, which the laws fix, not on the impulses: where those
+    are not unique (a box on four coplanar corners: four normal rows of rank 3, eight
+    tangent rows of rank 3) the impulses returned are the sweeps' iterate from
+    ``P = 0`` at that point, one of the solutions; the velocities, and the total force
+    and moment they make, are the same for every one.
 
     Parameters
     ----------
@@ -199,51 +212,177 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     >>> solve_friction(W, np.array([-1.0, 0.1]), np.array([0.5]), [np.array([1])])
     array([ 1. , -0.1])
     """
+    P, _, change = _sweeps(W, q, mu, tangents)
+    if P is None:
+        raise ContactError(f"the contact impulses with friction of a step ({len(mu)} "
+                           f"contacts) did not converge in {MAX_SWEEPS} sweeps (their "
+                           f"velocities still changed by {change:.1e} of their size in "
+                           "the last)")
+    return P
+
+
+def _sweeps(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
+            tangents: list[np.ndarray]) -> tuple[np.ndarray | None, int, float]:
+    """:func:`solve_friction`'s sweeps: the impulses (``None``: no convergence), how
+    many sweeps were made, and the velocities' change in the last relative to their
+    size."""
     k = len(mu)
     P = np.zeros(len(q))
-    diagonal = np.diag(W).copy()
-    for _ in range(MAX_SWEEPS):
-        before = P.copy()
+    diagonal = np.diag(W).tolist()
+    normal_rows, normal_q = [W[c] for c in range(k)], q[:k].tolist()
+    # each contact's tangential rows without its own columns (the velocities the
+    # others leave it) and its block decomposed, once per solve: a sweep needs them for
+    # every contact, and redoing that each sweep was most of its cost
+    blocks: list[tuple[slice | np.ndarray, np.ndarray, np.ndarray, _Disk] | None] = []
+    for rows in tangents:
+        if not len(rows):
+            blocks.append(None)
+            continue
+        others = W[rows].copy()
+        others[:, rows] = 0.0
+        contiguous = bool(np.all(np.diff(rows) == 1))
+        place = slice(int(rows[0]), int(rows[-1]) + 1) if contiguous else rows
+        blocks.append((place, others, q[rows], _Disk(W[np.ix_(rows, rows)])))
+    w, scale, change = q.copy(), float(np.abs(q).max(initial=0.0)), math.inf
+    size = np.abs(W)
+    for sweep in range(1, MAX_SWEEPS + 1):
         for c in range(k):
             if diagonal[c] > 0:
-                P[c] = max(0.0, P[c] - (W[c] @ P + q[c]) / diagonal[c])
-            rows = tangents[c]
-            if len(rows):
-                block = W[np.ix_(rows, rows)]
-                rest = W[rows] @ P + q[rows] - block @ P[rows]  # without its own
-                P[rows] = _coulomb(block, rest, mu[c] * P[c])
-        if np.abs(P - before).max(initial=0.0) <= 1e-14 * (1.0 + np.abs(P).max(initial=0.0)):
-            return P
-    raise ContactError(f"the contact impulses with friction of a step ({k} contacts) did "
-                       f"not converge in {MAX_SWEEPS} sweeps")
+                P[c] = max(0.0, P[c] - (normal_rows[c] @ P + normal_q[c]) / diagonal[c])
+            block = blocks[c]
+            if block is not None:
+                place, others, q_rows, disk = block
+                rest = others @ P + q_rows
+                P[place] = disk.impulse(rest.tolist(), mu[c] * P[c])
+        before, w = w, W @ P + q
+        scale = max(scale, float(np.abs(w).max(initial=0.0)))
+        last, change = change, float(np.abs(w - before).max(initial=0.0))
+        if _settled(change, last, scale, size @ np.abs(P)) and (
+                _residual(W, w, P, mu, tangents) <= RESIDUAL_RTOL * scale):
+            return P, sweep, change / max(scale, np.finfo(float).tiny)
+    return None, MAX_SWEEPS, change / max(scale, np.finfo(float).tiny)
 
 
-def _coulomb(block: np.ndarray, rest: np.ndarray, radius: float) -> np.ndarray:
-    """One contact's tangential impulse ``p``: sticking (``block p + rest = 0``) if that
-    lies in the disk of ``radius``, else on its rim opposing the sliding velocity it
-    leaves, ``p = -radius w / |w|``, ``w = block p + rest``. Not the sticking impulse
-    scaled onto the rim: with an anisotropic ``block`` (a box's corner, whose rotation
-    couples its two tangents) that one pushes askew, yawing a sliding box and
-    braking it by less than ``mu N``. With ``p = -w / s`` (``s = |w| / radius``):
-    ``p = -(s + block)^-1 rest``, whose size falls with ``s``; ``s`` by bisection.
+def _settled(change: float, last: float, scale: float, sizes: np.ndarray) -> bool:
+    """Whether the velocities are where the sweeps take them, to ``VELOCITY_RTOL`` of
+    ``scale`` (the largest velocity seen): their ``change`` over the last sweep
+    (``last`` over the one before) within their rounding (``sizes``: ``|W| |P|``), or
+    within the tolerance with the changes still to come, ``change r / (1 - r)`` at the
+    rate ``r = change / last`` (Gauss-Seidel converges linearly), too."""
+    if change <= 8 * np.finfo(float).eps * (scale + float(sizes.max(initial=0.0))):
+        return True
+    tolerance = VELOCITY_RTOL * scale
+    rate = change / last if last > 0.0 else math.inf
+    return change <= tolerance and rate < 1.0 and change * rate <= tolerance * (1 - rate)
 
-    >>> block, rest = np.diag([1.0, 4.0]), np.array([2.0, 2.0])
-    >>> p = _coulomb(block, rest, 0.1)
-    >>> w = block @ p + rest
-    >>> bool(np.allclose(p, -0.1 * w / np.linalg.norm(w), rtol=0, atol=1e-15))
-    True
-    """
-    stick = -np.linalg.lstsq(block, rest, rcond=None)[0]
-    if np.linalg.norm(stick) <= radius or radius <= 0.0:
-        return stick if radius > 0.0 else np.zeros_like(rest)
-    values, vectors = np.linalg.eigh(block)
-    along = vectors.T @ rest
-    low, high = 0.0, float(np.linalg.norm(rest)) / radius  # at high: size <= radius
-    for _ in range(200):
-        mid = (low + high) / 2
-        if mid in (low, high):
-            break
-        size = np.linalg.norm(along / (mid + np.maximum(values, 0.0)))
-        low, high = (mid, high) if size > radius else (low, mid)
-    p = -vectors @ (along / (high + np.maximum(values, 0.0)))
-    return p * (radius / np.linalg.norm(p))  # on the rim to rounding
+
+def _residual(W: np.ndarray, w: np.ndarray, P: np.ndarray, mu: np.ndarray,
+              tangents: list[np.ndarray]) -> float:
+    """How far the impulses ``P`` and their velocities ``w = W P + q`` are from the
+    laws, as a velocity: each normal row's ``min(d P, w)`` (``d`` its diagonal), each
+    contact's ``d (p - proj(p - w / d))``, ``p`` its tangential impulse and ``w`` its
+    sliding velocity, ``proj`` onto its disk, ``d`` its block's largest diagonal. It is
+    0 just where the laws hold: ``p`` inside the disk with ``w = 0`` (sticking) or on
+    its rim against ``w`` (sliding)."""
+    k = len(mu)
+    diagonal = np.diag(W)
+    worst = float(np.abs(np.minimum(P[:k] * diagonal[:k], w[:k])).max(initial=0.0))
+    for c, rows in enumerate(tangents):
+        d = float(diagonal[rows].max(initial=0.0))
+        if d <= 0.0:
+            continue
+        radius = mu[c] * P[c]
+        trial = P[rows] - w[rows] / d
+        size = float(np.linalg.norm(trial))
+        if size > radius:
+            trial = trial * (radius / size)
+        worst = max(worst, d * float(np.abs(P[rows] - trial).max()))
+    return worst
+
+
+class _Disk:
+    """One contact's tangential law, its block ``B = V diag(values) V^T`` decomposed
+    once per solve, :meth:`impulse` once per sweep. In plain floats: a block has 1 or
+    2 rows, where each array operation costs more than its arithmetic."""
+
+    def __init__(self, block: np.ndarray):
+        values, vectors = np.linalg.eigh(block)
+        self.vectors: list[list[float]] = vectors.tolist()
+        # the least-squares sticking impulse leaves out the small eigenvalues, as a
+        # least-squares solve's cutoff leaves out the small singular values
+        cutoff = np.finfo(float).eps * len(values) * float(np.abs(values).max())
+        self.inverse = [1.0 / v if abs(v) > cutoff else 0.0 for v in values.tolist()]
+        self.values = [max(v, 0.0) for v in values.tolist()]
+
+    def impulse(self, rest: list[float], radius: float) -> list[float]:
+        """The tangential impulse ``p``: sticking (``B p + rest = 0``, least squares)
+        if that lies in the disk of ``radius``, else on its rim opposing the sliding
+        velocity it leaves, ``p = -radius w / |w|``, ``w = B p + rest``. Not the
+        sticking impulse scaled onto the rim: with an anisotropic ``B`` (a box's
+        corner, whose rotation couples its two tangents) that one pushes askew, yawing
+        a sliding box and braking it by less than ``mu N``. With ``p = -w / s``
+        (``s = |w| / radius``): ``p = -(s + B)^-1 rest``, whose size falls with ``s``;
+        ``s`` by Newton's method on ``1 / |p(s)| = 1 / radius`` (concave in ``s``: from
+        below it does not overshoot), kept in a bisection's bracket.
+
+        >>> disk, rest = _Disk(np.diag([1.0, 4.0])), [2.0, 2.0]
+        >>> p = np.array(disk.impulse(rest, 0.1))
+        >>> w = np.diag([1.0, 4.0]) @ p + rest
+        >>> bool(np.allclose(p, -0.1 * w / np.linalg.norm(w), rtol=0, atol=1e-15))
+        True
+        """
+        if radius <= 0.0:
+            return [0.0] * len(rest)
+        if len(rest) == 2:  # in space: the same, written out
+            return self._two(rest, radius)
+        along = [sum(row[j] * r for row, r in zip(self.vectors, rest))
+                 for j in range(len(rest))]  # V^T rest
+        stick = [a * u for a, u in zip(along, self.inverse)]
+        if math.hypot(*stick) <= radius:
+            return self._back(stick, -1.0)
+        values = self.values
+        low, high = 0.0, math.hypot(*rest) / radius  # at high: |p| <= radius
+        s = 0.0 if min(values) > 0.0 else high / 2  # (a singular B: |p(0)| unbounded)
+        for _ in range(200):
+            term = [a / (s + v) for a, v in zip(along, values)]
+            size = math.hypot(*term)
+            low, high = (s, high) if size > radius else (low, s)
+            slope = sum(t * t / (s + v) for t, v in zip(term, values)) / size**3
+            step = s + (1.0 / radius - 1.0 / size) / slope  # slope: d(1 / size)/ds
+            if step == s:
+                break
+            s = step if low < step < high else (low + high) / 2
+            if s in (low, high):
+                break
+        term = [a / (s + v) for a, v in zip(along, values)]
+        return self._back(term, -radius / math.hypot(*term))  # on the rim to rounding
+
+    def _two(self, rest: list[float], radius: float) -> list[float]:
+        """:meth:`impulse` for two rows, its sums written out (a third of the time)."""
+        (v00, v01), (v10, v11) = self.vectors
+        r0, r1 = rest
+        a0, a1 = v00 * r0 + v10 * r1, v01 * r0 + v11 * r1  # V^T rest
+        t0, t1 = a0 * self.inverse[0], a1 * self.inverse[1]
+        if math.hypot(t0, t1) <= radius:  # sticking
+            return [-(v00 * t0 + v01 * t1), -(v10 * t0 + v11 * t1)]
+        l0, l1 = self.values
+        low, high = 0.0, math.hypot(r0, r1) / radius
+        s = 0.0 if min(l0, l1) > 0.0 else high / 2
+        for _ in range(200):
+            t0, t1 = a0 / (s + l0), a1 / (s + l1)
+            size = math.hypot(t0, t1)
+            low, high = (s, high) if size > radius else (low, s)
+            slope = (t0 * t0 / (s + l0) + t1 * t1 / (s + l1)) / size**3
+            step = s + (1.0 / radius - 1.0 / size) / slope
+            if step == s:
+                break
+            s = step if low < step < high else (low + high) / 2
+            if s in (low, high):
+                break
+        t0, t1 = a0 / (s + l0), a1 / (s + l1)
+        factor = -radius / math.hypot(t0, t1)
+        return [factor * (v00 * t0 + v01 * t1), factor * (v10 * t0 + v11 * t1)]
+
+    def _back(self, along: list[float], factor: float) -> list[float]:
+        """``factor V along``."""
+        return [factor * sum(v * a for v, a in zip(row, along)) for row in self.vectors]
