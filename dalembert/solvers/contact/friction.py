@@ -69,10 +69,11 @@ from .impulses import contact_impulses
 #: (:func:`slip_direction`).
 SLIP_SAMPLES = 24
 #: :func:`consistent_directions`' Newton method: the difference step of its Jacobian
-#: and the largest step it takes (radians), and its most iterations (it converges in
+#: and the largest step it takes (radians: a start direction found with the other
+#: contacts held may be half a radian off), and its most iterations (it converges in
 #: two or three from the last directions found).
 CONSISTENT_STEP = 1e-7
-CONSISTENT_TURN = 0.5
+CONSISTENT_TURN = 1.0
 CONSISTENT_ITERATIONS = 12
 
 

@@ -82,17 +82,41 @@ def test_a_box_pushed_beyond_the_cone_slides_on_all_four_corners(box, angle):
     assert np.abs(traj["box_z"] - C / 2).max() < 1e-12
     for part in ("b1", "b2", "b3"):  # no roll, pitch or yaw
         assert np.abs(traj[f"box_{part}"]).max() < 1e-10
-    # the forces once moving: at t = 0, at rest, they show the directions the corners
-    # were found to start sliding in, one after another (the instant after, each
-    # slides along its velocity)
-    moving = traj.t > 0
     lam = loads(mu * M * g, d)
-    for k in range(4):
-        normal = traj.multiplier(f"c{k}_1")[moving]
+    for k in range(4):  # from the start, at rest, on
+        normal = traj.multiplier(f"c{k}_1")
         assert np.abs(normal - lam[k]).max() < 1e-10
         for j in (0, 1):  # sliding along d
-            assert np.abs(traj.multiplier(f"c{k}_friction_{j + 1}")[moving]
+            assert np.abs(traj.multiplier(f"c{k}_friction_{j + 1}")
                           + mu * normal * d[j]).max() < 1e-10
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.5])
+def test_a_box_pushed_by_a_growing_force_slips_on_all_four_corners_at_once(angle):
+    """Pushed by ``k t``: at rest until ``k t = mu m g``, every corner on its cone at
+    once, then sliding along the push with ``x'' = (k t - mu m g) / m`` (the corners'
+    sliding velocities start from 0: their direction is their accelerations')."""
+    from dalembert import t as time
+
+    rate = 40.0
+    inertia = M / 12 * np.diag([B**2 + C**2, A**2 + C**2, A**2 + B**2])
+    body = RigidBody("box", M, inertia)
+    corners = [plane_contact(f"c{k}", Ground(), body, point=(x, y, -C / 2), friction=mu)
+               for k, (x, y) in enumerate(CORNERS)]
+    d = np.array([np.cos(angle), np.sin(angle)])
+    box = Multibody([body], gravity=(0, 0, -g), contacts=corners,
+                    forces=[Force(body, (rate * d[0] * time, rate * d[1] * time, 0))])
+    q0, qd0 = box.initial_state(positions={"box": (0, 0, C / 2)})
+    t = np.linspace(0.3, 0.5, 3)
+    traj = box.simulate((0.0, 0.5), q0, qd0, t_eval=t, timeout=120)
+    assert traj.success, traj.message
+    slip = mu * M * g / rate
+    assert [s.t for s in traj.contacts.switches][1:] == pytest.approx([slip], abs=1e-12)
+    s = rate / M * ((t**3 - slip**3) / 6 - slip**2 * (t - slip) / 2) - mu * g * (t - slip)**2 / 2
+    assert np.abs(traj["box_x"] - d[0] * s).max() < 1e-10
+    assert np.abs(traj["box_y"] - d[1] * s).max() < 1e-10
+    for part in ("b1", "b2", "b3"):
+        assert np.abs(traj[f"box_{part}"]).max() < 1e-10
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.5])
