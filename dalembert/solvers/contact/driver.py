@@ -429,7 +429,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
             te, ye, event = fired
             kind, k = watched[which][event]
             if kind == "slid":  # the same closed set, k sliding along its velocity
-                directions = _slid_directions(full, gaps, which, te, ye, segment_start, k)
+                directions = _slid_directions(full, gaps, te, ye, segment_start, k)
                 ended.add(k)
                 t, y = te, ye
                 continue
@@ -763,8 +763,8 @@ def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.nd
             and k not in ended and float(np.linalg.norm(rates[gaps.tangents[k]])) < speed}
 
 
-def _slid_directions(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float,
-                     y: np.ndarray, start: SegmentStart, k: int) -> dict[int, np.ndarray]:
+def _slid_directions(full: NumericModel, gaps: Gaps, t: float, y: np.ndarray,
+                     start: SegmentStart, k: int) -> dict[int, np.ndarray]:
     """The sliding directions from ``(t, y)``, where gap ``k``'s onset has ended: its
     velocity's direction, the others' as they were."""
     n = full.n

@@ -334,7 +334,7 @@ class SlidingForces:
         if starting:
             directions.update({k: self.last.get(k, self.starts[k]) for k in starting})
             directions = consistent_directions(full, gaps, t, q, qd, which, directions,
-                                               starting, self.kkt)
+                                               starting, self.kkt, self.acting)
             self.last.update({k: directions[k] for k in starting})
         _, lam = solve_sliding(full, gaps, t, q, qd, which, directions, self.kkt,
                                acting=self.acting)
@@ -504,7 +504,11 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     """
     if len(gaps.tangents[k]) != 2:
         return guess
-    accel = _tangential_acceleration(full, gaps, t, q, qd, which, directions, k, kkt)
+    rates = _row_accelerations(full, gaps, t, q, qd, which, directions, kkt)
+    rows = gaps.tangents[k]
+
+    def accel(angle: float) -> np.ndarray:
+        return rates({k: _unit(angle)})[rows]
 
     def cross(angle: float) -> float:
         a = accel(angle)
@@ -538,7 +542,8 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
 def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
                           qd: np.ndarray, which: ClosedGaps,
                           directions: dict[int, np.ndarray], starting: Sequence[int],
-                          kkt: KKTFactorization | None = None) -> dict[int, np.ndarray]:
+                          kkt: KKTFactorization | None = None,
+                          acting: np.ndarray | None = None) -> dict[int, np.ndarray]:
     """The directions of the friction of the gaps ``starting`` while they start to
     slide from rest together: the unit ``d_k`` along which each one's tangential
     acceleration points (``a_t(k) = s_k d_k``, ``s_k >= 0``, as
@@ -570,6 +575,8 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
         The gaps starting to slide.
     kkt
         A factorization object of ``full``'s pattern to reuse.
+    acting
+        The rows that act (:func:`acting_rows`) if the caller has them.
 
     Returns
     -------
@@ -598,20 +605,12 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
     >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
     42.8019
     """
-    values = full.kkt_sparse(t, q, qd)
-    _, _, Av, c = values
-    pattern = full.pattern
-    kkt = kkt or kkt_factorization(pattern)
-    acting = acting_rows(full, gaps, t, q, which)
-    trial = dict(directions)
+    accelerations = _row_accelerations(full, gaps, t, q, qd, which, directions, kkt, acting)
     rows = [gaps.tangents[k] for k in starting]
 
     def residual(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each one's ``a_t`` across its direction, and along it."""
-        for k, angle in zip(starting, angles):
-            trial[k] = _unit(angle)
-        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, trial, kkt, values, acting)
-        rates = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
+        rates = accelerations({k: _unit(angle) for k, angle in zip(starting, angles)})
         a = np.array([rates[r] for r in rows])
         return np.cos(angles) * a[:, 1] - np.sin(angles) * a[:, 0], \
             np.cos(angles) * a[:, 0] + np.sin(angles) * a[:, 1]
@@ -640,27 +639,26 @@ def _unit(angle: float) -> np.ndarray:
     return np.array([np.cos(angle), np.sin(angle)])
 
 
-def _tangential_acceleration(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                             qd: np.ndarray, which: ClosedGaps,
-                             directions: dict[int, np.ndarray], k: int,
-                             kkt: KKTFactorization | None) -> Callable[[float], np.ndarray]:
-    """``a_t(angle)``: gap ``k``'s tangential acceleration (its two sliding
-    velocities' rates) with the closed set ``which``, ``k`` sliding along the unit
-    vector at ``angle`` and the others along ``directions``."""
-    rows = gaps.tangents[k]
+def _row_accelerations(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                       qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
+                       kkt: KKTFactorization | None, acting: np.ndarray | None = None
+                       ) -> Callable[[dict[int, np.ndarray]], np.ndarray]:
+    """``rates(trial)``: the rates of change of the rates of every row of ``full``
+    (``A qdd - c``; a sliding velocity's is its contact point's tangential
+    acceleration) with the closed set ``which``, the sliding gaps along ``directions``
+    but those of ``trial`` along theirs."""
     values = full.kkt_sparse(t, q, qd)
     _, _, Av, c = values
     pattern = full.pattern
     kkt = kkt or kkt_factorization(pattern)
-    acting = acting_rows(full, gaps, t, q, which)
-    trial = dict(directions)
+    acting = acting if acting is not None else acting_rows(full, gaps, t, q, which)
 
-    def accel(angle: float) -> np.ndarray:
-        trial[k] = _unit(angle)
-        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, trial, kkt, values, acting)
-        return (matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c)[rows]
+    def rates(trial: dict[int, np.ndarray]) -> np.ndarray:
+        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, {**directions, **trial}, kkt,
+                               values, acting)
+        return matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
 
-    return accel
+    return rates
 
 
 def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,

@@ -129,11 +129,11 @@ def screenable(events: Sequence[Callable], every_row_kept: bool) -> bool:
     True
     """
     screens = [getattr(event, "screen", None) for event in events]
-    now = [None if screen is None else screen() for screen in screens]
     if any(screen is None for screen in screens):
         return False
     # (a screen that is None now is not a multiplier's: see screens_of)
-    return every_row_kept or not any(isinstance(x, (ForceScreen, ConeScreen)) for x in now)
+    return every_row_kept or not any(isinstance(screen(), (ForceScreen, ConeScreen))
+                                     for screen in screens if screen is not None)
 
 
 class ScreenTable:

@@ -108,7 +108,7 @@ def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_ve
     x0, xd0 = c[0] * onset**3 / 6 / rolling, c[0] * onset**2 / 2 / rolling
 
     def equations(t, z):
-        x, y, th, sx, sy, thd = z
+        _, _, _, sx, sy, thd = z
         f = -MU * M * G * np.array([sx, sy]) / np.hypot(sx, sy)
         return [sx - R * thd, sy, thd, (c[0] * t + f[0]) / M + R**2 * f[0] / INERTIA,
                 (c[1] * t + f[1]) / M, R * f[0] / INERTIA]
