@@ -59,6 +59,53 @@ def test_a_stiff_run_switches_to_radau_and_meets_the_reference(elastic, backend)
     assert auto.stats["n_steps"] < explicit.stats["n_steps"] / 3
 
 
+@pytest.fixture(scope="module")
+def barely_excited():
+    """The elastic pendulum at k = 1e7, the end of its polar-coordinate model
+    integrated by SciPy's DOP853 at rtol 1e-11, and DOP853's steps (in C) at rtol 1e-8."""
+    from test_elastic_pendulum import polar
+
+    k = 1e7
+    system = build(k)
+    q0 = dict(zip(("x", "y", "z"), cartesian(r0(k), TH0)))
+    explicit = system.simulate((0.0, T_END), q0, method="DOP853", rtol=1e-8, atol=1e-10,
+                               t_eval=[T_END])
+    return system, q0, cartesian(*polar(k)), explicit.stats["n_steps"]
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_a_barely_excited_stiff_spring_is_found_by_its_spectral_radius(barely_excited,
+                                                                         backend):
+    """At k = 1e7 the spring is loaded slowly by the swing: Hairer's test reads
+    ``h |lambda|`` about 0.1 (the stages' difference is the slow motion's) while
+    DOP853's steps sit at 0.9-1.4 times its stability limit. The spectral estimate
+    (power iteration on the Jacobian's square: ``sqrt(k)`` here) finds it, and Radau
+    takes over; the end against the polar-coordinate model."""
+    system, q0, expected, explicit_steps = barely_excited
+    auto = system.simulate((0.0, T_END), q0, method="auto", rtol=1e-8, atol=1e-10,
+                           t_eval=[T_END], backend=backend)
+    assert auto.success and auto.stats["n_switches"] == 1
+    assert np.abs(end_of(auto) - expected).max() < 1e-8
+    assert auto.stats["n_steps"] < explicit_steps / 2
+
+
+def test_the_spectral_radius_of_a_spring_is_its_frequency():
+    """Power iteration on the square of a linear problem's matrix: ``w`` for an
+    undamped spring in balanced coordinates, within the coordinates' scale mismatch
+    (``sqrt(w)`` at most) in raw ones, and 0 for a problem without dynamics."""
+    from dalembert.solvers.steppers.stiffness import spectral_radius
+
+    w = 3e3
+    balanced = np.array([[0.0, w], [-w, 0.0]])
+    rho, _ = spectral_radius(lambda t, y: balanced @ y, 0.0, np.ones(2), np.array([1.0, 0.3]))
+    assert abs(rho - w) < 1e-6 * w
+    raw = np.array([[0.0, 1.0], [-w**2, -0.1]])
+    rho, _ = spectral_radius(lambda t, y: raw @ y, 0.0, np.ones(2), np.array([1.0, 0.3]))
+    assert w / np.sqrt(w) <= rho <= w * np.sqrt(w)
+    rho, _ = spectral_radius(lambda t, y: np.zeros(2), 0.0, np.ones(2), np.ones(2))
+    assert rho == 0.0
+
+
 def test_a_non_stiff_run_is_dop853s():
     """Without stiffness the run is DOP853's, step for step (the detector only watches)."""
     system = cartesian_pendulum.build()
