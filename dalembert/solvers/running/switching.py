@@ -84,6 +84,12 @@ SPECTRAL_FIRST = 300
 #: DOP853's steps sit at 0.9-1.4 where a lightly damped stiff mode holds them (the trial
 #: decides whether Radau pays: at k = 1e5 it does not, at 1e7 it does).
 SPECTRAL_LIMIT = 0.8
+#: ... and only where the explicit steps left to the segment's end, at the step
+#: reached, are at least this many: a trial costs about a Radau solver's set-up, the
+#: estimate and 20 implicit steps (2.5 ms on the elastic pendulum, as much as 300 of its
+#: DOP853 steps), which fewer steps left cannot repay (at k = 1e5 the estimate fires
+#: at step 300 with 265 steps left, and the trial fails).
+SPECTRAL_LEFT = 1000
 
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
 #: (``h_abs``: its first step, or 0 to let it choose).
@@ -203,7 +209,10 @@ class StiffSwitch:
         if n_steps < self._estimate_at or solver.detector is None:
             return False
         self._estimate_at = n_steps + max(SPECTRAL_FIRST, n_steps)
+        h = step_size(solver)
+        if not h > 0.0 or abs(solver.t_bound - solver.t) < SPECTRAL_LEFT * h:
+            return False
         start = self._vector if self._vector is not None else \
             np.random.default_rng(0).standard_normal(len(solver.y))
         rho, self._vector = spectral_radius(solver.fun, solver.t, solver.y, start)
-        return step_size(solver) * rho >= SPECTRAL_LIMIT
+        return h * rho >= SPECTRAL_LIMIT
