@@ -35,9 +35,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench.peers import dalembert as peer  # noqa: E402
-from bench.peers.common import T_END, energy_error, meets  # noqa: E402
-from bench.peers.ladder import Prepared, bisect  # noqa: E402
+from bench.peers import dalembert as peer
+from bench.peers.common import T_END, energy_error, meets
+from bench.peers.ladder import Prepared, bisect
 
 METHODS = ("DOP853", "Radau", "auto")
 CHAINS = {"planar16": ("revolute", 16), "planar256": ("revolute", 256),
@@ -66,6 +66,7 @@ def record(traj, n: int) -> dict:
 
 
 def timed(mb, q0, qd0, method: str, rtol: float, n: int) -> dict:
+    """One run at ``rtol``: its record with its wall and CPU seconds."""
     start, cpu = time.perf_counter(), time.process_time()
     traj = simulate(mb, q0, qd0, method, rtol)
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
@@ -128,20 +129,23 @@ def same_rtol(mb, q0, qd0, rtol: float, n: int, rounds: int) -> dict:
 
 
 def run_chain(name: str, rounds: int) -> dict:
+    """One chain: each method bisected, then timed in interleaved rounds (0: the default
+    count), ``auto`` watched and its cost split at DOP853's setting."""
     workload, n = CHAINS[name]
     mb, build_s = peer.build(workload, n)
     q0, qd0 = peer.initial_state(mb, workload, n)
     simulate(mb, q0, qd0, "DOP853", 1e-3)  # load the C loop before anything is timed
     kept: dict[str, dict] = {}
     for method in METHODS:
-        prepared = Prepared({}, lambda rtol, m=method: timed(mb, q0, qd0, m, rtol, n),
-                            RTOLS, meets)
-        rec = bisect(prepared)
+        def attempt(rtol: float, method: str = method) -> dict:
+            return timed(mb, q0, qd0, method, rtol, n)
+
+        rec = bisect(Prepared({}, attempt, RTOLS, meets))
         kept[method] = rec
         print(f"{name} {method}: rtol {rec['setting_value']:.3g} ({rec['bisection']}), "
               f"{rec['steps']} steps, {rec['evaluations']} evaluations, "
               f"switches {rec['switches']}, energy {rec['energy_error']:.2e}", flush=True)
-    rounds = rounds or (31 if n <= 64 else 11)
+    rounds = rounds or (31 if n <= 64 else 21)
     order = list(METHODS)
     times: dict[str, list] = {m: [] for m in METHODS}
     for r in range(rounds):
@@ -185,7 +189,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument("--chains", nargs="+", default=list(CHAINS), choices=list(CHAINS))
     parser.add_argument("--rounds", type=int, default=0,
-                        help="timing rounds (0: 31 for n <= 64, else 11)")
+                        help="timing rounds (0: 31 for n <= 64, else 21)")
     parser.add_argument("--out", type=Path,
                         default=Path(__file__).parent / "results" / "auto_free_chains.json")
     args = parser.parse_args()
