@@ -238,6 +238,21 @@ def test_a_false_alarm_goes_back_with_bounded_extra_work():
     assert error < 3 * max(np.abs(explicit.q[-1] - reference.q[-1]).max(), 1e-10)
 
 
+@pytest.mark.parametrize("rtol", [1e-3, 1e-6])
+def test_a_false_alarm_with_few_steps_left_starts_no_trial(rtol):
+    """The hanging chain over its gallery span: the detector fires (it made one trial
+    at each of these tolerances before), but DOP853 has fewer steps left than a trial
+    could repay (``TRIAL_LEFT``): the run is DOP853's, step for step."""
+    system = hanging_chain.build()
+    span = (0.0, hanging_chain.T_END)
+    options = dict(rtol=rtol, atol=rtol * 1e-2, t_eval=[span[1]])
+    auto = system.simulate(span, **hanging_chain.INITIAL, method="auto", **options)
+    explicit = system.simulate(span, **hanging_chain.INITIAL, **options)
+    assert auto.stats["n_switches"] == 0
+    assert auto.stats["n_steps"] == explicit.stats["n_steps"]
+    assert np.array_equal(auto.q, explicit.q)
+
+
 def test_the_detector_measures_h_lambda():
     """On ``y' = -lambda y`` the estimate is ``h lambda``; a long run at DOP853's
     stability limit is called stiff, a smooth one is not."""
