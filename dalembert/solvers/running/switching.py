@@ -1,8 +1,11 @@
 """``method="auto"``: DOP853 until it meets stiffness, then Radau while Radau pays.
 
 The run starts with DOP853 under Hairer's stiffness detector
-(:mod:`~dalembert.solvers.steppers.stiffness`, its limit lowered: :data:`DETECTOR`).
-When the detector says stiff, the loop hands the run, at the state reached, to Radau
+(:mod:`~dalembert.solvers.steppers.stiffness`, its limit lowered: :data:`DETECTOR`),
+with now and then an estimate of the Jacobian's largest eigenvalue beside it
+(:data:`SPECTRAL_FIRST`: the test misses a stiff mode the motion barely excites).
+When either says stiff, and enough explicit steps are left to repay a trial
+(:data:`TRIAL_LEFT`), the loop hands the run, at the state reached, to Radau
 (in C on the KKT structure where it applies), its first step the explicit one. After
 ``TRIAL_STEPS`` implicit steps the trial is judged on the step Radau has grown to: if it
 is ``COST_RATIO`` times the explicit step it replaced, the run stays with Radau for the
