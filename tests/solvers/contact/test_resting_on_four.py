@@ -37,15 +37,20 @@ FX, FY = sp.symbols("Fx Fy")
 TIMES = np.linspace(0.0, 0.3, 7)
 
 
-@pytest.fixture(scope="module")
-def box() -> Multibody:
-    """The box on its corners, pushed at its mass center by ``(Fx, Fy, 0)``."""
+def box_pushed_by(scale: sp.Expr | float) -> Multibody:
+    """The box on its corners, pushed at its mass center by ``scale (Fx, Fy, 0)``."""
     inertia = M / 12 * np.diag([B**2 + C**2, A**2 + C**2, A**2 + B**2])
     body = RigidBody("box", M, inertia)
     corners = [plane_contact(f"c{k}", Ground(), body, point=(x, y, -C / 2), friction=mu)
                for k, (x, y) in enumerate(CORNERS)]
     return Multibody([body], gravity=(0, 0, -g), contacts=corners,
-                     forces=[Force(body, (FX, FY, 0))])
+                     forces=[Force(body, (scale * FX, scale * FY, 0))])
+
+
+@pytest.fixture(scope="module")
+def box() -> Multibody:
+    """Pushed by ``(Fx, Fy, 0)``."""
+    return box_pushed_by(1)
 
 
 def pushed(box: Multibody, force: float, angle: float):
@@ -93,15 +98,10 @@ def test_a_box_pushed_beyond_the_cone_slides_on_all_four_corners(box, angle):
 
 @pytest.fixture(scope="module")
 def ramped() -> Multibody:
-    """The box on its corners, pushed at its mass center by ``(Fx t, Fy t, 0)``."""
+    """Pushed by ``(Fx t, Fy t, 0)``."""
     from dalembert import t as time
 
-    inertia = M / 12 * np.diag([B**2 + C**2, A**2 + C**2, A**2 + B**2])
-    body = RigidBody("box", M, inertia)
-    corners = [plane_contact(f"c{k}", Ground(), body, point=(x, y, -C / 2), friction=mu)
-               for k, (x, y) in enumerate(CORNERS)]
-    return Multibody([body], gravity=(0, 0, -g), contacts=corners,
-                     forces=[Force(body, (FX * time, FY * time, 0))])
+    return box_pushed_by(time)
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.5])
