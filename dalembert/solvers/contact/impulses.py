@@ -61,7 +61,8 @@ class ContactImpulses:
 
 def contact_impulses(gaps: Gaps, kkt: KKTFactorization, A: np.ndarray, b: np.ndarray,
                      contacts: np.ndarray, before: np.ndarray, free: np.ndarray,
-                     restitution: np.ndarray) -> ContactImpulses:
+                     restitution: np.ndarray, start: np.ndarray | None = None
+                     ) -> ContactImpulses:
     """The impulses on the gaps ``contacts`` (and their sliding velocities, with
     friction) that leave each acting gap's rate at ``-e`` times its rate ``before``
     (Newton's law; an open one free to move away), from the velocities ``free`` they
@@ -83,6 +84,9 @@ def contact_impulses(gaps: Gaps, kkt: KKTFactorization, A: np.ndarray, b: np.nda
         The velocities without the contact impulses.
     restitution
         Newton's coefficient of every gap.
+    start
+        Impulses on every row to start the friction's sweeps from (the step before's;
+        ``None``: 0).
 
     Examples
     --------
@@ -125,7 +129,8 @@ def contact_impulses(gaps: Gaps, kkt: KKTFactorization, A: np.ndarray, b: np.nda
             at += len(tangents)
         # a rough contact grips with any impulse its normal one allows (none without one)
         mu = np.minimum(gaps.friction[contacts], np.finfo(float).max)
-        impulse = solve_friction(W, q, mu, groups)
+        impulse = solve_friction(W, q, mu, groups,
+                                 None if start is None else start[rows])
     return ContactImpulses(rows, impulse, response @ impulse, reaction @ impulse)
 
 
@@ -170,20 +175,22 @@ def solve_lcp(W: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
-                   tangents: list[np.ndarray]) -> np.ndarray:
+                   tangents: list[np.ndarray], start: np.ndarray | None = None
+                   ) -> np.ndarray:
     """The contact impulses with Coulomb friction: ``k`` normal impulses first (an LCP
     as in :func:`solve_lcp`), then each contact's tangential ones, in the disk of
     radius ``mu`` times its normal one and opposing the sliding velocity ``w`` they
     leave, or holding it at 0 (sticking): ``w = W P + q`` (:class:`_Disk`). Solved by
     projected Gauss-Seidel over the contacts (each contact's tangential block at once),
-    from ``P = 0``, until the velocities ``w`` are within :data:`VELOCITY_RTOL` of where
-    the sweeps take them (the changes still to come counted at the rate they fall:
-    :func:`_settled`) and they satisfy the laws (:func:`_residual`).
+    from ``start`` (0 by default), until the velocities ``w`` are within
+    :data:`VELOCITY_RTOL` of where the sweeps take them (the changes still to come
+    counted at the rate they fall: :func:`_settled`) and they satisfy the laws
+    (:func:`_residual`).
 
     It stops on the velocities, which the laws fix, not on the impulses: where those
     are not unique (a box on four coplanar corners: four normal rows of rank 3, eight
     tangent rows of rank 3) the impulses returned are the sweeps' iterate from
-    ``P = 0`` at that point, one of the solutions; the velocities, and the total force
+    ``start`` at that point, one of the solutions; the velocities, and the total force
     and moment they make, are the same for every one.
 
     Parameters
@@ -195,6 +202,9 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
         Each contact's coefficient.
     tangents
         Each contact's tangent rows' places in ``W`` (empty without friction).
+    start
+        The impulses to start the sweeps from (``None``: 0); where the impulses are not
+        unique, which solution is returned depends on it.
 
     Raises
     ------
@@ -212,7 +222,7 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     >>> solve_friction(W, np.array([-1.0, 0.1]), np.array([0.5]), [np.array([1])])
     array([ 1. , -0.1])
     """
-    P, _, change = _sweeps(W, q, mu, tangents)
+    P, _, change = _sweeps(W, q, mu, tangents, start)
     if P is None:
         raise ContactError(f"the contact impulses with friction of a step ({len(mu)} "
                            f"contacts) did not converge in {MAX_SWEEPS} sweeps (their "
@@ -221,13 +231,14 @@ def solve_friction(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
     return P
 
 
-def _sweeps(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
-            tangents: list[np.ndarray]) -> tuple[np.ndarray | None, int, float]:
+def _sweeps(W: np.ndarray, q: np.ndarray, mu: np.ndarray, tangents: list[np.ndarray],
+            start: np.ndarray | None = None) -> tuple[np.ndarray | None, int, float]:
     """:func:`solve_friction`'s sweeps: the impulses (``None``: no convergence), how
     many sweeps were made, and the velocities' change in the last relative to their
     size."""
     k = len(mu)
-    P = np.zeros(len(q))
+    P = np.zeros(len(q)) if start is None else np.array(start, dtype=float)
+    P[:k] = np.maximum(P[:k], 0.0)  # the sweeps keep each tangential one in its disk
     diagonal = np.diag(W).tolist()
     normal_rows, normal_q = [W[c] for c in range(k)], q[:k].tolist()
     # each contact's tangential rows without its own columns (the velocities the
@@ -243,7 +254,7 @@ def _sweeps(W: np.ndarray, q: np.ndarray, mu: np.ndarray,
         contiguous = bool(np.all(np.diff(rows) == 1))
         place = slice(int(rows[0]), int(rows[-1]) + 1) if contiguous else rows
         blocks.append((place, others, q[rows], _Disk(W[np.ix_(rows, rows)])))
-    w, scale, change = q.copy(), float(np.abs(q).max(initial=0.0)), math.inf
+    w, scale, change = W @ P + q, float(np.abs(q).max(initial=0.0)), math.inf
     size = np.abs(W)
     for sweep in range(1, MAX_SWEEPS + 1):
         for c in range(k):

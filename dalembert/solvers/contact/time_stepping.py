@@ -136,12 +136,13 @@ def run_time_stepping(full: NumericModel, gaps: Gaps, t_span: tuple[float, float
 
     def _steps() -> None:
         nonlocal q, v, closed_before
+        P = np.zeros(m)
         for t, end in itertools.pairwise(grid):
             h = end - t
             if held:
                 full.set_inputs(held[-1])
             q_next, v_next, P = _step(full, gaps, kkt, bilateral, t, q, v, h, turn,
-                                      None if hold.sampled else signal)
+                                      None if hold.sampled else signal, P)
             if hold.sampled:  # the sample at an instant, shown at its point; else held
                 try:
                     held.append(hold.sample(end, np.concatenate([q_next, v_next]))
@@ -240,9 +241,12 @@ def hold_marks(hold: Hold, t_eval: np.ndarray) -> np.ndarray:
 
 def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
           q: np.ndarray, v: np.ndarray, h: float, turn: Rotations,
-          signal: InputSignal | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+          signal: InputSignal | None, previous: np.ndarray | None = None
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One Moreau-Jean step: the positions and velocity after it and the impulses
-    (the inputs from ``signal`` at the midpoint, if given)."""
+    (the inputs from ``signal`` at the midpoint, if given; the friction's sweeps start
+    from the impulses of the step before, ``previous``: a body resting or sliding
+    steadily poses nearly the same problem at every step)."""
     n, m, pattern = full.n, full.m, full.pattern
     tm, qm = t + h / 2, turn.advance(q, v, h / 2)
     v = turn.carry(q, v, qm)  # rates tied to the midpoint's quaternions
@@ -266,7 +270,8 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
     if len(near):
         A = pattern.dense_A(Av)
         gaps.check_finite(A[gaps.first + near].sum(axis=1), tm)
-        found = contact_impulses(gaps, kkt, A, b, near, v, v_free, gaps.restitution)
+        found = contact_impulses(gaps, kkt, A, b, near, v, v_free, gaps.restitution,
+                                 previous)
         v_free = v_free + found.velocity
         P[found.rows] = found.impulse
         pushing = near[found.impulse[:len(near)] > 0.0]

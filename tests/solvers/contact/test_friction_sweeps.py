@@ -95,6 +95,27 @@ def test_a_box_sliding_on_its_corners_is_braked_by_mu_times_its_weight(alpha, v0
     assert abs(total[1]) < 1e-12 * m * g * h
 
 
+@pytest.mark.parametrize(("alpha", "v0"), [(0.4, 0.0), (0.6, 0.3)])
+def test_sweeps_started_anywhere_leave_the_same_velocities(alpha, v0):
+    """The time-stepping mode starts each step's sweeps from the step before's
+    impulses: from the solution, from another of the (not unique) solutions, from a
+    start outside the cone, the velocities after the step are the closed form's (at
+    rest, or braked by ``mu`` times the weight), and the start within rounding of a
+    solution is one (it is kept: no drift along the impulses' null space)."""
+    W, q, groups, J, inverse, free = box_problem(alpha, v0)
+    cold = solve_friction(W, q, np.full(4, mu), groups)
+    other = cold.copy()
+    other[:4] += 0.1 * m * g * h * np.array([1.0, -1.0, 1.0, -1.0])  # the normals' null space
+    for start in (cold, other, np.full(len(q), 1.0)):
+        P = solve_friction(W, q, np.full(4, mu), groups, start)
+        after = free + inverse @ J.T @ P
+        down = max(v0 + g * h * (math.sin(alpha) - mu * math.cos(alpha)), 0.0)
+        assert abs(after[0] + down) < 1e-13
+        assert at_rest(np.concatenate([[0.0], after[1:]]))
+    assert np.abs(solve_friction(W, q, np.full(4, mu), groups, cold) - cold).max() \
+        < 1e-12 * m * g * h
+
+
 def test_a_box_slowed_to_rest_within_the_step_grips():
     v0 = 0.5 * mu * g * h  # friction could take twice this in the step
     normals, friction, after = solved(0.0, v0)
