@@ -217,37 +217,56 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     SingularSystemError
         The rows that act are dependent.
     """
+    return _sliding_solver(full, gaps, t, q, qd, which, kkt, values, acting)(directions)
+
+
+def _sliding_solver(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                    qd: np.ndarray, which: ClosedGaps, kkt: KKTFactorization | None = None,
+                    values: tuple[np.ndarray, ...] | None = None,
+                    acting: np.ndarray | None = None
+                    ) -> Callable[[dict[int, np.ndarray]], tuple[np.ndarray, np.ndarray]]:
+    """:func:`solve_sliding` at one state for any sliding directions: the KKT matrix
+    factored and the solve without friction made once, each call then one solve per
+    sliding gap (the searches for directions try many at one state). ``kkt`` holds
+    this factorization only until it is factored again."""
     Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
     kkt = kkt or kkt_factorization(full.pattern)
     if acting is None:
         acting = acting_rows(full, gaps, t, q, which)
     kkt.factor(np.concatenate([Mv, Av]), acting)
-    qdd, lam = kkt.solve(np.concatenate([f, c]))
+    qdd0, lam0 = kkt.solve(np.concatenate([f, c]))
     # dependent rows left out: every multiplier the minimum-norm one (a linear map of
     # the kept rows' ones, so the sliding contacts' normal forces stay linear below)
     spread = _minimum_norm(full, gaps, Av, which, acting)
+    lam0 = spread(lam0)
     sliding = which.sliding
-    if not sliding:
-        return qdd, spread(lam)
-    lam = spread(lam)
     zeros = np.zeros(full.m)
-    D = [friction_directions(full, gaps, k, Av, directions[k]) for k in sliding]
-    responses = [(qdd_k, spread(lam_k)) for qdd_k, lam_k in
-                 (kkt.solve(np.concatenate([d, zeros])) for d in D)]
     normal = gaps.first + np.array(sliding, dtype=int)
-    # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
-    R = np.array([lam_k[normal] for _, lam_k in responses]).T
-    try:
-        N = np.linalg.solve(np.eye(len(sliding)) - R, lam[normal])
-    except np.linalg.LinAlgError as exc:  # their normal forces are not unique
-        raise SingularSystemError("the sliding contacts' normal rows are dependent") from exc
-    for n_k, (qdd_k, lam_k) in zip(N, responses):
-        qdd = qdd + n_k * qdd_k
-        lam = lam + n_k * lam_k
-    assert gaps.friction is not None
-    for k, n_k in zip(sliding, N):
-        lam[gaps.tangents[k]] = -gaps.friction[k] * n_k * directions[k]
-    return qdd, lam
+    friction = gaps.friction
+
+    def solve(directions: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        qdd, lam = qdd0, lam0
+        if not sliding:
+            return qdd, lam
+        assert friction is not None  # (sliding gaps have coefficients)
+        D = [friction_directions(full, gaps, k, Av, directions[k]) for k in sliding]
+        responses = [(qdd_k, spread(lam_k)) for qdd_k, lam_k in
+                     (kkt.solve(np.concatenate([d, zeros])) for d in D)]
+        # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
+        R = np.array([lam_k[normal] for _, lam_k in responses]).T
+        try:
+            N = np.linalg.solve(np.eye(len(sliding)) - R, lam[normal])
+        except np.linalg.LinAlgError as exc:  # their normal forces are not unique
+            raise SingularSystemError("the sliding contacts' normal rows are dependent") \
+                from exc
+        for n_k, (qdd_k, lam_k) in zip(N, responses):
+            qdd = qdd + n_k * qdd_k
+            lam = lam + n_k * lam_k
+        for k, n_k in zip(sliding, N):
+            lam[gaps.tangents[k]] = -friction[k] * n_k * directions[k]
+        return qdd, lam
+
+    return solve
 
 
 def _minimum_norm(full: NumericModel, gaps: Gaps, Av: np.ndarray, which: ClosedGaps,
@@ -650,12 +669,10 @@ def _row_accelerations(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     values = full.kkt_sparse(t, q, qd)
     _, _, Av, c = values
     pattern = full.pattern
-    kkt = kkt or kkt_factorization(pattern)
-    acting = acting if acting is not None else acting_rows(full, gaps, t, q, which)
+    solve = _sliding_solver(full, gaps, t, q, qd, which, kkt, values, acting)
 
     def rates(trial: dict[int, np.ndarray]) -> np.ndarray:
-        qdd, _ = solve_sliding(full, gaps, t, q, qd, which, {**directions, **trial}, kkt,
-                               values, acting)
+        qdd, _ = solve({**directions, **trial})
         return matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
 
     return rates
