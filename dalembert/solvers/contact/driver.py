@@ -755,12 +755,15 @@ def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.nd
     speed: their friction takes the direction their contact point accelerates in
     (:func:`~dalembert.solvers.contact.friction.consistent_directions`) until they
     slide that fast along their start direction."""
+    candidates = [k for k in which.sliding if len(gaps.tangents[k]) == 2 and k not in ended]
+    if not candidates:
+        return {}
     n = full.n
     q, qd = y[:n], y[n:]
     speed = ONSET_RTOL * (1.0 + np.abs(qd).max(initial=0.0))
     rates = row_rates(full, t, q, qd)
-    return {k: speed for k in which.sliding if len(gaps.tangents[k]) == 2
-            and k not in ended and float(np.linalg.norm(rates[gaps.tangents[k]])) < speed}
+    return {k: speed for k in candidates
+            if float(np.linalg.norm(rates[gaps.tangents[k]])) < speed}
 
 
 def _slid_directions(full: NumericModel, gaps: Gaps, t: float, y: np.ndarray,
@@ -768,7 +771,7 @@ def _slid_directions(full: NumericModel, gaps: Gaps, t: float, y: np.ndarray,
     """The sliding directions from ``(t, y)``, where gap ``k``'s onset has ended: its
     velocity's direction, the others' as they were."""
     n = full.n
-    s = row_rates(full, t, y[:n], y[n:])[gaps.tangents[k]]
+    s = sliding_velocity(full, gaps, k, t, y[:n], y[n:])
     return {**start.directions, k: s / float(np.linalg.norm(s))}
 
 

@@ -238,7 +238,8 @@ def _sweeps(W: np.ndarray, q: np.ndarray, mu: np.ndarray, tangents: list[np.ndar
     size."""
     k = len(mu)
     P = np.zeros(len(q)) if start is None else np.array(start, dtype=float)
-    P[:k] = np.maximum(P[:k], 0.0)  # the sweeps keep each tangential one in its disk
+    P[:k] = np.maximum(P[:k], 0.0)  # a start's normal ones pushing (the sweeps then
+    # put each tangential one in its disk)
     diagonal = np.diag(W).tolist()
     normal_rows, normal_q = [W[c] for c in range(k)], q[:k].tolist()
     # each contact's tangential rows without its own columns (the velocities the
