@@ -147,8 +147,9 @@ class StepCollapse:
         True False
         True True
         """
-        self._stalled = self._stalled + 1 if self._remaining(t, t_bound) > STALL_STEPS else 0
-        return self._remaining(t, t_bound) if self._stalled >= RUNAWAY_WINDOWS else None
+        remaining = self._remaining(t, t_bound)
+        self._stalled = self._stalled + 1 if remaining > STALL_STEPS else 0
+        return remaining if self._stalled >= RUNAWAY_WINDOWS else None
 
     def _remaining(self, t: float, t_bound: float) -> float:
         """The steps to ``t_bound`` at the last window's mean step."""
