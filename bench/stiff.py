@@ -21,7 +21,8 @@ RK4 and implicitfast (hinges with ``stiffness``/``damping``); Exudyn
 generalized-alpha (2D bodies, ``RevoluteJoint2D``, a ``CoordinateSpringDamper``
 between consecutive links' angle coordinates).
 
-Usage: ``python bench/stiff.py [--k K ...] [--tools T ...] [--cap S]``.
+Usage: ``python bench/stiff.py [--k K ...] [--tools T ...] [--cap S] [--n LINKS]``
+(``--n``: a chain of other length, the same links and springs, its own reference).
 """
 
 from __future__ import annotations
@@ -53,6 +54,8 @@ PEERS = ["mujoco-RK4", "mujoco-implicitfast", "exudyn-GA"]
 TOOLS = [f"dalembert-{m}" for m in METHODS] + PEERS
 TARGETS = (1e-3, 1e-6)
 REFERENCE = HERE / "results" / "stiff_reference.json"
+#: The chain's links (``--n``; 16, the issue's chain, by default).
+LINKS = sc.N
 #: Each attempt also keeps its angle error and counts (the ladder keeps the energy's).
 ladder.KEPT = (*ladder.KEPT, "angle_error", "n_steps", "steps", "njev", "nlu", "n_switches")
 #: Tolerance ladder of dalembert's methods (atol = rtol / 100), as the suite's.
@@ -66,11 +69,12 @@ EXUDYN_STEPS = tuple(1e-2 / 2**j for j in range(16))
 def reference_angles(k: float) -> np.ndarray:
     """The reference's absolute angles at ``T_END`` (computed and cached if missing)."""
     cached = json.loads(REFERENCE.read_text()) if REFERENCE.exists() else {}
-    if f"{k:g}" not in cached:
+    key = sc.reference_key(k, LINKS)
+    if key not in cached:
         subprocess.run([sys.executable, str(HERE / "stiff_chain.py"), "--k", str(k),
-                        "--out", str(REFERENCE)], check=True)
+                        "--n", str(LINKS), "--out", str(REFERENCE)], check=True)
         cached = json.loads(REFERENCE.read_text())
-    return np.asarray(cached[f"{k:g}"]["phi"])
+    return np.asarray(cached[key]["phi"])
 
 
 def angle_record(phi: np.ndarray, ref: np.ndarray) -> dict:
@@ -86,8 +90,8 @@ def prepare_dalembert(method: str, k: float, c: float, ref: np.ndarray) -> Prepa
     from dalembert.multibody import JointSpring, Multibody, chain
 
     start = time.perf_counter()
-    base = chain(sc.N, sc.L, sc.M, sc.R, joint="revolute", planar=True)
-    springs = [JointSpring(f"spring{i + 1}", base.joints[i], k, c) for i in range(1, sc.N)]
+    base = chain(LINKS, sc.L, sc.M, sc.R, joint="revolute", planar=True)
+    springs = [JointSpring(f"spring{i + 1}", base.joints[i], k, c) for i in range(1, LINKS)]
     mb = Multibody(base.bodies, base.joints, gravity=(0.0, -sc.G, 0.0),
                    joint_springs=springs, name="stiff chain")
     mb.system.compiled  # derive and generate code now  # noqa: B018
@@ -122,7 +126,7 @@ def prepare_dalembert(method: str, k: float, c: float, ref: np.ndarray) -> Prepa
                 "residual": float(traj.position_residual.max()),
                 **angle_record(phi, ref)}
 
-    info = {"build_s": build_s, "coordinates": 3 * sc.N, "constraints": 2 * sc.N}
+    info = {"build_s": build_s, "coordinates": 3 * LINKS, "constraints": 2 * LINKS}
     return Prepared(info, attempt, RTOLS, lambda r: True)
 
 
@@ -140,7 +144,7 @@ def prepare_mujoco(integrator: str, k: float, c: float, ref: np.ndarray) -> Prep
     spec.option.gravity = [0.0, 0.0, -sc.G]
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     parent = spec.worldbody
-    for j in range(sc.N):
+    for j in range(LINKS):
         body = parent.add_body(name=f"link{j + 1}", pos=[0.0, 0.0, 0.0 if j == 0 else -sc.L],
                                explicitinertial=True, mass=sc.M, ipos=[0.0, 0.0, -sc.L / 2],
                                inertia=[sc.I_C, sc.I_C, sc.M * sc.R**2 / 2])
@@ -162,13 +166,13 @@ def prepare_mujoco(integrator: str, k: float, c: float, ref: np.ndarray) -> Prep
         mujoco.mj_step(model, data, nstep=steps)
         wall, cpu_s = time.perf_counter() - start, time.process_time() - cpu
         bad = int(data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
-        phi = np.cumsum(data.qpos) if bad == 0 else np.full(sc.N, np.nan)
+        phi = np.cumsum(data.qpos) if bad == 0 else np.full(LINKS, np.nan)
         return {"setting": {"integrator": integrator, "timestep": sc.T_END / steps},
                 "simulate_s": wall, "cpu_s": cpu_s, "steps": steps,
                 "evaluations": (4 if integrator == "RK4" else 1) * steps,
                 "finished": bad == 0, "residual": 0.0, **angle_record(phi, ref)}
 
-    info = {"build_s": build_s, "coordinates": sc.N, "constraints": 0,
+    info = {"build_s": build_s, "coordinates": LINKS, "constraints": 0,
             "note": "hinge stiffness and damping given as MjSpec arrays (first entry)"}
     return Prepared(info, attempt, MUJOCO_STEPS, lambda r: True)
 
@@ -188,7 +192,7 @@ def exudyn_chain(k: float, c: float):
     above = mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0] * 3))
     down = sc.L * np.array([np.sin(sc.ANGLE), -np.cos(sc.ANGLE)])
     nodes, angle_markers = [], []
-    for j in range(sc.N):
+    for j in range(LINKS):
         x, y = (j + 0.5) * down
         node = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[x, y, sc.ANGLE]))
         body = mbs.AddObject(ei.ObjectRigidBody2D(mass=sc.M, inertia=sc.I_C, nodeNumber=node))
@@ -229,7 +233,7 @@ def prepare_exudyn(k: float, c: float, ref: np.ndarray) -> Prepared:
             ok = False
         wall, cpu_s = time.perf_counter() - start, time.process_time() - cpu
         phi = np.array([mbs.GetNodeOutput(n, exu.OutputVariableType.Coordinates)[2]
-                        + sc.ANGLE for n in nodes]) if ok else np.full(sc.N, np.nan)
+                        + sc.ANGLE for n in nodes]) if ok else np.full(LINKS, np.nan)
         steps = math.ceil(sc.T_END / h - 1e-9)
         del container
         return {"setting": {"solver": "generalized-alpha", "spectralRadius": 0.95,
@@ -237,14 +241,14 @@ def prepare_exudyn(k: float, c: float, ref: np.ndarray) -> Prepared:
                 "steps": steps, "evaluations": steps, "finished": ok, "residual": 0.0,
                 **angle_record(phi, ref)}
 
-    info = {"build_s": build_s, "coordinates": 3 * sc.N, "constraints": 2 * sc.N,
+    info = {"build_s": build_s, "coordinates": 3 * LINKS, "constraints": 2 * LINKS,
             "evaluations_note": "time steps (each a Newton solve)"}
     return Prepared(info, attempt, EXUDYN_STEPS, lambda r: True)
 
 
 def prepare(tool: str, k: float) -> Prepared:
     ref = reference_angles(k)
-    c = sc.damping_for(k)["c"]
+    c = sc.damping_for(k, n=LINKS)["c"]
     if tool.startswith("dalembert-"):
         return prepare_dalembert(tool.split("-", 1)[1], k, c, ref)
     if tool.startswith("mujoco-"):
@@ -301,7 +305,7 @@ def serve(tool: str, k: float, cap: float) -> dict:
 def run_one(tool: str, k: float, cap: float) -> dict:
     """:func:`serve` in a fresh process, killed at ``cap`` seconds."""
     cmd = [sys.executable, str(Path(__file__).resolve()), "--one", tool, str(k),
-           "--cap", str(cap)]
+           "--cap", str(cap), "--n", str(LINKS)]
     env = {**os.environ, "PYTHONWARNINGS": "ignore", **SINGLE_THREAD}
     start = time.perf_counter()
     status = "ran"
@@ -349,9 +353,12 @@ def main() -> None:
     parser.add_argument("--tools", nargs="+", choices=TOOLS, default=TOOLS)
     parser.add_argument("--cap", type=float, default=90.0,
                         help="seconds per (tool, k), bisections and timing rounds")
+    parser.add_argument("--n", type=int, default=sc.N, help="links of the chain")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "stiff.json")
     parser.add_argument("--one", nargs=2, metavar=("TOOL", "K"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    global LINKS
+    LINKS = args.n
     if args.one:
         serve(args.one[0], float(args.one[1]), args.cap)
         return
@@ -367,11 +374,12 @@ def main() -> None:
                   flush=True)
             args.out.parent.mkdir(parents=True, exist_ok=True)
             args.out.write_text(json.dumps(
-                {"workload": __doc__.split("\n\n")[1].replace("\n", " "), "cap_s": args.cap,
+                {"workload": __doc__.split("\n\n")[1].replace("\n", " "), "links": LINKS,
+                 "cap_s": args.cap,
                  "targets_rad": list(TARGETS), "machine": machine(),
                  "started": time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(started)),
                  "elapsed_s": time.time() - started,
-                 "damping": {f"{k:g}": sc.damping_for(k) for k in args.k},
+                 "damping": {f"{k:g}": sc.damping_for(k, n=LINKS) for k in args.k},
                  "records": records}, indent=1) + "\n")
     print(table(records))
 

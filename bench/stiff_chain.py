@@ -125,6 +125,11 @@ def energy(y: np.ndarray, k: float, n: int = N) -> float:
     return float(0.5 * w @ mass @ w - G * b @ np.cos(phi) + 0.5 * k * phi @ S @ phi)
 
 
+def reference_key(k: float, n: int = N) -> str:
+    """A reference's key in ``stiff_reference.json``: ``"1e+06"``, ``"1e+06 n=64"``."""
+    return f"{k:g}" if n == N else f"{k:g} n={n}"
+
+
 def reference(k: float, method: str = "Radau", rtol: float = 1e-12, atol: float = 1e-13,
               n: int = N) -> dict:
     """The absolute angles at ``T_END`` (and the run's statistics), minimal coordinates."""
@@ -157,6 +162,7 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument("--k", type=float, nargs="+", default=list(STIFFNESSES))
+    parser.add_argument("--n", type=int, default=N, help="links of the chain")
     parser.add_argument("--out", type=Path,
                         default=Path(__file__).parent / "results" / "stiff_reference.json")
     args = parser.parse_args()
@@ -165,13 +171,14 @@ def main() -> None:
         runs = []
         for method, rtol, atol in (STIFFEST_RUNS if k >= 1e8 else REFERENCE_RUNS):
             start = time.process_time()
-            run = reference(k, method, rtol, atol)
+            run = reference(k, method, rtol, atol, n=args.n)
             run["cpu_s"] = time.process_time() - start
             runs.append(run)
             print(f"k={k:g} {method} rtol={rtol:g}: {run['cpu_s']:.1f} s CPU, "
                   f"{run['nfev']} evaluations", flush=True)
         spread = float(np.max(np.abs(np.subtract(runs[0]["phi"], runs[1]["phi"]))))
-        out[f"{k:g}"] = {"k": k, **damping_for(k), "phi": runs[0]["phi"],
+        out[reference_key(k, args.n)] = {"k": k, "links": args.n, **damping_for(k, n=args.n),
+                                         "phi": runs[0]["phi"],
                          "check_max_angle_difference": spread, "runs": runs}
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(out, indent=1) + "\n")

@@ -296,7 +296,7 @@ def simulation_options(
     t_span: Sequence[float],
     *,
     t_eval: Sequence[float] | np.ndarray | None = None,
-    method: str | type[OdeSolver] = "DOP853",
+    method: str | type[OdeSolver] = "auto",
     rtol: float | Sequence[float] | np.ndarray | None = None,
     atol: float | Sequence[float] | np.ndarray | None = None,
     step_control: StepController = "PI",
@@ -326,7 +326,7 @@ def simulation_options(
     ----------
     t_span, t_eval, method, first_step, max_step, events, dense_output
         As in :func:`scipy.integrate.solve_ivp`; ``method`` may also be ``"IDA"``
-        (:class:`IDA`) or ``"auto"`` (:class:`Switching`).
+        (:class:`IDA`) or ``"auto"`` (the default, :class:`Switching`).
     rtol, atol
         As in :func:`scipy.integrate.solve_ivp`; ``None``: the method's defaults
         (:func:`default_tolerances`; with ``"auto"``, each method's own).
@@ -398,10 +398,12 @@ def simulation_options(
         solver = IDA
         _check_ida(rtol, stabilization, backend, events, dense_output, inputs,
                    sample_time)
-    elif method == "auto":  # DOP853 at its defaults, Radau at its own
+    elif method == "auto":  # the default; DOP853 at its defaults, Radau at its own
         if step_control != "PI":
-            raise ValueError("method='auto' watches DOP853's steps for stiffness under "
-                             "step_control='PI' (the default); give that, or a method")
+            raise ValueError(f"step_control={step_control!r} gives one explicit method's "
+                             "steps; give it with that method (method='DOP853', 'RK45' "
+                             "...): method='auto', the default, watches DOP853's steps "
+                             "for stiffness under step_control='PI'")
         solver = scipy.integrate.DOP853
         implicit = DEFAULT_TOLERANCES["implicit"]
         switching = Switching(_tolerance(implicit.rtol if rtol is None else rtol),

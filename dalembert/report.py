@@ -233,7 +233,7 @@ def format_run(run: ExampleRun, base: Path | None = None) -> str:
         "",
         f"Simulated t = {traj.t[0]:.4g}..{traj.t[-1]:.4g} ({len(traj)} output points) "
         f"in {run.seconds:.2f} s after {run.setup_seconds:.2f} s of derivation and code "
-        "generation (DOP853, rtol=1e-11, projection stabilization); "
+        f"generation ({_method_used(traj)}, projection stabilization); "
         f"energy plot: {_energy_label(run)}.",
         "",
         "Measured errors (`checks()`, against closed forms and conservation laws):",
@@ -371,6 +371,18 @@ def gallery_html(runs: list[ExampleRun], failed: dict[str, str], base: Path) -> 
               for name, err in failed.items()]
     parts.append("</body></html>\n")
     return "\n".join(parts)
+
+
+def _method_used(traj: Trajectory) -> str:
+    """The methods of a run at the default ``method="auto"`` and tolerances."""
+    from .options import DEFAULT_TOLERANCES
+
+    explicit, implicit = DEFAULT_TOLERANCES["explicit"], DEFAULT_TOLERANCES["implicit"]
+    switches = int(traj.stats.get("n_switches", 0))
+    if not switches:
+        return f"DOP853, rtol={explicit.rtol:g}"
+    return (f"DOP853 at rtol={explicit.rtol:g} and Radau at rtol={implicit.rtol:g}, "
+            f"{switches} switch{'es' if switches > 1 else ''} between them")
 
 
 def _energy_label(run: ExampleRun) -> str:

@@ -613,7 +613,7 @@ class System:
         qd0: CoordinateValues | None = None,
         *,
         t_eval: Sequence[float] | np.ndarray | None = None,
-        method: str | type[OdeSolver] = "DOP853",
+        method: str | type[OdeSolver] = "auto",
         rtol: float | Sequence[float] | None = None,
         atol: float | Sequence[float] | None = None,
         first_step: float | None = None,
@@ -656,21 +656,26 @@ class System:
         t_eval
             Output times (default: every step).
         method
-            A ``solve_ivp`` method name (``"DOP853"`` default; ``"Radau"``/``"BDF"``
-            for stiff mechanisms), an ``OdeSolver`` subclass, or ``"IDA"`` (SUNDIALS
-            IDA on the stabilized index-2 form, through scikit-sundae:
-            :mod:`dalembert.solvers.ida`; no events, dense output or inputs yet).
+            ``"auto"`` (default: DOP853, switching to Radau where the problem turns
+            out stiff, :mod:`dalembert.solvers.running.switching`), a ``solve_ivp``
+            method name (``"DOP853"``; ``"Radau"``/``"BDF"`` for stiff mechanisms), an
+            ``OdeSolver`` subclass, or ``"IDA"`` (SUNDIALS IDA on the stabilized
+            index-2 form, through scikit-sundae: :mod:`dalembert.solvers.ida`; no
+            events, dense output or inputs yet).
         rtol, atol
             Tolerances: finite positive numbers (or arrays, one per state entry).
             Default (``None``): the method's (:data:`dalembert.options.DEFAULT_TOLERANCES`),
             ``rtol=1e-11, atol=1e-13`` for the explicit methods, ``1e-8, 1e-10`` for
-            the implicit ones (Radau, BDF, LSODA, IDA).
+            the implicit ones (Radau, BDF, LSODA, IDA); ``"auto"`` runs DOP853 and
+            Radau each at its own.
         first_step, max_step
             Step limits, as in ``solve_ivp``.
         step_control
             The explicit Runge-Kutta methods' step-size controller: ``"PI"``
             (default; fewer rejected steps where stability limits the step, see
-            :mod:`dalembert.solvers.steppers.scipy_ivp`) or ``"scipy"`` (``solve_ivp``'s).
+            :mod:`dalembert.solvers.steppers.scipy_ivp`) or ``"scipy"`` (``solve_ivp``'s,
+            with an explicit ``method`` named: ``"auto"`` watches the PI controller's
+            steps).
         stabilization
             ``"projection"`` (positions and velocities projected after every step:
             no tuning, residuals at rounding level), ``"baumgarte"`` (see

@@ -191,8 +191,8 @@ def test_interrupt_keeps_the_stretches_done(chains, monkeypatch):
     whole = simulate(system, initial, stretches=True)
     calls = {"n": 0}
 
-    def impatient(self):
-        done = RUN(self)
+    def impatient(self, *budget):
+        done = RUN(self, *budget)
         calls["n"] += 1
         if calls["n"] == 3:
             raise KeyboardInterrupt
@@ -216,10 +216,10 @@ def test_a_signal_during_a_call_interrupts(chains, monkeypatch):
     def ctrl_c(signum, frame):
         raise KeyboardInterrupt
 
-    def arm_then_run(self):  # the timer starts with the first call to C
+    def arm_then_run(self, *budget):  # the timer starts with the first call to C
         if not signal.getitimer(signal.ITIMER_REAL)[0]:
             signal.setitimer(signal.ITIMER_REAL, 0.02)
-        return RUN(self)
+        return RUN(self, *budget)
 
     monkeypatch.setattr(StretchRunner, "run", arm_then_run)
     previous = signal.signal(signal.SIGALRM, ctrl_c)

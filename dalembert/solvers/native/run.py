@@ -101,7 +101,7 @@ class _Stretches:
             run.next_eval = int(np.searchsorted(self._ahead, solver.direction * solver.t,
                                                 "right"))
         run.n_steps = run.n_out = 0
-        run.max_steps = MAX_STEPS if max_steps is None else max_steps
+        run.max_steps = MAX_STEPS if max_steps is None else min(max_steps, MAX_STEPS)
         self._pending = True
         with outside_python():  # the GIL is released: other threads run their Python
             status = self._call()

@@ -47,7 +47,7 @@ them fire, at rtol 1e-6 and 1e-8 too).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import OdeSolver
@@ -96,6 +96,51 @@ SPECTRAL_LIMIT = 0.8
 #: runs at rtol 1e-3, where every trial failed (bench/README.md).
 TRIAL_LEFT = 1000
 
+#: The order of DOP853's error estimate plus one: its steps where accuracy holds them
+#: scale as ``rtol ** (1 / 8)``.
+EXPLICIT_ORDER = 8
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The ``h |lambda|`` at which each test starts a trial, for one run's tolerances.
+
+    The limits above were measured with both methods at one tolerance. At the default
+    ones DOP853 runs at ``rtol`` 1e-11 and Radau at 1e-8: DOP853's steps there are
+    ``(1e-11 / 1e-8) ** (1 / 8)`` = 0.42 times those it takes at Radau's tolerance, and
+    a stiff mode that holds them at that tolerance shows as ``h |lambda|`` 0.42 times
+    lower. So the limits are scaled by that ratio (never raised): else the 16-link
+    spring chain at k = 1e8 ran 820,000 steps of DOP853 (``h |lambda|`` about 0.8)
+    before switching, 66 s against Radau's 5.6 s for the same error.
+
+    Parameters
+    ----------
+    detector
+        Hairer's test for the explicit solver.
+    spectral
+        The limit of the spectral estimate.
+
+    Examples
+    --------
+    >>> Limits.of(1e-8, 1e-8).spectral == SPECTRAL_LIMIT
+    True
+    >>> round(Limits.of(1e-11, 1e-8).detector.limit, 3)
+    0.422
+    """
+
+    detector: StiffnessDetector
+    spectral: float
+
+    @classmethod
+    def of(cls, explicit_rtol: float | np.ndarray, implicit_rtol: float | np.ndarray
+           ) -> Limits:
+        """The limits for the explicit method at ``explicit_rtol`` and the implicit one at
+        ``implicit_rtol`` (arrays: their largest entries)."""
+        ratio = float(np.max(explicit_rtol)) / float(np.max(implicit_rtol))
+        scale = min(1.0, ratio ** (1.0 / EXPLICIT_ORDER))
+        return cls(replace(DETECTOR, limit=DETECTOR.limit * scale), SPECTRAL_LIMIT * scale)
+
+
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
 #: (``h_abs``: its first step, or 0 to let it choose).
 SolverFactory = Callable[[float, np.ndarray, float, float], OdeSolver]
@@ -112,6 +157,8 @@ class StiffSwitch:
         without a detector: the switch arms one when its wait is over).
     implicit_name
         The implicit method's name, for the run's record.
+    spectral_limit
+        The ``h |lambda|`` of a spectral estimate that starts a trial (:class:`Limits`).
 
     Examples
     --------
@@ -127,6 +174,7 @@ class StiffSwitch:
     implicit: SolverFactory
     explicit: SolverFactory
     implicit_name: str = "Radau"
+    spectral_limit: float = SPECTRAL_LIMIT
     #: ``(t, method)`` of each switch made
     switches: list[tuple[float, str]] = field(default_factory=list)
     _trial: tuple[float, int, float] | None = None  # t, steps and explicit step at the switch
@@ -220,9 +268,9 @@ class StiffSwitch:
         return self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
 
     def _spectrally_stiff(self, solver: OdeSolver) -> bool:
-        """Whether an estimate puts the explicit step at ``SPECTRAL_LIMIT`` times the
+        """Whether an estimate puts the explicit step at ``spectral_limit`` times the
         Jacobian's largest ``|lambda|`` or above (see :data:`SPECTRAL_FIRST`)."""
         start = self._vector if self._vector is not None else \
             np.random.default_rng(0).standard_normal(len(solver.y))
         rho, self._vector = spectral_radius(solver.fun, solver.t, solver.y, start)
-        return step_size(solver) * rho >= SPECTRAL_LIMIT
+        return step_size(solver) * rho >= self.spectral_limit

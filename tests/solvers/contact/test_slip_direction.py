@@ -136,13 +136,19 @@ def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_ve
                     potential=M * G * Z - c[0] * time * X - c[1] * time * Y,
                     constraints=[Unilateral(Z - R, name="floor", friction=MU,
                                             tangents=[X.diff() + R * TH.diff(), Y.diff()])])
-    traj = system.simulate((0.0, 1.0), {"z": R}, t_eval=t, timeout=120)
-    assert traj.success, traj.message
-    (slip,) = [s.t for s in traj.contacts.switches if s.t > 0]
-    assert abs(slip - onset) < 1e-12
-    assert np.abs(traj.q[:, [0, 1, 3]] - reference.y[:3].T).max() < 2e-11
-    s = np.column_stack([traj["x_dot"] + R * traj["theta_dot"], traj["y_dot"]])
-    assert np.abs(s - reference.y[3:5].T).max() < 2e-11
-    assert np.abs(traj["theta_dot"] - reference.y[5]).max() < 2e-11
+    # DOP853 at its 1e-11 throughout; the default method switches to Radau (rtol 1e-8)
+    # in the stiff stretch after the onset and keeps its tolerance (relative errors)
+    for method, tol in (("DOP853", 2e-11), ("auto", 1e-8)):
+        traj = system.simulate((0.0, 1.0), {"z": R}, t_eval=t, timeout=120, method=method)
+        assert traj.success, traj.message
+        (slip,) = [s.t for s in traj.contacts.switches if s.t > 0]
+        assert abs(slip - onset) < 1e-12
+        q_ref, s_ref = reference.y[:3].T, reference.y[3:5].T
+        assert (np.abs(traj.q[:, [0, 1, 3]] - q_ref) / (1 + np.abs(q_ref))).max() < tol
+        s = np.column_stack([traj["x_dot"] + R * traj["theta_dot"], traj["y_dot"]])
+        assert (np.abs(s - s_ref) / (1 + np.abs(s_ref))).max() < tol
+        w_ref = reference.y[5]
+        assert (np.abs(traj["theta_dot"] - w_ref) / (1 + np.abs(w_ref))).max() < tol
+    assert traj.stats["n_switches"] >= 1
     # by t = 1 it has turned by a tenth of a radian from its onset direction
     assert np.arccos(s[-1] @ d0 / np.linalg.norm(s[-1])) > 0.1
