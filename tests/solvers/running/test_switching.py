@@ -60,6 +60,20 @@ def test_a_stiff_run_switches_to_radau_and_meets_the_reference(elastic, backend)
     assert auto.stats["n_steps"] < explicit.stats["n_steps"] / 3
 
 
+def test_at_the_default_tolerances_a_stiff_run_switches(elastic):
+    """At the defaults DOP853 runs at rtol 1e-11 and Radau at 1e-8: DOP853's steps are
+    about (1e-3)^(1/8) = 0.42 times those it takes at Radau's tolerance, so the spring's
+    mode holds them at ``h |lambda|`` below the tests' limits of equal tolerances; scaled
+    by that ratio (``switching.Limits``) they fire, and the end meets the reference to
+    Radau's tolerance in fewer than half DOP853's steps."""
+    system, q0, expected = elastic
+    auto = system.simulate((0.0, T_END), q0, t_eval=[T_END])  # the default method
+    explicit = system.simulate((0.0, T_END), q0, method="DOP853", t_eval=[T_END])
+    assert auto.success and auto.stats["n_switches"] >= 1
+    assert np.abs(end_of(auto) - expected).max() < 1e-8
+    assert auto.stats["n_steps"] < explicit.stats["n_steps"] / 2
+
+
 @pytest.fixture(scope="module")
 def barely_excited():
     """The elastic pendulum at k = 1e7, the end of its polar-coordinate model
