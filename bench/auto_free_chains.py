@@ -106,22 +106,22 @@ def same_rtol(mb, q0, qd0, rtol: float, n: int, rounds: int) -> dict:
     """Where ``auto``'s time goes: DOP853, ``auto`` and ``auto`` with a detector that
     cannot fire (its limit out of reach: the test's cost alone, no switch) at one rtol
     (DOP853's kept one), interleaved rounds, the fastest CPU time of each."""
-    from dalembert.solvers.running import switching
+    from dalembert.solvers.running import run_data
     from dalembert.solvers.steppers.stiffness import StiffnessDetector
 
-    real = switching.DETECTOR
+    real = run_data.DETECTOR
     variants = [("DOP853", "DOP853", real), ("auto", "auto", real),
                 ("auto, detector never firing", "auto", StiffnessDetector(limit=1e300))]
     out: dict[str, dict] = {}
     try:
         for r in range(rounds):
             for label, method, detector in variants[r % 3:] + variants[:r % 3]:
-                switching.DETECTOR = detector
+                run_data.DETECTOR = detector
                 one = timed(mb, q0, qd0, method, rtol, n)
                 if label not in out or one["cpu_s"] < out[label]["cpu_s"]:
                     out[label] = one
     finally:
-        switching.DETECTOR = real
+        run_data.DETECTOR = real
     return {"rtol": rtol, **{k: {f: v[f] for f in ("cpu_s", "simulate_s", "steps",
                                                    "evaluations", "lu", "switches",
                                                    "energy_error")}

@@ -49,7 +49,7 @@ from ..state import accelerations_at
 from ..steppers.scipy_ivp import LinearizedRadau
 from .integrate import IntegrationResult, finite_difference_jacobian, integrate
 from .nonfinite import Diagnosis, nonfinite_diagnosis
-from .switching import Limits, StiffSwitch
+from .switching import DETECTOR, StiffSwitch
 from .watchdog import Watchdog
 
 if TYPE_CHECKING:
@@ -89,8 +89,6 @@ class RunData:
         it stops a function of the user's that never returns), or ``None``.
     implicit_options
         ``method="auto"``'s implicit solver's keyword arguments, or ``None``.
-    limits
-        ``method="auto"``'s limits of its tests for stiffness, or ``None``.
     """
 
     plan: SimulationPlan
@@ -109,7 +107,6 @@ class RunData:
     deadline: float | None = None
     watchdog: Watchdog | None = None
     implicit_options: dict[str, object] | None = None
-    limits: Limits | None = None
 
     def hold_inputs(self, values: np.ndarray) -> None:
         """Hold the inputs at ``values`` for the evaluations from now on (a sampled
@@ -149,8 +146,8 @@ class RunData:
 
     def _switch(self) -> StiffSwitch | None:
         """``method="auto"``'s switching for one segment (its memory is the segment's)."""
-        implicit, options, limits = self.plan.implicit, self.implicit_options, self.limits
-        if implicit is None or options is None or limits is None:
+        implicit, options = self.plan.implicit, self.implicit_options
+        if implicit is None or options is None:
             return None
         explicit, explicit_options = self.plan.solver, dict(self.solver_options)
         if issubclass(explicit, IDA):
@@ -171,7 +168,7 @@ class RunData:
             return explicit_class(self.rhs, t, y, t_bound,
                                   **{**explicit_options, "first_step": first})
 
-        return StiffSwitch(make_implicit, make_explicit, spectral_limit=limits.spectral)
+        return StiffSwitch(make_implicit, make_explicit)
 
     def passages(self) -> str:
         """The warning naming the singular configurations the run passed (empty if none)."""
@@ -248,10 +245,8 @@ def start_run(plan: SimulationPlan) -> RunData:
         solver_options["linearize"] = _linearization(num, rhs, kept, gain, signal)
     implicit_options = None
     switching = options.switching
-    limits = None
     if switching is not None and plan.implicit is not None:  # method="auto"
-        limits = Limits.of(options.step.rtol, switching.rtol)
-        solver_options["detector"] = limits.detector
+        solver_options["detector"] = DETECTOR
         implicit_options = {**options.step.solver_options(), "rtol": switching.rtol,
                             "atol": switching.atol}
         implicit_options.pop("first_step", None)
@@ -283,7 +278,7 @@ def start_run(plan: SimulationPlan) -> RunData:
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
         runaway=runaway_diagnosis(num, rows, initial.names, t0, y0), careful=steps,
         deadline=deadline, watchdog=None if deadline is None else Watchdog(deadline),
-        implicit_options=implicit_options, limits=limits)
+        implicit_options=implicit_options)
 
 
 def _functions(num: NumericModel, native: NativeSolver | None, careful: CarefulModel | None,

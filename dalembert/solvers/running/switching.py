@@ -46,12 +46,14 @@ them fire, at rtol 1e-6 and 1e-8 too).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.integrate import OdeSolver
 
+from ...errors import IntegrationWarning, ModelError
 from ..steppers.scipy_ivp import ControlledSteps, step_size
 from ..steppers.stiffness import StiffnessDetector, StiffnessState, spectral_radius
 
@@ -96,52 +98,6 @@ SPECTRAL_LIMIT = 0.8
 #: runs at rtol 1e-3, where every trial failed (bench/README.md).
 TRIAL_LEFT = 1000
 
-#: The order of DOP853's error estimate plus one: its steps where accuracy holds them
-#: scale as ``rtol ** (1 / 8)``.
-EXPLICIT_ORDER = 8
-
-
-@dataclass(frozen=True)
-class Limits:
-    """The ``h |lambda|`` at which each test starts a trial, for one run's tolerances.
-
-    The limits above were measured with both methods at one tolerance. At the default
-    ones DOP853 runs at ``rtol`` 1e-11 and Radau at 1e-8: DOP853's steps there are
-    ``(1e-11 / 1e-8) ** (1 / 8)`` = 0.42 times those it takes at Radau's tolerance, and
-    a stiff mode that holds them at that tolerance shows as ``h |lambda|`` 0.42 times
-    lower. So the limits are scaled by that ratio (never raised): unscaled, the elastic
-    pendulum at k = 1e6 ... 1e8 ran DOP853 throughout at the defaults (0.43 s against
-    Radau's 0.016 s at k = 1e8), the 16-link spring chain at k = 1e6 had its trials
-    late (2.7 s against 1.5 s; docs/design.md).
-
-    Parameters
-    ----------
-    detector
-        Hairer's test for the explicit solver.
-    spectral
-        The limit of the spectral estimate.
-
-    Examples
-    --------
-    >>> Limits.of(1e-8, 1e-8).spectral == SPECTRAL_LIMIT
-    True
-    >>> round(Limits.of(1e-11, 1e-8).detector.limit, 3)
-    0.422
-    """
-
-    detector: StiffnessDetector
-    spectral: float
-
-    @classmethod
-    def of(cls, explicit_rtol: float | np.ndarray, implicit_rtol: float | np.ndarray
-           ) -> Limits:
-        """The limits for the explicit method at ``explicit_rtol`` and the implicit one at
-        ``implicit_rtol`` (arrays: their largest entries)."""
-        ratio = float(np.max(explicit_rtol)) / float(np.max(implicit_rtol))
-        scale = min(1.0, ratio ** (1.0 / EXPLICIT_ORDER))
-        return cls(replace(DETECTOR, limit=DETECTOR.limit * scale), SPECTRAL_LIMIT * scale)
-
-
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
 #: (``h_abs``: its first step, or 0 to let it choose).
 SolverFactory = Callable[[float, np.ndarray, float, float], OdeSolver]
@@ -158,8 +114,6 @@ class StiffSwitch:
         without a detector: the switch arms one when its wait is over).
     implicit_name
         The implicit method's name, for the run's record.
-    spectral_limit
-        The ``h |lambda|`` of a spectral estimate that starts a trial (:class:`Limits`).
 
     Examples
     --------
@@ -175,12 +129,11 @@ class StiffSwitch:
     implicit: SolverFactory
     explicit: SolverFactory
     implicit_name: str = "Radau"
-    spectral_limit: float = SPECTRAL_LIMIT
     #: ``(t, method)`` of each switch made
     switches: list[tuple[float, str]] = field(default_factory=list)
     _trial: tuple[float, int, float] | None = None  # t, steps and explicit step at the switch
     _judged: float = 0.0  # the implicit step at the last judgement (0: none yet)
-    _settled: bool = False  # the implicit method kept for the rest of the segment
+    _settled: bool = False  # one method kept for the rest of the segment (no more trials)
     _detector: StiffnessDetector | None = None  # the explicit solver's, kept while it waits
     _rearm_at: int | None = None  # the step count at which the detector is armed again
     _wait: int = field(default_factory=lambda: RETRY_WAIT)  # the next failed trial's wait
@@ -263,15 +216,23 @@ class StiffSwitch:
         if not solver.stiff and not (estimate and solver.detector is not None
                                      and self._spectrally_stiff(solver)):
             return None
+        try:
+            implicit = self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
+        except ModelError as exc:  # its Jacobian cannot be made (a sign() in a force)
+            warnings.warn(f"method='auto' found the problem stiff at t={solver.t:.6g} but "
+                          f"cannot switch to {self.implicit_name}: {exc}; the run stays "
+                          "with DOP853", IntegrationWarning, stacklevel=2)
+            solver.detector, self._settled = None, True  # DOP853's for the rest
+            return None
         self._detector = solver.detector
         self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
         self.switches.append((solver.t, self.implicit_name))
-        return self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
+        return implicit
 
     def _spectrally_stiff(self, solver: OdeSolver) -> bool:
-        """Whether an estimate puts the explicit step at ``spectral_limit`` times the
+        """Whether an estimate puts the explicit step at ``SPECTRAL_LIMIT`` times the
         Jacobian's largest ``|lambda|`` or above (see :data:`SPECTRAL_FIRST`)."""
         start = self._vector if self._vector is not None else \
             np.random.default_rng(0).standard_normal(len(solver.y))
         rho, self._vector = spectral_radius(solver.fun, solver.t, solver.y, start)
-        return step_size(solver) * rho >= self.spectral_limit
+        return step_size(solver) * rho >= SPECTRAL_LIMIT

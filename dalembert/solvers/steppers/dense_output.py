@@ -76,7 +76,11 @@ class DenseRecorder:
         form = interpolant_form(dense)
         if self.kind is None:
             self.kind = "objects" if form is None else form[0]
-        if form is None:  # another solver's: kept as made (self.kind == "objects")
+        if self.kind != "objects" and self.count and (
+                form is None or form[0] != self.kind
+                or self._buffer.shape[1] != 2 + self.n_state * (1 + len(form[2]))):
+            self._as_objects()  # another solver's steps from here (method="auto")
+        if self.kind == "objects" or form is None:  # kept as made
             del self._objects[self.count:]
             self._objects.append((t_old, t_new, dense, y_end))
         else:
@@ -89,6 +93,21 @@ class DenseRecorder:
             row[2 + self.n_state:] = np.ravel(rows)
         self._final = y_end
         self.count += 1
+
+    def _as_objects(self) -> None:
+        """Keep the steps recorded in the table as interpolants of their own (one
+        :class:`DenseSolution` each), so that steps of another form can follow."""
+        k, n = self.count, self.n_state
+        if k:
+            table = self._buffer[:k]
+            rows = table[:, 2 + n:].reshape(k, -1, n)
+            assert self._final is not None
+            ends = np.vstack([table[1:, 2:2 + n], self._final[None, :]])
+            self._objects = [(float(r[0]), float(r[1]), DenseSolution(
+                self.direction, r[:1], r[1:2], ends[i:i + 1], None, kind=str(self.kind),
+                starts=r[None, 2:2 + n], rows=rows[i:i + 1]), ends[i].copy())
+                for i, r in enumerate(table)]
+        self.kind = "objects"
 
     def _grow(self, width: int) -> None:
         capacity = max(FIRST_CAPACITY, int(GROWTH * len(self._buffer)))
