@@ -15,6 +15,15 @@ fires the same events as one without (tested).
 Screens are for terminal events that fall through 0 and are positive at every step's
 end before they fire (the contact events are so made): then "below the margin at a
 step's end" catches every step in which such an event fires.
+
+Where the run's model drops rows as dependent (a box on its four corners), its events
+see the minimum-norm multipliers, and a held contact's friction is its share of the
+held contacts' friction in proportion to their normal forces
+(:func:`~dalembert.solvers.contact.friction.held_forces`), not the run's multipliers
+(0 on the dropped rows). C computes these from the run's at each step's end (the rows
+joined to the dropped ones as combinations of their kept rows, small dense solves:
+:class:`ScreenTable`), so such segments run in C too; where it cannot (a dropped row
+no longer follows from the kept ones, a singular Gram matrix), it flags the step.
 """
 
 from __future__ import annotations
