@@ -79,10 +79,17 @@ def switches(traj) -> np.ndarray:
     return np.array([s.t for s in traj.contacts.switches])
 
 
-def assert_same(screened, stepped) -> None:
-    """The same switches, steps and states, bit for bit (DOP853, the same steps)."""
+def assert_same(screened, stepped, tol: float = 0.0) -> None:
+    """The same switches, steps and states, bit for bit (``tol`` 0: DOP853, the same
+    steps), or to ``tol`` relative (Radau, whose stretches hold the Newton matrices
+    differently)."""
     assert [s.closed for s in screened.contacts.switches] == \
         [s.closed for s in stepped.contacts.switches]
+    if tol:
+        assert np.abs(switches(screened) - switches(stepped)).max() <= tol
+        scale = 1.0 + np.abs(stepped.q).max()
+        assert np.abs(screened.q[-1] - stepped.q[-1]).max() <= tol * scale
+        return
     assert np.array_equal(switches(screened), switches(stepped))
     assert screened.stats == stepped.stats
     assert np.array_equal(screened.t, stepped.t)
@@ -113,16 +120,17 @@ def on_the_floor(box: Multibody, height: float = 0.0):
     return box.initial_state(positions={"box": (0, 0, C / 2 + height)})
 
 
-def test_a_block_on_two_equal_contacts_slips_when_pushed_by_k_t(both):
+@pytest.mark.parametrize("method, tol", [("DOP853", 0.0), ("Radau", 1e-8)])
+def test_a_block_on_two_equal_contacts_slips_when_pushed_by_k_t(method, tol, both):
     """Sticking, each contact holding half the friction (the cone screens read the
     shares), until ``k t = mu g``; then sliding."""
     k = 20.0
     screened, stepped, (_, shared) = both(two_contacts(k * time), (0.0, 0.4),
-                                          {"x": 0.0, "y": 0.0})
+                                          {"x": 0.0, "y": 0.0}, method=method)
     assert shared > 10
     assert switches(screened)[1:] == pytest.approx([mu * g / k], abs=1e-10)
     assert screened.contacts.switches[1].closed == (0, 1)
-    assert_same(screened, stepped)
+    assert_same(screened, stepped, tol)
 
 
 def test_a_block_on_two_rough_corners_tips_when_its_torque_reaches_m_g_b(both):
