@@ -222,7 +222,8 @@ typedef struct {
   int64_t n_held, n_held_kept;
   const int64_t *held_row, *held_normal, *held_start, *held_entry, *held_col;
   double dependent_rtol;           /* a dropped row's residual off the kept ones' span */
-  double *spread, *work;           /* work: m (the multipliers seen), and the dense parts */
+  double *spread, *work;           /* work: 2 m (the multipliers seen, then with the held
+                                    * friction shared), and the dense parts */
 } dl_screens;
 
 /* One call of dl_rk_run: where the outputs go, how to project, when to return. */
