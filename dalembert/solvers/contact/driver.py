@@ -703,6 +703,9 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                 return _open_at_start(start, t, value)
             add(closing, "closing", k, partial(_gap_screen, full, gap_at + k, start, k))
     assert gaps.friction is not None  # made by Gaps.of
+    # the held contacts whose friction held_forces shares by load: (normal, tangents)
+    shared = tuple((place[first + k], tuple(place[int(r)] for r in gaps.tangents[k]))
+                   for k in which.held if len(gaps.tangents[k]))
     for k in which.held:
         if gaps.friction[k] == np.inf:
             continue
@@ -715,10 +718,11 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
             force = held_forces(full, gaps, t, q, which, every)[k]
             return _open_at_start(start, t, mu * float(every[first + k])
                                   - float(np.linalg.norm(force)))
-        # the held forces are the multipliers where the rows are independent (the
-        # screens of multipliers are only used then)
+        # the held forces are the multipliers where the rows are independent; where
+        # they are not, C shares the held friction as held_forces does
         add(slipping, "slipping", k, partial(
-            ConeScreen, place[first + k], tuple(place[int(r)] for r in gaps.tangents[k]), mu))
+            ConeScreen, place[first + k], tuple(place[int(r)] for r in gaps.tangents[k]), mu,
+            shared))
     for k in which.sliding:
         def sticking(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
             s = sliding_velocity(full, gaps, k, t, q, qd)

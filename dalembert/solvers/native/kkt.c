@@ -40,53 +40,6 @@ void eval_static(const dl_function *F, double t, const double *q, const double *
   }
 }
 
-/* Cholesky of a dense n x n block in place (lower triangle, row major); the diagonal
- * keeps 1 / L_jj, so the solves multiply instead of divide. */
-DL_INLINE int cholesky(double *L, int64_t n) {
-  for (int64_t j = 0; j < n; ++j) {
-    double d = L[j * n + j];
-    const double scale = fabs(d);
-    for (int64_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
-    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_MASS;
-    const double inv = 1.0 / sqrt(d);
-    L[j * n + j] = inv;
-    for (int64_t i = j + 1; i < n; ++i) {
-      double s = L[i * n + j];
-      for (int64_t k = 0; k < j; ++k) s -= L[i * n + k] * L[j * n + k];
-      L[i * n + j] = s * inv;
-    }
-  }
-  return DL_OK;
-}
-
-/* x <- L^-1 x */
-DL_INLINE void forward(const double *restrict L, int64_t n, double *restrict x) {
-  for (int64_t i = 0; i < n; ++i) {
-    double s = x[i];
-    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
-    x[i] = s * L[i * n + i];
-  }
-}
-
-/* x = L^-1 b (b left as it is) */
-DL_INLINE void forward_into(const double *restrict L, int64_t n, const double *restrict b,
-                            double *restrict x) {
-  for (int64_t i = 0; i < n; ++i) {
-    double s = b[i];
-    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
-    x[i] = s * L[i * n + i];
-  }
-}
-
-/* x <- L^-T x */
-DL_INLINE void backward(const double *restrict L, int64_t n, double *restrict x) {
-  for (int64_t i = n - 1; i >= 0; --i) {
-    double s = x[i];
-    for (int64_t k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
-    x[i] = s * L[i * n + i];
-  }
-}
-
 /* The widest band whose LDL^T rows keep their products in registers (BY_WIDTH's
  * widths); wider rows read them back from memory, where they were stored an instant
  * before, so each waits for the store as well as for the arithmetic. */

@@ -125,7 +125,15 @@ class Screens(ctypes.Structure):
                 ("n_force", _i64), ("force_row", _ptr), ("n_cone", _i64),
                 *((name, _ptr) for name in ("cone_normal", "cone_start", "cone_tangent",
                                             "cone_mu")),
-                ("margin", _f64), ("force_rtol", _f64), ("lambda", _ptr), ("ydot", _ptr)]
+                ("margin", _f64), ("force_rtol", _f64), ("lambda", _ptr), ("ydot", _ptr),
+                ("run_velocity", Function), ("run_vel", _ptr), ("n_group", _i64),
+                ("n_group_kept", _i64),
+                *((name, _ptr) for name in ("group_row", "group_start", "group_entry",
+                                            "group_col")),
+                ("n_held", _i64), ("n_held_kept", _i64),
+                *((name, _ptr) for name in ("held_row", "held_normal", "held_start",
+                                            "held_entry", "held_col")),
+                ("dependent_rtol", _f64), ("spread", _ptr), ("work", _ptr)]
 
 
 class Run(ctypes.Structure):

@@ -189,7 +189,15 @@ typedef struct {
  *   force:    lambda[force_row[k]] of the run's own model, margin
  *             force_rtol (1 + max |lambda|);
  *   cone:     cone_mu[k] lambda[cone_normal[k]] - |lambda[cone_tangent[j]]| over j in
- *             [cone_start[k], cone_start[k+1]), margin as force. */
+ *             [cone_start[k], cone_start[k+1]), margin as force.
+ * Where the run's model drops rows as dependent (their multipliers 0 in its solve),
+ * lambda is first made what the events see (screens.c's minimum_norm): the group's
+ * rows (group_row, the kept ones first, n_group_kept of them; the rows coupled to the
+ * dropped ones through shared coordinates) get the minimum-norm multipliers, and the
+ * held contacts' tangent rows (held_row, kept first; held_normal: each one's normal
+ * row; n_held 0: none dropped) the friction shared in proportion to the normal forces.
+ * Each group's rows are read from the run's model's velocity values (run_vel) by the
+ * entries [*_start[i], *_start[i+1]) of *_entry at columns *_col. */
 typedef struct {
   dl_function position, velocity;  /* the watched model's (only what is used is set) */
   const double *p;                 /* its parameter vector */
@@ -207,6 +215,15 @@ typedef struct {
   const double *cone_mu;
   double margin, force_rtol;
   double *lambda, *ydot;           /* work: the run's model's m and 2 n */
+  dl_function run_velocity;        /* the run's model's (set with a group) */
+  double *run_vel;                 /* work: its values [A values, b] */
+  int64_t n_group, n_group_kept;
+  const int64_t *group_row, *group_start, *group_entry, *group_col;
+  int64_t n_held, n_held_kept;
+  const int64_t *held_row, *held_normal, *held_start, *held_entry, *held_col;
+  double dependent_rtol;           /* a dropped row's residual off the kept ones' span */
+  double *spread, *work;           /* work: 2 m (the multipliers seen, then with the held
+                                    * friction shared), and the dense parts */
 } dl_screens;
 
 /* One call of dl_rk_run: where the outputs go, how to project, when to return. */
@@ -312,6 +329,54 @@ DL_INLINE int64_t block_size(const dl_model *md, int64_t b) {
   ((kd) == 1 ? F(__VA_ARGS__, 1) : (kd) == 2 ? F(__VA_ARGS__, 2)                          \
    : (kd) == 3 ? F(__VA_ARGS__, 3) : (kd) == 4 ? F(__VA_ARGS__, 4)                        \
    : (kd) == 5 ? F(__VA_ARGS__, 5) : (kd) == 9 ? F(__VA_ARGS__, 9) : F(__VA_ARGS__, kd))
+
+/* Small dense kernels (kkt.c's mass blocks, screens.c's Gram matrices). */
+/* Cholesky of a dense n x n block in place (lower triangle, row major); the diagonal
+ * keeps 1 / L_jj, so the solves multiply instead of divide. */
+DL_INLINE int cholesky(double *L, int64_t n) {
+  for (int64_t j = 0; j < n; ++j) {
+    double d = L[j * n + j];
+    const double scale = fabs(d);
+    for (int64_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
+    if (!(d > 1e-14 * scale) || !(d > 0.0)) return DL_SINGULAR_MASS;
+    const double inv = 1.0 / sqrt(d);
+    L[j * n + j] = inv;
+    for (int64_t i = j + 1; i < n; ++i) {
+      double s = L[i * n + j];
+      for (int64_t k = 0; k < j; ++k) s -= L[i * n + k] * L[j * n + k];
+      L[i * n + j] = s * inv;
+    }
+  }
+  return DL_OK;
+}
+
+/* x <- L^-1 x */
+DL_INLINE void forward(const double *restrict L, int64_t n, double *restrict x) {
+  for (int64_t i = 0; i < n; ++i) {
+    double s = x[i];
+    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
+/* x = L^-1 b (b left as it is) */
+DL_INLINE void forward_into(const double *restrict L, int64_t n, const double *restrict b,
+                            double *restrict x) {
+  for (int64_t i = 0; i < n; ++i) {
+    double s = b[i];
+    for (int64_t k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
+
+/* x <- L^-T x */
+DL_INLINE void backward(const double *restrict L, int64_t n, double *restrict x) {
+  for (int64_t i = n - 1; i >= 0; --i) {
+    double s = x[i];
+    for (int64_t k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
+    x[i] = s * L[i * n + i];
+  }
+}
 
 /* kkt.c: the generated functions, A's values, the KKT factorization and solves */
 DL_INTERNAL void eval_state(const dl_function *F, double t, const double *q, const double *qd,

@@ -15,6 +15,15 @@ fires the same events as one without (tested).
 Screens are for terminal events that fall through 0 and are positive at every step's
 end before they fire (the contact events are so made): then "below the margin at a
 step's end" catches every step in which such an event fires.
+
+Where the run's model drops rows as dependent (a box on its four corners), its events
+see the minimum-norm multipliers, and a held contact's friction is its share of the
+held contacts' friction in proportion to their normal forces
+(:func:`~dalembert.solvers.contact.friction.held_forces`), not the run's multipliers
+(0 on the dropped rows). C computes these from the run's at each step's end (the rows
+joined to the dropped ones as combinations of their kept rows, small dense solves:
+:class:`ScreenTable`), so such segments run in C too; where it cannot (a dropped row
+no longer follows from the kept ones, a singular Gram matrix), it flags the step.
 """
 
 from __future__ import annotations
@@ -26,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...codegen.compiled import NumericModel
+from ...numerics.rank import RANK_RTOL
 from . import library
 from .solver import NativeSolver, Pinned, c_function
 
@@ -66,11 +76,18 @@ class ForceScreen:
 
 @dataclass(frozen=True)
 class ConeScreen:
-    """``mu lambda[normal] - |lambda[tangents]|`` of the run's own rows."""
+    """``mu lambda[normal] - |lambda[tangents]|`` of the run's own rows.
+
+    ``shared``: the held contacts (each its normal row and tangent rows) whose friction
+    is shared with this one's in proportion to their normal forces where their tangent
+    rows are dependent (:func:`~dalembert.solvers.contact.friction.held_forces`; empty:
+    this contact alone); ``|lambda[tangents]|`` is then its share.
+    """
 
     normal: int
     tangents: tuple[int, ...]
     mu: float
+    shared: tuple[tuple[int, tuple[int, ...]], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -111,29 +128,25 @@ def screens_of(events: Sequence[Callable]) -> list[Screen] | None:
     return found
 
 
-def screenable(events: Sequence[Callable], every_row_kept: bool) -> bool:
-    """Whether the loop in C can screen ``events`` (every one has a screen; one on a
-    multiplier only where every row of the model is kept: where some are dropped as
-    dependent, the events' multipliers are the minimum-norm ones, not the run's).
+def screenable(events: Sequence[Callable]) -> bool:
+    """Whether the loop in C can screen ``events``: every one has a screen. (Where the
+    run's model drops rows as dependent, the screens of multipliers read the ones the
+    events see, the minimum-norm multipliers and the held friction shared by load,
+    which C computes from the run's: see :class:`ScreenTable`.)
 
     Parameters
     ----------
     events
         The run's event functions.
-    every_row_kept
-        No constraint row of the run's model is dropped as dependent.
 
     Examples
     --------
-    >>> screenable([], True)
+    >>> screenable([])
     True
+    >>> screenable([lambda t, y: y[0]])
+    False
     """
-    screens = [getattr(event, "screen", None) for event in events]
-    if any(screen is None for screen in screens):
-        return False
-    # (a screen that is None now is not a multiplier's: see screens_of)
-    return every_row_kept or not any(isinstance(screen(), (ForceScreen, ConeScreen))
-                                     for screen in screens if screen is not None)
+    return all(getattr(event, "screen", None) is not None for event in events)
 
 
 class ScreenTable:
@@ -184,7 +197,54 @@ class ScreenTable:
         s.cone_mu = pin.array([x.mu for x in cones], np.float64)
         setattr(s, "lambda", pin.zeros(native.m))  # (a keyword in Python)
         s.ydot = pin.zeros(2 * native.n)
+        if native.kept is not None and (forces or cones):
+            self._dependent(s, cones, native)
         self.address = ctypes.addressof(s)
+
+    def _dependent(self, s: library.Screens, cones: Sequence[ConeScreen],
+                   native: NativeSolver) -> None:
+        """Where the run's model drops rows as dependent, what C needs to give the force
+        and cone screens the multipliers the events see (``screens.c``'s minimum_norm
+        and held_shares): the group of rows whose minimum-norm multipliers differ from
+        the run's (the dropped rows and every row joined to them through shared
+        coordinates: the rows a dropped one combines are among them, and the
+        projection leaves the others as they are), and the held contacts' tangent rows
+        where one of them is dropped (their friction shared by load)."""
+        num, pin = native.num, self._pinned
+        m, n = num.m, num.n
+        assert native.kept is not None
+        kept = np.zeros(m, dtype=bool)
+        kept[native.kept] = True
+        rows, cols = np.asarray(num.pattern.A_rows), np.asarray(num.pattern.A_cols)
+        group = _joined(np.flatnonzero(~kept), rows, cols)
+        if not len(group):
+            return
+        shared = {x.normal: x.tangents for x in cones}
+        for x in cones:
+            shared.update(dict(x.shared))
+        held = np.array([r for tangents in shared.values() for r in tangents], dtype=int)
+        normal = np.array([k for k, tangents in shared.items() for _ in tangents], dtype=int)
+        if not len(held) or kept[held].all():
+            held = normal = np.zeros(0, dtype=int)  # the run's own tangent multipliers
+        s.run_velocity = c_function("velocity", num.compiled.functions["velocity"].native)
+        s.run_vel = pin.zeros(len(rows) + m)
+        for name, these, by in (("group", group, None), ("held", held, normal)):
+            order = np.argsort(~kept[these], kind="stable")  # the kept rows first
+            these = these[order]
+            setattr(s, f"n_{name}", len(these))
+            setattr(s, f"n_{name}_kept", int(kept[these].sum()))
+            setattr(s, f"{name}_row", pin.array(these))
+            if by is not None:
+                s.held_normal = pin.array(by[order])
+            entries = [np.flatnonzero(rows == r) for r in these]
+            setattr(s, f"{name}_start", pin.array(np.cumsum([0] + [len(e) for e in entries])))
+            flat = np.concatenate([np.zeros(0, dtype=int), *entries])
+            setattr(s, f"{name}_entry", pin.array(flat))
+            setattr(s, f"{name}_col", pin.array(cols[flat]))
+        size = max(len(group), len(held))
+        s.work = pin.zeros(size * n + 2 * size * size + n + 2 * size)
+        s.spread = pin.zeros(2 * m)
+        s.dependent_rtol = RANK_RTOL
 
     def _rates(self, s: library.Screens, rates: Sequence[RateScreen],
                model: NumericModel) -> None:
@@ -203,3 +263,20 @@ class ScreenTable:
         s.rate_start, s.rate_value = self._pinned.array(start), self._pinned.array(value)
         s.rate_col, s.rate_weight = self._pinned.array(col), self._pinned.array(weight, np.float64)
 
+
+def _joined(start: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """The rows joined to those of ``start`` through shared columns (the pattern's
+    entries ``(rows, cols)``), sorted.
+
+    Examples
+    --------
+    >>> _joined(np.array([0]), np.array([0, 1, 1, 2]), np.array([0, 0, 1, 2])).tolist()
+    [0, 1]
+    """
+    found = set(int(r) for r in start)
+    frontier = list(found)
+    while frontier:
+        near = np.isin(cols, cols[np.isin(rows, frontier)])
+        frontier = [int(r) for r in np.unique(rows[near]) if int(r) not in found]
+        found.update(frontier)
+    return np.array(sorted(found), dtype=int)

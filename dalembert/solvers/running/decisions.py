@@ -193,15 +193,15 @@ def choose_solver(options: SimulationOptions, native: bool,
 
 
 def choose_stretches(stepper: type[OdeSolver] | None, projection: bool,
-                     output: Output, every_row_kept: bool = True) -> bool:
+                     output: Output) -> bool:
     """Whether whole stretches of steps run in C: with a C stepper, the C loop's
     projection, no dense output, and no events but those C screens
-    (:func:`~dalembert.solvers.native.screens.screenable`; ``every_row_kept``: no
-    constraint row is dropped as dependent).
+    (:func:`~dalembert.solvers.native.screens.screenable`; with rows dropped as
+    dependent too, whose screens of multipliers C gives the minimum-norm ones).
 
     >>> from dalembert.options import simulation_options
     >>> choose_stretches(None, True, simulation_options((0.0, 1.0)).output)
     False
     """
     return stepper is not None and projection and not output.dense_output \
-        and screenable(output.events, every_row_kept)
+        and screenable(output.events)

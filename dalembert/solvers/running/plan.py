@@ -172,6 +172,6 @@ def plan_simulation(num: NumericModel, initial: InitializationReport,
         stepper=chosen.stepper, python_solver=chosen.python_solver,
         python_options=chosen.python_options,
         stretches=choose_stretches(chosen.stepper, stabilization.projection,
-                                   options.output, kept is None),
+                                   options.output),
         kept=kept, gain=stabilization.gain, projection=stabilization.projection,
         implicit=implicit)

@@ -117,8 +117,8 @@ def test_a_sticking_block_slips_where_its_force_leaves_the_cone(both):
 
 def test_a_rocking_block_with_dependent_corners_runs_as_in_the_python_loop(both):
     """Rocking and sliding (``mu = 0.1``) until it rests flat: on both corners its rows
-    are dependent (a set whose multipliers are not the run's), and those segments keep
-    the Python loop; the rocking ones run in C."""
+    are dependent (a set whose multipliers are not the run's: C's screens make them the
+    minimum-norm ones, ``test_screens_dependent.py``)."""
     from test_rough import block, tilted
 
     screened, stepped = both(block(0.1), (0.0, 2.5), tilted(-0.1))
