@@ -257,14 +257,17 @@ def start_run(plan: SimulationPlan) -> RunData:
     elif plan.solver in (Radau, BDF):
         solver_options["jac"] = _jacobian(num, rhs, kept, gain, signal)
     steps = None
-    # careful steps: in the Python loop's own solver, or (a solver stepping in C) in one
-    # of the same method stepping in Python; not for the implicit solvers with the C rhs
+    # careful steps: in the Python loop's own solver, or in one of the same method
+    # stepping in Python (a solver stepping in C; Radau on the exact Jacobian, which is
+    # not the careful right-hand side's; "auto", whose Radau may be running there);
+    # not for the implicit solvers with the C rhs
     if careful is not None and (stepping_in_c or native is None):
         careful_rhs = _with_inputs(num, signal, careful.rhs)
+        apart = stepping_in_c or plan.solver is LinearizedRadau or implicit_options is not None
         steps = CarefulSteps(careful, partial(_careful_solver, plan.python_solver,
                                               careful_rhs, options.t_span[1],
                                               plan.python_options)
-                             if stepping_in_c else None)
+                             if apart else None)
     if careful is not None:
         outputs = careful.outputs(outputs, signal)
     t0, y0 = options.t_span[0], plan.y0

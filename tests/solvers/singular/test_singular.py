@@ -123,6 +123,18 @@ def test_a02_passes_every_flat_position_on_its_branch(backend, N):
     assert "minimum-norm" in passages[0] and re.search(r"rows involved: [OAB]\d+_\d", passages[0])
 
 
+def test_radau_passes_every_flat_position_in_the_python_loop_too():
+    """Radau through A02's flat positions (N = 2, 11 flat positions in 11 s, its default
+    tolerances) in the Python loop: its careful steps are taken by a Radau of its own on
+    the careful right-hand side, as in the C loop (its exact Jacobian is not that
+    right-hand side's: before, it stopped at t = 10.4, the steps collapsed). B0 to the
+    benchmark's 1e-3."""
+    traj, _ = simulate_a02(2, 11.0, "python", method="Radau")
+    assert traj.success, traj.message
+    assert max(b0_errors(traj, 2)) < 1e-3
+    assert crank_spread(traj, 2) < 1e-6
+
+
 @pytest.mark.parametrize("backend", ["c", "python"])
 @pytest.mark.parametrize("rtol", [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10])
 def test_a02_at_every_tolerance_stays_on_its_branch(backend, rtol):
