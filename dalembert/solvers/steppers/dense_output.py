@@ -74,11 +74,13 @@ class DenseRecorder:
         """Record the step ``t_old -> t_new``: its interpolant ``dense`` (what the
         solver's ``dense_output()`` returned) and the state recorded at ``t_new``."""
         form = interpolant_form(dense)
-        if self.kind is None:
+        width = None if form is None else 2 + self.n_state * (1 + len(form[2]))
+        if self.count == 0:  # the first step (or all forgotten): its form decides
             self.kind = "objects" if form is None else form[0]
-        if self.kind != "objects" and self.count and (
-                form is None or form[0] != self.kind
-                or self._buffer.shape[1] != 2 + self.n_state * (1 + len(form[2]))):
+            if width is not None and self._buffer.shape[1] != width:
+                self._buffer = np.empty((0, 0))
+        elif self.kind != "objects" and (form is None or form[0] != self.kind
+                                         or self._buffer.shape[1] != width):
             self._as_objects()  # another solver's steps from here (method="auto")
         if self.kind == "objects" or form is None:  # kept as made
             del self._objects[self.count:]
