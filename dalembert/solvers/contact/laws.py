@@ -30,7 +30,10 @@ takes; where it does not act, they are free.
 **Closed contacts.** After a switch, the gaps that stay closed are those of the
 complementarity problem at the acceleration level: among the touching gaps at rest,
 each closed one pushes (``lambda >= 0``) and each open one does not accelerate into
-its obstacle (``g'' >= 0``).
+its obstacle (``g'' >= 0``). Where some meet them open or closed alike (each force 0
+with each free acceleration 0: a body lifted off several contacts, their forces
+reaching 0 together), the choice is the one that meets them a moment later
+(:func:`_look_ahead`).
 """
 
 from __future__ import annotations

@@ -12,6 +12,8 @@ row; a box on its four coplanar corners, rank 3 of 4), with friction or without:
 meets the complementarity conditions there (its force 0, its free acceleration 0);
 the choice is the one that holds a moment later (they open), not one contact at a
 time, each leaving the others with all the load, at the same instant without end.
+Sliding along the floor at ``v0``, ``x'' = -mu (g - k t)`` until ``t*`` (the normal
+force is the weight less the lift), then ``x' `` constant.
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ import sympy as sp
 from dalembert import System, Unilateral, coordinates
 from dalembert import t as time
 from dalembert.multibody import Force, Ground, Multibody, RigidBody, plane_contact
+from dalembert.solvers.contact.gaps import Gaps
+from dalembert.solvers.contact.laws import closed_gaps
 
 g, mu, RATE = 9.81, 0.5, 20.0
 X, Y = coordinates("x y")
@@ -126,3 +130,34 @@ def test_a_box_lifted_off_its_four_corners_leaves_them_all_at_once(friction, bac
     for name in names:  # the four equal springs' loads: a quarter each
         assert np.abs(traj.multiplier(name)[before]
                       - (M * g - rate * traj.t[before]) / 4).max() < 1e-10
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_a_sliding_block_lifted_off_two_contacts_leaves_them_at_once(backend):
+    """Sliding at ``v0`` on both: ``x'' = -mu (g - k t)`` (the weight less the lift is
+    the normal force, whichever contact carries it) until ``t*``, then free."""
+    v0, rough = 1.0, 0.1  # still sliding at t* (v = 0.76)
+    traj = block(2, rough).simulate((0.0, 1.0), {X: 0.0, Y: 0.0}, {X: v0}, t_eval=TIMES,
+                                    backend=backend)
+    off = g / RATE
+    held = np.minimum(traj.t, off)
+    x = v0 * traj.t - rough * (g * held**2 / 2 - RATE * held**3 / 6) \
+        - rough * (g * off - RATE * off**2 / 2) * (traj.t - held)
+    check_lift_off(traj, ["a", "b"], off, traj["y"], lifted(traj.t, 1.0, RATE))
+    assert np.abs(traj["x"] - x).max() < 1e-10
+
+
+def test_the_closed_set_decides_a_tie_by_what_follows_it():
+    """At ``t*`` both contacts meet the conditions open or closed (their forces and the
+    free acceleration 0): lifted on, they open; with no lift and no weight (the forces
+    stay 0) they stay as they were, closed."""
+    touching, rest = np.ones(2, dtype=bool), np.zeros(2)
+    for system, expected in [(block(2, None), ()),
+                             (System([X, Y], kinetic=(X.diff()**2 + Y.diff()**2) / 2,
+                                     constraints=[Unilateral(Y, "a"), Unilateral(Y, "b")]),
+                              (0, 1))]:
+        full = system.with_gaps_closed().numeric()
+        gaps = Gaps.of(system.definition.unilateral, 0, [0.0, 0.0])
+        assert closed_gaps(full, gaps, g / RATE, rest, rest, touching) == expected
+        # a moment before the lift-off both press (each half of the rest)
+        assert closed_gaps(full, gaps, 0.9 * g / RATE, rest, rest, touching) == (0, 1)
