@@ -579,7 +579,7 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         qd = settled.qd
     exclude = () if opening is None else (opening,)
     closed = closed_gaps(full, gaps, t, q, qd, touching, exclude,
-                         friction_at(full, gaps, t, q, qd))
+                         friction_at(full, gaps, t, q, qd), inputs_at)
     grip = _grip(full, gaps, t, q, qd, closed)
     if grip is not None:  # a rough contact closing while sliding stops sliding at once
         history.impacts.append(ImpactRecord(t, grip.impulses[gaps.rows],
@@ -589,7 +589,7 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
     seen = friction_at(full, gaps, t, q, qd)  # the velocities stay through the rounds
     for _ in range(MAX_FRICTION_ROUNDS):
         friction = choose_friction(full, gaps, t, q, qd, closed, seen, slipping)
-        again = closed_gaps(full, gaps, t, q, qd, touching, exclude, friction)
+        again = closed_gaps(full, gaps, t, q, qd, touching, exclude, friction, inputs_at)
         if again == closed:
             which = friction.of(closed)
             return np.concatenate([q, _held_still(full, gaps, t, q, qd, which)]), which, \

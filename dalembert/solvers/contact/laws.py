@@ -30,7 +30,10 @@ takes; where it does not act, they are free.
 **Closed contacts.** After a switch, the gaps that stay closed are those of the
 complementarity problem at the acceleration level: among the touching gaps at rest,
 each closed one pushes (``lambda >= 0``) and each open one does not accelerate into
-its obstacle (``g'' >= 0``).
+its obstacle (``g'' >= 0``). Where some meet them open or closed alike (each force 0
+with each free acceleration 0: a body lifted off several contacts, their forces
+reaching 0 together), the choice is the one that meets them a moment later
+(:func:`_look_ahead`).
 """
 
 from __future__ import annotations
@@ -55,6 +58,10 @@ __all__ = ["IMPACT_LAWS", "ImpactLaw", "ImpactOutcome", "closed_gaps", "resolve_
 MAX_STAGES = 1000
 #: Largest number of candidate gaps whose sets are enumerated when pivoting cycles.
 MAX_ENUMERATED = 12
+#: How far ahead, relative to ``1 + |t|``, the closed set's ties are decided (see
+#: :func:`_look_ahead`): far above rounding, so that a force's rate of change shows,
+#: and far below the time scales of the motion, so that its Taylor expansion holds.
+LOOK_AHEAD = 1e-6
 
 
 @dataclass(frozen=True)
@@ -164,7 +171,9 @@ def resolve_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
 
 def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
                 qd: np.ndarray, touching: np.ndarray, exclude: Iterable[int] = (),
-                friction: Friction | None = None) -> tuple[int, ...]:
+                friction: Friction | None = None,
+                inputs_at: Callable[[float, np.ndarray, np.ndarray], np.ndarray | None]
+                | None = None) -> tuple[int, ...]:
     """The gaps that are closed from ``(t, q, qd)`` on: among the touching gaps at rest
     (rate 0 to rounding; ``exclude`` left open), a set whose multipliers push and whose
     others do not accelerate into their obstacles.
@@ -183,6 +192,10 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         How each frictional gap acts where it is closed (held, or sliding:
         :class:`~dalembert.solvers.contact.friction.Friction`); ``None``: the rough
         ones held, no other friction.
+    inputs_at
+        The inputs at a state, ``inputs_at(t, q, qd)`` (or ``None``: those ``full``
+        holds), for the ties decided a moment later (:func:`_look_ahead`: contacts
+        whose forces reach 0 together, each open or closed alike at ``t``).
 
     Raises
     ------
@@ -210,33 +223,97 @@ def closed_gaps(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     candidates = np.flatnonzero(resting)
     if not len(candidates):
         return ()
-    values = full.kkt_sparse(t, q, qd)
-    f, Av, c = values[1:]
-    kkt = kkt_factorization(full.pattern)
-    pattern = full.pattern
     friction = friction or Friction(set(gaps.rough))
+    now = _Checker(full, gaps, t, q, qd, candidates, friction)
+    found = _search(candidates, now.check)
+    if found is None:
+        raise ContactError(
+            f"at t={t:.6g} no set of the touching gaps {_named(gaps, resting)} can stay "
+            "closed: each choice pulls on a contact or moves one into its obstacle (a "
+            "contact problem without a solution at this state)")
+    return tuple(int(k) for k in _look_ahead(now, found, inputs_at))
 
-    def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+
+class _Checker:
+    """The complementarity conditions of the candidate gaps at one state, for any set
+    of them closed."""
+
+    def __init__(self, full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                 qd: np.ndarray, candidates: np.ndarray, friction: Friction) -> None:
+        self.full, self.gaps, self.t, self.q, self.qd = full, gaps, t, q, qd
+        self.candidates, self.friction = candidates, friction
+        self.values = full.kkt_sparse(t, q, qd)
+        self.kkt = kkt_factorization(full.pattern)
+        #: each set's ``qdd``, by its bytes (``None``: singular)
+        self.qdd: dict[bytes, np.ndarray | None] = {}
+
+    def check(self, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each candidate's violation (positive: wrong) with ``chosen`` closed: a
-        closed gap pulling, an open one accelerating into its obstacle."""
+        closed gap pulling, an open one accelerating into its obstacle; and the
+        tolerance of each."""
+        full, gaps, candidates = self.full, self.gaps, self.candidates
+        f, Av, c = self.values[1:]
+        pattern = full.pattern
         try:
-            qdd, lam = solve_sliding(full, gaps, t, q, qd, friction.of(chosen.tolist()),
-                                     friction.directions, kkt, values)
+            qdd, lam = solve_sliding(full, gaps, self.t, self.q, self.qd,
+                                     self.friction.of(chosen.tolist()),
+                                     self.friction.directions, self.kkt, self.values)
         except SingularSystemError:  # dependent contact rows: another set will do
+            self.qdd[chosen.tobytes()] = None
             return np.full(len(candidates), np.inf), np.zeros(len(candidates))
+        self.qdd[chosen.tobytes()] = qdd
         accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
         force, gap_accel = lam[gaps.rows], accel[gaps.rows]
         scale = FORCE_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(lam).max(initial=0.0))
         wrong = np.where(np.isin(np.arange(gaps.count), chosen), -force, -gap_accel)
         return wrong[candidates], np.full(len(candidates), scale)
 
-    found = _search(candidates, check)
-    if found is None:
-        raise ContactError(
-            f"at t={t:.6g} no set of the touching gaps {_named(gaps, resting)} can stay "
-            "closed: each choice pulls on a contact or moves one into its obstacle (a "
-            "contact problem without a solution at this state)")
-    return tuple(int(k) for k in found)
+
+def _look_ahead(now: _Checker, found: np.ndarray,
+                inputs_at: Callable[[float, np.ndarray, np.ndarray], np.ndarray | None]
+                | None) -> np.ndarray:
+    """``found``, the set meeting the conditions at ``now``'s state, with its ties
+    decided a moment later: the candidates whose force (closed) or acceleration (open)
+    is 0 to within the tolerance meet the conditions open or closed alike (a body
+    lifted off several contacts, each force reaching 0 at the same instant, where the
+    free acceleration is 0 too). Which of them stay closed is the choice that meets
+    them at the state :data:`LOOK_AHEAD` later, reached from the tie (the forces of
+    the candidates in it are 0, so every such choice moves the same way) by its
+    Taylor expansion: the complementarity of their forces' and accelerations' rates
+    of change. Else one contact of a set whose forces fall through 0 together would
+    open at a time, the others, 0 to rounding, staying closed, then the next one, at
+    the same instant without end. Ties still 0 there (a contact pushing with no
+    force that stays so) keep ``found``."""
+    wrong, scale = now.check(found)
+    tied = now.candidates[np.abs(wrong) <= scale]
+    qdd = now.qdd.get(found.tobytes())
+    if not len(tied) or qdd is None:
+        return found
+    full, t, q, qd = now.full, now.t, now.q, now.qd
+    h = LOOK_AHEAD * (1.0 + abs(t))
+    q_h, qd_h = q + h * qd + h * h / 2 * qdd, qd + h * qdd
+    inputs = None if inputs_at is None else full.inputs.copy()
+    try:
+        if inputs_at is not None:
+            later_inputs = inputs_at(t + h, q_h, qd_h)
+            if later_inputs is not None:
+                full.set_inputs(later_inputs)
+        later = _Checker(full, now.gaps, t + h, q_h, qd_h, now.candidates, now.friction)
+        fixed = sorted(set(found.tolist()) - set(tied.tolist()))
+        where = np.searchsorted(now.candidates, tied)
+
+        def check(chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            every = np.array(sorted(fixed + chosen.tolist()), dtype=found.dtype)
+            wrong, scale = later.check(every)
+            return wrong[where], scale[where]
+
+        again = _search(tied, check, np.intersect1d(tied, found))
+    finally:
+        if inputs is not None:
+            full.set_inputs(inputs)
+    if again is None:
+        return found
+    return np.array(sorted(fixed + again.tolist()), dtype=found.dtype)
 
 
 def _complementary(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
