@@ -729,7 +729,7 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
             return _open_at_start(start, t, float(s @ start.directions[k]))
         add(sticking, "sticking", k, partial(
             _sliding_screen, full, tuple(int(r) for r in gaps.tangents[k]), start, k))
-        if len(gaps.tangents[k]) != 2:
+        if len(gaps.tangents[k]) not in (2, 3):
             continue
 
         def slid(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
@@ -759,7 +759,8 @@ def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.nd
     speed: their friction takes the direction their contact point accelerates in
     (:func:`~dalembert.solvers.contact.friction.consistent_directions`) until they
     slide that fast along their start direction."""
-    candidates = [k for k in which.sliding if len(gaps.tangents[k]) == 2 and k not in ended]
+    candidates = [k for k in which.sliding
+                  if len(gaps.tangents[k]) in (2, 3) and k not in ended]
     if not candidates:
         return {}
     n = full.n

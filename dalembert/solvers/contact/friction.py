@@ -452,7 +452,7 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     # each found with the others fixed as they were then: together (the corners of a
     # body, whose contact points' accelerations are coupled)
     started = [k for k in chosen.directions
-               if k not in start.directions and len(gaps.tangents[k]) == 2]
+               if k not in start.directions and len(gaps.tangents[k]) in (2, 3)]
     if len(started) > 1:
         chosen.directions = consistent_directions(full, gaps, t, q, qd, chosen.of(closed),
                                                   chosen.directions, started, kkt)
@@ -521,19 +521,21 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
     42.8019
     """
-    if len(gaps.tangents[k]) != 2:
+    plane = sliding_plane(full, gaps, t, q, qd, k)
+    if plane is None:
         return guess
     rates = _row_accelerations(full, gaps, t, q, qd, which, directions, kkt)
     rows = gaps.tangents[k]
 
     def accel(angle: float) -> np.ndarray:
-        return rates({k: _unit(angle)})[rows]
+        return plane.T @ rates({k: plane @ _unit(angle)})[rows]
 
     def cross(angle: float) -> float:
         a = accel(angle)
         return float(np.cos(angle) * a[1] - np.sin(angle) * a[0])
 
-    start = float(np.arctan2(guess[1], guess[0]))
+    inplane = plane.T @ guess
+    start = float(np.arctan2(inplane[1], inplane[0]))
     # a whole turn centred on the guess, which is a sample (a root there is exact)
     angles = start + np.linspace(-np.pi, np.pi, 2 * SLIP_SAMPLES + 1)
     sampled = [accel(a) for a in angles]
@@ -555,7 +557,49 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     if not roots:  # no direction it can slide in (a contact problem without a solution)
         return guess
     best = min(roots, key=lambda a: abs(a - start))
-    return _unit(best)
+    return plane @ _unit(best)
+
+
+def sliding_plane(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
+                  k: int) -> np.ndarray | None:
+    """An orthonormal basis (columns) of the plane gap ``k``'s sliding velocities
+    span: the identity with two of them; with three of rank 2 (a contact's sliding
+    velocity in world components, as between two spheres) the leading left singular
+    vectors of their rows of ``A``; ``None`` for other counts or ranks (their
+    direction at an onset is then not sought).
+
+    Parameters
+    ----------
+    full, gaps
+        The model with every gap a row and its sliding velocities.
+    t, q, qd
+        The state (the inputs as ``full`` holds them).
+    k
+        The gap.
+
+    Examples
+    --------
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> x, y, z = coordinates("x y z")
+    >>> ball = System([x, y, z], kinetic=(x.diff()**2 + y.diff()**2 + z.diff()**2) / 2,
+    ...               potential=9.81 * z, constraints=[Unilateral(z, "floor",
+    ...               friction=0.3, tangents=[x.diff(), y.diff(), x.diff() + y.diff()])])
+    >>> full = ball._closed(ClosedGaps((0,), held=(0,))).numeric()
+    >>> gaps = Gaps.of(ball.definition.unilateral, 0, [0.0])
+    >>> E = sliding_plane(full, gaps, 0.0, np.zeros(3), np.zeros(3), 0)
+    >>> E.shape, bool(np.allclose(E.T @ E, np.eye(2)))
+    ((3, 2), True)
+    """
+    rows = gaps.tangents[k]
+    if len(rows) == 2:
+        return np.eye(2)
+    if len(rows) != 3:
+        return None
+    _, _, Av, _ = full.kkt_sparse(t, q, qd)
+    U, sigma, _ = np.linalg.svd(full.pattern.dense_A(Av)[rows])
+    if sigma[1] <= RANK_RTOL * sigma[0] or sigma[2] > RANK_RTOL * sigma[0]:
+        return None
+    return U[:, :2]
 
 
 def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
@@ -624,17 +668,23 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
     >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
     42.8019
     """
+    planes = [sliding_plane(full, gaps, t, q, qd, k) for k in starting]
+    if any(plane is None for plane in planes):
+        return dict(directions)
+    E = [plane for plane in planes if plane is not None]
     accelerations = _row_accelerations(full, gaps, t, q, qd, which, directions, kkt, acting)
     rows = [gaps.tangents[k] for k in starting]
 
     def residual(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each one's ``a_t`` across its direction, and along it."""
-        rates = accelerations({k: _unit(angle) for k, angle in zip(starting, angles)})
-        a = np.array([rates[r] for r in rows])
+        rates = accelerations({k: e @ _unit(angle)
+                               for k, e, angle in zip(starting, E, angles)})
+        a = np.array([e.T @ rates[r] for e, r in zip(E, rows)])
         return np.cos(angles) * a[:, 1] - np.sin(angles) * a[:, 0], \
             np.cos(angles) * a[:, 0] + np.sin(angles) * a[:, 1]
 
-    angles = np.array([np.arctan2(directions[k][1], directions[k][0]) for k in starting])
+    inplane = [e.T @ directions[k] for e, k in zip(E, starting)]
+    angles = np.array([np.arctan2(d[1], d[0]) for d in inplane])
     for _ in range(CONSISTENT_ITERATIONS):
         across, along = residual(angles)
         J = np.column_stack([(residual(angles + CONSISTENT_STEP * e)[0] - across)
@@ -645,7 +695,8 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
         angles = angles + step
         if np.abs(step).max() <= 4 * np.finfo(float).eps * (1.0 + np.abs(angles).max()):
             if np.all(along >= -TOUCH_RTOL * (1.0 + np.abs(along).max())):
-                return {**directions, **{k: _unit(a) for k, a in zip(starting, angles)}}
+                return {**directions, **{k: e @ _unit(a)
+                                         for k, e, a in zip(starting, E, angles)}}
             break
     if len(starting) == 1:  # the whole search around the circle
         (k,) = starting

@@ -90,19 +90,16 @@ def test_a_cylinder_pushed_harder_than_mu_m_g_may_still_roll():
     assert np.abs(traj.multiplier("floor_friction_2") + push[1]).max() < 1e-12
 
 
-def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_velocity():
-    """A push ``c t`` at 0.5 rad: it rolls (``x'' = c_x t / (m + I / r^2)``) until its
-    sticking force ``(c_x t / 3, c_y t)`` reaches ``mu m g``, then slides with friction
-    ``f = -mu m g s / |s|`` along its sliding velocity ``s = (x' + r theta', y')``,
-    which turns from its onset direction towards the push as the push grows (near
-    ``s = 0`` that direction is stiff: the run must step through it). Against those
-    equations, ``s`` a state of its own (``s_x' = (c_x t + f_x) / m + r^2 f_x / I``),
-    integrated by SciPy's Radau with their exact Jacobian from the closed-form state at
-    the onset, ``s`` seeded with 1e-13 along the onset direction (seeded with 1e-11,
-    or integrated by LSODA or BDF, the reference moves by less than 1e-11)."""
+GROWING = 10.0 * np.array([np.cos(0.5), np.sin(0.5)])  # the push c t, along 0.5 rad
+
+
+def growing_push_reference(t: np.ndarray):
+    """The pushed cylinder's sliding equations from its onset (see the test below),
+    ``s`` a state of its own, integrated by SciPy's Radau with their exact Jacobian;
+    with the onset instant and direction."""
     from scipy.integrate import solve_ivp
 
-    c = 10.0 * np.array([np.cos(0.5), np.sin(0.5)])
+    c = GROWING
     onset = MU * M * G / np.hypot(c[0] / K, c[1])
     rolling = M + INERTIA / R**2
     x0, xd0 = c[0] * onset**3 / 6 / rolling, c[0] * onset**2 / 2 / rolling
@@ -125,17 +122,38 @@ def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_ve
         return J
 
     d0 = np.array([c[0] / K, c[1]]) / np.hypot(c[0] / K, c[1])
-    t = np.linspace(0.6, 1.0, 5)
     reference = solve_ivp(equations, (onset, 1.0), [x0, 0.0, -x0 / R, *(1e-13 * d0), -xd0 / R],
                           method="Radau", jac=jacobian, rtol=1e-13, atol=1e-16, t_eval=t)
     assert reference.success
+    return reference, onset, d0
+
+
+def growing_push_cylinder(tangents) -> System:
+    """The cylinder pushed by ``c t``, its sliding velocity ``tangents(s_x, s_y)``."""
     X, Y, Z, TH = coordinates("x y z theta")
     time = sp.Symbol("t")
-    system = System([X, Y, Z, TH], kinetic=M / 2 * (X.diff() ** 2 + Y.diff() ** 2
-                                                    + Z.diff() ** 2) + INERTIA / 2 * TH.diff() ** 2,
-                    potential=M * G * Z - c[0] * time * X - c[1] * time * Y,
-                    constraints=[Unilateral(Z - R, name="floor", friction=MU,
-                                            tangents=[X.diff() + R * TH.diff(), Y.diff()])])
+    c = GROWING
+    return System([X, Y, Z, TH], kinetic=M / 2 * (X.diff() ** 2 + Y.diff() ** 2
+                                                  + Z.diff() ** 2) + INERTIA / 2 * TH.diff() ** 2,
+                  potential=M * G * Z - c[0] * time * X - c[1] * time * Y,
+                  constraints=[Unilateral(Z - R, name="floor", friction=MU,
+                                          tangents=tangents(X.diff() + R * TH.diff(),
+                                                            Y.diff()))])
+
+
+def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_velocity():
+    """A push ``c t`` at 0.5 rad: it rolls (``x'' = c_x t / (m + I / r^2)``) until its
+    sticking force ``(c_x t / 3, c_y t)`` reaches ``mu m g``, then slides with friction
+    ``f = -mu m g s / |s|`` along its sliding velocity ``s = (x' + r theta', y')``,
+    which turns from its onset direction towards the push as the push grows (near
+    ``s = 0`` that direction is stiff: the run must step through it). Against those
+    equations, ``s`` a state of its own (``s_x' = (c_x t + f_x) / m + r^2 f_x / I``),
+    integrated by SciPy's Radau with their exact Jacobian from the closed-form state at
+    the onset, ``s`` seeded with 1e-13 along the onset direction (seeded with 1e-11,
+    or integrated by LSODA or BDF, the reference moves by less than 1e-11)."""
+    t = np.linspace(0.6, 1.0, 5)
+    reference, onset, d0 = growing_push_reference(t)
+    system = growing_push_cylinder(lambda sx, sy: [sx, sy])
     # DOP853 at its 1e-11 throughout; the default method switches to Radau (rtol 1e-8)
     # in the stiff stretch after the onset and keeps its tolerance (relative errors)
     for method, tol in (("DOP853", 2e-11), ("auto", 1e-8)):
@@ -152,3 +170,29 @@ def test_a_cylinder_pushed_by_a_growing_force_slips_from_rest_and_follows_its_ve
     assert traj.stats["n_switches"] >= 1
     # by t = 1 it has turned by a tenth of a radian from its onset direction
     assert np.arccos(s[-1] @ d0 / np.linalg.norm(s[-1])) > 0.1
+
+
+def test_a_contact_sliding_in_three_world_components_slips_from_rest_the_same():
+    """The same cylinder, its sliding velocity written as three world components of
+    rank 2 (``Q (s_x, s_y, 0)``, ``Q`` a rotation, as a contact between two spheres
+    gives it): the same motion, the friction along ``Q`` of the planar one. Its onset
+    too takes the direction its contact point accelerates in (without that it stalled
+    at the onset: steps of 1e-12 s until its time limit)."""
+    Q = np.array(sp.rot_axis1(0.7) * sp.rot_axis2(0.4), dtype=float)
+    t = np.linspace(0.6, 1.0, 5)
+    reference, onset, _ = growing_push_reference(t)
+    system = growing_push_cylinder(
+        lambda sx, sy: [float(Q[i, 0]) * sx + float(Q[i, 1]) * sy for i in range(3)])
+    traj = system.simulate((0.0, 1.0), {"z": R}, t_eval=t, timeout=60, method="DOP853")
+    assert traj.success, traj.message
+    (slip,) = [s.t for s in traj.contacts.switches if s.t > 0]
+    assert abs(slip - onset) < 1e-12
+    q_ref, s_ref = reference.y[:3].T, reference.y[3:5].T
+    assert (np.abs(traj.q[:, [0, 1, 3]] - q_ref) / (1 + np.abs(q_ref))).max() < 2e-11
+    s = np.column_stack([traj["x_dot"] + R * traj["theta_dot"], traj["y_dot"]])
+    assert (np.abs(s - s_ref) / (1 + np.abs(s_ref))).max() < 2e-11
+    # friction -mu m g along Q (s / |s|, 0), the normal force m g
+    forces = np.column_stack([traj.multiplier(f"floor_friction_{i}") for i in (1, 2, 3)])
+    along = -MU * M * G * s_ref / np.linalg.norm(s_ref, axis=1)[:, None]
+    assert np.abs(forces - along @ Q[:, :2].T).max() < 1e-8
+    assert np.abs(traj.multiplier("floor") - M * G).max() < 1e-10
