@@ -752,8 +752,8 @@ def _onset_screen(start: SegmentStart, k: int) -> Never | None:
 
 def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.ndarray,
            ended: Container[int]) -> dict[int, float]:
-    """The sliding gaps of ``which`` with two sliding velocities that start to slide
-    from rest at ``(t, y)`` (sliding slower than
+    """The sliding gaps of ``which`` with two sliding velocities (or three of rank 2)
+    that start to slide from rest at ``(t, y)`` (sliding slower than
     :data:`~dalembert.solvers.contact.gaps.ONSET_RTOL` relative to ``1 + max |qd|``;
     not those in ``ended``, whose onset has ended since the last switch), with that
     speed: their friction takes the direction their contact point accelerates in

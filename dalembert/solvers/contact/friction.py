@@ -476,9 +476,11 @@ def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     cross product of ``d`` and ``a_t(d)``, sampled around the circle, its sign
     changes where ``a_t . d > 0`` refined by Brent's method; the root nearest
     ``guess`` is taken (at a contact whose force has just reached its cone, ``a_t``
-    is 0 along ``guess``, which is then the root: the onset there). Other counts
-    keep ``guess``, as does a contact whose ``a_t`` does not depend on ``d`` (other
-    held rows fix its contact point) or that has no such root.
+    is 0 along ``guess``, which is then the root: the onset there). Three of rank 2
+    (world components, as between two spheres) are searched alike in their plane
+    (:func:`sliding_plane`). Other counts keep ``guess``, as does a contact whose
+    ``a_t`` does not depend on ``d`` (other held rows fix its contact point) or that
+    has no such root.
 
     Parameters
     ----------
@@ -630,7 +632,7 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
         The state (the inputs as ``full`` holds them).
     which
         The closed set, the gaps ``starting`` sliding (each with two sliding
-        velocities).
+        velocities, or three of rank 2: :func:`sliding_plane`).
     directions
         Each sliding gap's unit direction (those of ``starting``: near the ones
         sought).
