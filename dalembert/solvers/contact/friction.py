@@ -597,7 +597,7 @@ def sliding_plane(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: n
         return np.eye(2)
     if len(rows) != 3:
         return None
-    _, _, Av, _ = full.kkt_sparse(t, q, qd)
+    Av, _ = full.velocity_sparse(t, q)  # (the rows only: no KKT values)
     U, sigma, _ = np.linalg.svd(full.pattern.dense_A(Av)[rows])
     if sigma[1] <= RANK_RTOL * sigma[0] or sigma[2] > RANK_RTOL * sigma[0]:
         return None
