@@ -244,13 +244,22 @@ class _Checker:
         self.candidates, self.friction = candidates, friction
         self.values = full.kkt_sparse(t, q, qd)
         self.kkt = kkt_factorization(full.pattern)
-        #: each set's ``qdd``, by its bytes (``None``: singular)
-        self.qdd: dict[bytes, np.ndarray | None] = {}
+        #: each set checked, by its bytes: its ``qdd`` (``None``: singular) and
+        #: :meth:`check`'s answer (the search and the look ahead ask again)
+        self.seen: dict[bytes, tuple[np.ndarray | None, np.ndarray, np.ndarray]] = {}
 
     def check(self, chosen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each candidate's violation (positive: wrong) with ``chosen`` closed: a
         closed gap pulling, an open one accelerating into its obstacle; and the
         tolerance of each."""
+        key = chosen.tobytes()
+        if key not in self.seen:
+            self.seen[key] = self._solve(chosen)
+        _, wrong, scale = self.seen[key]
+        return wrong, scale
+
+    def _solve(self, chosen: np.ndarray
+               ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
         full, gaps, candidates = self.full, self.gaps, self.candidates
         f, Av, c = self.values[1:]
         pattern = full.pattern
@@ -259,14 +268,12 @@ class _Checker:
                                      self.friction.of(chosen.tolist()),
                                      self.friction.directions, self.kkt, self.values)
         except SingularSystemError:  # dependent contact rows: another set will do
-            self.qdd[chosen.tobytes()] = None
-            return np.full(len(candidates), np.inf), np.zeros(len(candidates))
-        self.qdd[chosen.tobytes()] = qdd
+            return None, np.full(len(candidates), np.inf), np.zeros(len(candidates))
         accel = matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
         force, gap_accel = lam[gaps.rows], accel[gaps.rows]
         scale = FORCE_RTOL * (1.0 + np.abs(f).max(initial=0.0) + np.abs(lam).max(initial=0.0))
         wrong = np.where(np.isin(np.arange(gaps.count), chosen), -force, -gap_accel)
-        return wrong[candidates], np.full(len(candidates), scale)
+        return qdd, wrong[candidates], np.full(len(candidates), scale)
 
 
 def _look_ahead(now: _Checker, found: np.ndarray,
@@ -284,9 +291,9 @@ def _look_ahead(now: _Checker, found: np.ndarray,
     open at a time, the others, 0 to rounding, staying closed, then the next one, at
     the same instant without end. Ties still 0 there (a contact pushing with no
     force that stays so) keep ``found``."""
-    wrong, scale = now.check(found)
+    wrong, scale = now.check(found)  # (made by the search: its answer kept)
     tied = now.candidates[np.abs(wrong) <= scale]
-    qdd = now.qdd.get(found.tobytes())
+    qdd = now.seen[found.tobytes()][0]
     if not len(tied) or qdd is None:
         return found
     full, t, q, qd = now.full, now.t, now.q, now.qd
