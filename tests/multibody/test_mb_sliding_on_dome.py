@@ -133,6 +133,7 @@ def dome() -> tuple[Multibody, dict[str, float], dict[str, float]]:
     ball = RigidBody("ball", M, J)
     mb = Multibody([ball], gravity=(0, 0, -G), forces=[Force(ball, (PUSH * time, 0, 0))],
                    contacts=[sphere_contact("dome", Ground(), ball, R, r, friction=MU)])
+    assert len(mb.contacts[0].tangents) == 3  # world components, of rank 2
     q0, qd0 = mb.initial_state(positions={"ball": X0}, orientations={"ball": Q0},
                                velocities={"ball": V0}, angular_velocities={"ball": W0})
     return mb, q0, qd0
