@@ -12,9 +12,11 @@ contacts closed then is the Multibody with these joints added after its own.
 Coulomb friction (``friction=mu``) acts along the contact's sliding velocity: the
 velocity of the material point of ``body_b`` at the contact relative to that of
 ``body_a`` at the same place, in the plane tangent to the contact (:class:`Sliding`).
-Its rows follow the closed contacts in the time-stepping contact mode, which keeps the
-friction impulse in the cone of radius ``mu`` times the normal one; the event-driven
-mode refuses friction with a clear error.
+In the event-driven contact mode a closed contact sticks, its sliding velocity held by
+these rows (:class:`Sliding`) while its force stays in the cone of radius ``mu`` times
+the normal one, or slides, its friction a load against the sliding velocity
+(:class:`SlidingFriction`); the time-stepping mode keeps each friction impulse in that
+cone.
 """
 
 from __future__ import annotations

@@ -67,6 +67,7 @@ from .friction import (
 )
 from .gaps import FORCE_RTOL, ONSET_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .laws import closed_gaps, resolve_impact
+from .sliding_in_c import SlidingInC
 
 #: Switches within rounding of one instant before the run is called a chattering cascade.
 MAX_SWITCHES_AT_ONCE = 100
@@ -343,6 +344,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
     made: dict[ClosedGaps, RunData] = {}
     watched: dict[ClosedGaps, tuple[tuple[str, int], ...]] = {}
     forces: dict[ClosedGaps, SlidingForces | None] = {}
+    in_c: dict[ClosedGaps, SlidingInC | None] = {}  # the sliding friction computed in C
     record = _Record()
     hold = Hold.of(signal, t_span, n)
     held = hold.sample(t, y) if hold.sampled else None
@@ -378,12 +380,18 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                                           segment_start.directions, segment_start.onset,
                                           inputs_at) if which.sliding else None
             events, watched[which] = _contact_events(gaps, which, full, segment_start)
-            data = made[which] = start(which, t, y, events,
-                                       _segment_inputs(gaps, which, forces[which], signal,
-                                                       held_sample if hold.sampled else None))
+            inputs = _segment_inputs(gaps, which, forces[which], signal,
+                                     held_sample if hold.sampled else None)
+            data = made[which] = start(which, t, y, events, inputs)
+            in_c[which] = None if inputs is None else SlidingInC.of(
+                data, full, gaps, which, inputs, None if hold.sampled else signal)
         sliding = forces[which]
         if sliding is not None:
             sliding.restart()
+        friction_in_c = in_c[which]
+        if friction_in_c is not None:
+            friction_in_c.start_segment(segment_start.directions, which.sliding,
+                                        segment_start.onset, held)
         if held is not None and not which.sliding:  # a sliding set's inputs ask for it
             data.hold_inputs(held)
         end = hold.next_instant(t, tf)

@@ -530,14 +530,15 @@ static void load_kkt(const dl_model *md, dl_data *d) {
   for (int64_t s = 0; s < md->n; ++s) d->u[s] = f[md->slot_coord[s]];
 }
 
-/* The model's inputs at (t, q, qd) into the parameter vector (none: nothing to do). */
+/* The model's inputs at (t, q, qd) into the parameter vector (none: nothing to do),
+ * then the sliding contacts' friction forces (friction.c), which depend on them. */
 int load_inputs(const dl_model *md, dl_data *d, double t, const double *q, const double *qd) {
   if (d->inputs) {
     memcpy(d->input_state, q, (size_t)md->n * sizeof(double));
     memcpy(d->input_state + md->n, qd, (size_t)md->n * sizeof(double));
     if (d->inputs(t) != 0) return DL_INPUT;
   }
-  return DL_OK;
+  return d->friction ? load_friction(md, d, t, q, qd) : DL_OK;
 }
 
 /* The KKT values at (t, q, qd), in the solve's layout (the inputs set first). */

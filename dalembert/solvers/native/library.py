@@ -45,8 +45,8 @@ FN_COUNT, MAX_ARGS = 5, 8
 FUNCTION_CODES = {**{f"DL_FN_{name.upper()}": k for name, k in FUNCTIONS.items()},
                   "DL_FN_COUNT": FN_COUNT, "DL_MAX_ARGS": MAX_ARGS}
 #: The runtime's sources, after ``runtime.h``, in the order they are compiled.
-SOURCES = ("kkt.c", "outputs.c", "projection.c", "screens.c", "runge_kutta.c", "radau.c",
-           "functions.c", "layout.c")
+SOURCES = ("kkt.c", "outputs.c", "projection.c", "screens.c", "friction.c", "runge_kutta.c",
+           "radau.c", "functions.c", "layout.c")
 HEADER = "runtime.h"
 
 
@@ -93,8 +93,24 @@ class Data(ctypes.Structure):
         *((name, _ptr) for name in ("values", "vel_values", "psi", "blocks", "a", "y", "u", "S",
                                     "r", "lambda", "qdd", "q_trial", "elim", "error_work", "c")),
         ("factor", Factor), ("inputs", _ptr), ("input_state", _ptr), ("conditioning", _f64),
-        ("gram_diagonal", _ptr), ("unit_mass", _ptr), ("unit_root", _ptr),
+        ("gram_diagonal", _ptr), ("unit_mass", _ptr), ("unit_root", _ptr), ("friction", _ptr),
     ]
+
+
+class Friction(ctypes.Structure):
+    """``dl_friction``: the friction forces of a segment's sliding contacts, computed
+    before each evaluation (:mod:`.friction`)."""
+
+    _fields_ = [("n_sliding", _i64),
+                *((name, _ptr) for name in ("normal", "start", "slot", "term_start",
+                                            "term_value", "term_col", "mu",
+                                            "start_direction")),
+                ("velocity", Function), ("p", _ptr), ("vel", _ptr), ("n_copy", _i64),
+                ("copy_from", _ptr), ("copy_to", _ptr), ("run_velocity", Function),
+                ("run_vel", _ptr), ("n_group", _i64), ("n_group_kept", _i64),
+                *((name, _ptr) for name in ("group_row", "group_start", "group_entry",
+                                            "group_col")),
+                ("dependent_rtol", _f64), ("work", _ptr)]
 
 
 class Tableau(ctypes.Structure):
@@ -178,7 +194,7 @@ class RadauState(ctypes.Structure):
 #: The C struct each mirror stands for.
 MIRRORS: dict[str, type[ctypes.Structure]] = {
     "dl_function": Function, "dl_model": Model, "dl_factor": Factor, "dl_data": Data,
-    "dl_tableau": Tableau,
+    "dl_friction": Friction, "dl_tableau": Tableau,
     "dl_stepper": Stepper, "dl_run": Run, "dl_screens": Screens, "dl_newton": Newton,
     "dl_radau": RadauState}
 

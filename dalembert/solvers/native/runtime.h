@@ -13,6 +13,7 @@
  *   outputs.c      the trajectory's derived quantities at given states
  *   projection.c   projection of a state onto the constraints
  *   screens.c      the screens of a stretch's events
+ *   friction.c     the friction forces of sliding contacts, before each evaluation
  *   runge_kutta.c  explicit Runge-Kutta steps and whole stretches of the loop
  *   radau.c        implicit steps: Radau IIA on the KKT-sized Newton systems (band LU)
  *   functions.c    any generated function of the model's array, called by its place
@@ -123,6 +124,39 @@ typedef struct {
   int64_t factored;           /* 1 while the factors are the KKT matrix's of dl_kkt_factor */
 } dl_factor;
 
+/* The friction forces of a contact segment's sliding contacts (friction.c,
+ * native/friction.py), computed before each evaluation where the model takes them as
+ * inputs: contact k slides along its direction d_k (of its sliding velocities, rows
+ * [start[k], start[k+1]) of the tangent lists) with the force -mu_k N_k d_k, N_k the
+ * multiplier of its normal row normal[k] in the run's model with these forces acting.
+ * The model's generalized force is linear in them (A_t^T F), so the N solve one
+ * linear system: the run's KKT system solved without friction and once per sliding
+ * contact with -mu_k A_t(k)^T d_k, then (I - R) N = N_0 (contacts/friction.py's
+ * solve_sliding). Each tangent row's value (A qd + b) and A are read from the watched
+ * model's velocity values (vel: [A values, b], with its own parameter vector p, the
+ * run's inputs copied into it: p[copy_to[i]] = run p[copy_from[i]]) by the terms
+ * [term_start[j], term_start[j+1]) of term_value at columns term_col (-1: b). The
+ * direction is the sliding velocity's s / |s|, kept at the segment's start one
+ * (start_direction, written by the caller at each segment's start) where s does not
+ * run along it. Where the run drops rows as dependent, the multipliers are first made
+ * the minimum-norm ones over the group of rows joined to the dropped ones (as the
+ * screens' group: group_*, read from the run's velocity values run_vel). */
+typedef struct {
+  int64_t n_sliding;
+  const int64_t *normal, *start, *slot, *term_start, *term_value, *term_col;
+  const double *mu, *start_direction;
+  dl_function velocity;            /* the watched model's */
+  double *p, *vel;
+  int64_t n_copy;
+  const int64_t *copy_from, *copy_to;
+  dl_function run_velocity;        /* the run's model's (set with a group) */
+  double *run_vel;
+  int64_t n_group, n_group_kept;
+  const int64_t *group_row, *group_start, *group_entry, *group_col;
+  double dependent_rtol;
+  double *work;                    /* native/friction.py's work size */
+} dl_friction;
+
 /* Everything one run writes: its parameter vector, its work arrays, its factorization,
  * its inputs. One per run (or per factorization object); never shared between threads. */
 typedef struct {
@@ -142,6 +176,9 @@ typedef struct {
   double *gram_diagonal;      /* m */
   /* n_unit: the 1 x 1 masses of the last factorization and 1 / sqrt of them */
   double *unit_mass, *unit_root;
+  /* the sliding contacts' friction forces, written into p after the inputs (NULL: none;
+   * friction.c) */
+  const dl_friction *friction;
 } dl_data;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
@@ -429,6 +466,17 @@ int dl_radau_run(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *
  * the multipliers there, or NULL: solved here if a screen needs them) */
 DL_INTERNAL int screened(const dl_model *md, dl_data *d, const dl_screens *sc, double t,
                          const double *y, const double *lambda);
+
+/* screens.c: a group's minimum-norm multipliers (see dl_screens) */
+DL_INTERNAL int group_minimum_norm(int64_t n, int64_t m, int64_t nr, int64_t nk,
+                                   const int64_t *row, const int64_t *start,
+                                   const int64_t *entry, const int64_t *col, const double *vel,
+                                   double rtol, double *work, const double *lambda,
+                                   double *out);
+
+/* friction.c: the sliding contacts' friction forces at (t, q, qd) into d->p */
+DL_INTERNAL int load_friction(const dl_model *md, dl_data *d, double t, const double *q,
+                              const double *qd);
 
 /* functions.c */
 int dl_call(const dl_model *md, const dl_data *d, int64_t which, const double *const *args,

@@ -68,27 +68,41 @@ DL_INLINE group_work work_of(double *work, int64_t nr, int64_t n) {
   return g;
 }
 
-/* The multipliers the events see, where the run dropped rows (its lambda 0 there): the
- * group's the minimum-norm ones with the same A^T lambda, the projection onto the range
- * of its rows' A (friction.py's _minimum_norm, the Python solve's lstsq). With A_R =
- * C A_K (C the identity on the kept rows) that range is C's, and with lambda 0 on the
- * dropped rows C^T lambda_R = lambda_K: out_R = C (I + C_d^T C_d)^-1 lambda_K. The
- * other rows' are the run's (their rows share no coordinate with the group's). */
-static int minimum_norm(const dl_model *md, const dl_screens *sc, const double *lambda,
-                        double *out) {
-  const int64_t n = md->n, nr = sc->n_group, nk = sc->n_group_kept;
-  group_work g = work_of(sc->work, nr, n);
-  memcpy(out, lambda, (size_t)md->m * sizeof(double));
-  dense_rows(nr, sc->group_start, sc->group_entry, sc->group_col, sc->run_vel, n, g.A);
-  if (combinations(g.A, nk, nr, n, sc->dependent_rtol, g.G, g.C, g.r)) return 1;
+/* The minimum-norm multipliers of a group of nr rows of a model of n coordinates and m
+ * rows (row: the group's rows, its nk kept ones first; each read from the model's
+ * velocity values vel by the entries [start[i], start[i+1]) of entry at columns col),
+ * where the run dropped the others (its lambda 0 there): the ones with the same
+ * A^T lambda, the projection onto the range of the group's A (friction.py's
+ * _minimum_norm, the Python solve's lstsq). With A_R = C A_K (C the identity on the
+ * kept rows) that range is C's, and with lambda 0 on the dropped rows C^T lambda_R =
+ * lambda_K: out_R = C (I + C_d^T C_d)^-1 lambda_K. The other rows' are lambda's (their
+ * rows share no coordinate with the group's). work: work_of's, for nr rows. 1 where the
+ * dependency no longer holds (combinations). */
+int group_minimum_norm(int64_t n, int64_t m, int64_t nr, int64_t nk, const int64_t *row,
+                       const int64_t *start, const int64_t *entry, const int64_t *col,
+                       const double *vel, double rtol, double *work, const double *lambda,
+                       double *out) {
+  group_work g = work_of(work, nr, n);
+  if (out != lambda) memcpy(out, lambda, (size_t)m * sizeof(double));
+  dense_rows(nr, start, entry, col, vel, n, g.A);
+  if (combinations(g.A, nk, nr, n, rtol, g.G, g.C, g.r)) return 1;
   weighted_gram(g.C, NULL, nk, nr, g.G);
   if (cholesky(g.G, nk) != DL_OK) return 1;
-  for (int64_t i = 0; i < nk; ++i) g.x[i] = lambda[sc->group_row[i]];
+  for (int64_t i = 0; i < nk; ++i) g.x[i] = lambda[row[i]];
   forward(g.G, nk, g.x);
   backward(g.G, nk, g.x);
-  for (int64_t i = 0; i < nk; ++i) out[sc->group_row[i]] = g.x[i];
-  for (int64_t k = nk; k < nr; ++k) out[sc->group_row[k]] = dot(g.C + (k - nk) * nk, g.x, nk);
+  for (int64_t i = 0; i < nk; ++i) out[row[i]] = g.x[i];
+  for (int64_t k = nk; k < nr; ++k) out[row[k]] = dot(g.C + (k - nk) * nk, g.x, nk);
   return 0;
+}
+
+/* The multipliers the events see, where the run dropped rows: the group's minimum-norm
+ * ones. */
+static int minimum_norm(const dl_model *md, const dl_screens *sc, const double *lambda,
+                        double *out) {
+  return group_minimum_norm(md->n, md->m, sc->n_group, sc->n_group_kept, sc->group_row,
+                            sc->group_start, sc->group_entry, sc->group_col, sc->run_vel,
+                            sc->dependent_rtol, sc->work, lambda, out);
 }
 
 /* The held contacts' friction shared in proportion to their normal forces, as

@@ -215,8 +215,7 @@ class ScreenTable:
         assert native.kept is not None
         kept = np.zeros(m, dtype=bool)
         kept[native.kept] = True
-        rows, cols = np.asarray(num.pattern.A_rows), np.asarray(num.pattern.A_cols)
-        group = _joined(np.flatnonzero(~kept), rows, cols)
+        group = dependent_group(native)
         if not len(group):
             return
         shared = {x.normal: x.tangents for x in cones}
@@ -227,24 +226,29 @@ class ScreenTable:
         if not len(held) or kept[held].all():
             held = normal = np.zeros(0, dtype=int)  # the run's own tangent multipliers
         s.run_velocity = c_function("velocity", num.compiled.functions["velocity"].native)
-        s.run_vel = pin.zeros(len(rows) + m)
+        s.run_vel = pin.zeros(len(num.pattern.A_rows) + m)
         for name, these, by in (("group", group, None), ("held", held, normal)):
             order = np.argsort(~kept[these], kind="stable")  # the kept rows first
-            these = these[order]
-            setattr(s, f"n_{name}", len(these))
-            setattr(s, f"n_{name}_kept", int(kept[these].sum()))
-            setattr(s, f"{name}_row", pin.array(these))
             if by is not None:
                 s.held_normal = pin.array(by[order])
-            entries = [np.flatnonzero(rows == r) for r in these]
-            setattr(s, f"{name}_start", pin.array(np.cumsum([0] + [len(e) for e in entries])))
-            flat = np.concatenate([np.zeros(0, dtype=int), *entries])
-            setattr(s, f"{name}_entry", pin.array(flat))
-            setattr(s, f"{name}_col", pin.array(cols[flat]))
+            self._group(s, name, these[order], kept, native)
         size = max(len(group), len(held))
-        s.work = pin.zeros(size * n + 2 * size * size + n + 2 * size)
+        s.work = pin.zeros(group_work_size(size, n))
         s.spread = pin.zeros(2 * m)
         s.dependent_rtol = RANK_RTOL
+
+    def _group(self, s: library.Screens, name: str, rows: np.ndarray, kept: np.ndarray,
+               native: NativeSolver) -> None:
+        """A group's fields (``n_<name>``, ``<name>_row``, ...): its rows, the kept ones
+        first, and their entries in the run's velocity values."""
+        start, entry, col = row_entries(native.num, rows)
+        pin = self._pinned
+        setattr(s, f"n_{name}", len(rows))
+        setattr(s, f"n_{name}_kept", int(kept[rows].sum()))
+        setattr(s, f"{name}_row", pin.array(rows))
+        setattr(s, f"{name}_start", pin.array(start))
+        setattr(s, f"{name}_entry", pin.array(entry))
+        setattr(s, f"{name}_col", pin.array(col))
 
     def _rates(self, s: library.Screens, rates: Sequence[RateScreen],
                model: NumericModel) -> None:
@@ -262,6 +266,38 @@ class ScreenTable:
         s.n_rate = len(rates)
         s.rate_start, s.rate_value = self._pinned.array(start), self._pinned.array(value)
         s.rate_col, s.rate_weight = self._pinned.array(col), self._pinned.array(weight, np.float64)
+
+
+def dependent_group(native: NativeSolver) -> np.ndarray:
+    """The rows whose minimum-norm multipliers differ from the run's, where its model
+    drops rows as dependent (empty: none dropped), the kept ones first: the dropped rows
+    and every row joined to them through shared coordinates (the rows a dropped one
+    combines are among them, and the projection leaves the others as they are)."""
+    if native.kept is None:
+        return np.zeros(0, dtype=int)
+    pattern = native.num.pattern
+    kept = np.zeros(native.m, dtype=bool)
+    kept[native.kept] = True
+    group = _joined(np.flatnonzero(~kept), np.asarray(pattern.A_rows),
+                    np.asarray(pattern.A_cols))
+    return group[np.argsort(~kept[group], kind="stable")]
+
+
+def row_entries(model: NumericModel, rows: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where C reads the constraint rows ``rows`` of ``model`` in its velocity values:
+    row ``i``'s entries are ``entry[start[i]:start[i + 1]]``, at the columns ``col``
+    there."""
+    A_rows, A_cols = np.asarray(model.pattern.A_rows), np.asarray(model.pattern.A_cols)
+    entries = [np.flatnonzero(A_rows == r) for r in rows]
+    flat = np.concatenate([np.zeros(0, dtype=int), *entries])
+    return np.cumsum([0] + [len(e) for e in entries]), flat, A_cols[flat]
+
+
+def group_work_size(rows: int, n: int) -> int:
+    """The work doubles of a group of ``rows`` rows in ``n`` coordinates (``screens.c``'s
+    ``work_of``)."""
+    return rows * n + 2 * rows * rows + n + 2 * rows
 
 
 def _joined(start: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:

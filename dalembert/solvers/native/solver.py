@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ctypes
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -19,6 +20,9 @@ from ..projection import ACCEPT_TOL, FAST_NEWTON, MAX_NEWTON, POSITION_TOL, Step
 from . import library
 from .structure import NotApplicable, SchurStructure, model_struct, schur_structure, work_sizes
 from .turns import outside_python
+
+if TYPE_CHECKING:
+    from .friction import FrictionTable
 
 DOUBLE = np.dtype(np.float64).itemsize  # bytes, for addresses inside a buffer
 #: Output points per call of dl_outputs (a few milliseconds for a large mechanism).
@@ -135,6 +139,7 @@ class NativeSolver:
         self._io()
         self._input_error: BaseException | None = None  # what the inputs' callback raised
         self._callback: object = None
+        self._friction: FrictionTable | None = None
         self.set_inputs(None)
 
     def _data(self) -> library.Data:
@@ -195,6 +200,19 @@ class NativeSolver:
 
         self._callback = library.INPUTS_CALLBACK(inputs)  # kept alive while C may call it
         self.data.inputs = ctypes.cast(self._callback, ctypes.c_void_p).value
+
+    def set_friction(self, table: FrictionTable | None) -> None:
+        """Have C compute sliding contacts' friction forces into their inputs before
+        every evaluation, after the inputs' callback (``None``: not; see
+        :mod:`.friction`).
+
+        Parameters
+        ----------
+        table
+            The sliding contacts of this run's model, or ``None``.
+        """
+        self._friction = table  # kept alive while C may read it
+        self.data.friction = None if table is None else table.address
 
     def _io(self) -> None:
         """Fixed input/output buffers: taking a new array's address costs more than a copy."""
