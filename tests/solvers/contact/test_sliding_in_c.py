@@ -1,0 +1,127 @@
+"""Sliding friction computed in C (``native/friction.c``): a sliding segment's steps in
+the C loop no longer call Python at each evaluation for its friction forces.
+
+References (closed forms):
+
+- A box on its four bottom corners (mass ``m``, the corners at ``(x_i, y_i)`` from the
+  centre, ``C/2`` below it) launched sliding along ``d`` without a push: every corner
+  slides along ``d``, so friction totals ``-mu m g d`` and the centre decelerates at
+  ``mu g`` along a straight line, stopping at ``v0 / (mu g)``. It does not turn: the
+  normal forces balance the friction's moment about the centre, ``sum N_i r_i =
+  (mu m g C / 2) d`` (in the floor's plane), which is parallel to ``d``, so the
+  friction's own moment about the vertical, ``-mu (sum N_i r_i) x d``, is 0. The four
+  normal rows have rank 3, and the run reports the minimum-norm normal forces, linear
+  in the corners' places (equal springs): ``N_i = m g / 4 + (mu m g C / 2)
+  (d_x x_i / sum x_j^2 + d_y y_i / sum y_j^2)``, each corner's friction ``-mu N_i d``.
+- A block on two equal contacts (rank 1) sliding along a floor against a damping force
+  ``-k v`` read from the state at each evaluation (the user's input):
+  ``v' = -(k/m) v - mu g``, so ``v = (v0 + a) exp(-k t/m) - a`` with ``a = mu g m / k``,
+  stopping at ``(m/k) ln((v0 + a) / a)``; each contact carries ``m g / 2``.
+
+Each run is also compared with the Python loop, whose friction is the Python solve's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from dalembert import System, Unilateral, coordinates
+from dalembert.multibody import Ground, Multibody, RigidBody, plane_contact
+from dalembert.solvers.contact import friction
+
+g, mu = 9.81, 0.4
+A, B, C, M = 0.2, 0.15, 0.1, 2.0
+CORNERS = [(sx * A / 2, sy * B / 2) for sx, sy in [(-1, -1), (1, -1), (1, 1), (-1, 1)]]
+X, Y = coordinates("x y")
+
+
+@pytest.fixture
+def python_friction(monkeypatch):
+    """The number of times the Python side computed sliding friction forces (a list
+    holding one count)."""
+    calls = [0]
+    call = friction.SlidingForces.__call__
+
+    def counted(self, *args):
+        calls[0] += 1
+        return call(self, *args)
+
+    monkeypatch.setattr(friction.SlidingForces, "__call__", counted)
+    return calls
+
+
+def box_on_four() -> Multibody:
+    inertia = M / 12 * np.diag([B**2 + C**2, A**2 + C**2, A**2 + B**2])
+    body = RigidBody("box", M, inertia)
+    corners = [plane_contact(f"c{k}", Ground(), body, point=(x, y, -C / 2), friction=mu)
+               for k, (x, y) in enumerate(CORNERS)]
+    return Multibody([body], gravity=(0, 0, -g), contacts=corners)
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_a_box_launched_sliding_on_four_corners_stops_at_v0_over_mu_g(backend,
+                                                                      python_friction):
+    v0, angle = 1.2, 0.5
+    d = np.array([np.cos(angle), np.sin(angle)])
+    box = box_on_four()
+    q0, qd0 = box.initial_state(positions={"box": (0, 0, C / 2)},
+                                velocities={"box": (*(v0 * d), 0)})
+    stop = v0 / (mu * g)
+    times = np.linspace(0.0, 0.5, 26)
+    # steps of at most 2 ms: many evaluations in the sliding segment
+    traj = box.simulate((0.0, 0.5), q0, qd0, t_eval=times, max_step=2e-3, backend=backend)
+    assert traj.success, traj.message
+    (t_stop,) = [s.t for s in traj.contacts.switches[1:]]
+    assert abs(t_stop - stop) < 1e-12
+    t = np.minimum(traj.t, stop)
+    s = v0 * t - mu * g * t**2 / 2  # along d
+    assert np.abs(traj["box_x"] - s * d[0]).max() < 1e-12
+    assert np.abs(traj["box_y"] - s * d[1]).max() < 1e-12
+    assert np.abs(traj["box_z"] - C / 2).max() < 1e-12
+    assert np.abs(traj["box_b3"]).max() < 1e-12  # no yaw
+    sliding = traj.t < stop
+    xs, ys = np.array(CORNERS).T
+    moment = mu * M * g * C / 2
+    for k, (x, y) in enumerate(CORNERS):
+        normal = M * g / 4 + moment * (d[0] * x / (xs**2).sum() + d[1] * y / (ys**2).sum())
+        assert np.abs(traj.multiplier(f"c{k}_1")[sliding] - normal).max() < 1e-10
+        forces = np.stack([traj.multiplier(f"c{k}_friction_{j}") for j in (1, 2)], axis=1)
+        assert np.abs(forces[sliding] + mu * normal * d).max() < 1e-10
+    # in C: the outputs' friction and the stop's location in Python, none at the
+    # steps' evaluations
+    evaluations = traj.stats["nfev"]
+    assert evaluations > 1000
+    if backend == "c":
+        assert python_friction[0] < evaluations / 20
+
+
+def test_a_block_damped_by_a_state_input_while_sliding_on_two_contacts(python_friction):
+    """The user's input read at each state still is, with the friction in C."""
+    k, v0, u = 3.0, 2.0, sp.Symbol("u")
+    block = System([X, Y], kinetic=(X.diff()**2 + Y.diff()**2) / 2, potential=g * Y,
+                   generalized_forces={X: u}, inputs=[u],
+                   constraints=[Unilateral(Y, name, friction=mu, tangents=[X.diff()])
+                                for name in ("a", "b")])
+    a = mu * g / k
+    stop = np.log((v0 + a) / a) / k
+    times = np.linspace(0.0, 0.6, 31)
+    runs = {backend: block.simulate((0.0, 0.6), {X: 0.0, Y: 0.0}, {X: v0},
+                                    inputs=lambda t, q, qd: [-k * qd[0]], t_eval=times,
+                                    max_step=2e-3, backend=backend)
+            for backend in ("c", "python")}
+    for traj in runs.values():
+        assert traj.success, traj.message
+        (t_stop,) = [s.t for s in traj.contacts.switches[1:]]
+        assert abs(t_stop - stop) < 1e-12
+        sliding = traj.t < stop
+        t = traj.t[sliding]
+        v = (v0 + a) * np.exp(-k * t) - a
+        assert np.abs(traj["x_dot"][sliding] - v).max() < 1e-12
+        assert np.abs(traj["x_dot"][~sliding]).max() < 1e-12
+        for name in ("a", "b"):
+            assert np.abs(traj.multiplier(name) - g / 2).max() < 1e-12
+            assert np.abs(traj.multiplier(f"{name}_friction_1")[sliding] + mu * g / 2).max() \
+                < 1e-12
+    assert np.abs(runs["c"].q - runs["python"].q).max() < 1e-13
