@@ -407,7 +407,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         result.y_events = result.y_events[:user_events]
         keep = np.flatnonzero(result.t < fired[0]) if fired is not None else \
             np.arange(len(result.t)) if end == tf else np.flatnonzero(result.t < end)
-        outputs = _outputs(full, gaps, which, dynamics, forces[which])
+        outputs = _outputs(full, gaps, which, dynamics, forces[which], friction_in_c)
         final_sample = fired is None and end == tf and hold.is_instant(tf) and \
             len(keep) > 0 and result.t[keep[-1]] == tf
         shown = keep[:-1] if final_sample else keep
@@ -823,12 +823,12 @@ def _contact_fired(result: IntegrationResult, user_events: int
 
 
 def _outputs(full: NumericModel, gaps: Gaps, which: ClosedGaps, dynamics: bool,
-             forces: SlidingForces | None
+             forces: SlidingForces | None, in_c: SlidingInC | None
              ) -> Callable[[Segment, np.ndarray, np.ndarray], dict[str, np.ndarray]]:
     """The outputs of a segment, its multipliers placed by row of the model with every
-    gap (0 on the open gaps; a sliding contact's friction forces in its sliding
-    velocities' rows, and in the constraint forces), the same arrays for every
-    segment."""
+    gap (0 on the open gaps; a sliding contact's friction forces, as the segment's
+    evaluations had them (``in_c`` or ``forces``), in its sliding velocities' rows, and
+    in the constraint forces), the same arrays for every segment."""
     m, n = full.m, full.n
     rows = _segment_rows(gaps, which)
     sliding = gaps.held_rows(ClosedGaps(which.closed, which.sliding))
@@ -845,9 +845,10 @@ def _outputs(full: NumericModel, gaps: Gaps, which: ClosedGaps, dynamics: bool,
                                             lam[i]).items():
                     lam[i, gaps.tangents[k]] = force
         if forces is not None and dynamics:
+            computed = None if in_c is None else in_c.forces(t, y)
             for i, (ti, yi) in enumerate(zip(t, y)):
                 q, qd = yi[:n], yi[n:]
-                lam[i, sliding] = forces(float(ti), q, qd)
+                lam[i, sliding] = forces(float(ti), q, qd) if computed is None else computed[i]
                 Av, _ = full.velocity_sparse(float(ti), q)
                 out["constraint_forces"][i] = matvec(pattern.A_cols, pattern.A_rows, Av,
                                                      lam[i], n)

@@ -44,6 +44,8 @@ class SlidingInC:
                  user: InputSignal | None) -> None:
         self.data, self.table, self.python = data, table, python
         zeros = self._zeros = np.zeros(table.forces)
+        #: Whether C computes the friction in the current segment.
+        self.active = False
         names = python.names[len(python.names) - table.forces:]
         # the friction forces' slots written 0 by the callback; C writes them after it
         self.user = None if user is None else user.extended(
@@ -99,7 +101,8 @@ class SlidingInC:
         """
         native = self.data.native
         assert native is not None
-        if any(k in onset for k in sliding):
+        self.active = not any(k in onset for k in sliding)
+        if not self.active:
             native.set_friction(None)
             native.set_inputs(self.python)
             return
@@ -108,3 +111,18 @@ class SlidingInC:
         if held is not None:
             self.data.hold_inputs(np.concatenate([held, self._zeros]))
         native.set_friction(self.table)
+
+    def forces(self, t: np.ndarray, y: np.ndarray) -> np.ndarray | None:
+        """The friction forces at the current segment's states ``y`` (one row per time
+        of ``t``) as C computes them, or ``None`` where the Python side does (an onset).
+
+        Parameters
+        ----------
+        t, y
+            Times and states ``[q, qd]`` of the current segment.
+        """
+        if not self.active:
+            return None
+        native = self.data.native
+        assert native is not None
+        return native.inputs(t, y)[:, -self.table.forces:]

@@ -317,6 +317,7 @@ def _runtime() -> ctypes.CDLL:
         "dl_rk_step": [_ptr] * 8,
         "dl_rk_run": [_ptr] * 8,
         "dl_outputs": [_ptr, _ptr, _i64, *[_ptr] * 8],
+        "dl_inputs": [_ptr, _ptr, _i64, _ptr, _ptr, _i64, _i64, _ptr],
         "dl_stages": [_ptr, _ptr, _ptr, _i64, _ptr, _i64, _i64, _i64, _f64, _f64, _ptr, _ptr,
                       _ptr, _ptr],
         "dl_call": [_ptr, _ptr, _i64, _ptr, _ptr],

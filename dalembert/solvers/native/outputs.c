@@ -36,3 +36,18 @@ int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, c
   }
   return DL_OK;
 }
+
+/* The model's inputs at k states Y (rows [q, qd]) as C's evaluations set them (the
+ * inputs' callback, then the sliding friction: friction.c), the count slots of the
+ * parameter vector from offset, into out (k rows). */
+int dl_inputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
+              int64_t offset, int64_t count, double *out) {
+  const int64_t n = md->n;
+  for (int64_t i = 0; i < k; ++i) {
+    const double *q = Y + i * 2 * n;
+    const int status = load_inputs(md, d, times[i], q, q + n);
+    if (status != DL_OK) return status;
+    memcpy(out + i * count, d->p + offset, (size_t)count * sizeof(double));
+  }
+  return DL_OK;
+}

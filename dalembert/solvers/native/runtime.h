@@ -442,6 +442,9 @@ int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, c
                double *qdd, double *lambda, double *force, double *position_residual,
                double *velocity_residual, double *energies);
 
+int dl_inputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
+              int64_t offset, int64_t count, double *out);
+
 /* projection.c */
 int dl_project(const dl_model *md, dl_data *d, double t, double *y,
                const unsigned char *holonomic, int64_t max_newton, int64_t max_full,

@@ -276,6 +276,19 @@ class NativeSolver:
             self._minimum_norm(times, states, out)
         return out
 
+    def inputs(self, t: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The model's inputs at the states ``y`` (one row per time of ``t``) as C's
+        evaluations set them: the inputs' callback's, then the sliding friction computed
+        in C (:meth:`set_friction`); one row per state."""
+        k, count = len(t), len(self.num.compiled.input_names)
+        times = np.ascontiguousarray(t, dtype=float)
+        states = np.ascontiguousarray(y, dtype=float).reshape(k, 2 * self.n)
+        out = np.zeros((k, count))
+        self._check(self.lib.dl_inputs(*self._at, k, times.ctypes.data, states.ctypes.data,
+                                       self.num.compiled.input_offset, count,
+                                       out.ctypes.data))
+        return out
+
     def _minimum_norm(self, times: np.ndarray, states: np.ndarray,
                       out: dict[str, np.ndarray]) -> None:
         """With dependent rows, the multipliers as the Python loop reports them: C left
