@@ -26,7 +26,7 @@ import numpy as np
 from ...codegen.compiled import NumericModel
 from ...numerics.rank import RANK_RTOL
 from . import library
-from .screens import dependent_group, group_work_size, row_entries
+from .screens import dependent_group, group_work_size, rate_terms, row_entries
 from .solver import NativeSolver, Pinned, c_function
 
 
@@ -110,14 +110,12 @@ class FrictionTable:
         self.address = ctypes.addressof(f)
 
     def _terms(self, f: library.Friction, rows: list[int], watched: NumericModel) -> None:
-        """Each tangent row's terms in the watched model's velocity values: its ``A``
-        values (times ``qd`` at their columns) and its ``b`` (column -1)."""
-        start, entry, col = row_entries(watched, np.array(rows, dtype=int))
+        """Each tangent row's terms in the watched model's velocity values
+        (:func:`~.screens.rate_terms`)."""
         value, column, at = [], [], [0]
-        for i, r in enumerate(rows):
-            these = slice(start[i], start[i + 1])
-            value += [*entry[these].tolist(), len(watched.pattern.A_rows) + r]
-            column += [*col[these].tolist(), -1]
+        for these, cols in rate_terms(watched, rows):
+            value += these
+            column += cols
             at.append(len(value))
         f.term_start, f.term_value = self._pinned.array(at), self._pinned.array(value)
         f.term_col = self._pinned.array(column)

@@ -252,20 +252,39 @@ class ScreenTable:
 
     def _rates(self, s: library.Screens, rates: Sequence[RateScreen],
                model: NumericModel) -> None:
-        """The rate screens' terms: per row of a screen, its ``A`` values (times ``qd``
-        at their columns) and its ``b`` (the velocity function's values after them)."""
-        rows, cols = np.asarray(model.pattern.A_rows), np.asarray(model.pattern.A_cols)
+        """The rate screens' terms (:func:`rate_terms`), each weighted by its row's
+        weight in the screen."""
         start, value, col, weight = [0], [], [], []
         for x in rates:
             for r, w in zip(x.rows, x.weights):
-                entries = np.flatnonzero(rows == r)
-                value += [*entries.tolist(), len(rows) + r]
-                col += [*cols[entries].tolist(), -1]
-                weight += [w] * (len(entries) + 1)
+                (these, cols), = rate_terms(model, [r])
+                value += these
+                col += cols
+                weight += [w] * len(these)
             start.append(len(value))
         s.n_rate = len(rates)
         s.rate_start, s.rate_value = self._pinned.array(start), self._pinned.array(value)
         s.rate_col, s.rate_weight = self._pinned.array(col), self._pinned.array(weight, np.float64)
+
+
+def rate_terms(model: NumericModel, rows: Sequence[int]) -> list[tuple[list[int], list[int]]]:
+    """Where C reads the rates ``A qd + b`` of the constraint rows ``rows`` of ``model``
+    in its velocity values ``[A values, b]``: per row, the places of its terms and their
+    columns (its ``A`` values times ``qd`` there, then its ``b``, column -1).
+
+    Examples
+    --------
+    >>> from dalembert.examples import load
+    >>> pendulum = load("pendulum").build().numeric()
+    >>> rate_terms(pendulum, [0])
+    [([0, 1, 2], [0, 1, -1])]
+    """
+    A_rows, A_cols = np.asarray(model.pattern.A_rows), np.asarray(model.pattern.A_cols)
+    out = []
+    for r in rows:
+        entries = np.flatnonzero(A_rows == r)
+        out.append(([*entries.tolist(), len(A_rows) + int(r)], [*A_cols[entries].tolist(), -1]))
+    return out
 
 
 def dependent_group(native: NativeSolver) -> np.ndarray:
