@@ -62,6 +62,10 @@ from .gaps import TOUCH_RTOL, Gaps
 from .impulses import contact_impulses
 from .rotations import Rotations
 
+#: An impact slower than this many times the change a step's free motion makes to its
+#: gap's rate is plastic in the time-stepping mode (:func:`_restitution`): the hops of a
+#: body at rest are one to two such changes.
+STEP_REST = 2.0
 #: Rounds of the position projection after a step (each a Gauss-Newton projection on
 #: the rows held so far), and Gauss-Newton iterations in each.
 PROJECTION_ITERATIONS = 8
@@ -270,8 +274,8 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
     if len(near):
         A = pattern.dense_A(Av)
         gaps.check_finite(A[gaps.first + near].sum(axis=1), tm)
-        found = contact_impulses(gaps, kkt, A, b, near, v, v_free, gaps.restitution,
-                                 previous)
+        found = contact_impulses(gaps, kkt, A, b, near, v, v_free,
+                                 _restitution(gaps, A, b, near, v, v_free), previous)
         v_free = v_free + found.velocity
         P[found.rows] = found.impulse
         pushing = near[found.impulse[:len(near)] > 0.0]
@@ -279,6 +283,23 @@ def _step(full: NumericModel, gaps: Gaps, kkt, bilateral: np.ndarray, t: float,
     q_next = _project(full, gaps, t + h, turn.advance(qm, v_free, h / 2), pushing)
     return q_next, project_velocities(full, t + h, q_next, turn.carry(qm, v_free, q_next),
                                       rows=np.flatnonzero(bilateral)), P
+
+
+def _restitution(gaps: Gaps, A: np.ndarray, b: np.ndarray, near: np.ndarray,
+                 v: np.ndarray, v_free: np.ndarray) -> np.ndarray:
+    """Newton's coefficient of every gap for a step: its own, but 0 for an impact of
+    the gaps ``near`` slower than its rest speed or than :data:`STEP_REST` times the
+    change the step's free motion makes to its rate (``A (v_free - v)``, ``g h`` for a
+    ball on a floor). A body settling (a bouncing ball's accumulation) otherwise never
+    rests: each step of free fall feeds it ``g h``, which ``e > 0`` returns as a hop of
+    a step or two, for ever."""
+    rows = gaps.first + near
+    rate = A[rows] @ v + b[rows]
+    change = A[rows] @ (v_free - v)
+    slow = -rate < np.maximum(gaps.rest_speed[near], STEP_REST * np.abs(change))
+    e = gaps.restitution.copy()
+    e[near[slow]] = 0.0
+    return e
 
 
 def _project(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,

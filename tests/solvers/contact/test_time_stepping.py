@@ -45,6 +45,30 @@ def test_bouncing_ball_is_first_order_in_the_step():
         assert abs(apex / (e**2 * h0) - 1) <= 2 * g * h / (g * t1)
 
 
+@pytest.mark.parametrize("h", [2e-3, 1e-3])
+def test_a_bouncing_ball_comes_to_rest_where_its_bounces_accumulate(h):
+    """The bounces accumulate at ``t_inf = t_1 (1 + e) / (1 - e)`` (a Zeno
+    accumulation). The ball then rests on the floor: there, height and speed 0, the
+    multiplier the weight, no impact after. Each impact lands within two steps of its
+    time (the test above), so rest comes within ``2 h`` per impact of ``t_inf``; the
+    energy the impacts took is the drop's, ``m g h0``, to first order in ``h``.
+    Without the step's rest rule (a slow impact plastic) the ball hops by ``g h`` for
+    ever, an impact every few steps."""
+    t1 = np.sqrt(2 * h0 / g)
+    t_inf = t1 * (1 + e) / (1 - e)
+    traj = BALL.simulate((0.0, t_inf + 0.5), {"y": h0}, contact_mode="time-stepping",
+                         contact_step=h)
+    assert traj.success, traj.message
+    moving = np.flatnonzero((traj.q[:, 0] != 0.0) | (traj.qd[:, 0] != 0.0))
+    rest = traj.t[moving[-1] + 1]
+    impacts = traj.contacts.impact_times
+    assert impacts[-1] == rest  # the last impact puts it to rest
+    assert abs(rest - t_inf) <= 2 * h * len(impacts)
+    assert np.abs(traj.multiplier("floor")[traj.t > rest] - g).max() < 1e-12
+    lost = sum(i.energy_lost for i in traj.contacts.impacts)
+    assert abs(lost - g * h0) < 0.01 * g * h0
+
+
 def test_chain_dropped_on_a_table_comes_to_rest_on_it():
     count, link = 6, 0.2
     xs = coordinates(" ".join(f"x{k}" for k in range(count)))
