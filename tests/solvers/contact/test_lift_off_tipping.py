@@ -377,7 +377,10 @@ def test_a_box_lifted_at_an_edge_leaves_its_far_corners_then_its_near_ones(mu, b
     box, section = box_lifted(mu)
     ref = Reference.of(section, END)
     q0, qd0 = box.initial_state(positions={"box": (0, 0, BOX_C / 2)})
-    # sliding, its steps' errors add up to a few 1e-10 at the default tolerance
+    # sliding from rest on two sliding velocities is stiff while slow (the direction of
+    # v / |v| turns at |a_t| / |v|): the default method turns to Radau there, whose
+    # values between its steps (the outputs, the state at the lift-off) are off by a
+    # few 1e-10 at the default tolerance, by some 1e-12 at this one
     traj = box.simulate((0.0, END), q0, qd0, t_eval=TIMES, backend=backend,
                         rtol=1e-12 if mu else None)
     # turned about y by -theta (its +x side up): b0 = cos(theta / 2), b2 = -sin(theta / 2)
