@@ -14,7 +14,9 @@ contact alike, with impulses over the step in place of forces:
 3. the velocity at the step's end solves the KKT system with the bilateral rows,
    ``M v+ = M v + h f + A_b^T P_b + A_c^T P_c``, the impulses ``P_c`` on the contacts
    from the complementarity problem ``0 <= P_c  _|_  U+ + e U >= 0`` (``U`` the
-   gaps' rates, Newton's law at the velocity level): with the Delassus matrix
+   gaps' rates, Newton's law at the velocity level; ``e`` 0 for an impact slower than
+   twice what the step's free motion adds to its rate, so that a body settling rests
+   instead of hopping by ``g h`` for ever: :func:`_restitution`): with the Delassus matrix
    ``W = A_c K^-1 A_c^T`` (one KKT factorization, one solve per contact) it is a small
    dense LCP, solved by principal pivoting
    (:func:`~dalembert.solvers.contact.impulses.solve_lcp`);
