@@ -384,7 +384,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                                      held_sample if hold.sampled else None)
             data = made[which] = start(which, t, y, events, inputs)
             in_c[which] = None if inputs is None else SlidingInC.of(
-                data, full, gaps, which, inputs, None if hold.sampled else signal)
+                data, full, gaps, which, None if hold.sampled else signal)
         sliding = forces[which]
         if sliding is not None:
             sliding.restart()
@@ -746,16 +746,20 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                 return 1.0  # not starting from rest in this segment: never fires
             s = sliding_velocity(full, gaps, k, t, q, qd)
             return _open_at_start(start, t, speed - float(s @ start.directions[k]))
-        # an onset's steps are taken in Python (its friction is found anew at each
-        # evaluation there): unscreened, and not watched in the other segments
-        add(slid, "slid", k, partial(_onset_screen, start, k))
+        add(slid, "slid", k, partial(_onset_screen, full, tuple(int(r) for r in gaps.tangents[k]),
+                                     start, k))
     return tuple(events), tuple(kinds)
 
 
-def _onset_screen(start: SegmentStart, k: int) -> Never | None:
-    """The screen of sliding gap ``k``'s ``"slid"`` event as the current segment
-    starts: none in its onset (whose steps Python takes), else it cannot fire."""
-    return None if k in start.onset else Never()
+def _onset_screen(full: NumericModel, rows: tuple[int, ...], start: SegmentStart,
+                  k: int) -> RateScreen | Never:
+    """The screen of sliding gap ``k``'s ``"slid"`` event (its sliding velocities, the
+    rows ``rows`` of ``full``) as the current segment starts: its onset speed less its
+    speed along its start direction in its onset, else it cannot fire."""
+    speed = start.onset.get(k)
+    if speed is None:
+        return Never()
+    return RateScreen(full, rows, tuple(-float(w) for w in start.directions[k]), -speed)
 
 
 def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.ndarray,

@@ -290,7 +290,11 @@ def _look_ahead(now: _Checker, found: np.ndarray,
     of change. Else one contact of a set whose forces fall through 0 together would
     open at a time, the others, 0 to rounding, staying closed, then the next one, at
     the same instant without end. Ties still 0 there (a contact pushing with no
-    force that stays so) keep ``found``."""
+    force that stays so) keep ``found``; where no choice holds there (a rough corner
+    whose normal force reaches 0 while it needs friction: held it pulls, let go it
+    falls into the floor), the problem has no solution from this state
+    (:class:`~dalembert.errors.ContactError`), where keeping ``found`` would switch
+    at this instant without end."""
     wrong, scale = now.check(found)  # (made by the search: its answer kept)
     tied = now.candidates[np.abs(wrong) <= scale]
     qdd = now.seen[found.tobytes()][0]
@@ -318,8 +322,12 @@ def _look_ahead(now: _Checker, found: np.ndarray,
     finally:
         if inputs is not None:
             full.set_inputs(inputs)
-    if again is None:
-        return found
+    if again is None:  # no choice holds a moment later: the problem has no solution
+        named = _named(now.gaps, np.isin(np.arange(now.gaps.count), tied))
+        raise ContactError(
+            f"at t={t:.6g} no set of the touching gaps {named} can stay closed: each "
+            "choice pulls on a contact or moves one into its obstacle a moment later (a "
+            "contact problem without a solution from this state)")
     return np.array(sorted(fixed + again.tolist()), dtype=found.dtype)
 
 

@@ -1,32 +1,38 @@
-"""Which side computes a sliding set's friction forces, segment by segment.
+"""A sliding set's friction forces computed in C, segment by segment.
 
 A segment with sliding contacts takes their friction forces as inputs of its model.
 In the C loop, C computes them before each evaluation
-(:mod:`~dalembert.solvers.native.friction`), so the segment's steps do not call
-Python; the Python side (:class:`~dalembert.solvers.contact.friction.SlidingForces`,
-through the inputs' callback) computes them where C cannot: in the Python loop, and in
-a segment where a contact starts to slide from rest, whose direction is found anew at
-each evaluation by a search (:func:`~dalembert.solvers.contact.friction.consistent_directions`;
-such steps are taken in Python anyway). The user's inputs stay the user's: a signal
-read at each state is still called, a sample held is written once per segment.
+(:mod:`~dalembert.solvers.native.friction`): the same solve as
+:func:`~dalembert.solvers.contact.friction.solve_sliding`, and for contacts starting
+to slide from rest the same search for their directions as
+:func:`~dalembert.solvers.contact.friction.consistent_directions`, so the segment's
+steps do not call Python for them. The Python side
+(:class:`~dalembert.solvers.contact.friction.SlidingForces`) computes them in the
+Python loop. The user's inputs stay the user's: a signal read at each state is still
+called, a sample held is written once per segment.
 """
 
 from __future__ import annotations
 
-from collections.abc import Container
+from collections.abc import Container, Sequence
 
 import numpy as np
 
 from ...codegen.compiled import NumericModel
 from ...inputs import InputSignal
 from ...model.constraints import ClosedGaps, friction_force_name
-from ..native.friction import FrictionTable, SlidingContact
+from ..native.friction import FrictionTable, OnsetSearch, SlidingContact
 from ..running.run_data import RunData
-from .gaps import Gaps
+from .friction import CONSISTENT_ITERATIONS, CONSISTENT_STEP, CONSISTENT_TURN
+from .gaps import TOUCH_RTOL, Gaps
+
+#: The onset's search as :func:`~dalembert.solvers.contact.friction.consistent_directions`
+#: makes it.
+SEARCH = OnsetSearch(CONSISTENT_STEP, CONSISTENT_TURN, CONSISTENT_ITERATIONS, TOUCH_RTOL)
 
 
 class SlidingInC:
-    """A sliding set's friction forces in C in its segments without an onset.
+    """A sliding set's friction forces in C.
 
     Parameters
     ----------
@@ -34,26 +40,23 @@ class SlidingInC:
         The run data of the set's model (its C solver set per segment).
     table
         The set's sliding contacts as C computes their friction.
-    python
-        The inputs with the friction forces computed in Python (the user's first).
+    names
+        The inputs that are their friction forces (the model's last).
     user
         The user's inputs read at each state (``None``: none, or a sample held).
     """
 
-    def __init__(self, data: RunData, table: FrictionTable, python: InputSignal,
+    def __init__(self, data: RunData, table: FrictionTable, names: Sequence[str],
                  user: InputSignal | None) -> None:
-        self.data, self.table, self.python = data, table, python
+        self.data, self.table = data, table
         zeros = self._zeros = np.zeros(table.forces)
-        #: Whether C computes the friction in the current segment.
-        self.active = False
-        names = python.names[len(python.names) - table.forces:]
         # the friction forces' slots written 0 by the callback; C writes them after it
         self.user = None if user is None else user.extended(
             names, lambda t, q, qd: zeros, "the sliding friction (computed in C)")
 
     @classmethod
     def of(cls, data: RunData, full: NumericModel, gaps: Gaps, which: ClosedGaps,
-           python: InputSignal, user: InputSignal | None) -> SlidingInC | None:
+           user: InputSignal | None) -> SlidingInC | None:
         """The set's friction in C, or ``None`` where its run is not in C (the Python
         loop, a model whose functions are not C).
 
@@ -65,13 +68,13 @@ class SlidingInC:
             The model with every gap a row (its own parameter vector) and its gaps.
         which
             The closed set, with sliding contacts.
-        python
-            Its inputs with the friction computed in Python.
         user
             The user's inputs read at each state, or ``None``.
         """
         native = data.native
-        if native is None or full.compiled.functions["velocity"].native is None:
+        functions = full.compiled.functions
+        if native is None or functions["velocity"].native is None \
+                or functions["kkt"].native is None:
             return None
         assert gaps.friction is not None  # (sliding contacts have coefficients)
         contacts = [SlidingContact(
@@ -80,13 +83,12 @@ class SlidingInC:
             inputs=tuple(friction_force_name(gaps.names[k], j)
                          for j in range(len(gaps.tangents[k]))))
             for k in which.sliding]
-        return cls(data, FrictionTable(contacts, full, native), python, user)
+        names = [name for c in contacts for name in c.inputs]
+        return cls(data, FrictionTable(contacts, full, native, SEARCH), names, user)
 
     def start_segment(self, directions: dict[int, np.ndarray], sliding: tuple[int, ...],
                       onset: Container[int], held: np.ndarray | None) -> None:
-        """Set the run's C solver for a segment: the friction in C from the sliding
-        directions at its start, or in Python where a contact of ``onset`` starts to
-        slide from rest.
+        """Set the run's C solver for a segment.
 
         Parameters
         ----------
@@ -101,28 +103,21 @@ class SlidingInC:
         """
         native = self.data.native
         assert native is not None
-        self.active = not any(k in onset for k in sliding)
-        if not self.active:
-            native.set_friction(None)
-            native.set_inputs(self.python)
-            return
-        self.table.start_segment([directions[k] for k in sliding])
+        self.table.start_segment([directions[k] for k in sliding], [k in onset for k in sliding])
         native.set_inputs(self.user)
         if held is not None:
             self.data.hold_inputs(np.concatenate([held, self._zeros]))
         native.set_friction(self.table)
 
-    def forces(self, t: np.ndarray, y: np.ndarray) -> np.ndarray | None:
+    def forces(self, t: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The friction forces at the current segment's states ``y`` (one row per time
-        of ``t``) as C computes them, or ``None`` where the Python side does (an onset).
+        of ``t``) as C computes them.
 
         Parameters
         ----------
         t, y
             Times and states ``[q, qd]`` of the current segment.
         """
-        if not self.active:
-            return None
         native = self.data.native
         assert native is not None
         return native.inputs(t, y)[:, -self.table.forces:]

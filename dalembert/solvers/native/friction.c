@@ -1,27 +1,45 @@
 /* The friction forces of a contact segment's sliding contacts, computed in C before
  * each evaluation (runtime.h's dl_friction, native/friction.py): the same solve as
- * contacts/friction.py's solve_sliding, on the run's own model, so that a sliding
- * segment's steps do not call Python at every evaluation. */
+ * contacts/friction.py's solve_sliding on the run's own model, and for the contacts
+ * starting to slide from rest the same search for their directions as its
+ * consistent_directions, so that a sliding segment's steps do not call Python at every
+ * evaluation. */
 #include "runtime.h"
 
-/* The work arrays: the current directions (n_tangent), a friction force and its
- * response (n each), a zero row vector, the multipliers without friction and one
- * response's (m each), R and the right-hand side (n_sliding^2 + n_sliding), then the
- * group's (screens.c's work_of): native/friction.py's work size. */
-typedef struct { double *direction, *force, *x, *zeros, *lam0, *lam, *R, *N, *group; } friction_work;
+/* The work arrays (native/friction.py's work size): the directions (n_tangent), the
+ * accelerations without friction (n), the responses to each tangent row's friction per
+ * unit normal force (n_tangent x n) and their normal multipliers (n_tangent x
+ * n_sliding), a force and a zero row vector (n, m), two multiplier vectors (m each),
+ * R and N (n_sliding^2 + n_sliding), the onset's search (see search_work), then the
+ * group's (screens.c's work_of). */
+typedef struct {
+  double *direction, *qdd0, *X, *RN, *force, *zeros, *lam0, *lam, *R, *N, *search, *group;
+} friction_work;
+
+/* The onset search's arrays for n_sliding contacts and n_tangent rows: the
+ * accelerations of the tangent rows without friction and their responses (n_tangent
+ * and n_tangent^2), each contact's plane (3 x 2), angles, residuals across and along,
+ * a shifted residual and the Newton matrix (n_sliding each, and n_sliding^2), and a
+ * trial's directions (n_tangent). */
+DL_INLINE int64_t search_size(int64_t ns, int64_t nt) {
+  return nt + nt * nt + 12 * ns + ns * ns + nt;
+}
 
 DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64_t m) {
   const int64_t ns = fr->n_sliding, nt = fr->start[ns];
   friction_work w;
   w.direction = fr->work;
-  w.force = w.direction + nt;
-  w.x = w.force + n;
-  w.zeros = w.x + n;
+  w.qdd0 = w.direction + nt;
+  w.X = w.qdd0 + n;
+  w.RN = w.X + nt * n;
+  w.force = w.RN + nt * ns;
+  w.zeros = w.force + n;
   w.lam0 = w.zeros + m;
   w.lam = w.lam0 + m;
   w.R = w.lam + m;
   w.N = w.R + ns * ns;
-  w.group = w.N + ns;
+  w.search = w.N + ns;
+  w.group = w.search + search_size(ns, nt);
   return w;
 }
 
@@ -32,6 +50,14 @@ DL_INLINE double tangent_rate(const dl_friction *fr, int64_t j, const double *qd
     const int64_t col = fr->term_col[e];
     s += fr->vel[fr->term_value[e]] * (col >= 0 ? qd[col] : 1.0);
   }
+  return s;
+}
+
+/* Tangent row j's A times x (its b left out). */
+DL_INLINE double tangent_times(const dl_friction *fr, int64_t j, const double *x) {
+  double s = 0.0;
+  for (int64_t e = fr->term_start[j]; e < fr->term_start[j + 1]; ++e)
+    if (fr->term_col[e] >= 0) s += fr->vel[fr->term_value[e]] * x[fr->term_col[e]];
   return s;
 }
 
@@ -91,35 +117,247 @@ static int solve_small(double *A, double *b, int64_t n) {
   return !all_finite(b, n);
 }
 
+/* The contacts' normal forces N with the directions d (by tangent row): (I - R) N =
+ * N_0, R's column k the normal multipliers of contact k's friction per unit normal
+ * force, sum over its rows j of d_j RN[j]. 1 where the system is singular. */
+static int normal_forces(const dl_friction *fr, const friction_work *w, const double *d,
+                         double *N) {
+  const int64_t ns = fr->n_sliding;
+  for (int64_t i = 0; i < ns; ++i) {
+    N[i] = w->lam0[fr->normal[i]];
+    for (int64_t k = 0; k < ns; ++k) {
+      double r = 0.0;
+      for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) r += d[j] * w->RN[j * ns + i];
+      w->R[i * ns + k] = (i == k) - r;
+    }
+  }
+  return solve_small(w->R, N, ns);
+}
+
+/* ---- The onset: the directions of the contacts starting to slide from rest ---- */
+
+/* The onset search's arrays (search_size's layout). */
+typedef struct {
+  double *a0, *T, *E, *angle, *across, *along, *shifted, *unused, *step, *J, *trial;
+} search_work;
+
+DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
+  search_work s;
+  s.a0 = at;
+  s.T = s.a0 + nt;
+  s.E = s.T + nt * nt;
+  s.angle = s.E + 6 * ns;
+  s.across = s.angle + ns;
+  s.along = s.across + ns;
+  s.shifted = s.along + ns;
+  s.unused = s.shifted + ns;
+  s.step = s.unused + ns;
+  s.J = s.step + ns;
+  s.trial = s.J + ns * ns;
+  return s;
+}
+
+/* Contact k's plane (3 x 2, row major, its nj rows): the identity for two sliding
+ * velocities; for three, an orthonormal basis of the span of their rows of A (the
+ * leading eigenvectors of their Gram matrix, Jacobi's rotations), 1 where they are
+ * not of rank 2 (friction.py's sliding_plane: no search then). */
+static int sliding_plane(const dl_friction *fr, int64_t k, double *E) {
+  const int64_t j0 = fr->start[k], nj = fr->start[k + 1] - j0;
+  if (nj == 2) {
+    E[0] = 1.0, E[1] = 0.0, E[2] = 0.0, E[3] = 1.0;
+    return 0;
+  }
+  if (nj != 3) return 1;
+  double G[3][3], V[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int64_t a = 0; a < 3; ++a)
+    for (int64_t b = 0; b < 3; ++b) {
+      double s = 0.0;  /* row a . row b over their common columns */
+      for (int64_t e = fr->term_start[j0 + a]; e < fr->term_start[j0 + a + 1]; ++e) {
+        if (fr->term_col[e] < 0) continue;
+        for (int64_t f = fr->term_start[j0 + b]; f < fr->term_start[j0 + b + 1]; ++f)
+          if (fr->term_col[f] == fr->term_col[e])
+            s += fr->vel[fr->term_value[e]] * fr->vel[fr->term_value[f]];
+      }
+      G[a][b] = s;
+    }
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    const double off = G[0][1] * G[0][1] + G[0][2] * G[0][2] + G[1][2] * G[1][2];
+    const double diag = G[0][0] * G[0][0] + G[1][1] * G[1][1] + G[2][2] * G[2][2];
+    if (!(off > 1e-32 * diag)) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (G[p][q] == 0.0) continue;
+        const double theta = (G[q][q] - G[p][p]) / (2.0 * G[p][q]);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+        const double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+        for (int r = 0; r < 3; ++r) {  /* G <- G J */
+          const double gp = G[r][p], gq = G[r][q];
+          G[r][p] = c * gp - s * gq;
+          G[r][q] = s * gp + c * gq;
+        }
+        for (int r = 0; r < 3; ++r) {  /* G <- J^T G */
+          const double gp = G[p][r], gq = G[q][r];
+          G[p][r] = c * gp - s * gq;
+          G[q][r] = s * gp + c * gq;
+        }
+        for (int r = 0; r < 3; ++r) {  /* V <- V J */
+          const double vp = V[r][p], vq = V[r][q];
+          V[r][p] = c * vp - s * vq;
+          V[r][q] = s * vp + c * vq;
+        }
+      }
+  }
+  int order[3] = {0, 1, 2};  /* eigenvalues, largest first */
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b)
+      if (G[order[b]][order[b]] > G[order[a]][order[a]]) {
+        const int s = order[a];
+        order[a] = order[b];
+        order[b] = s;
+      }
+  /* rank 2, on the Gram matrix's eigenvalues (the squares of the rows' singular
+   * values, whose rounding is eps times the largest: the test is on them, not on
+   * their roots) */
+  const double e0 = G[order[0]][order[0]], e1 = G[order[1]][order[1]];
+  if (!(e1 > fr->dependent_rtol * e0) || G[order[2]][order[2]] > fr->dependent_rtol * e0)
+    return 1;
+  for (int r = 0; r < 3; ++r) {
+    E[2 * r] = V[r][order[0]];
+    E[2 * r + 1] = V[r][order[1]];
+  }
+  return 0;
+}
+
+/* The residuals of the onset contacts' angles: with their directions E u(angle) (the
+ * others' as in d), the accelerations of their tangent rows a = a0 + T (N d) (N by
+ * contact, d by row), across: cos a_2 - sin a_1 and along: cos a_1 + sin a_2 in their
+ * planes (friction.py's consistent_directions). 1 where the normal forces are not
+ * found. */
+static int onset_residuals(const dl_friction *fr, const friction_work *w, const search_work *s,
+                           const double *angle, double *across, double *along) {
+  const int64_t ns = fr->n_sliding, nt = fr->start[ns];
+  memcpy(s->trial, w->direction, (size_t)nt * sizeof(double));
+  for (int64_t k = 0, i = 0; k < ns; ++k) {
+    if (!fr->onset[k]) continue;
+    const double c = cos(angle[i]), sn = sin(angle[i]);
+    for (int64_t j = 0; j < fr->start[k + 1] - fr->start[k]; ++j)
+      s->trial[fr->start[k] + j] = s->E[6 * k + 2 * j] * c + s->E[6 * k + 2 * j + 1] * sn;
+    ++i;
+  }
+  if (normal_forces(fr, w, s->trial, w->N)) return 1;
+  for (int64_t k = 0, i = 0; k < ns; ++k) {
+    if (!fr->onset[k]) continue;
+    double a1 = 0.0, a2 = 0.0;
+    for (int64_t r = fr->start[k]; r < fr->start[k + 1]; ++r) {
+      double a = s->a0[r];
+      for (int64_t l = 0; l < ns; ++l)
+        for (int64_t j = fr->start[l]; j < fr->start[l + 1]; ++j)
+          a += s->T[r * nt + j] * w->N[l] * s->trial[j];
+      a1 += s->E[6 * k + 2 * (r - fr->start[k])] * a;
+      a2 += s->E[6 * k + 2 * (r - fr->start[k]) + 1] * a;
+    }
+    const double c = cos(angle[i]), sn = sin(angle[i]);
+    across[i] = c * a2 - sn * a1;
+    along[i] = c * a1 + sn * a2;
+    ++i;
+  }
+  return 0;
+}
+
+/* The onset contacts' directions (into w->direction) by Newton's method on their
+ * angles from their start directions, as consistent_directions finds them (its
+ * difference step, largest turn, iterations and acceptance); where it finds none near
+ * them, the start ones are kept. From the start ones, not the last found (as the
+ * Python side does): the forces are then a function of the state alone, whatever
+ * evaluations came before (a step taken again, a Jacobian's differences). */
+static void onset_directions(const dl_model *md, const dl_friction *fr,
+                             const friction_work *w, double t, const double *q,
+                             const double *qd) {
+  const int64_t ns = fr->n_sliding, nt = fr->start[ns], n = md->n;
+  search_work s = search_work_of(w->search, ns, nt);
+  int64_t p = 0;
+  for (int64_t k = 0; k < ns; ++k) {
+    if (!fr->onset[k]) continue;
+    if (sliding_plane(fr, k, s.E + 6 * k)) return;  /* no search: the start kept */
+    double u1 = 0.0, u2 = 0.0;
+    for (int64_t j = 0; j < fr->start[k + 1] - fr->start[k]; ++j) {
+      u1 += s.E[6 * k + 2 * j] * fr->start_direction[fr->start[k] + j];
+      u2 += s.E[6 * k + 2 * j + 1] * fr->start_direction[fr->start[k] + j];
+    }
+    s.angle[p++] = atan2(u2, u1);
+  }
+  /* the tangent rows' accelerations: without friction, and per unit of each row's */
+  eval_state(&fr->kkt, t, q, qd, fr->p, fr->kkt_values);
+  for (int64_t r = 0; r < nt; ++r) {
+    s.a0[r] = tangent_times(fr, r, w->qdd0) - fr->kkt_values[fr->c_at + fr->tangent_row[r]];
+    for (int64_t j = 0; j < nt; ++j) s.T[r * nt + j] = tangent_times(fr, r, w->X + j * n);
+  }
+  const double eps = 2.220446049250313e-16;
+  for (int it = 0; it < fr->iterations; ++it) {
+    if (onset_residuals(fr, w, &s, s.angle, s.across, s.along)) return;
+    for (int64_t c = 0; c < p; ++c) {  /* J's column c by a forward difference */
+      s.angle[c] += fr->difference;
+      const int failed = onset_residuals(fr, w, &s, s.angle, s.shifted, s.unused);
+      s.angle[c] -= fr->difference;
+      if (failed) return;
+      for (int64_t r = 0; r < p; ++r) s.J[r * p + c] = (s.shifted[r] - s.across[r]) / fr->difference;
+    }
+    for (int64_t r = 0; r < p; ++r) s.step[r] = -s.across[r];
+    if (solve_small(s.J, s.step, p) || !(max_abs(s.step, p) <= fr->turn)) return;
+    for (int64_t r = 0; r < p; ++r) s.angle[r] += s.step[r];
+    if (max_abs(s.step, p) <= 4 * eps * (1.0 + max_abs(s.angle, p))) {
+      const double floor = -fr->touch_rtol * (1.0 + max_abs(s.along, p));
+      for (int64_t r = 0; r < p; ++r)
+        if (!(s.along[r] >= floor)) return;
+      for (int64_t k = 0, i = 0; k < ns; ++k) {
+        if (!fr->onset[k]) continue;
+        const double c = cos(s.angle[i]), sn = sin(s.angle[i]);
+        for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
+          w->direction[j] =
+              s.E[6 * k + 2 * (j - fr->start[k])] * c + s.E[6 * k + 2 * (j - fr->start[k]) + 1] * sn;
+        ++i;
+      }
+      return;
+    }
+  }
+}
+
 int load_friction(const dl_model *md, dl_data *d, double t, const double *q, const double *qd) {
   const dl_friction *fr = d->friction;
   const int64_t n = md->n, m = md->m, ns = fr->n_sliding, nt = fr->start[ns];
   friction_work w = friction_work_of(fr, n, m);
+  int onset = 0;
   for (int64_t i = 0; i < fr->n_copy; ++i) fr->p[fr->copy_to[i]] = d->p[fr->copy_from[i]];
   for (int64_t j = 0; j < nt; ++j) d->p[fr->slot[j]] = 0.0;
   eval_static(&fr->velocity, t, q, fr->p, fr->vel);
   if (fr->n_group) eval_static(&fr->run_velocity, t, q, d->p, fr->run_vel);
-  for (int64_t k = 0; k < ns; ++k) sliding_direction(fr, k, qd, w.direction + fr->start[k]);
+  for (int64_t k = 0; k < ns; ++k) {
+    if (fr->onset[k]) {  /* sought from its start direction */
+      onset = 1;
+      memcpy(w.direction + fr->start[k], fr->start_direction + fr->start[k],
+             (size_t)(fr->start[k + 1] - fr->start[k]) * sizeof(double));
+    } else {
+      sliding_direction(fr, k, qd, w.direction + fr->start[k]);
+    }
+  }
   /* the solve without friction, which holds the factors for the responses */
   eval_state(&md->fn[DL_FN_KKT], t, q, qd, d->p, d->values);
   if (!md->kkt_in_layout) load_kkt(md, d);
-  int status = dl_solve(md, d, w.x, w.lam0);
+  int status = dl_solve(md, d, w.qdd0, w.lam0);
   if (status != DL_OK) return status;
   if (spread(md, fr, w.group, w.lam0)) return DL_RANK_CHANGED;
-  /* the response to each contact's friction per unit normal force, -mu A_t^T d */
-  for (int64_t k = 0; k < ns; ++k) {
-    memset(w.force, 0, (size_t)n * sizeof(double));
-    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
+  /* the response to each tangent row's friction per unit normal force, -mu A_t^T */
+  for (int64_t k = 0; k < ns; ++k)
+    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
+      memset(w.force, 0, (size_t)n * sizeof(double));
       for (int64_t e = fr->term_start[j]; e < fr->term_start[j + 1]; ++e)
-        if (fr->term_col[e] >= 0)
-          w.force[fr->term_col[e]] -= fr->mu[k] * w.direction[j] * fr->vel[fr->term_value[e]];
-    kkt_solve_one(md, d, w.force, w.zeros, w.x, w.lam);
-    if (spread(md, fr, w.group, w.lam)) return DL_RANK_CHANGED;
-    for (int64_t i = 0; i < ns; ++i) w.R[i * ns + k] = (i == k) - w.lam[fr->normal[i]];
-  }
-  /* N = lambda0_n + R N */
-  for (int64_t i = 0; i < ns; ++i) w.N[i] = w.lam0[fr->normal[i]];
-  if (solve_small(w.R, w.N, ns)) return DL_SINGULAR_CONSTRAINTS;
+        if (fr->term_col[e] >= 0) w.force[fr->term_col[e]] -= fr->mu[k] * fr->vel[fr->term_value[e]];
+      kkt_solve_one(md, d, w.force, w.zeros, w.X + j * n, w.lam);
+      if (spread(md, fr, w.group, w.lam)) return DL_RANK_CHANGED;
+      for (int64_t i = 0; i < ns; ++i) w.RN[j * ns + i] = w.lam[fr->normal[i]];
+    }
+  if (onset) onset_directions(md, fr, &w, t, q, qd);
+  if (normal_forces(fr, &w, w.direction, w.N)) return DL_SINGULAR_CONSTRAINTS;
   for (int64_t k = 0; k < ns; ++k)
     for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
       d->p[fr->slot[j]] = -fr->mu[k] * w.N[k] * w.direction[j];

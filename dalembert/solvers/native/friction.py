@@ -31,6 +31,30 @@ from .solver import NativeSolver, Pinned, c_function
 
 
 @dataclass(frozen=True)
+class OnsetSearch:
+    """How the directions of contacts starting to slide from rest are sought: Newton's
+    method on their angles (as
+    :func:`~dalembert.solvers.contact.friction.consistent_directions`).
+
+    Attributes
+    ----------
+    difference
+        The difference step of its Jacobian (radians).
+    turn
+        The largest step it takes (radians).
+    iterations
+        Its most iterations.
+    touch_rtol
+        How far below 0 an acceleration along a direction found may be (relative).
+    """
+
+    difference: float
+    turn: float
+    iterations: int
+    touch_rtol: float
+
+
+@dataclass(frozen=True)
 class SlidingContact:
     """One sliding contact as C computes its friction.
 
@@ -67,13 +91,17 @@ class FrictionTable:
         run's inputs it shares into it).
     native
         The run's C solver.
+    search
+        How the directions of contacts starting to slide from rest are sought.
     """
 
     def __init__(self, contacts: Sequence[SlidingContact], watched: NumericModel,
-                 native: NativeSolver) -> None:
+                 native: NativeSolver, search: OnsetSearch) -> None:
         self._pinned = pin = Pinned()
         num = native.num
-        f = self.struct = library.Friction(n_sliding=len(contacts), dependent_rtol=RANK_RTOL)
+        f = self.struct = library.Friction(
+            n_sliding=len(contacts), dependent_rtol=RANK_RTOL, difference=search.difference,
+            turn=search.turn, iterations=search.iterations, touch_rtol=search.touch_rtol)
         names = list(num.compiled.input_names)
         f.normal = pin.array([c.normal for c in contacts])
         f.mu = pin.array([c.mu for c in contacts], np.float64)
@@ -83,9 +111,19 @@ class FrictionTable:
         #: How many friction forces (one per sliding velocity).
         self.forces = sum(len(c.tangents) for c in contacts)
         self._start = np.zeros(self.forces)
+        self._onset = np.zeros(len(contacts), dtype=np.int64)
         f.start_direction = pin.array(self._start, np.float64)
-        self._terms(f, [r for c in contacts for r in c.tangents], watched)
-        f.velocity = c_function("velocity", watched.compiled.functions["velocity"].native)
+        f.onset = pin.array(self._onset)
+        tangents = [r for c in contacts for r in c.tangents]
+        self._terms(f, tangents, watched)
+        f.tangent_row = pin.array(tangents)
+        functions = watched.compiled.functions
+        f.velocity = c_function("velocity", functions["velocity"].native)
+        # the watched model's KKT values, flat [M values, f, A values, c]: its c
+        pattern = watched.pattern
+        f.c_at = len(pattern.M_rows) + watched.n + len(pattern.A_rows)
+        f.kkt = c_function("kkt", functions["kkt"].native)
+        f.kkt_values = pin.zeros(f.c_at + watched.m)
         f.p = pin.array(watched.p, np.float64)
         if pin.arrays[-1] is not watched.p:  # C writes the vector the Python side reads
             raise ValueError("the watched model's parameters must be a float64 vector")
@@ -104,9 +142,10 @@ class FrictionTable:
             f.n_group, f.n_group_kept = len(group), int(np.isin(group, native.kept).sum())
             f.group_row, f.group_start = pin.array(group), pin.array(start)
             f.group_entry, f.group_col = pin.array(entry), pin.array(col)
-        ns, n, m = len(contacts), num.n, num.m
-        f.work = pin.zeros(len(self._start) + 2 * n + 3 * m + ns * ns + ns
-                           + group_work_size(len(group), n))
+        ns, nt, n, m = len(contacts), self.forces, num.n, num.m
+        search_size = 2 * nt + nt * nt + 12 * ns + ns * ns  # friction.c's search_size
+        f.work = pin.zeros(nt + 2 * n + nt * n + nt * ns + 3 * m + ns * ns + ns
+                           + search_size + group_work_size(len(group), n))
         self.address = ctypes.addressof(f)
 
     def _terms(self, f: library.Friction, rows: list[int], watched: NumericModel) -> None:
@@ -120,8 +159,18 @@ class FrictionTable:
         f.term_start, f.term_value = self._pinned.array(at), self._pinned.array(value)
         f.term_col = self._pinned.array(column)
 
-    def start_segment(self, directions: Sequence[np.ndarray]) -> None:
-        """The contacts' sliding directions at a segment's start (each unit, one entry
-        per sliding velocity), which C keeps where the sliding velocity does not run
-        along its start's."""
+    def start_segment(self, directions: Sequence[np.ndarray], onset: Sequence[bool]) -> None:
+        """A segment's start: the contacts' sliding directions there (each unit, one
+        entry per sliding velocity), which C keeps where the sliding velocity does not
+        run along its start's, and which start to slide from rest (their directions
+        sought from these).
+
+        Parameters
+        ----------
+        directions
+            Each contact's direction.
+        onset
+            Whether each contact starts to slide from rest.
+        """
         self._start[:] = np.concatenate(directions)
+        self._onset[:] = onset

@@ -147,6 +147,17 @@ typedef struct {
   const double *mu, *start_direction;
   dl_function velocity;            /* the watched model's */
   double *p, *vel;
+  /* the contacts starting to slide from rest in the segment (onset[k] 1, written by
+   * the caller): their directions are sought as the ones their contact points
+   * accelerate in (friction.c's onset_directions), from their start directions; the
+   * tangent rows' accelerations need the watched model's c (its KKT values, flat: c
+   * from c_at, at each tangent's row tangent_row); Newton's method with difference,
+   * turn, iterations and touch_rtol as friction.py's consistent_directions */
+  const int64_t *onset, *tangent_row;
+  dl_function kkt;
+  double *kkt_values;
+  int64_t c_at, iterations;
+  double difference, turn, touch_rtol;
   int64_t n_copy;
   const int64_t *copy_from, *copy_to;
   dl_function run_velocity;        /* the run's model's (set with a group) */
@@ -222,7 +233,8 @@ typedef struct {
  *             margin (1 + max |q|);
  *   rate:     sum over e in [rate_start[k], rate_start[k+1]) of rate_weight[e] times
  *             vel[rate_value[e]] (times qd[rate_col[e]] if >= 0), the watched
- *             model's velocity values [A values, b], margin margin (1 + max |qd|);
+ *             model's velocity values [A values, b], less rate_floor[k], margin
+ *             margin (1 + max |qd|);
  *   force:    lambda[force_row[k]] of the run's own model, margin
  *             force_rtol (1 + max |lambda|);
  *   cone:     cone_mu[k] lambda[cone_normal[k]] - |lambda[cone_tangent[j]]| over j in
@@ -244,7 +256,7 @@ typedef struct {
   const double *pos_floor;
   int64_t n_rate;
   const int64_t *rate_start, *rate_value, *rate_col;
-  const double *rate_weight;
+  const double *rate_weight, *rate_floor;
   int64_t n_force;
   const int64_t *force_row;
   int64_t n_cone;

@@ -154,7 +154,7 @@ int screened(const dl_model *md, dl_data *d, const dl_screens *sc, double t, con
         const int64_t col = sc->rate_col[e];
         value += sc->rate_weight[e] * sc->vel[sc->rate_value[e]] * (col >= 0 ? qd[col] : 1.0);
       }
-      if (below(value, margin)) return 1;
+      if (below(value - sc->rate_floor[k], margin)) return 1;
     }
   }
   if (!sc->n_force && !sc->n_cone) return 0;

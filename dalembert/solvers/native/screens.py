@@ -60,11 +60,13 @@ class PositionScreen:
 
 @dataclass(frozen=True)
 class RateScreen:
-    """``weights . (A qd + b)[rows]`` of the model ``watched`` (constraint rows' rates)."""
+    """``weights . (A qd + b)[rows] - floor`` of the model ``watched`` (constraint rows'
+    rates)."""
 
     watched: NumericModel
     rows: tuple[int, ...]
     weights: tuple[float, ...]
+    floor: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -263,6 +265,7 @@ class ScreenTable:
                 weight += [w] * len(these)
             start.append(len(value))
         s.n_rate = len(rates)
+        s.rate_floor = self._pinned.array([x.floor for x in rates], np.float64)
         s.rate_start, s.rate_value = self._pinned.array(start), self._pinned.array(value)
         s.rate_col, s.rate_weight = self._pinned.array(col), self._pinned.array(weight, np.float64)
 

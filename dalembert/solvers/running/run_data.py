@@ -32,6 +32,7 @@ import numpy as np
 from scipy.integrate import BDF, OdeSolver, Radau
 
 from ...codegen.compiled import NumericModel
+from ...errors import SingularSystemError
 from ...inputs import InputSignal
 from ...numerics.state_layout import StateLayout
 from ...options import IDA
@@ -275,7 +276,7 @@ def start_run(plan: SimulationPlan) -> RunData:
     return RunData(
         plan=plan, num=num, native=native, careful_model=careful, rhs=rhs,
         project=project, outputs=outputs,
-        events=tuple(_state_event(e, num.layout, partial(_multipliers, num, signal))
+        events=tuple(_state_event(e, num.layout, partial(_multipliers, num, signal, native))
                      for e in options.output.events), solver_options=solver_options,
         diagnose=nonfinite_diagnosis(num, initial.names, rows, gain, rhs),
         singular=singular_diagnosis(num, rows, kept, initial.q) if num.m else None,
@@ -361,9 +362,18 @@ def _with_inputs(num: NumericModel, signal: InputSignal | None,
     return with_inputs
 
 
-def _multipliers(num: NumericModel, signal: InputSignal | None, t: float, q: np.ndarray,
-                 qd: np.ndarray) -> np.ndarray:
-    """The multipliers at a state, for an event function that asks for them."""
+def _multipliers(num: NumericModel, signal: InputSignal | None, native: NativeSolver | None,
+                 t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """The multipliers at a state, for an event function that asks for them: in C where
+    the run is (its inputs as its evaluations set them, minimum-norm where rows are
+    dependent), else, or where C's factorization fails there (its dependent rows no
+    longer dependent), solved in Python."""
+    if native is not None:
+        try:
+            return native.outputs(np.array([t]), np.concatenate([q, qd])[None, :])[
+                "multipliers"][0]
+        except SingularSystemError:
+            pass
     if signal is not None:
         num.set_inputs(signal(t, q, qd))
     return accelerations_at(num, t, q, qd)[1]
