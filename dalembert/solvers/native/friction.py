@@ -12,7 +12,10 @@ with ``-mu A_t^T d`` give the normal forces by a small linear system (the low-ra
 correction of ``solve_sliding``). The tangent rows and their rates come from the model
 with every gap a row (the run's model lacks them), its velocity function evaluated in
 C. Where the run drops rows as dependent, the multipliers are made the minimum-norm
-ones first, as the Python side's are.
+ones first, as the Python side's are. A contact starting to slide from rest takes the
+direction its contact point accelerates in, sought by the same Newton's method as
+:func:`~dalembert.solvers.contact.friction.consistent_directions` (:class:`OnsetSearch`),
+from its start direction (docs/design.md, "Sliding friction in C").
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...codegen.c_backend import NativeHandle
 from ...codegen.compiled import NumericModel
 from ...numerics.rank import RANK_RTOL
 from . import library
@@ -122,8 +126,11 @@ class FrictionTable:
         # the watched model's KKT values, flat [M values, f, A values, c]: its c
         pattern = watched.pattern
         f.c_at = len(pattern.M_rows) + watched.n + len(pattern.A_rows)
-        f.kkt = c_function("kkt", functions["kkt"].native)
-        f.kkt_values = pin.zeros(f.c_at + watched.m)
+        kkt = functions["kkt"].native
+        if not isinstance(kkt, NativeHandle) or kkt.size != f.c_at + watched.m:
+            raise ValueError("the watched model's KKT function must write its flat values")
+        f.kkt = c_function("kkt", kkt)
+        f.kkt_values = pin.zeros(kkt.size)
         f.p = pin.array(watched.p, np.float64)
         if pin.arrays[-1] is not watched.p:  # C writes the vector the Python side reads
             raise ValueError("the watched model's parameters must be a float64 vector")
