@@ -62,11 +62,16 @@ import argparse
 import json
 import math
 import platform
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench.contact import coarsest  # the same bisection as the contact bench
 
 OUT = Path(__file__).resolve().parent / "results" / "sliding.json"
 G = 9.81
@@ -366,29 +371,6 @@ def mujoco_case(workload: str, config: str, dt: float):
 
 
 # ------------------------------------------------------------------------------ runs
-def coarsest(run, ladder, ok):
-    """The coarsest setting of ``ladder`` (finest last) whose result is ``ok``, refined
-    by bisection on a log scale to within 5%; ``None`` if even the finest is not."""
-    results = {}
-    passing = None
-    for setting in ladder:
-        results[setting] = run(setting)
-        if ok(results[setting]):
-            passing = setting
-            break
-    if passing is None:
-        return None, results
-    i = ladder.index(passing)
-    if i == 0:
-        return passing, results
-    lo, hi = passing, ladder[i - 1]  # lo meets, hi does not
-    while hi / lo > 1.05:
-        mid = math.sqrt(lo * hi)
-        results[mid] = run(mid)
-        lo, hi = (mid, hi) if ok(results[mid]) else (lo, mid)
-    return lo, results
-
-
 def workload_record(workload: str, configs: list[str]) -> tuple[dict, dict]:
     """Accuracy of every setting tried (not timed) and the runs to time."""
     simulate, measure = dalembert_case(workload)
