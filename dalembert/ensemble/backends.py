@@ -241,7 +241,12 @@ class Dask(Backend):
             if future.status == "finished":
                 yield self.client.gather(future, direct=self.direct)
                 continue
+            # waits: a result held by a worker that died after it finished is computed
+            # again, and then is there
             exc = future.exception()
+            if exc is None and future.status == "finished":
+                yield self.client.gather(future, direct=self.direct)
+                continue
             if isinstance(exc, distributed.KilledWorker) and not alone:
                 suspects += [Batch(batch.indices[i:i + 1], batch.rows[i:i + 1])
                              for i in range(len(batch.indices))]
