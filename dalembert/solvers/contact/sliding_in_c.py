@@ -23,12 +23,13 @@ from ...inputs import InputSignal
 from ...model.constraints import ClosedGaps, friction_force_name
 from ..native.friction import FrictionTable, OnsetSearch, SlidingContact
 from ..running.run_data import RunData
-from .friction import CONSISTENT_ITERATIONS, CONSISTENT_STEP, CONSISTENT_TURN
+from .friction import CONSISTENT_ITERATIONS, CONSISTENT_STEP, CONSISTENT_TURN, SLIP_SAMPLES
 from .gaps import TOUCH_RTOL, Gaps
 
 #: The onset's search as :func:`~dalembert.solvers.contact.friction.consistent_directions`
 #: makes it.
-SEARCH = OnsetSearch(CONSISTENT_STEP, CONSISTENT_TURN, CONSISTENT_ITERATIONS, TOUCH_RTOL)
+SEARCH = OnsetSearch(CONSISTENT_STEP, CONSISTENT_TURN, CONSISTENT_ITERATIONS, TOUCH_RTOL,
+                     SLIP_SAMPLES)
 
 
 class SlidingInC:

@@ -264,12 +264,131 @@ static int onset_residuals(const dl_friction *fr, const friction_work *w, const 
   return 0;
 }
 
-/* The onset contacts' directions (into w->direction) by Newton's method on their
- * angles from their start directions, as consistent_directions finds them (its
- * difference step, largest turn, iterations and acceptance); where it finds none near
- * them, the start ones are kept. From the start ones, not the last found (as the
- * Python side does): the forces are then a function of the state alone, whatever
- * evaluations came before (a step taken again, a Jacobian's differences). */
+/* Newton's method on the onset contacts' p angles from s->angle, as
+ * consistent_directions takes it (its difference step, largest turn, iterations and
+ * acceptance): 1 with their directions in w->direction, 0 where it finds none near. */
+static int newton_angles(const dl_friction *fr, const friction_work *w, const search_work *s,
+                         int64_t p) {
+  const int64_t ns = fr->n_sliding;
+  const double eps = 2.220446049250313e-16;
+  for (int it = 0; it < fr->iterations; ++it) {
+    if (onset_residuals(fr, w, s, s->angle, s->across, s->along)) return 0;
+    for (int64_t c = 0; c < p; ++c) {  /* J's column c by a forward difference */
+      s->angle[c] += fr->difference;
+      const int failed = onset_residuals(fr, w, s, s->angle, s->shifted, s->unused);
+      s->angle[c] -= fr->difference;
+      if (failed) return 0;
+      for (int64_t r = 0; r < p; ++r)
+        s->J[r * p + c] = (s->shifted[r] - s->across[r]) / fr->difference;
+    }
+    /* its friction does not turn its acceleration (other held rows fix its contact
+     * point): no direction to seek, any root would be rounding's */
+    const double scale = 1.0 + max_abs(s->across, p) + max_abs(s->along, p);
+    if (!(max_abs(s->J, p * p) > fr->touch_rtol * scale)) return 0;
+    for (int64_t r = 0; r < p; ++r) s->step[r] = -s->across[r];
+    if (solve_small(s->J, s->step, p) || !(max_abs(s->step, p) <= fr->turn)) return 0;
+    for (int64_t r = 0; r < p; ++r) s->angle[r] += s->step[r];
+    if (max_abs(s->step, p) <= 4 * eps * (1.0 + max_abs(s->angle, p))) {
+      const double floor = -fr->touch_rtol * (1.0 + max_abs(s->along, p));
+      for (int64_t r = 0; r < p; ++r)
+        if (!(s->along[r] >= floor)) return 0;
+      for (int64_t k = 0, i = 0; k < ns; ++k) {
+        if (!fr->onset[k]) continue;
+        const double c = cos(s->angle[i]), sn = sin(s->angle[i]);
+        for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
+          const double *e = s->E + 6 * k + 2 * (j - fr->start[k]);
+          w->direction[j] = e[0] * c + e[1] * sn;
+        }
+        ++i;
+      }
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/* Each onset contact's angle in its plane of its part of v (by tangent row) into
+ * s->angle; 0 where one of them is 0 in the plane. */
+static int angles_of(const dl_friction *fr, const search_work *s, const double *v) {
+  for (int64_t k = 0, i = 0; k < fr->n_sliding; ++k) {
+    if (!fr->onset[k]) continue;
+    double u1 = 0.0, u2 = 0.0;
+    for (int64_t j = 0; j < fr->start[k + 1] - fr->start[k]; ++j) {
+      u1 += s->E[6 * k + 2 * j] * v[fr->start[k] + j];
+      u2 += s->E[6 * k + 2 * j + 1] * v[fr->start[k] + j];
+    }
+    if (u1 == 0.0 && u2 == 0.0) return 0;
+    s->angle[i++] = atan2(u2, u1);
+  }
+  return 1;
+}
+
+/* One onset contact's residuals at angle a: across (returned) and, in along, along. */
+static double across_at(const dl_friction *fr, const friction_work *w, const search_work *s,
+                        double a, double *along) {
+  s->angle[0] = a;
+  if (onset_residuals(fr, w, s, s->angle, s->across, s->along)) return NAN;
+  *along = s->along[0];
+  return s->across[0];
+}
+
+/* A single onset contact's direction by the whole turn's search of friction.py's
+ * slip_direction, where Newton's method found none: the angle sampled at samples
+ * points a half turn around the start one, each change of sign of the residual
+ * across refined (bisection to rounding), the roots along which it accelerates kept,
+ * the one nearest the start taken. 1 with its direction in w->direction, 0 where
+ * there is none or its friction does not move it (every residual alike). */
+static int whole_turn(const dl_friction *fr, const friction_work *w, const search_work *s,
+                      int64_t k, double start) {
+  const int64_t m = 2 * fr->samples;
+  const double pi = 3.141592653589793;
+  double previous = 0.0, along = 0.0, lowest = INFINITY, highest = -INFINITY, size = 0.0;
+  double best = NAN, a_previous = 0.0;
+  for (int64_t i = 0; i <= m; ++i) {  /* the sizes of the accelerations: the scale */
+    const double a = start - pi + 2.0 * pi * (double)i / (double)m;
+    const double x = across_at(fr, w, s, a, &along);
+    if (!isfinite(x)) return 0;
+    size = fmax(size, hypot(x, along));
+    lowest = fmin(lowest, x);
+    highest = fmax(highest, x);
+  }
+  const double scale = 1.0 + size, touch = fr->touch_rtol * scale;
+  if (highest - lowest <= touch) return 0;  /* its friction does not move it */
+  for (int64_t i = 0; i <= m; ++i) {
+    const double a = start - pi + 2.0 * pi * (double)i / (double)m;
+    const double x = across_at(fr, w, s, a, &along);
+    if (i > 0 && (previous == 0.0 || previous * x < 0.0)) {
+      double lo = a_previous, hi = a, f_lo = previous, root = a_previous;
+      if (previous != 0.0) {
+        for (int it = 0; it < 200 && hi - lo > 4e-16 * (1.0 + fabs(hi)); ++it) {
+          const double mid = 0.5 * (lo + hi), f_mid = across_at(fr, w, s, mid, &along);
+          if ((f_mid < 0.0) == (f_lo < 0.0)) lo = mid, f_lo = f_mid; else hi = mid;
+        }
+        root = 0.5 * (lo + hi);
+      }
+      across_at(fr, w, s, root, &along);
+      if (along >= -touch && (isnan(best) || fabs(root - start) < fabs(best - start))) best = root;
+    }
+    previous = x;
+    a_previous = a;
+  }
+  if (isnan(best)) return 0;
+  const double c = cos(best), sn = sin(best);
+  for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
+    const double *e = s->E + 6 * k + 2 * (j - fr->start[k]);
+    w->direction[j] = e[0] * c + e[1] * sn;
+  }
+  return 1;
+}
+
+/* The onset contacts' directions (into w->direction): the directions their contact
+ * points accelerate in, sought by Newton's method (newton_angles) from their start
+ * directions, then, where it finds none near these, from their sliding velocities'
+ * (the slow manifold the motion follows: the Python side starts from the last
+ * directions found, which track it); where neither finds one, the start ones are
+ * kept. From these, not from the last found: the forces are then a function of the
+ * state alone, whatever evaluations came before (a step taken again, a Jacobian's
+ * differences). */
 static void onset_directions(const dl_model *md, const dl_friction *fr,
                              const friction_work *w, double t, const double *q,
                              const double *qd) {
@@ -279,12 +398,7 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
   for (int64_t k = 0; k < ns; ++k) {
     if (!fr->onset[k]) continue;
     if (sliding_plane(fr, k, s.E + 6 * k)) return;  /* no search: the start kept */
-    double u1 = 0.0, u2 = 0.0;
-    for (int64_t j = 0; j < fr->start[k + 1] - fr->start[k]; ++j) {
-      u1 += s.E[6 * k + 2 * j] * fr->start_direction[fr->start[k] + j];
-      u2 += s.E[6 * k + 2 * j + 1] * fr->start_direction[fr->start[k] + j];
-    }
-    s.angle[p++] = atan2(u2, u1);
+    ++p;
   }
   /* the tangent rows' accelerations: without friction, and per unit of each row's */
   eval_state(&fr->kkt, t, q, qd, fr->p, fr->kkt_values);
@@ -292,33 +406,25 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
     s.a0[r] = tangent_times(fr, r, w->qdd0) - fr->kkt_values[fr->c_at + fr->tangent_row[r]];
     for (int64_t j = 0; j < nt; ++j) s.T[r * nt + j] = tangent_times(fr, r, w->X + j * n);
   }
-  const double eps = 2.220446049250313e-16;
-  for (int it = 0; it < fr->iterations; ++it) {
-    if (onset_residuals(fr, w, &s, s.angle, s.across, s.along)) return;
-    for (int64_t c = 0; c < p; ++c) {  /* J's column c by a forward difference */
-      s.angle[c] += fr->difference;
-      const int failed = onset_residuals(fr, w, &s, s.angle, s.shifted, s.unused);
-      s.angle[c] -= fr->difference;
-      if (failed) return;
-      for (int64_t r = 0; r < p; ++r) s.J[r * p + c] = (s.shifted[r] - s.across[r]) / fr->difference;
+  if (angles_of(fr, &s, fr->start_direction) && newton_angles(fr, w, &s, p)) return;
+  double *guess = s.trial;  /* (free until the next residual) */
+  const double rest = fr->touch_rtol * (1.0 + max_abs(qd, n));  /* friction_at's speed */
+  for (int64_t k = 0; k < ns; ++k) {  /* each one's sliding velocity, its start if at rest */
+    double size = 0.0;
+    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
+      guess[j] = tangent_rate(fr, j, qd);
+      size += guess[j] * guess[j];
     }
-    for (int64_t r = 0; r < p; ++r) s.step[r] = -s.across[r];
-    if (solve_small(s.J, s.step, p) || !(max_abs(s.step, p) <= fr->turn)) return;
-    for (int64_t r = 0; r < p; ++r) s.angle[r] += s.step[r];
-    if (max_abs(s.step, p) <= 4 * eps * (1.0 + max_abs(s.angle, p))) {
-      const double floor = -fr->touch_rtol * (1.0 + max_abs(s.along, p));
-      for (int64_t r = 0; r < p; ++r)
-        if (!(s.along[r] >= floor)) return;
-      for (int64_t k = 0, i = 0; k < ns; ++k) {
-        if (!fr->onset[k]) continue;
-        const double c = cos(s.angle[i]), sn = sin(s.angle[i]);
-        for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
-          w->direction[j] =
-              s.E[6 * k + 2 * (j - fr->start[k])] * c + s.E[6 * k + 2 * (j - fr->start[k]) + 1] * sn;
-        ++i;
+    if (!(sqrt(size) > rest))
+      for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) guess[j] = fr->start_direction[j];
+  }
+  if (angles_of(fr, &s, guess) && newton_angles(fr, w, &s, p)) return;
+  if (p == 1) {  /* one contact: the whole turn, as the Python side searches it */
+    for (int64_t k = 0; k < ns; ++k)
+      if (fr->onset[k] && angles_of(fr, &s, fr->start_direction)) {
+        whole_turn(fr, w, &s, k, s.angle[0]);
+        return;
       }
-      return;
-    }
   }
 }
 

@@ -50,12 +50,17 @@ class OnsetSearch:
         Its most iterations.
     touch_rtol
         How far below 0 an acceleration along a direction found may be (relative).
+    samples
+        A single contact's search around the whole turn, where Newton's method finds
+        no direction: samples per half turn (as
+        :func:`~dalembert.solvers.contact.friction.slip_direction`).
     """
 
     difference: float
     turn: float
     iterations: int
     touch_rtol: float
+    samples: int
 
 
 @dataclass(frozen=True)
@@ -105,7 +110,8 @@ class FrictionTable:
         num = native.num
         f = self.struct = library.Friction(
             n_sliding=len(contacts), dependent_rtol=RANK_RTOL, difference=search.difference,
-            turn=search.turn, iterations=search.iterations, touch_rtol=search.touch_rtol)
+            turn=search.turn, iterations=search.iterations, touch_rtol=search.touch_rtol,
+            samples=search.samples)
         names = list(num.compiled.input_names)
         f.normal = pin.array([c.normal for c in contacts])
         f.mu = pin.array([c.mu for c in contacts], np.float64)

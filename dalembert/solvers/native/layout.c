@@ -48,7 +48,7 @@ static const dl_layout_entry entries[] = {
   FIELD(dl_friction, velocity), FIELD(dl_friction, p), FIELD(dl_friction, vel),
   FIELD(dl_friction, onset), FIELD(dl_friction, tangent_row),
   FIELD(dl_friction, kkt), FIELD(dl_friction, kkt_values), FIELD(dl_friction, c_at),
-  FIELD(dl_friction, iterations), FIELD(dl_friction, difference), FIELD(dl_friction, turn),
+  FIELD(dl_friction, iterations), FIELD(dl_friction, samples), FIELD(dl_friction, difference), FIELD(dl_friction, turn),
   FIELD(dl_friction, touch_rtol),
   FIELD(dl_friction, n_copy), FIELD(dl_friction, copy_from), FIELD(dl_friction, copy_to),
   FIELD(dl_friction, run_velocity), FIELD(dl_friction, run_vel), FIELD(dl_friction, n_group),

@@ -108,6 +108,7 @@ class Friction(ctypes.Structure):
                 ("velocity", Function), ("p", _ptr), ("vel", _ptr),
                 ("onset", _ptr), ("tangent_row", _ptr),
                 ("kkt", Function), ("kkt_values", _ptr), ("c_at", _i64), ("iterations", _i64),
+                ("samples", _i64),
                 *((name, _f64) for name in ("difference", "turn", "touch_rtol")),
                 ("n_copy", _i64),
                 ("copy_from", _ptr), ("copy_to", _ptr), ("run_velocity", Function),

@@ -152,11 +152,12 @@ typedef struct {
    * accelerate in (friction.c's onset_directions), from their start directions; the
    * tangent rows' accelerations need the watched model's c (its KKT values, flat: c
    * from c_at, at each tangent's row tangent_row); Newton's method with difference,
-   * turn, iterations and touch_rtol as friction.py's consistent_directions */
+   * turn, iterations and touch_rtol as friction.py's consistent_directions, and a
+   * single contact's whole turn with samples per half turn as its slip_direction */
   const int64_t *onset, *tangent_row;
   dl_function kkt;
   double *kkt_values;
-  int64_t c_at, iterations;
+  int64_t c_at, iterations, samples;
   double difference, turn, touch_rtol;
   int64_t n_copy;
   const int64_t *copy_from, *copy_to;
