@@ -76,6 +76,11 @@ MAX_FRICTION_ROUNDS = 10
 #: A value an event takes at its segment's start instead of one at or below 0 (see the
 #: module docstring): positive, below any value that matters.
 STARTS_OPEN = 1e-300
+#: A sliding velocity along its direction within this many ulps of the velocities'
+#: scale (``1 + max |qd|``) is 0: a contact that slips while the body cannot move (held
+#: by other contacts still sticking) slides at 0, whose rounding must not read as a
+#: stop at every step (the C loop's solves leave some, the Python loop's may not).
+SPEED_ROUNDING = 16 * np.finfo(float).eps
 
 
 @dataclass(frozen=True)
@@ -449,7 +454,7 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
                     f"the contacts switched {at_once} times at t={te:.6g} (chattering): "
                     f"last {gaps.names[k]!r}")
                 break
-        was = closed
+        was = which
         try:
             with watching(data.watchdog):  # the inputs are called at a switch
                 if fired is None:
@@ -463,7 +468,9 @@ def run_contacts(full: NumericModel, gaps: Gaps, start: StartSegments,
         except (InputError, TimeLimitExceeded) as exc:
             _stopped_sampling(result, te, exc, fired is None)
             break
-        if fired is not None or closed != was:
+        # a sample instant records a switch where the contacts change there (closing,
+        # opening, or a stop or slip that falls on it)
+        if fired is not None or which != was:
             history.switches.append(Switch(te, closed, y[:n].copy(), y[n:].copy()))
         ended.clear()
         t = te
@@ -734,7 +741,9 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
     for k in which.sliding:
         def sticking(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
             s = sliding_velocity(full, gaps, k, t, q, qd)
-            return _open_at_start(start, t, float(s @ start.directions[k]))
+            value = float(s @ start.directions[k])
+            rounding = SPEED_ROUNDING * (1.0 + np.abs(qd).max(initial=0.0))
+            return _open_at_start(start, t, 0.0 if abs(value) <= rounding else value)
         add(sticking, "sticking", k, partial(
             _sliding_screen, full, tuple(int(r) for r in gaps.tangents[k]), start, k))
         if len(gaps.tangents[k]) not in (2, 3):

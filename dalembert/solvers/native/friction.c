@@ -382,13 +382,13 @@ static int whole_turn(const dl_friction *fr, const friction_work *w, const searc
 }
 
 /* The onset contacts' directions (into w->direction): the directions their contact
- * points accelerate in, sought by Newton's method (newton_angles) from their start
- * directions, then, where it finds none near these, from their sliding velocities'
- * (the slow manifold the motion follows: the Python side starts from the last
- * directions found, which track it); where neither finds one, the start ones are
- * kept. From these, not from the last found: the forces are then a function of the
- * state alone, whatever evaluations came before (a step taken again, a Jacobian's
- * differences). */
+ * points accelerate in, sought by Newton's method (newton_angles) from their sliding
+ * velocities' where these are above the rest speed (the slow manifold the motion
+ * follows; the Python side starts from the last directions found, which track it),
+ * else from their start directions; then from the start directions; for a single
+ * contact, then around the whole turn; where none is found, the start ones are kept.
+ * Not from the last found: the forces are then a function of the state alone, whatever
+ * evaluations came before (a step taken again, a Jacobian's differences). */
 static void onset_directions(const dl_model *md, const dl_friction *fr,
                              const friction_work *w, double t, const double *q,
                              const double *qd) {
@@ -406,7 +406,6 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
     s.a0[r] = tangent_times(fr, r, w->qdd0) - fr->kkt_values[fr->c_at + fr->tangent_row[r]];
     for (int64_t j = 0; j < nt; ++j) s.T[r * nt + j] = tangent_times(fr, r, w->X + j * n);
   }
-  if (angles_of(fr, &s, fr->start_direction) && newton_angles(fr, w, &s, p)) return;
   double *guess = s.trial;  /* (free until the next residual) */
   const double rest = fr->touch_rtol * (1.0 + max_abs(qd, n));  /* friction_at's speed */
   for (int64_t k = 0; k < ns; ++k) {  /* each one's sliding velocity, its start if at rest */
@@ -419,6 +418,7 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
       for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) guess[j] = fr->start_direction[j];
   }
   if (angles_of(fr, &s, guess) && newton_angles(fr, w, &s, p)) return;
+  if (angles_of(fr, &s, fr->start_direction) && newton_angles(fr, w, &s, p)) return;
   if (p == 1) {  /* one contact: the whole turn, as the Python side searches it */
     for (int64_t k = 0; k < ns; ++k)
       if (fr->onset[k] && angles_of(fr, &s, fr->start_direction)) {

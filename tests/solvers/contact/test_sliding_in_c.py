@@ -19,6 +19,9 @@ References (closed forms):
   stopping at ``(m/k) ln((v0 + a) / a)``; each contact carries ``m g / 2``.
 
 Each run is also compared with the Python loop, whose friction is the Python solve's.
+Where no closed form is at hand (a box pushed off its centre, whose corners slip one
+after another while the others still hold it), the C loop is compared with the Python
+loop alone: the same instants and states to rounding.
 """
 
 from __future__ import annotations
@@ -28,7 +31,8 @@ import pytest
 import sympy as sp
 
 from dalembert import System, Unilateral, coordinates
-from dalembert.multibody import Ground, Multibody, RigidBody, plane_contact
+from dalembert import t as time
+from dalembert.multibody import Force, Ground, Multibody, RigidBody, plane_contact
 from dalembert.solvers.contact import friction
 
 g, mu = 9.81, 0.4
@@ -52,12 +56,13 @@ def python_friction(monkeypatch):
     return calls
 
 
-def box_on_four() -> Multibody:
+def box_on_four(friction: float = mu, forces: tuple = ()) -> Multibody:
     inertia = M / 12 * np.diag([B**2 + C**2, A**2 + C**2, A**2 + B**2])
     body = RigidBody("box", M, inertia)
-    corners = [plane_contact(f"c{k}", Ground(), body, point=(x, y, -C / 2), friction=mu)
+    corners = [plane_contact(f"c{k}", Ground(), body, point=(x, y, -C / 2), friction=friction)
                for k, (x, y) in enumerate(CORNERS)]
-    return Multibody([body], gravity=(0, 0, -g), contacts=corners)
+    return Multibody([body], gravity=(0, 0, -g), contacts=corners,
+                     forces=[Force(body, *f) for f in forces])
 
 
 @pytest.mark.parametrize("backend", ["c", "python"])
@@ -125,3 +130,27 @@ def test_a_block_damped_by_a_state_input_while_sliding_on_two_contacts(python_fr
             assert np.abs(traj.multiplier(f"{name}_friction_1")[sliding] + mu * g / 2).max() \
                 < 1e-12
     assert np.abs(runs["c"].q - runs["python"].q).max() < 1e-13
+
+
+def test_a_box_pushed_off_its_centre_slips_corner_by_corner_as_in_the_python_loop():
+    """Pushed by ``k t`` at a point off its centre, one corner reaches its cone first and
+    slips while the other three still hold the box (it slides at 0), then a second one:
+    both loops at the same instants, with the same forces until the second slip."""
+    k, angle, friction = 17.01911697809595, 1.4879242956303682, 0.23425966685744976
+    push = (k * time * np.cos(angle), k * time * np.sin(angle), 0)
+    box = box_on_four(friction, [(push, (0.03, -0.02, 0.0))])
+    q0, qd0 = box.initial_state(positions={"box": (0, 0, C / 2)})
+    times = np.linspace(0.2, 0.2245, 10)
+    runs = [box.simulate((0.0, 0.2245), q0, qd0, t_eval=times, method="DOP853",
+                         backend=backend) for backend in ("c", "python")]
+    for traj in runs:
+        assert traj.success, traj.message
+        assert len(traj.contacts.switches) == 3  # the start, then two slips
+    instants = [np.array([s.t for s in traj.contacts.switches]) for traj in runs]
+    assert np.abs(instants[0] - instants[1]).max() < 1e-12
+    assert np.abs(runs[0].q - runs[1].q).max() < 1e-12
+    # the forces until the second slip (then two corners slide at 0 together, each along
+    # any direction its search accepts: the problem's forces are not unique there)
+    before = runs[0].t < instants[0][2]
+    assert before.sum() > 5
+    assert np.abs(runs[0].multipliers[before] - runs[1].multipliers[before]).max() < 1e-10
