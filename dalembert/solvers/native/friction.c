@@ -19,10 +19,11 @@ typedef struct {
 /* The onset search's arrays for n_sliding contacts and n_tangent rows: the
  * accelerations of the tangent rows without friction and their responses (n_tangent
  * and n_tangent^2), each contact's plane (3 x 2), angles, residuals across and along,
- * a shifted residual and the Newton matrix (n_sliding each, and n_sliding^2), and a
- * trial's directions (n_tangent). */
-DL_INLINE int64_t search_size(int64_t ns, int64_t nt) {
-  return nt + nt * nt + 12 * ns + ns * ns + nt;
+ * a shifted residual and the Newton matrix (n_sliding each, and n_sliding^2), a
+ * trial's directions (n_tangent), and the whole turn's samples of the residual across
+ * (2 samples + 1). */
+DL_INLINE int64_t search_size(int64_t ns, int64_t nt, int64_t samples) {
+  return nt + nt * nt + 12 * ns + ns * ns + nt + 2 * samples + 1;
 }
 
 DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64_t m) {
@@ -39,7 +40,7 @@ DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64
   w.R = w.lam + m;
   w.N = w.R + ns * ns;
   w.search = w.N + ns;
-  w.group = w.search + search_size(ns, nt);
+  w.group = w.search + search_size(ns, nt, fr->samples);
   return w;
 }
 
@@ -138,7 +139,7 @@ static int normal_forces(const dl_friction *fr, const friction_work *w, const do
 
 /* The onset search's arrays (search_size's layout). */
 typedef struct {
-  double *a0, *T, *E, *angle, *across, *along, *shifted, *unused, *step, *J, *trial;
+  double *a0, *T, *E, *angle, *across, *along, *shifted, *unused, *step, *J, *trial, *sampled;
 } search_work;
 
 DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
@@ -154,6 +155,7 @@ DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
   s.step = s.unused + ns;
   s.J = s.step + ns;
   s.trial = s.J + ns * ns;
+  s.sampled = s.trial + nt;
   return s;
 }
 
@@ -344,9 +346,9 @@ static int whole_turn(const dl_friction *fr, const friction_work *w, const searc
   const double pi = 3.141592653589793;
   double previous = 0.0, along = 0.0, lowest = INFINITY, highest = -INFINITY, size = 0.0;
   double best = NAN, a_previous = 0.0;
-  for (int64_t i = 0; i <= m; ++i) {  /* the sizes of the accelerations: the scale */
+  for (int64_t i = 0; i <= m; ++i) {  /* the samples, and the accelerations' scale */
     const double a = start - pi + 2.0 * pi * (double)i / (double)m;
-    const double x = across_at(fr, w, s, a, &along);
+    const double x = s->sampled[i] = across_at(fr, w, s, a, &along);
     if (!isfinite(x)) return 0;
     size = fmax(size, hypot(x, along));
     lowest = fmin(lowest, x);
@@ -355,8 +357,7 @@ static int whole_turn(const dl_friction *fr, const friction_work *w, const searc
   const double scale = 1.0 + size, touch = fr->touch_rtol * scale;
   if (highest - lowest <= touch) return 0;  /* its friction does not move it */
   for (int64_t i = 0; i <= m; ++i) {
-    const double a = start - pi + 2.0 * pi * (double)i / (double)m;
-    const double x = across_at(fr, w, s, a, &along);
+    const double a = start - pi + 2.0 * pi * (double)i / (double)m, x = s->sampled[i];
     if (i > 0 && (previous == 0.0 || previous * x < 0.0)) {
       double lo = a_previous, hi = a, f_lo = previous, root = a_previous;
       if (previous != 0.0) {

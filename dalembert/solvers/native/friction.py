@@ -156,7 +156,8 @@ class FrictionTable:
             f.group_row, f.group_start = pin.array(group), pin.array(start)
             f.group_entry, f.group_col = pin.array(entry), pin.array(col)
         ns, nt, n, m = len(contacts), self.forces, num.n, num.m
-        search_size = 2 * nt + nt * nt + 12 * ns + ns * ns  # friction.c's search_size
+        # friction.c's search_size
+        search_size = 2 * nt + nt * nt + 12 * ns + ns * ns + 2 * search.samples + 1
         f.work = pin.zeros(nt + 2 * n + nt * n + nt * ns + 3 * m + ns * ns + ns
                            + search_size + group_work_size(len(group), n))
         self.address = ctypes.addressof(f)
