@@ -19,11 +19,11 @@ typedef struct {
 /* The onset search's arrays for n_sliding contacts and n_tangent rows: the
  * accelerations of the tangent rows without friction and their responses (n_tangent
  * and n_tangent^2), each contact's plane (3 x 2), angles, residuals across and along,
- * a shifted residual and the Newton matrix (n_sliding each, and n_sliding^2), a
- * trial's directions (n_tangent), and the whole turn's samples of the residual across
- * (2 samples + 1). */
+ * a shifted residual, the Newton matrix and its right singular vectors (n_sliding
+ * each, and twice n_sliding^2), a trial's directions (n_tangent), and the whole turn's
+ * samples of the residual across (2 samples + 1). */
 DL_INLINE int64_t search_size(int64_t ns, int64_t nt, int64_t samples) {
-  return nt + nt * nt + 12 * ns + ns * ns + nt + 2 * samples + 1;
+  return nt + nt * nt + 12 * ns + 2 * ns * ns + nt + 2 * samples + 1;
 }
 
 DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64_t m) {
@@ -118,6 +118,63 @@ static int solve_small(double *A, double *b, int64_t n) {
   return !all_finite(b, n);
 }
 
+/* x = the minimum-norm least-squares solution of A x = b for a small dense A (n x n, row
+ * major; overwritten with A V), as numpy's lstsq with its default cut-off (singular
+ * values below n eps times the largest taken as 0): A's singular value decomposition
+ * by one-sided Jacobi rotations of its columns (V n x n, their product; coefficient:
+ * n). 1 where the solution is not finite. */
+static int least_squares_small(double *A, double *V, double *coefficient, double *b,
+                               int64_t n) {
+  const double eps = 2.220446049250313e-16;
+  for (int64_t i = 0; i < n * n; ++i) V[i] = (i % (n + 1)) == 0 ? 1.0 : 0.0;
+  for (int sweep = 0; sweep < 60; ++sweep) {
+    int rotated = 0;
+    for (int64_t i = 0; i < n - 1; ++i)
+      for (int64_t j = i + 1; j < n; ++j) {
+        double alpha = 0.0, beta = 0.0, gamma = 0.0;
+        for (int64_t r = 0; r < n; ++r) {
+          alpha += A[r * n + i] * A[r * n + i];
+          beta += A[r * n + j] * A[r * n + j];
+          gamma += A[r * n + i] * A[r * n + j];
+        }
+        if (!(fabs(gamma) > eps * sqrt(alpha * beta))) continue;
+        rotated = 1;
+        const double zeta = (beta - alpha) / (2.0 * gamma);
+        const double t = (zeta >= 0 ? 1.0 : -1.0) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
+        const double c = 1.0 / sqrt(1.0 + t * t), s = c * t;
+        for (int64_t r = 0; r < n; ++r) {
+          const double ai = A[r * n + i], aj = A[r * n + j];
+          A[r * n + i] = c * ai - s * aj;
+          A[r * n + j] = s * ai + c * aj;
+          const double vi = V[r * n + i], vj = V[r * n + j];
+          V[r * n + i] = c * vi - s * vj;
+          V[r * n + j] = s * vi + c * vj;
+        }
+      }
+    if (!rotated) break;
+  }
+  /* A V = U Sigma: column k of A is sigma_k u_k; x = sum_k (u_k . b / sigma_k) v_k */
+  double largest = 0.0;
+  for (int64_t k = 0; k < n; ++k) {
+    double size = 0.0;
+    for (int64_t r = 0; r < n; ++r) size += A[r * n + k] * A[r * n + k];
+    largest = fmax(largest, sqrt(size));
+  }
+  for (int64_t k = 0; k < n; ++k) {
+    double size = 0.0, along = 0.0;
+    for (int64_t r = 0; r < n; ++r) {
+      size += A[r * n + k] * A[r * n + k];
+      along += A[r * n + k] * b[r];
+    }
+    coefficient[k] = sqrt(size) > (double)n * eps * largest ? along / size : 0.0;
+  }
+  for (int64_t r = 0; r < n; ++r) {
+    b[r] = 0.0;
+    for (int64_t k = 0; k < n; ++k) b[r] += coefficient[k] * V[r * n + k];
+  }
+  return !all_finite(b, n);
+}
+
 /* The contacts' normal forces N with the directions d (by tangent row): (I - R) N =
  * N_0, R's column k the normal multipliers of contact k's friction per unit normal
  * force, sum over its rows j of d_j RN[j]. 1 where the system is singular. */
@@ -139,7 +196,8 @@ static int normal_forces(const dl_friction *fr, const friction_work *w, const do
 
 /* The onset search's arrays (search_size's layout). */
 typedef struct {
-  double *a0, *T, *E, *angle, *across, *along, *shifted, *unused, *step, *J, *trial, *sampled;
+  double *a0, *T, *E, *angle, *across, *along, *shifted, *unused, *step, *J, *V, *trial;
+  double *sampled;
 } search_work;
 
 DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
@@ -154,7 +212,8 @@ DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
   s.unused = s.shifted + ns;
   s.step = s.unused + ns;
   s.J = s.step + ns;
-  s.trial = s.J + ns * ns;
+  s.V = s.J + ns * ns;
+  s.trial = s.V + ns * ns;
   s.sampled = s.trial + nt;
   return s;
 }
@@ -288,7 +347,7 @@ static int newton_angles(const dl_friction *fr, const friction_work *w, const se
     const double scale = 1.0 + max_abs(s->across, p) + max_abs(s->along, p);
     if (!(max_abs(s->J, p * p) > fr->touch_rtol * scale)) return 0;
     for (int64_t r = 0; r < p; ++r) s->step[r] = -s->across[r];
-    if (solve_small(s->J, s->step, p) || !(max_abs(s->step, p) <= fr->turn)) return 0;
+    if (least_squares_small(s->J, s->V, s->shifted, s->step, p) || !(max_abs(s->step, p) <= fr->turn)) return 0;
     for (int64_t r = 0; r < p; ++r) s->angle[r] += s->step[r];
     if (max_abs(s->step, p) <= 4 * eps * (1.0 + max_abs(s->angle, p))) {
       const double floor = -fr->touch_rtol * (1.0 + max_abs(s->along, p));
@@ -382,23 +441,46 @@ static int whole_turn(const dl_friction *fr, const friction_work *w, const searc
   return 1;
 }
 
+/* The onset contacts' directions copied from (into w->direction) or to (remember 1,
+ * from w->direction) the last found. */
+static void last_found(const dl_friction *fr, const friction_work *w, int remember) {
+  for (int64_t k = 0; k < fr->n_sliding; ++k) {
+    if (!fr->onset[k]) continue;
+    double *last = fr->last_direction + fr->start[k], *d = w->direction + fr->start[k];
+    const size_t size = (size_t)(fr->start[k + 1] - fr->start[k]) * sizeof(double);
+    if (remember) memcpy(last, d, size); else memcpy(d, last, size);
+  }
+}
+
 /* The onset contacts' directions (into w->direction): the directions their contact
  * points accelerate in, sought by Newton's method (newton_angles) from their sliding
  * velocities' where these are above the rest speed (the slow manifold the motion
- * follows; the Python side starts from the last directions found, which track it),
- * else from their start directions; then from the start directions; for a single
- * contact, then around the whole turn; where none is found, the start ones are kept.
- * Not from the last found: the forces are then a function of the state alone, whatever
- * evaluations came before (a step taken again, a Jacobian's differences). */
+ * follows), else from their start directions; then from the start directions; for a
+ * single contact, then around the whole turn; several contacts all moving then from
+ * the last directions found in the segment's steps, kept themselves where that finds
+ * none either; else the start ones are kept.
+ *
+ * The last found only after the others: the forces are a function of the state alone
+ * wherever those find the directions. They do not where a body's contacts all slide
+ * with no acceleration, its load within what their friction holds (after its corners
+ * slipped one by one, creeping at below the onset's speed): their directions then
+ * form a family, each root's neighbours roots too, which the growing load shrinks to
+ * the one where the body breaks loose, and only the last found follow it there (the
+ * Python side always starts from them). What is found is remembered (remember 1) at
+ * the steps' evaluations, not where the screens or the outputs look (dl_data's
+ * looking), and a stretch puts the memory back with a step it leaves to the caller
+ * (keep_onset_memory), so that the steps are the same whether or not they are looked
+ * at and wherever they run. */
 static void onset_directions(const dl_model *md, const dl_friction *fr,
                              const friction_work *w, double t, const double *q,
-                             const double *qd) {
+                             const double *qd, int remember) {
   const int64_t ns = fr->n_sliding, nt = fr->start[ns], n = md->n;
   search_work s = search_work_of(w->search, ns, nt);
-  int64_t p = 0;
+  int64_t p = 0, first = -1;
   for (int64_t k = 0; k < ns; ++k) {
     if (!fr->onset[k]) continue;
     if (sliding_plane(fr, k, s.E + 6 * k)) return;  /* no search: the start kept */
+    if (first < 0) first = k;
     ++p;
   }
   /* the tangent rows' accelerations: without friction, and per unit of each row's */
@@ -409,24 +491,44 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
   }
   double *guess = s.trial;  /* (free until the next residual) */
   const double rest = fr->touch_rtol * (1.0 + max_abs(qd, n));  /* friction_at's speed */
+  int moving = 1;  /* every onset contact sliding faster than that */
   for (int64_t k = 0; k < ns; ++k) {  /* each one's sliding velocity, its start if at rest */
     double size = 0.0;
     for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
       guess[j] = tangent_rate(fr, j, qd);
       size += guess[j] * guess[j];
     }
-    if (!(sqrt(size) > rest))
+    if (!(sqrt(size) > rest)) {
       for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) guess[j] = fr->start_direction[j];
+      if (fr->onset[k]) moving = 0;
+    }
   }
-  if (angles_of(fr, &s, guess) && newton_angles(fr, w, &s, p)) return;
-  if (angles_of(fr, &s, fr->start_direction) && newton_angles(fr, w, &s, p)) return;
+  /* the last found, for several contacts all moving (at rest, the start directions
+   * are the switch's own) */
+  const int found_before = p > 1 && moving && isfinite(fr->last_direction[fr->start[first]]);
+  if ((angles_of(fr, &s, guess) && newton_angles(fr, w, &s, p)) ||
+      (angles_of(fr, &s, fr->start_direction) && newton_angles(fr, w, &s, p)) ||
+      (found_before && angles_of(fr, &s, fr->last_direction) &&
+       newton_angles(fr, w, &s, p))) {
+    if (remember) last_found(fr, w, 1);
+    return;
+  }
   if (p == 1) {  /* one contact: the whole turn, as the Python side searches it */
-    for (int64_t k = 0; k < ns; ++k)
-      if (fr->onset[k] && angles_of(fr, &s, fr->start_direction)) {
-        whole_turn(fr, w, &s, k, s.angle[0]);
-        return;
-      }
+    if (angles_of(fr, &s, fr->start_direction)) whole_turn(fr, w, &s, first, s.angle[0]);
+    return;
   }
+  if (found_before) last_found(fr, w, 0);
+}
+
+/* The onset search's last directions found kept at a stretch's step's start (restore
+ * 0), put back where the step is not finished there (1): the caller takes it again
+ * from its start, as the Python loop would have (nothing without sliding friction). */
+void keep_onset_memory(const dl_data *d, int restore) {
+  const dl_friction *fr = d->friction;
+  if (!fr) return;
+  const int64_t nt = fr->start[fr->n_sliding];
+  double *last = fr->last_direction, *kept = last + nt;
+  memcpy(restore ? last : kept, restore ? kept : last, (size_t)nt * sizeof(double));
 }
 
 int load_friction(const dl_model *md, dl_data *d, double t, const double *q, const double *qd) {
@@ -463,7 +565,7 @@ int load_friction(const dl_model *md, dl_data *d, double t, const double *q, con
       if (spread(md, fr, w.group, w.lam)) return DL_RANK_CHANGED;
       for (int64_t i = 0; i < ns; ++i) w.RN[j * ns + i] = w.lam[fr->normal[i]];
     }
-  if (onset) onset_directions(md, fr, &w, t, q, qd);
+  if (onset) onset_directions(md, fr, &w, t, q, qd, !d->looking);
   if (normal_forces(fr, &w, w.direction, w.N)) return DL_SINGULAR_CONSTRAINTS;
   for (int64_t k = 0; k < ns; ++k)
     for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)

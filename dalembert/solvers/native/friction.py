@@ -124,6 +124,8 @@ class FrictionTable:
         self._onset = np.zeros(len(contacts), dtype=np.int64)
         f.start_direction = pin.array(self._start, np.float64)
         f.onset = pin.array(self._onset)
+        self._last = np.full(2 * self.forces, np.nan)
+        f.last_direction = pin.array(self._last, np.float64)
         tangents = [r for c in contacts for r in c.tangents]
         self._terms(f, tangents, watched)
         f.tangent_row = pin.array(tangents)
@@ -157,7 +159,7 @@ class FrictionTable:
             f.group_entry, f.group_col = pin.array(entry), pin.array(col)
         ns, nt, n, m = len(contacts), self.forces, num.n, num.m
         # friction.c's search_size
-        search_size = 2 * nt + nt * nt + 12 * ns + ns * ns + 2 * search.samples + 1
+        search_size = 2 * nt + nt * nt + 12 * ns + 2 * ns * ns + 2 * search.samples + 1
         f.work = pin.zeros(nt + 2 * n + nt * n + nt * ns + 3 * m + ns * ns + ns
                            + search_size + group_work_size(len(group), n))
         self.address = ctypes.addressof(f)
@@ -188,3 +190,4 @@ class FrictionTable:
         """
         self._start[:] = np.concatenate(directions)
         self._onset[:] = onset
+        self._last[:] = np.nan  # none found yet in this segment

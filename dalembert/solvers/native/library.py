@@ -94,6 +94,7 @@ class Data(ctypes.Structure):
                                     "r", "lambda", "qdd", "q_trial", "elim", "error_work", "c")),
         ("factor", Factor), ("inputs", _ptr), ("input_state", _ptr), ("conditioning", _f64),
         ("gram_diagonal", _ptr), ("unit_mass", _ptr), ("unit_root", _ptr), ("friction", _ptr),
+        ("looking", _i64),
     ]
 
 
@@ -106,7 +107,7 @@ class Friction(ctypes.Structure):
                                             "term_value", "term_col", "mu",
                                             "start_direction")),
                 ("velocity", Function), ("p", _ptr), ("vel", _ptr),
-                ("onset", _ptr), ("tangent_row", _ptr),
+                ("onset", _ptr), ("tangent_row", _ptr), ("last_direction", _ptr),
                 ("kkt", Function), ("kkt_values", _ptr), ("c_at", _i64), ("iterations", _i64),
                 ("samples", _i64),
                 *((name, _f64) for name in ("difference", "turn", "touch_rtol")),

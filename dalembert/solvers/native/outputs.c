@@ -5,9 +5,10 @@
  * constraint force A^T lambda, the largest position and velocity residuals, and the
  * energies [T, V, h]. With qdd NULL (lambda and force too) the KKT solves are left
  * out: the residuals and energies alone. */
-int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
-               double *qdd, double *lambda, double *force, double *position_residual,
-               double *velocity_residual, double *energies) {
+static int outputs_at(const dl_model *md, dl_data *d, int64_t k, const double *times,
+                      const double *Y, double *qdd, double *lambda, double *force,
+                      double *position_residual, double *velocity_residual,
+                      double *energies) {
   const int64_t n = md->n, m = md->m;
   for (int64_t i = 0; i < k; ++i) {
     const double t = times[i], *q = Y + i * 2 * n, *qd = q + n;
@@ -40,8 +41,8 @@ int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, c
 /* The model's inputs at k states Y (rows [q, qd]) as C's evaluations set them (the
  * inputs' callback, then the sliding friction: friction.c), the count slots of the
  * parameter vector from offset, into out (k rows). */
-int dl_inputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
-              int64_t offset, int64_t count, double *out) {
+static int inputs_at(const dl_model *md, dl_data *d, int64_t k, const double *times,
+                     const double *Y, int64_t offset, int64_t count, double *out) {
   const int64_t n = md->n;
   for (int64_t i = 0; i < k; ++i) {
     const double *q = Y + i * 2 * n;
@@ -50,4 +51,24 @@ int dl_inputs(const dl_model *md, dl_data *d, int64_t k, const double *times, co
     memcpy(out + i * count, d->p + offset, (size_t)count * sizeof(double));
   }
   return DL_OK;
+}
+
+/* The outputs and the inputs are looked at (dl_data's looking): what they evaluate
+ * leaves the run's steps as they were. */
+int dl_outputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
+               double *qdd, double *lambda, double *force, double *position_residual,
+               double *velocity_residual, double *energies) {
+  d->looking = 1;
+  const int status = outputs_at(md, d, k, times, Y, qdd, lambda, force, position_residual,
+                                velocity_residual, energies);
+  d->looking = 0;
+  return status;
+}
+
+int dl_inputs(const dl_model *md, dl_data *d, int64_t k, const double *times, const double *Y,
+              int64_t offset, int64_t count, double *out) {
+  d->looking = 1;
+  const int status = inputs_at(md, d, k, times, Y, offset, count, out);
+  d->looking = 0;
+  return status;
 }

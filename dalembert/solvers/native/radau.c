@@ -482,8 +482,10 @@ int dl_radau_run(const dl_model *md, dl_data *d, const dl_newton *nw, dl_radau *
     if (run->n_steps && wall_seconds() - start > run->max_seconds) break;
     const double t = st->t, h_abs = st->h_abs, h_abs_old = st->h_abs_old,
                  error_norm_old = st->error_norm_old, t_old = st->t_old;
+    keep_onset_memory(d, 0);
     const int status = radau_finish(md, d, nw, st, run, y, f, f_end, Z);
     if (status != DL_OK && status != DL_NEAR_SINGULAR) {
+      keep_onset_memory(d, 1);
       st->t = t, st->h_abs = h_abs, st->h_abs_old = h_abs_old;
       st->error_norm_old = error_norm_old, st->t_old = t_old;
       return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;

@@ -282,9 +282,11 @@ int dl_rk_run(const dl_model *md, dl_data *d, const dl_tableau *tb, dl_stepper *
   while (st->direction * (st->t - st->t_bound) < 0 && run->n_steps < run->max_steps) {
     if (run->n_steps && wall_seconds() - start > run->max_seconds) break;
     const dl_stepper before = *st;
+    keep_onset_memory(d, 0);
     const int status = finish_step(md, d, tb, st, run, y, K, stage);
     if (status != DL_OK && status != DL_NEAR_SINGULAR) {
       *st = before;
+      keep_onset_memory(d, 1);
       /* a full buffer after some steps just ends this call */
       return status == DL_OUTPUTS && run->n_steps ? DL_OK : status;
     }

@@ -149,12 +149,17 @@ typedef struct {
   double *p, *vel;
   /* the contacts starting to slide from rest in the segment (onset[k] 1, written by
    * the caller): their directions are sought as the ones their contact points
-   * accelerate in (friction.c's onset_directions), from their start directions; the
-   * tangent rows' accelerations need the watched model's c (its KKT values, flat: c
+   * accelerate in (friction.c's onset_directions), from their start directions, and
+   * where that finds none, from the last ones found at the segment's steps
+   * (last_direction: n_tangent, by tangent row, NaN from the segment's start until
+   * one is found, not written where dl_data's looking; then n_tangent more, the copy a
+   * stretch keeps at each step's start: keep_onset_memory); the tangent rows'
+   * accelerations need the watched model's c (its KKT values, flat: c
    * from c_at, at each tangent's row tangent_row); Newton's method with difference,
    * turn, iterations and touch_rtol as friction.py's consistent_directions, and a
    * single contact's whole turn with samples per half turn as its slip_direction */
   const int64_t *onset, *tangent_row;
+  double *last_direction;
   dl_function kkt;
   double *kkt_values;
   int64_t c_at, iterations, samples;
@@ -191,6 +196,10 @@ typedef struct {
   /* the sliding contacts' friction forces, written into p after the inputs (NULL: none;
    * friction.c) */
   const dl_friction *friction;
+  /* 1 while the screens or the outputs evaluate at a state of their own: the friction's
+   * onset search does not remember what it finds there (the steps' evaluations are
+   * then the same function whether or not they were looked at in between) */
+  int64_t looking;
 } dl_data;
 
 /* One Runge-Kutta method: scipy.integrate's tableau. */
@@ -491,6 +500,7 @@ DL_INTERNAL int group_minimum_norm(int64_t n, int64_t m, int64_t nr, int64_t nk,
                                    double *out);
 
 /* friction.c: the sliding contacts' friction forces at (t, q, qd) into d->p */
+DL_INTERNAL void keep_onset_memory(const dl_data *d, int restore);
 DL_INTERNAL int load_friction(const dl_model *md, dl_data *d, double t, const double *q,
                               const double *qd);
 

@@ -159,7 +159,10 @@ int screened(const dl_model *md, dl_data *d, const dl_screens *sc, double t, con
   }
   if (!sc->n_force && !sc->n_cone) return 0;
   if (!lambda) {  /* the multipliers at the end: one more solve */
-    if (dl_rhs(md, d, t, y, sc->ydot, sc->lambda) != DL_OK) return 1;
+    d->looking = 1;
+    const int status = dl_rhs(md, d, t, y, sc->ydot, sc->lambda);
+    d->looking = 0;
+    if (status != DL_OK) return 1;
     lambda = sc->lambda;
   }
   if (sc->n_group) {  /* dependent rows: the multipliers the events see */

