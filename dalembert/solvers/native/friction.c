@@ -154,19 +154,17 @@ static int least_squares_small(double *A, double *V, double *coefficient, double
     if (!rotated) break;
   }
   /* A V = U Sigma: column k of A is sigma_k u_k; x = sum_k (u_k . b / sigma_k) v_k */
-  double largest = 0.0;
+  double largest = 0.0;  /* sigma_k^2 into coefficient first */
   for (int64_t k = 0; k < n; ++k) {
-    double size = 0.0;
-    for (int64_t r = 0; r < n; ++r) size += A[r * n + k] * A[r * n + k];
-    largest = fmax(largest, sqrt(size));
+    coefficient[k] = 0.0;
+    for (int64_t r = 0; r < n; ++r) coefficient[k] += A[r * n + k] * A[r * n + k];
+    largest = fmax(largest, coefficient[k]);
   }
+  const double cut = (double)n * eps * sqrt(largest);
   for (int64_t k = 0; k < n; ++k) {
-    double size = 0.0, along = 0.0;
-    for (int64_t r = 0; r < n; ++r) {
-      size += A[r * n + k] * A[r * n + k];
-      along += A[r * n + k] * b[r];
-    }
-    coefficient[k] = sqrt(size) > (double)n * eps * largest ? along / size : 0.0;
+    double along = 0.0;
+    for (int64_t r = 0; r < n; ++r) along += A[r * n + k] * b[r];
+    coefficient[k] = sqrt(coefficient[k]) > cut ? along / coefficient[k] : 0.0;
   }
   for (int64_t r = 0; r < n; ++r) {
     b[r] = 0.0;
@@ -326,8 +324,9 @@ static int onset_residuals(const dl_friction *fr, const friction_work *w, const 
 }
 
 /* Newton's method on the onset contacts' p angles from s->angle, as
- * consistent_directions takes it (its difference step, largest turn, iterations and
- * acceptance): 1 with their directions in w->direction, 0 where it finds none near. */
+ * consistent_directions takes it (its difference step, least-squares step, largest
+ * turn, iterations and acceptance): 1 with their directions in w->direction, 0 where
+ * it finds none near. */
 static int newton_angles(const dl_friction *fr, const friction_work *w, const search_work *s,
                          int64_t p) {
   const int64_t ns = fr->n_sliding;
@@ -347,7 +346,9 @@ static int newton_angles(const dl_friction *fr, const friction_work *w, const se
     const double scale = 1.0 + max_abs(s->across, p) + max_abs(s->along, p);
     if (!(max_abs(s->J, p * p) > fr->touch_rtol * scale)) return 0;
     for (int64_t r = 0; r < p; ++r) s->step[r] = -s->across[r];
-    if (least_squares_small(s->J, s->V, s->shifted, s->step, p) || !(max_abs(s->step, p) <= fr->turn)) return 0;
+    if (least_squares_small(s->J, s->V, s->shifted, s->step, p) ||
+        !(max_abs(s->step, p) <= fr->turn))
+      return 0;
     for (int64_t r = 0; r < p; ++r) s->angle[r] += s->step[r];
     if (max_abs(s->step, p) <= 4 * eps * (1.0 + max_abs(s->angle, p))) {
       const double floor = -fr->touch_rtol * (1.0 + max_abs(s->along, p));
