@@ -118,6 +118,16 @@ static int solve_small(double *A, double *b, int64_t n) {
   return !all_finite(b, n);
 }
 
+/* The Jacobi rotation (c, s) that zeroes the off-diagonal entry apq of the symmetric
+ * 2 x 2 [[app, apq], [apq, aqq]] (apq not 0): p' = c p - s q, q' = s p + c q, the
+ * smaller angle (Golub and Van Loan's symmetric Schur decomposition). */
+static void jacobi_rotation(double app, double aqq, double apq, double *c, double *s) {
+  const double theta = (aqq - app) / (2.0 * apq);
+  const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+  *c = 1.0 / sqrt(t * t + 1.0);
+  *s = t * *c;
+}
+
 /* x = the minimum-norm least-squares solution of A x = b for a small dense A (n x n, row
  * major; overwritten with A V), as numpy's lstsq with its default cut-off (singular
  * values below n eps times the largest taken as 0): A's singular value decomposition
@@ -139,9 +149,8 @@ static int least_squares_small(double *A, double *V, double *coefficient, double
         }
         if (!(fabs(gamma) > eps * sqrt(alpha * beta))) continue;
         rotated = 1;
-        const double zeta = (beta - alpha) / (2.0 * gamma);
-        const double t = (zeta >= 0 ? 1.0 : -1.0) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-        const double c = 1.0 / sqrt(1.0 + t * t), s = c * t;
+        double c, s;
+        jacobi_rotation(alpha, beta, gamma, &c, &s);
         for (int64_t r = 0; r < n; ++r) {
           const double ai = A[r * n + i], aj = A[r * n + j];
           A[r * n + i] = c * ai - s * aj;
@@ -246,9 +255,8 @@ static int sliding_plane(const dl_friction *fr, int64_t k, double *E) {
     for (int p = 0; p < 2; ++p)
       for (int q = p + 1; q < 3; ++q) {
         if (G[p][q] == 0.0) continue;
-        const double theta = (G[q][q] - G[p][p]) / (2.0 * G[p][q]);
-        const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
-        const double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+        double c, s;
+        jacobi_rotation(G[p][p], G[q][q], G[p][q], &c, &s);
         for (int r = 0; r < 3; ++r) {  /* G <- G J */
           const double gp = G[r][p], gq = G[r][q];
           G[r][p] = c * gp - s * gq;

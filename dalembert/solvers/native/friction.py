@@ -15,7 +15,9 @@ C. Where the run drops rows as dependent, the multipliers are made the minimum-n
 ones first, as the Python side's are. A contact starting to slide from rest takes the
 direction its contact point accelerates in, sought by the same Newton's method as
 :func:`~dalembert.solvers.contact.friction.consistent_directions` (:class:`OnsetSearch`),
-from its start direction (docs/design.md, "Sliding friction in C").
+from its sliding velocity's or start direction, then, for several contacts, from the
+last directions found in the segment's steps (docs/design.md, "Sliding friction in
+C").
 """
 
 from __future__ import annotations
