@@ -740,6 +740,8 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
             shared))
     for k in which.sliding:
         def sticking(t: float, q: np.ndarray, qd: np.ndarray, *, k: int = k) -> float:
+            if k in start.onset:
+                return 1.0  # at rest, its friction holding it or not: no stop to find
             s = sliding_velocity(full, gaps, k, t, q, qd)
             value = float(s @ start.directions[k])
             rounding = SPEED_ROUNDING * (1.0 + np.abs(qd).max(initial=0.0))
@@ -777,9 +779,9 @@ def _onset(full: NumericModel, gaps: Gaps, which: ClosedGaps, t: float, y: np.nd
     that start to slide from rest at ``(t, y)`` (sliding slower than
     :data:`~dalembert.solvers.contact.gaps.ONSET_RTOL` relative to ``1 + max |qd|``;
     not those in ``ended``, whose onset has ended since the last switch), with that
-    speed: their friction takes the direction their contact point accelerates in
-    (:func:`~dalembert.solvers.contact.friction.consistent_directions`) until they
-    slide that fast along their start direction."""
+    speed: their friction is Coulomb's law at the level of accelerations
+    (:func:`~dalembert.solvers.contact.friction.onset_friction`) until they slide that
+    fast along their start direction."""
     candidates = [k for k in which.sliding
                   if len(gaps.tangents[k]) in (2, 3) and k not in ended]
     if not candidates:
@@ -808,9 +810,12 @@ def _gap_screen(full: NumericModel, at: int, start: SegmentStart, k: int) -> Pos
 
 
 def _sliding_screen(full: NumericModel, rows: tuple[int, ...], start: SegmentStart,
-                    k: int) -> RateScreen:
+                    k: int) -> RateScreen | Never:
     """The screen of sliding gap ``k``'s sticking event (its sliding velocities, the
-    rows ``rows`` of ``full``) as the current segment starts."""
+    rows ``rows`` of ``full``) as the current segment starts; in its onset it cannot
+    fire."""
+    if k in start.onset:
+        return Never()
     return RateScreen(full, rows, tuple(float(w) for w in start.directions[k]))
 
 

@@ -12,7 +12,8 @@ of the segment is not symmetric:
 with ``A_t(k)`` the contact's sliding velocities' rows. It is solved with the one
 symmetric factorization of the rows that hold (bilateral, closed gaps, held sliding
 velocities) by a low-rank correction: the solution without friction and one solve
-per sliding contact, then a ``k x k`` system for the normal forces (:func:`solve_sliding`).
+per sliding velocity (its response per unit normal force of friction along it), then
+a ``k x k`` system for the normal forces (:func:`solve_sliding`).
 The segment's model takes the friction forces as inputs
 (:func:`~dalembert.model.constraints.friction_inputs`), which :class:`SlidingForces`
 gives at each state.
@@ -38,13 +39,15 @@ rounding; in space the direction turns with the motion, and a segment also ends 
 it turns by a right angle.
 
 At a switch :func:`choose_friction` decides: a contact sliding goes on sliding; one
-at rest sticks if its sticking force lies in the cone, and otherwise slides in the
-direction its contact point accelerates in under the friction that opposes it
-(:func:`slip_direction`): with one sliding velocity the direction that force cannot
-hold (``d = -lambda_t / |lambda_t|``); with two, the unit ``d`` with ``a_t(d)``
-along ``d``, a root in its angle, which is the direction of the excess only where
-the contact's tangential mass is isotropic (a cylinder lying on a floor, rolling one
-way and sliding the other, is not).
+at rest sticks if its sticking force lies in the cone. Otherwise, with one sliding
+velocity, it slides in the direction that force cannot hold (``d = -lambda_t /
+|lambda_t|``); with two (or three of rank 2), it and every other contact at rest like
+it start to slide from rest together, their friction from then on Coulomb's law at
+the level of accelerations (:func:`onset_friction`): each holds, or slides along its
+acceleration, all decided at once, until it slides faster than a small speed. Its
+direction is the direction of the excess force only where the contact's tangential
+mass is isotropic (a cylinder lying on a floor, rolling one way and sliding the other,
+is not).
 """
 
 from __future__ import annotations
@@ -53,7 +56,6 @@ from collections.abc import Callable, Container, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ...codegen.compiled import NumericModel
 from ...errors import SingularSystemError
@@ -64,17 +66,6 @@ from ..kkt.factorization import KKTFactorization, kkt_factorization
 from ..kkt.sparse import matvec
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .impulses import contact_impulses
-
-#: Samples of the slip direction's angle per half turn, to bracket its roots
-#: (:func:`slip_direction`).
-SLIP_SAMPLES = 24
-#: :func:`consistent_directions`' Newton method: the difference step of its Jacobian
-#: and the largest step it takes (radians: a start direction found with the other
-#: contacts held may be half a radian off), and its most iterations (it converges in
-#: two or three from the last directions found).
-CONSISTENT_STEP = 1e-7
-CONSISTENT_TURN = 1.0
-CONSISTENT_ITERATIONS = 12
 
 
 @dataclass
@@ -104,17 +95,6 @@ def sliding_velocity(full: NumericModel, gaps: Gaps, k: int, t: float, q: np.nda
                      qd: np.ndarray) -> np.ndarray:
     """The sliding velocities of gap ``k`` (its tangent rows' rates in ``full``)."""
     return row_rates(full, t, q, qd)[gaps.tangents[k]]
-
-
-def friction_directions(full: NumericModel, gaps: Gaps, k: int, Av: np.ndarray,
-                        d: np.ndarray) -> np.ndarray:
-    """``-mu A_t^T d``: the generalized force of gap ``k``'s friction per unit normal
-    force, sliding along ``d`` (``Av``: the values of ``full``'s rows)."""
-    pattern = full.pattern
-    weights = np.zeros(full.m)
-    weights[gaps.tangents[k]] = d
-    assert gaps.friction is not None
-    return -gaps.friction[k] * matvec(pattern.A_cols, pattern.A_rows, Av, weights, full.n)
 
 
 def acting_rows(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
@@ -217,56 +197,88 @@ def solve_sliding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     SingularSystemError
         The rows that act are dependent.
     """
-    return _sliding_solver(full, gaps, t, q, qd, which, kkt, values, acting)(directions)
+    return _Responses(full, gaps, t, q, qd, which, kkt, values, acting).solve(directions)
 
 
-def _sliding_solver(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                    qd: np.ndarray, which: ClosedGaps, kkt: KKTFactorization | None = None,
-                    values: tuple[np.ndarray, ...] | None = None,
-                    acting: np.ndarray | None = None
-                    ) -> Callable[[dict[int, np.ndarray]], tuple[np.ndarray, np.ndarray]]:
-    """:func:`solve_sliding` at one state for any sliding directions: the KKT matrix
-    factored and the solve without friction made once, each call then one solve per
-    sliding gap (the searches for directions try many at one state). ``kkt`` holds
-    this factorization only until it is factored again."""
-    Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
-    kkt = kkt or kkt_factorization(full.pattern)
-    if acting is None:
-        acting = acting_rows(full, gaps, t, q, which)
-    kkt.factor(np.concatenate([Mv, Av]), acting)
-    qdd0, lam0 = kkt.solve(np.concatenate([f, c]))
-    # dependent rows left out: every multiplier the minimum-norm one (a linear map of
-    # the kept rows' ones, so the sliding contacts' normal forces stay linear below)
-    spread = _minimum_norm(full, gaps, Av, which, acting)
-    lam0 = spread(lam0)
-    sliding = which.sliding
-    zeros = np.zeros(full.m)
-    normal = gaps.first + np.array(sliding, dtype=int)
-    friction = gaps.friction
+class _Responses:
+    """:func:`solve_sliding` at one state for any sliding friction: the KKT matrix
+    factored, the solve without friction, and each sliding gap's tangent rows' responses
+    per unit normal force of friction along them, so that each trial is small dense
+    algebra (the normal forces by a ``k x k`` system). ``kkt`` holds this
+    factorization only until it is factored again."""
 
-    def solve(directions: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        qdd, lam = qdd0, lam0
-        if not sliding:
-            return qdd, lam
-        assert friction is not None  # (sliding gaps have coefficients)
-        D = [friction_directions(full, gaps, k, Av, directions[k]) for k in sliding]
-        responses = [(qdd_k, spread(lam_k)) for qdd_k, lam_k in
-                     (kkt.solve(np.concatenate([d, zeros])) for d in D)]
-        # lambda_n = lambda0_n + R N with N = lambda_n: (I - R) N = lambda0_n
-        R = np.array([lam_k[normal] for _, lam_k in responses]).T
+    def __init__(self, full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                 qd: np.ndarray, which: ClosedGaps, kkt: KKTFactorization | None = None,
+                 values: tuple[np.ndarray, ...] | None = None,
+                 acting: np.ndarray | None = None) -> None:
+        Mv, f, Av, c = values if values is not None else full.kkt_sparse(t, q, qd)
+        kkt = kkt or kkt_factorization(full.pattern)
+        if acting is None:
+            acting = acting_rows(full, gaps, t, q, which)
+        kkt.factor(np.concatenate([Mv, Av]), acting)
+        # dependent rows left out: every multiplier the minimum-norm one (a linear map of
+        # the kept rows' ones, so the sliding contacts' normal forces stay linear below)
+        spread = _minimum_norm(full, gaps, Av, which, acting)
+        qdd0, lam0 = kkt.solve(np.concatenate([f, c]))
+        self.qdd0, self.lam0 = qdd0, spread(lam0)
+        pattern, zeros = full.pattern, np.zeros(full.m)
+        self.gaps, self.sliding = gaps, which.sliding
+        tangents = [gaps.tangents[k] for k in which.sliding]
+        #: the sliding gaps' tangent rows, and each one's gap (its place among them)
+        self.rows = np.concatenate([np.zeros(0, dtype=int), *tangents]).astype(int)
+        self.owner = np.repeat(np.arange(len(tangents)), [len(r) for r in tangents])
+        self.normal = gaps.first + np.array(which.sliding, dtype=int)
+        self.mu = np.zeros(0) if gaps.friction is None else \
+            gaps.friction[np.array(which.sliding, dtype=int)]
+        responses = []
+        for j, row in enumerate(self.rows):  # friction -mu A_t^T along row j
+            weights = zeros.copy()
+            weights[row] = -self.mu[self.owner[j]]
+            force = matvec(pattern.A_cols, pattern.A_rows, Av, weights, full.n)
+            qdd_j, lam_j = kkt.solve(np.concatenate([force, zeros]))
+            responses.append((qdd_j, spread(lam_j)))
+        self.qdd_rows = np.array([r[0] for r in responses]).reshape(len(self.rows), full.n)
+        self.lam_rows = np.array([r[1] for r in responses]).reshape(len(self.rows), full.m)
+
+        def accelerations(qdd: np.ndarray) -> np.ndarray:  # A qdd on the tangent rows
+            return matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m)[self.rows]
+
+        #: the tangent rows' accelerations without friction and per unit of each row's
+        self.a0 = accelerations(qdd0) - c[self.rows]
+        self.T = np.array([accelerations(x) for x in self.qdd_rows]).reshape(
+            len(self.rows), len(self.rows)).T
+
+    def normal_forces(self, u: np.ndarray) -> np.ndarray:
+        """The sliding gaps' normal forces with friction ``-mu N u`` (``u`` by tangent
+        row): ``(I - R) N = N_0``."""
+        k = len(self.sliding)
+        R = np.zeros((k, k))
+        np.add.at(R.T, self.owner, self.lam_rows[:, self.normal] * u[:, None])
         try:
-            N = np.linalg.solve(np.eye(len(sliding)) - R, lam[normal])
+            return np.linalg.solve(np.eye(k) - R, self.lam0[self.normal])
         except np.linalg.LinAlgError as exc:  # their normal forces are not unique
             raise SingularSystemError("the sliding contacts' normal rows are dependent") \
                 from exc
-        for n_k, (qdd_k, lam_k) in zip(N, responses):
-            qdd = qdd + n_k * qdd_k
-            lam = lam + n_k * lam_k
-        for k, n_k in zip(sliding, N):
-            lam[gaps.tangents[k]] = -friction[k] * n_k * directions[k]
+
+    def solve(self, directions: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """``qdd`` and the multipliers with each sliding gap's friction along
+        ``directions`` (``-mu N d``)."""
+        if not self.sliding:
+            return self.qdd0, self.lam0
+        u = np.concatenate([directions[k] for k in self.sliding])
+        N = self.normal_forces(u)
+        weights = N[self.owner] * u
+        qdd = self.qdd0 + weights @ self.qdd_rows
+        lam = self.lam0 + weights @ self.lam_rows
+        for k, mu, n_k in zip(self.sliding, self.mu, N):
+            lam[self.gaps.tangents[k]] = -mu * n_k * directions[k]
         return qdd, lam
 
-    return solve
+    def at(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The tangent rows' accelerations and the sliding gaps' normal forces with
+        friction ``-mu N u`` (``u`` by tangent row)."""
+        N = self.normal_forces(u)
+        return self.a0 + self.T @ (N[self.owner] * u), N
 
 
 def _minimum_norm(full: NumericModel, gaps: Gaps, Av: np.ndarray, which: ClosedGaps,
@@ -317,7 +329,7 @@ class SlidingForces:
         call: one object serves every segment with this set).
     onset
         The sliding gaps that start to slide from rest in the current segment (as
-        ``starts``), which take :func:`consistent_directions`.
+        ``starts``), which take :func:`onset_friction`.
     user
         The user's inputs at a state (the held sample, if sampled; ``None``: the
         model has none).
@@ -332,11 +344,11 @@ class SlidingForces:
         #: The rows acting, found at the first state (which held rows depend on the
         #: others does not change while the set is closed).
         self.acting: np.ndarray | None = None
-        #: The last consistent direction found, by gap (see :meth:`restart`).
+        #: The last onset friction found, by gap (see :meth:`restart`).
         self.last: dict[int, np.ndarray] = {}
 
     def restart(self) -> None:
-        """Forget the last consistent directions (a segment starts)."""
+        """Forget the last onset friction found (a segment starts)."""
         self.last.clear()
 
     def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
@@ -352,8 +364,8 @@ class SlidingForces:
         starting = [k for k in which.sliding if k in self.onset]
         if starting:
             directions.update({k: self.last.get(k, self.starts[k]) for k in starting})
-            directions = consistent_directions(full, gaps, t, q, qd, which, directions,
-                                               starting, self.kkt, self.acting)
+            directions = onset_friction(full, gaps, t, q, qd, which, directions, starting,
+                                        self.kkt, self.acting)
             self.last.update({k: directions[k] for k in starting})
         _, lam = solve_sliding(full, gaps, t, q, qd, which, directions, self.kkt,
                                acting=self.acting)
@@ -384,9 +396,11 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
                     qd: np.ndarray, closed: tuple[int, ...], start: Friction,
                     slipping: int | None = None) -> Friction:
     """Which closed frictional gaps stick and which slide from ``(t, q, qd)`` on (see
-    the module docstring): the held ones of ``start`` whose sticking force leaves the
-    cone slide, one at a time, the worst first, along :func:`slip_direction`;
-    ``slipping``, a gap whose force has just reached the cone, slides.
+    the module docstring): where a held one of ``start`` has a sticking force that leaves
+    the cone (the worst first; ``slipping``, a gap whose force has just reached it),
+    it slides: with one sliding velocity alone, against that force; with two (or three
+    of rank 2) with every held one like it, from rest, their friction and directions
+    from :func:`onset_friction`.
 
     Parameters
     ----------
@@ -442,124 +456,30 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         size = float(np.linalg.norm(force))
         if excess[worst] <= allowed or size == 0.0:
             break
-        chosen.held.discard(worst)
-        chosen.directions[worst] = -force / size  # sliding, for the set slip_direction sees
-        chosen.directions[worst] = slip_direction(full, gaps, t, q, qd, chosen.of(closed),
-                                                  chosen.directions, worst, -force / size,
-                                                  kkt)
-        resting.remove(worst)
+        # a contact with two sliding velocities (or three of rank 2) slips with every
+        # resting one like it: which of them then holds and which slides, and along
+        # what, is Coulomb's law at the level of accelerations, all at once
+        # (onset_friction); one by one, each holding the others, a body's corners
+        # slipped in turn and then crept on directions of no acceleration
+        group = [k for k in resting if len(gaps.tangents[k]) in (2, 3)] \
+            if len(gaps.tangents[worst]) in (2, 3) else [worst]
+        for k in group:  # from the share of its cone it held (onset_friction's start)
+            cone = mu[k] * lam[gaps.first + k]
+            chosen.held.discard(k)
+            chosen.directions[k] = -forces[k] / cone if k != worst and cone > 0.0 \
+                else -forces[k] / np.linalg.norm(forces[k])
+            resting.remove(k)
         slipping = None
-    # each found with the others fixed as they were then: together (the corners of a
-    # body, whose contact points' accelerations are coupled)
     started = [k for k in chosen.directions
                if k not in start.directions and len(gaps.tangents[k]) in (2, 3)]
-    if len(started) > 1:
-        chosen.directions = consistent_directions(full, gaps, t, q, qd, chosen.of(closed),
-                                                  chosen.directions, started, kkt)
+    if started:
+        guesses = {k: chosen.directions[k] for k in started}
+        found = onset_friction(full, gaps, t, q, qd, chosen.of(closed), chosen.directions,
+                               started, kkt)
+        for k in started:  # its direction: where it slides, or where its force holds it
+            u = found[k] if np.linalg.norm(found[k]) > 0.0 else guesses[k]
+            chosen.directions[k] = u / np.linalg.norm(u)
     return chosen
-
-
-def slip_direction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                   qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
-                   k: int, guess: np.ndarray, kkt: KKTFactorization | None = None
-                   ) -> np.ndarray:
-    """The direction in which gap ``k``, at rest, starts to slide with the closed set
-    ``which`` (``k`` among its sliding gaps, the others' directions in
-    ``directions``): the unit ``d`` along which its tangential acceleration points
-    under its friction force ``-mu lambda_n d`` (``a_t(d) = s d``, ``s > 0``), the
-    normal force and every other force solved with it (:func:`solve_sliding`).
-
-    With one sliding velocity that is ``guess``, the direction of the sticking force
-    the contact cannot hold (``-lambda_t / |lambda_t|``), and so it is where the
-    contact's tangential mass (the block ``W_tt`` of its sliding velocities in the
-    Delassus matrix) is isotropic. With two it is a root in the angle of ``d``: the
-    cross product of ``d`` and ``a_t(d)``, sampled around the circle, its sign
-    changes where ``a_t . d > 0`` refined by Brent's method; the root nearest
-    ``guess`` is taken (at a contact whose force has just reached its cone, ``a_t``
-    is 0 along ``guess``, which is then the root: the onset there). Three of rank 2
-    (world components, as between two spheres) are searched alike in their plane
-    (:func:`sliding_plane`). Other counts keep ``guess``, as does a contact whose
-    ``a_t`` does not depend on ``d`` (other held rows fix its contact point) or that
-    has no such root.
-
-    Parameters
-    ----------
-    full, gaps
-        The model with every gap a row and its sliding velocities.
-    t, q, qd
-        The state (the inputs as ``full`` holds them).
-    which
-        The closed set, ``k`` sliding.
-    directions
-        Each sliding gap's unit direction (``k``'s is replaced by the trial ones).
-    k
-        The gap starting to slide.
-    guess
-        The direction of its excess sticking force (a unit vector).
-    kkt
-        A factorization object of ``full``'s pattern to reuse.
-
-    Examples
-    --------
-    A cylinder (``I = m r^2 / 2``) lying on a floor, its axis along ``y``, pushed at
-    its axis by 12 N at 0.5 rad from ``x``: along ``x`` its contact point has three
-    times the inverse mass it has along ``y``, so it slides at 42.8 degrees, not
-    along the excess force (58.6 degrees):
-
-    >>> from dalembert import System, Unilateral, coordinates
-    >>> x, y, z, th = coordinates("x y z theta")
-    >>> push = 12.0 * np.array([np.cos(0.5), np.sin(0.5)])
-    >>> cylinder = System([x, y, z, th], kinetic=(x.diff()**2 + y.diff()**2
-    ...                   + z.diff()**2) / 2 + 0.02 / 2 * th.diff()**2,
-    ...                   potential=9.81 * z - push[0] * x - push[1] * y,
-    ...                   constraints=[Unilateral(z - 0.2, "floor", friction=0.3,
-    ...                       tangents=[x.diff() + 0.2 * th.diff(), y.diff()])])
-    >>> which = ClosedGaps((0,), sliding=(0,))
-    >>> full = cylinder._closed(ClosedGaps((0,), held=(0,))).numeric()
-    >>> gaps = Gaps.of(cylinder.definition.unilateral, 0, [0.0])
-    >>> q, rest = np.array([0.0, 0.0, 0.2, 0.0]), np.zeros(4)
-    >>> excess = np.array([push[0] / 3, push[1]]) / np.hypot(push[0] / 3, push[1])
-    >>> d = slip_direction(full, gaps, 0.0, q, rest, which, {0: excess}, 0, excess)
-    >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
-    42.8019
-    """
-    plane = sliding_plane(full, gaps, t, q, qd, k)
-    if plane is None:
-        return guess
-    rates = _row_accelerations(full, gaps, t, q, qd, which, directions, kkt)
-    rows = gaps.tangents[k]
-
-    def accel(angle: float) -> np.ndarray:
-        return plane.T @ rates({k: plane @ _unit(angle)})[rows]
-
-    def cross(angle: float) -> float:
-        a = accel(angle)
-        return float(np.cos(angle) * a[1] - np.sin(angle) * a[0])
-
-    inplane = plane.T @ guess
-    start = float(np.arctan2(inplane[1], inplane[0]))
-    # a whole turn centred on the guess, which is a sample (a root there is exact)
-    angles = start + np.linspace(-np.pi, np.pi, 2 * SLIP_SAMPLES + 1)
-    sampled = [accel(a) for a in angles]
-    signs = [float(np.cos(a) * v[1] - np.sin(a) * v[0]) for a, v in zip(angles, sampled)]
-    scale = 1.0 + max(float(np.linalg.norm(v)) for v in sampled)
-    if max(float(np.linalg.norm(v - sampled[0])) for v in sampled) <= TOUCH_RTOL * scale:
-        # its friction does not move it (other held rows fix its contact point): any
-        # root would be rounding's
-        return guess
-    roots = []
-    for i in range(len(angles) - 1):
-        f0, f1 = signs[i], signs[i + 1]
-        if f0 == 0.0 or f0 * f1 < 0.0:
-            angle = angles[i] if f0 == 0.0 else \
-                brentq(cross, angles[i], angles[i + 1], xtol=1e-15, rtol=1e-15)
-            # sliding along d, not against it (a_t = s d with s < 0 is no solution)
-            if float(accel(angle) @ _unit(angle)) >= -TOUCH_RTOL * scale:
-                roots.append(float(angle))
-    if not roots:  # no direction it can slide in (a contact problem without a solution)
-        return guess
-    best = min(roots, key=lambda a: abs(a - start))
-    return plane @ _unit(best)
 
 
 def sliding_plane(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
@@ -604,23 +524,27 @@ def sliding_plane(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: n
     return U[:, :2]
 
 
-def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                          qd: np.ndarray, which: ClosedGaps,
-                          directions: dict[int, np.ndarray], starting: Sequence[int],
-                          kkt: KKTFactorization | None = None,
-                          acting: np.ndarray | None = None) -> dict[int, np.ndarray]:
-    """The directions of the friction of the gaps ``starting`` while they start to
-    slide from rest together: the unit ``d_k`` along which each one's tangential
-    acceleration points (``a_t(k) = s_k d_k``, ``s_k >= 0``, as
-    :func:`slip_direction` finds one at its onset, the others held), all at once,
-    by Newton's method on their angles from ``directions`` (the last ones found).
+def onset_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                   qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
+                   starting: Sequence[int], kkt: KKTFactorization | None = None,
+                   acting: np.ndarray | None = None) -> dict[int, np.ndarray]:
+    """The friction of the gaps ``starting``, at rest, as Coulomb's law at the level
+    of accelerations gives it: each either holds (its tangential acceleration 0, its
+    force inside its cone) or slides along its acceleration, its force on the rim
+    against it (``a_t = s d``, ``s > 0``, friction ``-mu lambda_n d``), all at once.
+    For given normal forces that is the minimum of a convex function of the
+    accelerations (Gauss's least constraint with the friction's dissipation), so the
+    accelerations are unique even where the forces are not (a box held on four
+    corners at their cones). Solved by a semismooth Newton method from
+    ``directions`` (:func:`_coulomb_onset`); where it finds no solution the
+    directions are kept.
 
     Why not the sliding velocity's direction ``v / |v|``: near ``v = 0`` that turns
     at a rate of about ``|a_t| / |v|`` towards this one wherever the contact's
     tangential mass is anisotropic (a cylinder rolling one way and sliding the
     other), a stiffness without bound that stalls an explicit method at the onset,
     and where ``v`` is rounding's it points anywhere (the corners of a box). The
-    motion follows this direction within ``O(|v|)`` there (its slow manifold), so a
+    motion follows this friction within ``O(|v|)`` there (its slow manifold), so a
     segment takes it while ``|v|`` is below a small speed
     (:data:`~dalembert.solvers.contact.gaps.ONSET_RTOL`), then ``v / |v|``.
 
@@ -634,8 +558,7 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
         The closed set, the gaps ``starting`` sliding (each with two sliding
         velocities, or three of rank 2: :func:`sliding_plane`).
     directions
-        Each sliding gap's unit direction (those of ``starting``: near the ones
-        sought).
+        Each sliding gap's direction (those of ``starting``: where to start from).
     starting
         The gaps starting to slide.
     kkt
@@ -646,89 +569,120 @@ def consistent_directions(full: NumericModel, gaps: Gaps, t: float, q: np.ndarra
     Returns
     -------
     dict
-        ``directions`` with those of ``starting`` replaced (kept where Newton's
-        method finds no such directions near them).
+        ``directions`` with those of ``starting`` replaced by ``u``, their friction
+        being ``-mu lambda_n u``: a unit vector where the gap slides, shorter (by the
+        fraction of its cone it uses) where it holds.
 
     Examples
     --------
-    The cylinder of :func:`slip_direction`'s example, from a direction 0.2 rad off:
+    A cylinder (``I = m r^2 / 2``) lying on a floor, its axis along ``y``, pushed at
+    its axis by 12 N at 0.5 rad from ``x``: along ``x`` its contact point has three
+    times the inverse mass it has along ``y``, so it slides at 42.8 degrees, not
+    along the excess force (58.6 degrees); pushed by 2 N its contact holds and it
+    rolls along ``x``, the friction ``(push_x / 3, push_y)`` back (0.38 of its cone):
 
     >>> from dalembert import System, Unilateral, coordinates
     >>> x, y, z, th = coordinates("x y z theta")
-    >>> push = 12.0 * np.array([np.cos(0.5), np.sin(0.5)])
-    >>> cylinder = System([x, y, z, th], kinetic=(x.diff()**2 + y.diff()**2
+    >>> def cylinder(push):
+    ...     push = push * np.array([np.cos(0.5), np.sin(0.5)])
+    ...     return System([x, y, z, th], kinetic=(x.diff()**2 + y.diff()**2
     ...                   + z.diff()**2) / 2 + 0.02 / 2 * th.diff()**2,
     ...                   potential=9.81 * z - push[0] * x - push[1] * y,
     ...                   constraints=[Unilateral(z - 0.2, "floor", friction=0.3,
     ...                       tangents=[x.diff() + 0.2 * th.diff(), y.diff()])])
     >>> which = ClosedGaps((0,), sliding=(0,))
-    >>> full = cylinder._closed(ClosedGaps((0,), held=(0,))).numeric()
-    >>> gaps = Gaps.of(cylinder.definition.unilateral, 0, [0.0])
     >>> q, rest = np.array([0.0, 0.0, 0.2, 0.0]), np.zeros(4)
-    >>> near = np.array([np.cos(0.95), np.sin(0.95)])
-    >>> d = consistent_directions(full, gaps, 0.0, q, rest, which, {0: near}, [0])[0]
-    >>> round(float(np.degrees(np.arctan2(d[1], d[0]))), 4)
-    42.8019
+    >>> for push in (12.0, 2.0):
+    ...     system = cylinder(push)
+    ...     full = system._closed(ClosedGaps((0,), held=(0,))).numeric()
+    ...     gaps = Gaps.of(system.definition.unilateral, 0, [0.0])
+    ...     u = onset_friction(full, gaps, 0.0, q, rest, which, {0: np.zeros(2)}, [0])[0]
+    ...     print(round(float(np.linalg.norm(u)), 4),
+    ...           round(float(np.degrees(np.arctan2(u[1], u[0]))), 4))
+    1.0 42.8019
+    0.3817 58.61
     """
     planes = [sliding_plane(full, gaps, t, q, qd, k) for k in starting]
     if any(plane is None for plane in planes):
         return dict(directions)
-    E = [plane for plane in planes if plane is not None]
-    accelerations = _row_accelerations(full, gaps, t, q, qd, which, directions, kkt, acting)
-    rows = [gaps.tangents[k] for k in starting]
-
-    def residual(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Each one's ``a_t`` across its direction, and along it."""
-        rates = accelerations({k: e @ _unit(angle)
-                               for k, e, angle in zip(starting, E, angles)})
-        a = np.array([e.T @ rates[r] for e, r in zip(E, rows)])
-        return np.cos(angles) * a[:, 1] - np.sin(angles) * a[:, 0], \
-            np.cos(angles) * a[:, 0] + np.sin(angles) * a[:, 1]
-
-    inplane = [e.T @ directions[k] for e, k in zip(E, starting)]
-    angles = np.array([np.arctan2(d[1], d[0]) for d in inplane])
-    for _ in range(CONSISTENT_ITERATIONS):
-        across, along = residual(angles)
-        J = np.column_stack([(residual(angles + CONSISTENT_STEP * e)[0] - across)
-                             / CONSISTENT_STEP for e in np.eye(len(angles))])
-        step = np.linalg.lstsq(J, -across, rcond=None)[0]
-        if not np.all(np.isfinite(step)) or np.abs(step).max() > CONSISTENT_TURN:
-            break  # not near such directions: keep the last ones
-        angles = angles + step
-        if np.abs(step).max() <= 4 * np.finfo(float).eps * (1.0 + np.abs(angles).max()):
-            if np.all(along >= -TOUCH_RTOL * (1.0 + np.abs(along).max())):
-                return {**directions, **{k: e @ _unit(a)
-                                         for k, e, a in zip(starting, E, angles)}}
-            break
-    if len(starting) == 1:  # the whole search around the circle
-        (k,) = starting
-        return {**directions, k: slip_direction(full, gaps, t, q, qd, which, directions, k,
-                                                directions[k], kkt)}
-    return dict(directions)
+    kkt = kkt or kkt_factorization(full.pattern)
+    if acting is None:
+        acting = acting_rows(full, gaps, t, q, which)
+    problem = _Responses(full, gaps, t, q, qd, which, kkt, acting=acting)
+    place = {int(row): j for j, row in enumerate(problem.rows)}
+    cols = [np.array([place[int(r)] for r in gaps.tangents[k]]) for k in starting]
+    u = np.concatenate([directions[k] for k in which.sliding]).astype(float)
+    found = _coulomb_onset(problem, [which.sliding.index(k) for k in starting], cols,
+                           [E for E in planes if E is not None], u)
+    if found is None:
+        return dict(directions)
+    return {**directions, **{k: found[c] for k, c in zip(starting, cols)}}
 
 
-def _unit(angle: float) -> np.ndarray:
-    return np.array([np.cos(angle), np.sin(angle)])
+#: :func:`onset_friction`'s Newton method: its most iterations, and the difference step
+#: of its accelerations' Jacobian (in the units of ``u``, at most 1).
+ONSET_ITERATIONS = 40
+ONSET_STEP = 1e-7
+#: ``G`` (dimensionless) within this many ulps of 0 is a solution.
+ONSET_ROUNDING = 64
 
 
-def _row_accelerations(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
-                       qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
-                       kkt: KKTFactorization | None, acting: np.ndarray | None = None
-                       ) -> Callable[[dict[int, np.ndarray]], np.ndarray]:
-    """``rates(trial)``: the rates of change of the rates of every row of ``full``
-    (``A qdd - c``; a sliding velocity's is its contact point's tangential
-    acceleration) with the closed set ``which``, the sliding gaps along ``directions``
-    but those of ``trial`` along theirs."""
-    values = full.kkt_sparse(t, q, qd)
-    _, _, Av, c = values
-    pattern = full.pattern
-    solve = _sliding_solver(full, gaps, t, q, qd, which, kkt, values, acting)
+def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarray],
+                   planes: list[np.ndarray], u: np.ndarray) -> np.ndarray | None:
+    """``u`` (by tangent row) with the onset contacts' entries solving Coulomb's law at
+    the level of accelerations, or ``None``: semismooth Newton's method on ``G(x) = x -
+    proj(x + rho a(x))`` from ``u``, ``x`` each contact's ``u`` in its plane, ``proj``
+    onto the unit disk, each contact's ``rho`` the inverse of the largest eigenvalue
+    of its block (so that ``G`` is well scaled). ``G`` is 0 just where the law holds:
+    inside the disk with ``a = 0`` (it holds), or on its rim with ``a`` along ``x``
+    (it slides against its acceleration). Its generalized Jacobian ``I - P (I + rho
+    da/dx)``, ``P`` the projection's (the identity inside, ``(I - z z^T / |z|^2) /
+    |z|`` outside), ``da/dx`` by forward differences; the step the minimum-norm least
+    squares one (where a body's forces are not unique, ``da/dx`` is singular)."""
+    p = len(contacts)
+    eps = np.finfo(float).eps
 
-    def rates(trial: dict[int, np.ndarray]) -> np.ndarray:
-        qdd, _ = solve({**directions, **trial})
-        return matvec(pattern.A_rows, pattern.A_cols, Av, qdd, full.m) - c
+    def unpack(x: np.ndarray) -> np.ndarray:
+        out = u.copy()
+        for c in range(p):
+            out[cols[c]] = planes[c] @ x[2 * c:2 * c + 2]
+        return out
 
-    return rates
+    def accelerations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a, N = problem.at(unpack(x))
+        return np.concatenate([planes[c].T @ a[cols[c]] for c in range(p)]), N
+
+    x = np.concatenate([planes[c].T @ u[cols[c]] for c in range(p)])
+    a, N = accelerations(x)
+    rho = np.ones(2 * p)
+    for c, i in enumerate(contacts):  # its block: da/dx of its own u, -mu N E^T T E
+        block = -planes[c].T @ problem.T[np.ix_(cols[c], cols[c])] @ planes[c] * N[i]
+        top = float(np.abs(np.linalg.eigvalsh((block + block.T) / 2)).max())
+        rho[2 * c:2 * c + 2] = 1.0 / top if top > 0.0 else 1.0
+    for _ in range(ONSET_ITERATIONS):
+        z = x + rho * a
+        proj, P = z.copy(), np.zeros((2 * p, 2 * p))
+        for c in range(p):
+            part = z[2 * c:2 * c + 2]
+            size = float(np.hypot(*part))
+            if size > 1.0:
+                unit = part / size
+                proj[2 * c:2 * c + 2] = unit
+                P[2 * c:2 * c + 2, 2 * c:2 * c + 2] = (np.eye(2) - np.outer(unit, unit)) / size
+            else:
+                P[2 * c:2 * c + 2, 2 * c:2 * c + 2] = np.eye(2)
+        G = x - proj
+        if np.abs(G).max() <= ONSET_ROUNDING * eps:
+            return unpack(proj)
+        da = np.column_stack([(accelerations(x + ONSET_STEP * e)[0] - a) / ONSET_STEP
+                              for e in np.eye(2 * p)])
+        J = np.eye(2 * p) - P @ (np.eye(2 * p) + rho[:, None] * da)
+        step = np.linalg.lstsq(J, -G, rcond=None)[0]
+        if not np.all(np.isfinite(step)):
+            return None
+        x = x + step
+        a, N = accelerations(x)
+    return None
 
 
 def coulomb_impact(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,

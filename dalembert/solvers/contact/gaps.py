@@ -30,14 +30,15 @@ TOUCH_RTOL = 1e-9
 #: touching) neither pulls nor opens (a fresh KKT solve has rounding errors far below).
 FORCE_RTOL = 1e-12
 #: The sliding speed, relative to ``1 + max |qd|``, below which a contact starting to
-#: slide from rest with two sliding velocities (or three of rank 2) takes the direction
-#: its contact point accelerates in
-#: (:func:`~dalembert.solvers.contact.friction.consistent_directions`), not its
-#: velocity's. The motion differs from that direction by ``O(|v|)``, so the
-#: error it leaves falls as the square of this speed, and the steps it takes to
-#: follow ``v / |v|`` after it grow as its inverse square root (measured on a cylinder
-#: pushed by a growing force: positions of 4.6 within 1.6e-8, 1.6e-10 and 1.5e-12
-#: at 1e-4, 1e-5 and 1e-6, in 264, 385 and 579 steps; docs/design.md).
+#: slide from rest with two sliding velocities (or three of rank 2) takes the friction
+#: Coulomb's law gives at the level of accelerations
+#: (:func:`~dalembert.solvers.contact.friction.onset_friction`: it holds, or slides
+#: along its acceleration), not its velocity's direction. The motion differs from that
+#: friction by ``O(|v|)``, so the error it leaves falls as the square of this speed, and
+#: the steps it takes to follow ``v / |v|`` after it grow as its inverse square root
+#: (measured on a cylinder pushed by a growing force: positions of 4.6 within 1.6e-8,
+#: 1.6e-10 and 1.5e-12 at 1e-4, 1e-5 and 1e-6, in 264, 385 and 579 steps;
+#: docs/design.md).
 ONSET_RTOL = 1e-6
 
 

@@ -4,8 +4,8 @@ A segment with sliding contacts takes their friction forces as inputs of its mod
 In the C loop, C computes them before each evaluation
 (:mod:`~dalembert.solvers.native.friction`): the same solve as
 :func:`~dalembert.solvers.contact.friction.solve_sliding`, and for contacts starting
-to slide from rest the same search for their directions as
-:func:`~dalembert.solvers.contact.friction.consistent_directions`, so the segment's
+to slide from rest the same solve of Coulomb's law at the level of accelerations as
+:func:`~dalembert.solvers.contact.friction.onset_friction`, so the segment's
 steps do not call Python for them. The Python side
 (:class:`~dalembert.solvers.contact.friction.SlidingForces`) computes them in the
 Python loop. The user's inputs stay the user's: a signal read at each state is still
@@ -23,13 +23,12 @@ from ...inputs import InputSignal
 from ...model.constraints import ClosedGaps, friction_force_name
 from ..native.friction import FrictionTable, OnsetSearch, SlidingContact
 from ..running.run_data import RunData
-from .friction import CONSISTENT_ITERATIONS, CONSISTENT_STEP, CONSISTENT_TURN, SLIP_SAMPLES
-from .gaps import TOUCH_RTOL, Gaps
+from .friction import ONSET_ITERATIONS, ONSET_ROUNDING, ONSET_STEP
+from .gaps import Gaps
 
-#: The onset's search as :func:`~dalembert.solvers.contact.friction.consistent_directions`
+#: The onset's search as :func:`~dalembert.solvers.contact.friction.onset_friction`
 #: makes it.
-SEARCH = OnsetSearch(CONSISTENT_STEP, CONSISTENT_TURN, CONSISTENT_ITERATIONS, TOUCH_RTOL,
-                     SLIP_SAMPLES)
+SEARCH = OnsetSearch(ONSET_ITERATIONS, ONSET_STEP, ONSET_ROUNDING)
 
 
 class SlidingInC:

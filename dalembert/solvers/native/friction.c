@@ -1,9 +1,8 @@
 /* The friction forces of a contact segment's sliding contacts, computed in C before
  * each evaluation (runtime.h's dl_friction, native/friction.py): the same solve as
  * contacts/friction.py's solve_sliding on the run's own model, and for the contacts
- * starting to slide from rest the same search for their directions as its
- * consistent_directions, so that a sliding segment's steps do not call Python at every
- * evaluation. */
+ * starting to slide from rest the same solve as its onset_friction, so that a sliding
+ * segment's steps do not call Python at every evaluation. */
 #include "runtime.h"
 
 /* The work arrays (native/friction.py's work size): the directions (n_tangent), the
@@ -16,14 +15,15 @@ typedef struct {
   double *direction, *qdd0, *X, *RN, *force, *zeros, *lam0, *lam, *R, *N, *search, *group;
 } friction_work;
 
-/* The onset search's arrays for n_sliding contacts and n_tangent rows: the
- * accelerations of the tangent rows without friction and their responses (n_tangent
- * and n_tangent^2), each contact's plane (3 x 2), angles, residuals across and along,
- * a shifted residual, the Newton matrix and its right singular vectors (n_sliding
- * each, and twice n_sliding^2), a trial's directions (n_tangent), and the whole turn's
- * samples of the residual across (2 samples + 1). */
-DL_INLINE int64_t search_size(int64_t ns, int64_t nt, int64_t samples) {
-  return nt + nt * nt + 12 * ns + 2 * ns * ns + nt + 2 * samples + 1;
+/* The onset's arrays for n_sliding contacts and n_tangent rows: the accelerations of
+ * the tangent rows without friction and their responses (n_tangent and n_tangent^2),
+ * each contact's plane (3 x 2), then, two per contact in its plane, the unknowns,
+ * their accelerations and those at a difference, the point projected, the residual,
+ * the step and the scales (7 x 2 n_sliding), the projection's 2 x 2 blocks
+ * (4 n_sliding), the Newton matrix and its right singular vectors ((2 n_sliding)^2
+ * each), and a trial's directions (n_tangent). */
+DL_INLINE int64_t search_size(int64_t ns, int64_t nt) {
+  return nt + nt * nt + 6 * ns + 14 * ns + 4 * ns + 8 * ns * ns + nt;
 }
 
 DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64_t m) {
@@ -40,7 +40,7 @@ DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64
   w.R = w.lam + m;
   w.N = w.R + ns * ns;
   w.search = w.N + ns;
-  w.group = w.search + search_size(ns, nt, fr->samples);
+  w.group = w.search + search_size(ns, nt);
   return w;
 }
 
@@ -201,10 +201,9 @@ static int normal_forces(const dl_friction *fr, const friction_work *w, const do
 
 /* ---- The onset: the directions of the contacts starting to slide from rest ---- */
 
-/* The onset search's arrays (search_size's layout). */
+/* The onset's arrays (search_size's layout). */
 typedef struct {
-  double *a0, *T, *E, *angle, *across, *along, *shifted, *unused, *step, *J, *V, *trial;
-  double *sampled;
+  double *a0, *T, *E, *x, *a, *shifted, *z, *G, *step, *rho, *P, *J, *V, *trial;
 } search_work;
 
 DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
@@ -212,16 +211,17 @@ DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
   s.a0 = at;
   s.T = s.a0 + nt;
   s.E = s.T + nt * nt;
-  s.angle = s.E + 6 * ns;
-  s.across = s.angle + ns;
-  s.along = s.across + ns;
-  s.shifted = s.along + ns;
-  s.unused = s.shifted + ns;
-  s.step = s.unused + ns;
-  s.J = s.step + ns;
-  s.V = s.J + ns * ns;
-  s.trial = s.V + ns * ns;
-  s.sampled = s.trial + nt;
+  s.x = s.E + 6 * ns;
+  s.a = s.x + 2 * ns;
+  s.shifted = s.a + 2 * ns;
+  s.z = s.shifted + 2 * ns;
+  s.G = s.z + 2 * ns;
+  s.step = s.G + 2 * ns;
+  s.rho = s.step + 2 * ns;
+  s.P = s.rho + 2 * ns;
+  s.J = s.P + 4 * ns;
+  s.V = s.J + 4 * ns * ns;
+  s.trial = s.V + 4 * ns * ns;
   return s;
 }
 
@@ -295,20 +295,19 @@ static int sliding_plane(const dl_friction *fr, int64_t k, double *E) {
   return 0;
 }
 
-/* The residuals of the onset contacts' angles: with their directions E u(angle) (the
- * others' as in d), the accelerations of their tangent rows a = a0 + T (N d) (N by
- * contact, d by row), across: cos a_2 - sin a_1 and along: cos a_1 + sin a_2 in their
- * planes (friction.py's consistent_directions). 1 where the normal forces are not
- * found. */
-static int onset_residuals(const dl_friction *fr, const friction_work *w, const search_work *s,
-                           const double *angle, double *across, double *along) {
+/* The directions with the onset contacts' u = E x (x two per contact in its plane, the
+ * others' as in w->direction) into s->trial, and the onset contacts' tangential
+ * accelerations in their planes a = E^T (a0 + T (N u)) into a (N into w->N). 1 where
+ * the normal forces are not found. */
+static int onset_accelerations(const dl_friction *fr, const friction_work *w,
+                               const search_work *s, const double *x, double *a) {
   const int64_t ns = fr->n_sliding, nt = fr->start[ns];
   memcpy(s->trial, w->direction, (size_t)nt * sizeof(double));
   for (int64_t k = 0, i = 0; k < ns; ++k) {
     if (!fr->onset[k]) continue;
-    const double c = cos(angle[i]), sn = sin(angle[i]);
     for (int64_t j = 0; j < fr->start[k + 1] - fr->start[k]; ++j)
-      s->trial[fr->start[k] + j] = s->E[6 * k + 2 * j] * c + s->E[6 * k + 2 * j + 1] * sn;
+      s->trial[fr->start[k] + j] = s->E[6 * k + 2 * j] * x[2 * i] +
+                                   s->E[6 * k + 2 * j + 1] * x[2 * i + 1];
     ++i;
   }
   if (normal_forces(fr, w, s->trial, w->N)) return 1;
@@ -316,138 +315,105 @@ static int onset_residuals(const dl_friction *fr, const friction_work *w, const 
     if (!fr->onset[k]) continue;
     double a1 = 0.0, a2 = 0.0;
     for (int64_t r = fr->start[k]; r < fr->start[k + 1]; ++r) {
-      double a = s->a0[r];
+      double ar = s->a0[r];
       for (int64_t l = 0; l < ns; ++l)
         for (int64_t j = fr->start[l]; j < fr->start[l + 1]; ++j)
-          a += s->T[r * nt + j] * w->N[l] * s->trial[j];
-      a1 += s->E[6 * k + 2 * (r - fr->start[k])] * a;
-      a2 += s->E[6 * k + 2 * (r - fr->start[k]) + 1] * a;
+          ar += s->T[r * nt + j] * w->N[l] * s->trial[j];
+      a1 += s->E[6 * k + 2 * (r - fr->start[k])] * ar;
+      a2 += s->E[6 * k + 2 * (r - fr->start[k]) + 1] * ar;
     }
-    const double c = cos(angle[i]), sn = sin(angle[i]);
-    across[i] = c * a2 - sn * a1;
-    along[i] = c * a1 + sn * a2;
+    a[2 * i] = a1, a[2 * i + 1] = a2;
     ++i;
   }
   return 0;
 }
 
-/* Newton's method on the onset contacts' p angles from s->angle, as
- * consistent_directions takes it (its difference step, least-squares step, largest
- * turn, iterations and acceptance): 1 with their directions in w->direction, 0 where
- * it finds none near. */
-static int newton_angles(const dl_friction *fr, const friction_work *w, const search_work *s,
+/* Coulomb's law at the level of accelerations for the p onset contacts from their
+ * directions in w->direction (friction.py's _coulomb_onset, its constants and steps):
+ * semismooth Newton's method on G(x) = x - proj(x + rho a(x)), x each contact's u
+ * in its plane, proj onto the unit disk, rho the inverse of the largest eigenvalue of
+ * its block; the minimum-norm least-squares step. 1 with the u found in w->direction,
+ * 0 where none is found (w->direction as it was). */
+static int coulomb_onset(const dl_friction *fr, const friction_work *w, const search_work *s,
                          int64_t p) {
-  const int64_t ns = fr->n_sliding;
+  const int64_t ns = fr->n_sliding, nt = fr->start[ns], m = 2 * p;
   const double eps = 2.220446049250313e-16;
-  for (int it = 0; it < fr->iterations; ++it) {
-    if (onset_residuals(fr, w, s, s->angle, s->across, s->along)) return 0;
-    for (int64_t c = 0; c < p; ++c) {  /* J's column c by a forward difference */
-      s->angle[c] += fr->difference;
-      const int failed = onset_residuals(fr, w, s, s->angle, s->shifted, s->unused);
-      s->angle[c] -= fr->difference;
-      if (failed) return 0;
-      for (int64_t r = 0; r < p; ++r)
-        s->J[r * p + c] = (s->shifted[r] - s->across[r]) / fr->difference;
-    }
-    /* its friction does not turn its acceleration (other held rows fix its contact
-     * point): no direction to seek, any root would be rounding's */
-    const double scale = 1.0 + max_abs(s->across, p) + max_abs(s->along, p);
-    if (!(max_abs(s->J, p * p) > fr->touch_rtol * scale)) return 0;
-    for (int64_t r = 0; r < p; ++r) s->step[r] = -s->across[r];
-    if (least_squares_small(s->J, s->V, s->shifted, s->step, p) ||
-        !(max_abs(s->step, p) <= fr->turn))
-      return 0;
-    for (int64_t r = 0; r < p; ++r) s->angle[r] += s->step[r];
-    if (max_abs(s->step, p) <= 4 * eps * (1.0 + max_abs(s->angle, p))) {
-      const double floor = -fr->touch_rtol * (1.0 + max_abs(s->along, p));
-      for (int64_t r = 0; r < p; ++r)
-        if (!(s->along[r] >= floor)) return 0;
-      for (int64_t k = 0, i = 0; k < ns; ++k) {
-        if (!fr->onset[k]) continue;
-        const double c = cos(s->angle[i]), sn = sin(s->angle[i]);
-        for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
-          const double *e = s->E + 6 * k + 2 * (j - fr->start[k]);
-          w->direction[j] = e[0] * c + e[1] * sn;
-        }
-        ++i;
-      }
-      return 1;
-    }
-  }
-  return 0;
-}
-
-/* Each onset contact's angle in its plane of its part of v (by tangent row) into
- * s->angle; 0 where one of them is 0 in the plane. */
-static int angles_of(const dl_friction *fr, const search_work *s, const double *v) {
-  for (int64_t k = 0, i = 0; k < fr->n_sliding; ++k) {
+  for (int64_t k = 0, i = 0; k < ns; ++k) {  /* x: each one's u in its plane */
     if (!fr->onset[k]) continue;
     double u1 = 0.0, u2 = 0.0;
     for (int64_t j = 0; j < fr->start[k + 1] - fr->start[k]; ++j) {
-      u1 += s->E[6 * k + 2 * j] * v[fr->start[k] + j];
-      u2 += s->E[6 * k + 2 * j + 1] * v[fr->start[k] + j];
+      u1 += s->E[6 * k + 2 * j] * w->direction[fr->start[k] + j];
+      u2 += s->E[6 * k + 2 * j + 1] * w->direction[fr->start[k] + j];
     }
-    if (u1 == 0.0 && u2 == 0.0) return 0;
-    s->angle[i++] = atan2(u2, u1);
+    s->x[2 * i] = u1, s->x[2 * i + 1] = u2;
+    ++i;
   }
-  return 1;
-}
-
-/* One onset contact's residuals at angle a: across (returned) and, in along, along. */
-static double across_at(const dl_friction *fr, const friction_work *w, const search_work *s,
-                        double a, double *along) {
-  s->angle[0] = a;
-  if (onset_residuals(fr, w, s, s->angle, s->across, s->along)) return NAN;
-  *along = s->along[0];
-  return s->across[0];
-}
-
-/* A single onset contact's direction by the whole turn's search of friction.py's
- * slip_direction, where Newton's method found none: the angle sampled at samples
- * points a half turn around the start one, each change of sign of the residual
- * across refined (bisection to rounding), the roots along which it accelerates kept,
- * the one nearest the start taken. 1 with its direction in w->direction, 0 where
- * there is none or its friction does not move it (every residual alike). */
-static int whole_turn(const dl_friction *fr, const friction_work *w, const search_work *s,
-                      int64_t k, double start) {
-  const int64_t m = 2 * fr->samples;
-  const double pi = 3.141592653589793;
-  double previous = 0.0, along = 0.0, lowest = INFINITY, highest = -INFINITY, size = 0.0;
-  double best = NAN, a_previous = 0.0;
-  for (int64_t i = 0; i <= m; ++i) {  /* the samples, and the accelerations' scale */
-    const double a = start - pi + 2.0 * pi * (double)i / (double)m;
-    const double x = s->sampled[i] = across_at(fr, w, s, a, &along);
-    if (!isfinite(x)) return 0;
-    size = fmax(size, hypot(x, along));
-    lowest = fmin(lowest, x);
-    highest = fmax(highest, x);
-  }
-  const double scale = 1.0 + size, touch = fr->touch_rtol * scale;
-  if (highest - lowest <= touch) return 0;  /* its friction does not move it */
-  for (int64_t i = 0; i <= m; ++i) {
-    const double a = start - pi + 2.0 * pi * (double)i / (double)m, x = s->sampled[i];
-    if (i > 0 && (previous == 0.0 || previous * x < 0.0)) {
-      double lo = a_previous, hi = a, f_lo = previous, root = a_previous;
-      if (previous != 0.0) {
-        for (int it = 0; it < 200 && hi - lo > 4e-16 * (1.0 + fabs(hi)); ++it) {
-          const double mid = 0.5 * (lo + hi), f_mid = across_at(fr, w, s, mid, &along);
-          if ((f_mid < 0.0) == (f_lo < 0.0)) lo = mid, f_lo = f_mid; else hi = mid;
-        }
-        root = 0.5 * (lo + hi);
+  if (onset_accelerations(fr, w, s, s->x, s->a)) return 0;
+  for (int64_t k = 0, i = 0; k < ns; ++k) {  /* rho: its block -N E^T T E */
+    if (!fr->onset[k]) continue;
+    double b[2][2];
+    for (int c = 0; c < 2; ++c)
+      for (int d = 0; d < 2; ++d) {
+        double sum = 0.0;
+        for (int64_t r = fr->start[k]; r < fr->start[k + 1]; ++r)
+          for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
+            sum += s->E[6 * k + 2 * (r - fr->start[k]) + c] * s->T[r * nt + j] *
+                   s->E[6 * k + 2 * (j - fr->start[k]) + d];
+        b[c][d] = -sum * w->N[k];
       }
-      across_at(fr, w, s, root, &along);
-      if (along >= -touch && (isnan(best) || fabs(root - start) < fabs(best - start))) best = root;
+    const double mean = 0.5 * (b[0][0] + b[1][1]), off = 0.5 * (b[0][1] + b[1][0]);
+    const double radius = hypot(0.5 * (b[0][0] - b[1][1]), off);
+    const double top = fmax(fabs(mean + radius), fabs(mean - radius));
+    s->rho[2 * i] = s->rho[2 * i + 1] = top > 0.0 ? 1.0 / top : 1.0;
+    ++i;
+  }
+  for (int64_t it = 0; it < fr->iterations; ++it) {
+    double worst = 0.0;
+    for (int64_t c = 0; c < p; ++c) {  /* the projection and its 2 x 2 Jacobian */
+      const double z1 = s->x[2 * c] + s->rho[2 * c] * s->a[2 * c];
+      const double z2 = s->x[2 * c + 1] + s->rho[2 * c + 1] * s->a[2 * c + 1];
+      const double size = hypot(z1, z2);
+      double *P = s->P + 4 * c;
+      if (size > 1.0) {
+        const double e1 = z1 / size, e2 = z2 / size;
+        s->z[2 * c] = e1, s->z[2 * c + 1] = e2;
+        P[0] = (1.0 - e1 * e1) / size, P[1] = P[2] = -e1 * e2 / size;
+        P[3] = (1.0 - e2 * e2) / size;
+      } else {
+        s->z[2 * c] = z1, s->z[2 * c + 1] = z2;
+        P[0] = P[3] = 1.0, P[1] = P[2] = 0.0;
+      }
+      for (int r = 0; r < 2; ++r) {
+        s->G[2 * c + r] = s->x[2 * c + r] - s->z[2 * c + r];
+        worst = fmax(worst, fabs(s->G[2 * c + r]));
+      }
     }
-    previous = x;
-    a_previous = a;
+    if (!(worst == worst)) return 0;
+    if (worst <= fr->rounding * eps) {  /* its directions: the projected point's */
+      if (onset_accelerations(fr, w, s, s->z, s->shifted)) return 0;
+      memcpy(w->direction, s->trial, (size_t)nt * sizeof(double));
+      return 1;
+    }
+    for (int64_t col = 0; col < m; ++col) {  /* J = I - P (I + rho da/dx), by columns */
+      s->x[col] += fr->difference;
+      const int failed = onset_accelerations(fr, w, s, s->x, s->shifted);
+      s->x[col] -= fr->difference;
+      if (failed) return 0;
+      for (int64_t r = 0; r < m; ++r)  /* (I + rho da/dx)'s column col */
+        s->shifted[r] = (r == col) + s->rho[r] * (s->shifted[r] - s->a[r]) / fr->difference;
+      for (int64_t r = 0; r < m; ++r) {
+        const int64_t c = r / 2, e = r % 2;
+        const double *P = s->P + 4 * c;
+        s->J[r * m + col] = (r == col) - P[2 * e] * s->shifted[2 * c] -
+                            P[2 * e + 1] * s->shifted[2 * c + 1];
+      }
+    }
+    for (int64_t r = 0; r < m; ++r) s->step[r] = -s->G[r];
+    if (least_squares_small(s->J, s->V, s->shifted, s->step, m)) return 0;
+    for (int64_t r = 0; r < m; ++r) s->x[r] += s->step[r];
+    if (onset_accelerations(fr, w, s, s->x, s->a)) return 0;
   }
-  if (isnan(best)) return 0;
-  const double c = cos(best), sn = sin(best);
-  for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
-    const double *e = s->E + 6 * k + 2 * (j - fr->start[k]);
-    w->direction[j] = e[0] * c + e[1] * sn;
-  }
-  return 1;
+  return 0;
 }
 
 /* The onset contacts' directions copied from (into w->direction) or to (remember 1,
@@ -461,25 +427,14 @@ static void last_found(const dl_friction *fr, const friction_work *w, int rememb
   }
 }
 
-/* The onset contacts' directions (into w->direction): the directions their contact
- * points accelerate in, sought by Newton's method (newton_angles) from their sliding
- * velocities' where these are above the rest speed (the slow manifold the motion
- * follows), else from their start directions; then from the start directions; for a
- * single contact, then around the whole turn; several contacts all moving then from
- * the last directions found in the segment's steps, kept themselves where that finds
- * none either; else the start ones are kept.
- *
- * The last found only after the others: the forces are a function of the state alone
- * wherever those find the directions. They do not where a body's contacts all slide
- * with no acceleration, its load within what their friction holds (after its corners
- * slipped one by one, creeping at below the onset's speed): their directions then
- * form a family, each root's neighbours roots too, which the growing load shrinks to
- * the one where the body breaks loose, and only the last found follow it there (the
- * Python side always starts from them). What is found is remembered (remember 1) at
- * the steps' evaluations, not where the screens or the outputs look (dl_data's
- * looking), and a stretch puts the memory back with a step it leaves to the caller
- * (keep_onset_memory), so that the steps are the same whether or not they are looked
- * at and wherever they run. */
+/* The friction of the contacts starting to slide from rest (fr->onset) into
+ * w->direction: Coulomb's law at the level of accelerations (coulomb_onset), as
+ * friction.py's onset_friction finds it, from the last found in the segment's steps
+ * (last_direction), else from the start directions; where none is found, that start
+ * kept. What is found is remembered (remember 1) at the steps' evaluations, not where
+ * the screens or the outputs look (dl_data's looking), and a stretch puts the memory
+ * back with a step it leaves to the caller (keep_onset_memory), so that the steps are
+ * the same whether or not they are looked at and wherever they run. */
 static void onset_directions(const dl_model *md, const dl_friction *fr,
                              const friction_work *w, double t, const double *q,
                              const double *qd, int remember) {
@@ -498,35 +453,8 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
     s.a0[r] = tangent_times(fr, r, w->qdd0) - fr->kkt_values[fr->c_at + fr->tangent_row[r]];
     for (int64_t j = 0; j < nt; ++j) s.T[r * nt + j] = tangent_times(fr, r, w->X + j * n);
   }
-  double *guess = s.trial;  /* (free until the next residual) */
-  const double rest = fr->touch_rtol * (1.0 + max_abs(qd, n));  /* friction_at's speed */
-  int moving = 1;  /* every onset contact sliding faster than that */
-  for (int64_t k = 0; k < ns; ++k) {  /* each one's sliding velocity, its start if at rest */
-    double size = 0.0;
-    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
-      guess[j] = tangent_rate(fr, j, qd);
-      size += guess[j] * guess[j];
-    }
-    if (!(sqrt(size) > rest)) {
-      for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) guess[j] = fr->start_direction[j];
-      if (fr->onset[k]) moving = 0;
-    }
-  }
-  /* the last found, for several contacts all moving (at rest, the start directions
-   * are the switch's own) */
-  const int found_before = p > 1 && moving && isfinite(fr->last_direction[fr->start[first]]);
-  if ((angles_of(fr, &s, guess) && newton_angles(fr, w, &s, p)) ||
-      (angles_of(fr, &s, fr->start_direction) && newton_angles(fr, w, &s, p)) ||
-      (found_before && angles_of(fr, &s, fr->last_direction) &&
-       newton_angles(fr, w, &s, p))) {
-    if (remember) last_found(fr, w, 1);
-    return;
-  }
-  if (p == 1) {  /* one contact: the whole turn, as the Python side searches it */
-    if (angles_of(fr, &s, fr->start_direction)) whole_turn(fr, w, &s, first, s.angle[0]);
-    return;
-  }
-  if (found_before) last_found(fr, w, 0);
+  if (isfinite(fr->last_direction[fr->start[first]])) last_found(fr, w, 0);
+  if (coulomb_onset(fr, w, &s, p) && remember) last_found(fr, w, 1);
 }
 
 /* The onset search's last directions found kept at a stretch's step's start (restore

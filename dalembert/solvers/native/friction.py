@@ -12,12 +12,12 @@ with ``-mu A_t^T d`` give the normal forces by a small linear system (the low-ra
 correction of ``solve_sliding``). The tangent rows and their rates come from the model
 with every gap a row (the run's model lacks them), its velocity function evaluated in
 C. Where the run drops rows as dependent, the multipliers are made the minimum-norm
-ones first, as the Python side's are. A contact starting to slide from rest takes the
-direction its contact point accelerates in, sought by the same Newton's method as
-:func:`~dalembert.solvers.contact.friction.consistent_directions` (:class:`OnsetSearch`),
-from its sliding velocity's or start direction, then, for several contacts, from the
-last directions found in the segment's steps (docs/design.md, "Sliding friction in
-C").
+ones first, as the Python side's are. Contacts starting to slide from rest take the
+friction Coulomb's law gives at the level of accelerations (each holds, or slides along
+its acceleration), found by the same semismooth Newton's method as
+:func:`~dalembert.solvers.contact.friction.onset_friction` (:class:`OnsetSearch`), from
+the last found in the segment's steps, else from their start directions
+(docs/design.md, "Sliding friction in C").
 """
 
 from __future__ import annotations
@@ -38,31 +38,22 @@ from .solver import NativeSolver, Pinned, c_function
 
 @dataclass(frozen=True)
 class OnsetSearch:
-    """How the directions of contacts starting to slide from rest are sought: Newton's
-    method on their angles (as
-    :func:`~dalembert.solvers.contact.friction.consistent_directions`).
+    """How the friction of contacts starting to slide from rest is found: a semismooth
+    Newton's method (as :func:`~dalembert.solvers.contact.friction.onset_friction`).
 
     Attributes
     ----------
-    difference
-        The difference step of its Jacobian (radians).
-    turn
-        The largest step it takes (radians).
     iterations
         Its most iterations.
-    touch_rtol
-        How far below 0 an acceleration along a direction found may be (relative).
-    samples
-        A single contact's search around the whole turn, where Newton's method finds
-        no direction: samples per half turn (as
-        :func:`~dalembert.solvers.contact.friction.slip_direction`).
+    difference
+        The difference step of its accelerations' Jacobian.
+    rounding
+        Its residual within this many ulps of 0 is a solution.
     """
 
-    difference: float
-    turn: float
     iterations: int
-    touch_rtol: float
-    samples: int
+    difference: float
+    rounding: float
 
 
 @dataclass(frozen=True)
@@ -103,7 +94,7 @@ class FrictionTable:
     native
         The run's C solver.
     search
-        How the directions of contacts starting to slide from rest are sought.
+        How the friction of contacts starting to slide from rest is found.
     """
 
     def __init__(self, contacts: Sequence[SlidingContact], watched: NumericModel,
@@ -111,9 +102,8 @@ class FrictionTable:
         self._pinned = pin = Pinned()
         num = native.num
         f = self.struct = library.Friction(
-            n_sliding=len(contacts), dependent_rtol=RANK_RTOL, difference=search.difference,
-            turn=search.turn, iterations=search.iterations, touch_rtol=search.touch_rtol,
-            samples=search.samples)
+            n_sliding=len(contacts), dependent_rtol=RANK_RTOL, iterations=search.iterations,
+            difference=search.difference, rounding=search.rounding)
         names = list(num.compiled.input_names)
         f.normal = pin.array([c.normal for c in contacts])
         f.mu = pin.array([c.mu for c in contacts], np.float64)
@@ -161,7 +151,7 @@ class FrictionTable:
             f.group_entry, f.group_col = pin.array(entry), pin.array(col)
         ns, nt, n, m = len(contacts), self.forces, num.n, num.m
         # friction.c's search_size
-        search_size = 2 * nt + nt * nt + 12 * ns + 2 * ns * ns + 2 * search.samples + 1
+        search_size = 2 * nt + nt * nt + 24 * ns + 8 * ns * ns
         f.work = pin.zeros(nt + 2 * n + nt * n + nt * ns + 3 * m + ns * ns + ns
                            + search_size + group_work_size(len(group), n))
         self.address = ctypes.addressof(f)

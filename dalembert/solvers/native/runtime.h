@@ -155,15 +155,14 @@ typedef struct {
    * one is found, not written where dl_data's looking; then n_tangent more, the copy a
    * stretch keeps at each step's start: keep_onset_memory); the tangent rows'
    * accelerations need the watched model's c (its KKT values, flat: c
-   * from c_at, at each tangent's row tangent_row); Newton's method with difference,
-   * turn, iterations and touch_rtol as friction.py's consistent_directions, and a
-   * single contact's whole turn with samples per half turn as its slip_direction */
+   * from c_at, at each tangent's row tangent_row); Newton's method with iterations,
+   * difference and rounding as friction.py's onset_friction */
   const int64_t *onset, *tangent_row;
   double *last_direction;
   dl_function kkt;
   double *kkt_values;
-  int64_t c_at, iterations, samples;
-  double difference, turn, touch_rtol;
+  int64_t c_at, iterations;
+  double difference, rounding;
   int64_t n_copy;
   const int64_t *copy_from, *copy_to;
   dl_function run_velocity;        /* the run's model's (set with a group) */
