@@ -67,6 +67,14 @@ from ..kkt.sparse import matvec
 from .gaps import FORCE_RTOL, TOUCH_RTOL, Gaps, row_rates
 from .impulses import contact_impulses
 
+#: :func:`onset_friction`'s Newton method: its most iterations (from the last found, 0 to
+#: 3 in most evaluations, 29 at most on three random pushes of a box), and the
+#: difference step of its accelerations' Jacobian (in the units of ``u``, at most 1).
+ONSET_ITERATIONS = 40
+ONSET_STEP = 1e-7
+#: ``G`` (dimensionless) within this many ulps of 0 is a solution.
+ONSET_ROUNDING = 64
+
 
 @dataclass
 class Friction:
@@ -605,9 +613,6 @@ def onset_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     planes = [sliding_plane(full, gaps, t, q, qd, k) for k in starting]
     if any(plane is None for plane in planes):
         return dict(directions)
-    kkt = kkt or kkt_factorization(full.pattern)
-    if acting is None:
-        acting = acting_rows(full, gaps, t, q, which)
     problem = _Responses(full, gaps, t, q, qd, which, kkt, acting=acting)
     place = {int(row): j for j, row in enumerate(problem.rows)}
     cols = [np.array([place[int(r)] for r in gaps.tangents[k]]) for k in starting]
@@ -617,14 +622,6 @@ def onset_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     if found is None:
         return dict(directions)
     return {**directions, **{k: found[c] for k, c in zip(starting, cols)}}
-
-
-#: :func:`onset_friction`'s Newton method: its most iterations, and the difference step
-#: of its accelerations' Jacobian (in the units of ``u``, at most 1).
-ONSET_ITERATIONS = 40
-ONSET_STEP = 1e-7
-#: ``G`` (dimensionless) within this many ulps of 0 is a solution.
-ONSET_ROUNDING = 64
 
 
 def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarray],
