@@ -63,6 +63,7 @@ from .friction import (
     choose_friction,
     friction_at,
     held_forces,
+    onset_holding,
     sliding_velocity,
 )
 from .gaps import FORCE_RTOL, ONSET_RTOL, TOUCH_RTOL, Gaps, row_rates
@@ -81,6 +82,11 @@ STARTS_OPEN = 1e-300
 #: by other contacts still sticking) slides at 0, whose rounding must not read as a
 #: stop at every step (the C loop's solves leave some, the Python loop's may not).
 SPEED_ROUNDING = 16 * np.finfo(float).eps
+#: An open gap within this many ulps of the positions' scale (``1 + max |q|``) of where
+#: it closes, moving away, is not closing: its value's rounding, read as a fall through
+#: 0, closed a contact that had just opened (slowly) again at once, at every switch (a
+#: box rocking on an edge after landing).
+GAP_ROUNDING = 16 * np.finfo(float).eps
 
 
 @dataclass(frozen=True)
@@ -607,7 +613,9 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         again = closed_gaps(full, gaps, t, q, qd, touching, exclude, friction, inputs_at)
         if again == closed:
             which = friction.of(closed)
-            return np.concatenate([q, _held_still(full, gaps, t, q, qd, which)]), which, \
+            qd = _held_still(full, gaps, t, q, qd, which)
+            return np.concatenate([q, _stopped(full, gaps, t, q, qd, which,
+                                               friction.directions)]), which, \
                 {k: friction.directions[k] for k in which.sliding}
         closed = again
     raise ContactError(f"at t={t:.6g} the closed contacts and their friction (sticking "
@@ -666,6 +674,25 @@ def _held_still(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.
     return impact(full, t, q, qd, acting_rows(full, gaps, t, q, which)).qd
 
 
+def _stopped(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
+             which: ClosedGaps, directions: dict[int, np.ndarray]) -> np.ndarray:
+    """``qd`` with the sliding velocities of the gaps of ``which`` that start an onset
+    (:func:`_onset`) and hold there (Coulomb's law at the level of accelerations:
+    :func:`~dalembert.solvers.contact.friction.onset_friction`) set to 0: a body coming
+    to rest slides ever slower, below the onset's speed, and its onset's friction, which
+    holds it (no acceleration), would keep that speed for ever."""
+    onset = _onset(full, gaps, which, t, np.concatenate([q, qd]), ())
+    moving = [k for k in onset if np.any(sliding_velocity(full, gaps, k, t, q, qd))]
+    if not moving:
+        return qd
+    holding = [k for k in onset_holding(full, gaps, t, q, qd, which, directions, list(onset))
+               if k in moving]
+    if not holding:
+        return qd
+    stop = ClosedGaps(which.closed, tuple(sorted(set(which.held) | set(holding))))
+    return impact(full, t, q, qd, acting_rows(full, gaps, t, q, stop)).qd
+
+
 def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                     start: SegmentStart
                     ) -> tuple[tuple[Callable, ...], tuple[tuple[str, int], ...]]:
@@ -715,6 +742,9 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                 # contact held to the projection's tolerance, or left at rounding below
                 # 0, must not close again in the first tiny step
                 value = float(gaps.values(full, t, q)[k]) - start.floors.get(k, 0.0)
+                rounding = GAP_ROUNDING * (1.0 + np.abs(q).max(initial=0.0))
+                if value < rounding and gaps.rates(full, t, q, qd)[k] > 0.0:
+                    return rounding
                 return _open_at_start(start, t, value)
             add(closing, "closing", k, partial(_gap_screen, full, gap_at + k, start, k))
     assert gaps.friction is not None  # made by Gaps.of

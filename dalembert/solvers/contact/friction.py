@@ -70,10 +70,18 @@ from .impulses import contact_impulses
 #: :func:`onset_friction`'s Newton method: its most iterations (from the last found, 0 to
 #: 3 in most evaluations, 29 at most on three random pushes of a box), and the
 #: difference step of its accelerations' Jacobian (in the units of ``u``, at most 1).
-ONSET_ITERATIONS = 40
+ONSET_ITERATIONS = 100
 ONSET_STEP = 1e-7
-#: ``G`` (dimensionless) within this many ulps of 0 is a solution.
-ONSET_ROUNDING = 64
+#: ``G`` (dimensionless) within this many ulps of 0 is a solution (its rounding reaches
+#: 1e-13 on a box's four corners).
+ONSET_ROUNDING = 1024
+#: The shortest fraction of a Newton step its line search tries.
+ONSET_SMALLEST_STEP = 2.0**-20
+#: Where no step lowers ``G`` any more (its rounding: 5e-13 measured on a box coming to
+#: rest on its corners, one of them at its cone), ``G`` within this of 0 is a solution.
+ONSET_STALLED = 1e-10
+#: Whole Newton steps taken where no fraction of one lowers ``|G|`` (at most, per solve).
+ONSET_FREE_STEPS = 3
 
 
 @dataclass
@@ -544,8 +552,9 @@ def onset_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     accelerations (Gauss's least constraint with the friction's dissipation), so the
     accelerations are unique even where the forces are not (a box held on four
     corners at their cones). Solved by a semismooth Newton method from
-    ``directions`` (:func:`_coulomb_onset`); where it finds no solution the
-    directions are kept.
+    ``directions`` (:func:`_coulomb_onset`); where it finds no solution, each one's
+    friction opposes its sliding velocity (where that is not 0), which cannot add
+    energy.
 
     Why not the sliding velocity's direction ``v / |v|``: near ``v = 0`` that turns
     at a rate of about ``|a_t| / |v|`` towards this one wherever the contact's
@@ -610,18 +619,57 @@ def onset_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     1.0 42.8019
     0.3817 58.61
     """
+    return _onset_solution(full, gaps, t, q, qd, which, directions, starting,
+                           _Responses(full, gaps, t, q, qd, which, kkt, acting=acting))
+
+
+def _onset_solution(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                    qd: np.ndarray, which: ClosedGaps, directions: dict[int, np.ndarray],
+                    starting: Sequence[int], problem: _Responses
+                    ) -> dict[int, np.ndarray]:
+    """:func:`onset_friction` on the responses ``problem`` at its state."""
     planes = [sliding_plane(full, gaps, t, q, qd, k) for k in starting]
     if any(plane is None for plane in planes):
         return dict(directions)
-    problem = _Responses(full, gaps, t, q, qd, which, kkt, acting=acting)
     place = {int(row): j for j, row in enumerate(problem.rows)}
     cols = [np.array([place[int(r)] for r in gaps.tangents[k]]) for k in starting]
     u = np.concatenate([directions[k] for k in which.sliding]).astype(float)
     found = _coulomb_onset(problem, [which.sliding.index(k) for k in starting], cols,
                            [E for E in planes if E is not None], u)
-    if found is None:
-        return dict(directions)
-    return {**directions, **{k: found[c] for k, c in zip(starting, cols)}}
+    if found is not None:
+        return {**directions, **{k: found[c] for k, c in zip(starting, cols)}}
+    # none found: friction against each one's sliding velocity, which cannot add energy
+    # (kept at its start where it is 0)
+    rates = row_rates(full, t, q, qd)
+    kept = dict(directions)
+    for k in starting:
+        s = rates[gaps.tangents[k]]
+        size = float(np.linalg.norm(s))
+        if size > 0.0:
+            kept[k] = s / size
+    return kept
+
+
+def onset_holding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
+                  which: ClosedGaps, directions: dict[int, np.ndarray],
+                  starting: Sequence[int]) -> tuple[int, ...]:
+    """The gaps of ``starting`` that Coulomb's law at the level of accelerations holds
+    (:func:`onset_friction`): their tangential acceleration 0, to
+    :data:`~dalembert.solvers.contact.gaps.TOUCH_RTOL` relative to the accelerations
+    without friction (where their forces are not unique, some hold at their cones).
+
+    Parameters
+    ----------
+    full, gaps, t, q, qd, which, directions, starting
+        As :func:`onset_friction`'s.
+    """
+    problem = _Responses(full, gaps, t, q, qd, which)
+    found = _onset_solution(full, gaps, t, q, qd, which, directions, starting, problem)
+    a, _ = problem.at(np.concatenate([found[k] for k in which.sliding]).astype(float))
+    place = {int(row): j for j, row in enumerate(problem.rows)}
+    scale = 1.0 + float(np.abs(problem.a0).max(initial=0.0))
+    return tuple(k for k in starting if np.abs(a[[place[int(r)] for r in gaps.tangents[k]]])
+                 .max(initial=0.0) <= TOUCH_RTOL * scale)
 
 
 def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarray],
@@ -635,7 +683,13 @@ def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarr
     (it slides against its acceleration). Its generalized Jacobian ``I - P (I + rho
     da/dx)``, ``P`` the projection's (the identity inside, ``(I - z z^T / |z|^2) /
     |z|`` outside), ``da/dx`` by forward differences; the step the minimum-norm least
-    squares one (where a body's forces are not unique, ``da/dx`` is singular)."""
+    squares one (where a body's forces are not unique, ``da/dx`` is singular), halved
+    until ``|G|`` falls (undamped, the steps of a box coming to rest on its corners
+    swung between 1e-3 and 1e2 without end). Where no fraction lowers it, ``x`` is a
+    solution if ``G`` is within :data:`ONSET_STALLED` of 0; else a whole step is taken
+    all the same (:data:`ONSET_FREE_STEPS` per solve), then the projection's own step
+    (``x`` to the point projected, a step of the fixed-point iteration) where that
+    lowers ``|G|``."""
     p = len(contacts)
     eps = np.finfo(float).eps
 
@@ -649,14 +703,8 @@ def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarr
         a, N = problem.at(unpack(x))
         return np.concatenate([planes[c].T @ a[cols[c]] for c in range(p)]), N
 
-    x = np.concatenate([planes[c].T @ u[cols[c]] for c in range(p)])
-    a, N = accelerations(x)
-    rho = np.ones(2 * p)
-    for c, i in enumerate(contacts):  # its block: da/dx of its own u, -mu N E^T T E
-        block = -planes[c].T @ problem.T[np.ix_(cols[c], cols[c])] @ planes[c] * N[i]
-        top = float(np.abs(np.linalg.eigvalsh((block + block.T) / 2)).max())
-        rho[2 * c:2 * c + 2] = 1.0 / top if top > 0.0 else 1.0
-    for _ in range(ONSET_ITERATIONS):
+    def natural(x: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``G``, the projected point and ``P`` at ``x`` with accelerations ``a``."""
         z = x + rho * a
         proj, P = z.copy(), np.zeros((2 * p, 2 * p))
         for c in range(p):
@@ -668,7 +716,18 @@ def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarr
                 P[2 * c:2 * c + 2, 2 * c:2 * c + 2] = (np.eye(2) - np.outer(unit, unit)) / size
             else:
                 P[2 * c:2 * c + 2, 2 * c:2 * c + 2] = np.eye(2)
-        G = x - proj
+        return x - proj, proj, P
+
+    x = np.concatenate([planes[c].T @ u[cols[c]] for c in range(p)])
+    a, N = accelerations(x)
+    rho = np.ones(2 * p)
+    for c, i in enumerate(contacts):  # its block: da/dx of its own u, -mu N E^T T E
+        block = -planes[c].T @ problem.T[np.ix_(cols[c], cols[c])] @ planes[c] * N[i]
+        top = float(np.abs(np.linalg.eigvalsh((block + block.T) / 2)).max())
+        rho[2 * c:2 * c + 2] = 1.0 / top if top > 0.0 else 1.0
+    G, proj, P = natural(x, a)
+    free = ONSET_FREE_STEPS
+    for _ in range(ONSET_ITERATIONS):
         if np.abs(G).max() <= ONSET_ROUNDING * eps:
             return unpack(proj)
         da = np.column_stack([(accelerations(x + ONSET_STEP * e)[0] - a) / ONSET_STEP
@@ -677,8 +736,27 @@ def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarr
         step = np.linalg.lstsq(J, -G, rcond=None)[0]
         if not np.all(np.isfinite(step)):
             return None
-        x = x + step
-        a, N = accelerations(x)
+        size, fraction = float(np.linalg.norm(G)), 1.0
+        while True:
+            trial = x + fraction * step
+            a_trial = accelerations(trial)[0]
+            G_trial, proj_trial, P_trial = natural(trial, a_trial)
+            if float(np.linalg.norm(G_trial)) < (1.0 - 1e-4 * fraction) * size:
+                break
+            fraction /= 2
+            if fraction < ONSET_SMALLEST_STEP:
+                if np.abs(G).max() <= ONSET_STALLED:  # its rounding, where it is that near
+                    return unpack(proj)
+                # else a whole step all the same (a few: Newton's method often recovers),
+                # then the projection's own step, x -> proj
+                trial = x + step if free else proj
+                free -= 1
+                a_trial = accelerations(trial)[0]
+                G_trial, proj_trial, P_trial = natural(trial, a_trial)
+                if free < 0 and not float(np.linalg.norm(G_trial)) < size:
+                    return None
+                break
+        x, a, G, proj, P = trial, a_trial, G_trial, proj_trial, P_trial
     return None
 
 

@@ -23,12 +23,20 @@ from ...inputs import InputSignal
 from ...model.constraints import ClosedGaps, friction_force_name
 from ..native.friction import FrictionTable, OnsetSearch, SlidingContact
 from ..running.run_data import RunData
-from .friction import ONSET_ITERATIONS, ONSET_ROUNDING, ONSET_STEP
+from .friction import (
+    ONSET_FREE_STEPS,
+    ONSET_ITERATIONS,
+    ONSET_ROUNDING,
+    ONSET_SMALLEST_STEP,
+    ONSET_STALLED,
+    ONSET_STEP,
+)
 from .gaps import Gaps
 
 #: The onset's search as :func:`~dalembert.solvers.contact.friction.onset_friction`
 #: makes it.
-SEARCH = OnsetSearch(ONSET_ITERATIONS, ONSET_STEP, ONSET_ROUNDING)
+SEARCH = OnsetSearch(ONSET_ITERATIONS, ONSET_STEP, ONSET_ROUNDING, ONSET_SMALLEST_STEP,
+                     ONSET_STALLED, ONSET_FREE_STEPS)
 
 
 class SlidingInC:

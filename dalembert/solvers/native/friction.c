@@ -18,12 +18,13 @@ typedef struct {
 /* The onset's arrays for n_sliding contacts and n_tangent rows: the accelerations of
  * the tangent rows without friction and their responses (n_tangent and n_tangent^2),
  * each contact's plane (3 x 2), then, two per contact in its plane, the unknowns,
- * their accelerations and those at a difference, the point projected, the residual,
- * the step and the scales (7 x 2 n_sliding), the projection's 2 x 2 blocks
- * (4 n_sliding), the Newton matrix and its right singular vectors ((2 n_sliding)^2
- * each), and a trial's directions (n_tangent). */
+ * their accelerations, the point projected and the residual, and the same at a trial
+ * step (8 x 2 n_sliding), the accelerations at a difference, the step and the scales
+ * (3 x 2 n_sliding), the projection's 2 x 2 blocks and a trial's (2 x 4 n_sliding),
+ * the Newton matrix and its right singular vectors ((2 n_sliding)^2 each), and a
+ * trial's directions (n_tangent). */
 DL_INLINE int64_t search_size(int64_t ns, int64_t nt) {
-  return nt + nt * nt + 6 * ns + 14 * ns + 4 * ns + 8 * ns * ns + nt;
+  return nt + nt * nt + 6 * ns + 22 * ns + 8 * ns + 8 * ns * ns + nt;
 }
 
 DL_INLINE friction_work friction_work_of(const dl_friction *fr, int64_t n, int64_t m) {
@@ -203,7 +204,8 @@ static int normal_forces(const dl_friction *fr, const friction_work *w, const do
 
 /* The onset's arrays (search_size's layout). */
 typedef struct {
-  double *a0, *T, *E, *x, *a, *shifted, *z, *G, *step, *rho, *P, *J, *V, *trial;
+  double *a0, *T, *E, *x, *a, *z, *G, *xt, *at, *zt, *Gt, *shifted, *step, *rho, *P, *Pt;
+  double *J, *V, *trial;
 } search_work;
 
 DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
@@ -213,13 +215,18 @@ DL_INLINE search_work search_work_of(double *at, int64_t ns, int64_t nt) {
   s.E = s.T + nt * nt;
   s.x = s.E + 6 * ns;
   s.a = s.x + 2 * ns;
-  s.shifted = s.a + 2 * ns;
-  s.z = s.shifted + 2 * ns;
+  s.z = s.a + 2 * ns;
   s.G = s.z + 2 * ns;
-  s.step = s.G + 2 * ns;
+  s.xt = s.G + 2 * ns;
+  s.at = s.xt + 2 * ns;
+  s.zt = s.at + 2 * ns;
+  s.Gt = s.zt + 2 * ns;
+  s.shifted = s.Gt + 2 * ns;
+  s.step = s.shifted + 2 * ns;
   s.rho = s.step + 2 * ns;
   s.P = s.rho + 2 * ns;
-  s.J = s.P + 4 * ns;
+  s.Pt = s.P + 4 * ns;
+  s.J = s.Pt + 4 * ns;
   s.V = s.J + 4 * ns * ns;
   s.trial = s.V + 4 * ns * ns;
   return s;
@@ -328,12 +335,45 @@ static int onset_accelerations(const dl_friction *fr, const friction_work *w,
   return 0;
 }
 
+/* The natural residual at x, whose accelerations are a (p contacts, rho their scales):
+ * the point projected onto each unit disk into z, G = x - z, and the projection's 2 x 2
+ * Jacobian blocks into P; returns |G|'s largest entry, its 2-norm into *norm. */
+static double natural_residual(int64_t p, const double *rho, const double *x, const double *a,
+                               double *z, double *G, double *P, double *norm) {
+  double worst = 0.0, squares = 0.0;
+  for (int64_t c = 0; c < p; ++c) {
+    const double z1 = x[2 * c] + rho[2 * c] * a[2 * c];
+    const double z2 = x[2 * c + 1] + rho[2 * c + 1] * a[2 * c + 1];
+    const double size = hypot(z1, z2);
+    double *B = P + 4 * c;
+    if (size > 1.0) {
+      const double e1 = z1 / size, e2 = z2 / size;
+      z[2 * c] = e1, z[2 * c + 1] = e2;
+      B[0] = (1.0 - e1 * e1) / size, B[1] = B[2] = -e1 * e2 / size;
+      B[3] = (1.0 - e2 * e2) / size;
+    } else {
+      z[2 * c] = z1, z[2 * c + 1] = z2;
+      B[0] = B[3] = 1.0, B[1] = B[2] = 0.0;
+    }
+    for (int r = 0; r < 2; ++r) {
+      G[2 * c + r] = x[2 * c + r] - z[2 * c + r];
+      worst = fmax(worst, fabs(G[2 * c + r]));
+      squares += G[2 * c + r] * G[2 * c + r];
+    }
+  }
+  *norm = sqrt(squares);
+  return worst;
+}
+
 /* Coulomb's law at the level of accelerations for the p onset contacts from their
  * directions in w->direction (friction.py's _coulomb_onset, its constants and steps):
  * semismooth Newton's method on G(x) = x - proj(x + rho a(x)), x each contact's u
  * in its plane, proj onto the unit disk, rho the inverse of the largest eigenvalue of
- * its block; the minimum-norm least-squares step. 1 with the u found in w->direction,
- * 0 where none is found (w->direction as it was). */
+ * its block; the minimum-norm least-squares step, halved until |G| falls; where no
+ * fraction does, a solution if |G| is within stalled, else a whole step all the same
+ * (free_steps per solve), then the projection's own step (x to the point projected)
+ * where that lowers |G|. 1 with the u found in w->direction, 0 where none is found
+ * (w->direction as it was). */
 static int coulomb_onset(const dl_friction *fr, const friction_work *w, const search_work *s,
                          int64_t p) {
   const int64_t ns = fr->n_sliding, nt = fr->start[ns], m = 2 * p;
@@ -367,27 +407,10 @@ static int coulomb_onset(const dl_friction *fr, const friction_work *w, const se
     s->rho[2 * i] = s->rho[2 * i + 1] = top > 0.0 ? 1.0 / top : 1.0;
     ++i;
   }
+  double norm, trial_norm;
+  double worst = natural_residual(p, s->rho, s->x, s->a, s->z, s->G, s->P, &norm);
+  int64_t free = fr->free_steps;
   for (int64_t it = 0; it < fr->iterations; ++it) {
-    double worst = 0.0;
-    for (int64_t c = 0; c < p; ++c) {  /* the projection and its 2 x 2 Jacobian */
-      const double z1 = s->x[2 * c] + s->rho[2 * c] * s->a[2 * c];
-      const double z2 = s->x[2 * c + 1] + s->rho[2 * c + 1] * s->a[2 * c + 1];
-      const double size = hypot(z1, z2);
-      double *P = s->P + 4 * c;
-      if (size > 1.0) {
-        const double e1 = z1 / size, e2 = z2 / size;
-        s->z[2 * c] = e1, s->z[2 * c + 1] = e2;
-        P[0] = (1.0 - e1 * e1) / size, P[1] = P[2] = -e1 * e2 / size;
-        P[3] = (1.0 - e2 * e2) / size;
-      } else {
-        s->z[2 * c] = z1, s->z[2 * c + 1] = z2;
-        P[0] = P[3] = 1.0, P[1] = P[2] = 0.0;
-      }
-      for (int r = 0; r < 2; ++r) {
-        s->G[2 * c + r] = s->x[2 * c + r] - s->z[2 * c + r];
-        worst = fmax(worst, fabs(s->G[2 * c + r]));
-      }
-    }
     if (!(worst == worst)) return 0;
     if (worst <= fr->rounding * eps) {  /* its directions: the projected point's */
       if (onset_accelerations(fr, w, s, s->z, s->shifted)) return 0;
@@ -403,15 +426,44 @@ static int coulomb_onset(const dl_friction *fr, const friction_work *w, const se
         s->shifted[r] = (r == col) + s->rho[r] * (s->shifted[r] - s->a[r]) / fr->difference;
       for (int64_t r = 0; r < m; ++r) {
         const int64_t c = r / 2, e = r % 2;
-        const double *P = s->P + 4 * c;
-        s->J[r * m + col] = (r == col) - P[2 * e] * s->shifted[2 * c] -
-                            P[2 * e + 1] * s->shifted[2 * c + 1];
+        const double *B = s->P + 4 * c;
+        s->J[r * m + col] = (r == col) - B[2 * e] * s->shifted[2 * c] -
+                            B[2 * e + 1] * s->shifted[2 * c + 1];
       }
     }
     for (int64_t r = 0; r < m; ++r) s->step[r] = -s->G[r];
     if (least_squares_small(s->J, s->V, s->shifted, s->step, m)) return 0;
-    for (int64_t r = 0; r < m; ++r) s->x[r] += s->step[r];
-    if (onset_accelerations(fr, w, s, s->x, s->a)) return 0;
+    for (double fraction = 1.0;; fraction /= 2) {  /* halved until |G| falls */
+      if (fraction < fr->smallest_step) {
+        if (worst <= fr->stalled) {  /* its rounding, where it is that near */
+          if (onset_accelerations(fr, w, s, s->z, s->shifted)) return 0;
+          memcpy(w->direction, s->trial, (size_t)nt * sizeof(double));
+          return 1;
+        }
+        /* else a whole step all the same (a few), then the projection's, x -> z */
+        for (int64_t r = 0; r < m; ++r) s->xt[r] = free > 0 ? s->x[r] + s->step[r] : s->z[r];
+        --free;
+        if (onset_accelerations(fr, w, s, s->xt, s->at)) return 0;
+        const double trial_worst =
+            natural_residual(p, s->rho, s->xt, s->at, s->zt, s->Gt, s->Pt, &trial_norm);
+        if (free < 0 && !(trial_norm < norm)) return 0;
+        worst = trial_worst, norm = trial_norm;
+        break;
+      }
+      for (int64_t r = 0; r < m; ++r) s->xt[r] = s->x[r] + fraction * s->step[r];
+      if (onset_accelerations(fr, w, s, s->xt, s->at)) return 0;
+      const double trial_worst =
+          natural_residual(p, s->rho, s->xt, s->at, s->zt, s->Gt, s->Pt, &trial_norm);
+      if (trial_norm < (1.0 - 1e-4 * fraction) * norm) {
+        worst = trial_worst, norm = trial_norm;
+        break;
+      }
+    }
+    memcpy(s->x, s->xt, (size_t)m * sizeof(double));
+    memcpy(s->a, s->at, (size_t)m * sizeof(double));
+    memcpy(s->z, s->zt, (size_t)m * sizeof(double));
+    memcpy(s->G, s->Gt, (size_t)m * sizeof(double));
+    memcpy(s->P, s->Pt, (size_t)(2 * m) * sizeof(double));
   }
   return 0;
 }
@@ -430,8 +482,8 @@ static void last_found(const dl_friction *fr, const friction_work *w, int rememb
 /* The friction of the contacts starting to slide from rest (fr->onset) into
  * w->direction: Coulomb's law at the level of accelerations (coulomb_onset), as
  * friction.py's onset_friction finds it, from the last found in the segment's steps
- * (last_direction), else from the start directions; where none is found, that start
- * kept. What is found is remembered (remember 1) at the steps' evaluations, not where
+ * (last_direction), else from the start directions; where none is found, against the
+ * sliding velocities (that start where one is 0). What is found is remembered (remember 1) at the steps' evaluations, not where
  * the screens or the outputs look (dl_data's looking), and a stretch puts the memory
  * back with a step it leaves to the caller (keep_onset_memory), so that the steps are
  * the same whether or not they are looked at and wherever they run. */
@@ -454,7 +506,22 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
     for (int64_t j = 0; j < nt; ++j) s.T[r * nt + j] = tangent_times(fr, r, w->X + j * n);
   }
   if (isfinite(fr->last_direction[fr->start[first]])) last_found(fr, w, 0);
-  if (coulomb_onset(fr, w, &s, p) && remember) last_found(fr, w, 1);
+  if (coulomb_onset(fr, w, &s, p)) {
+    if (remember) last_found(fr, w, 1);
+    return;
+  }
+  /* none found: friction against each one's sliding velocity, which cannot add energy
+   * (kept as it started where that is 0) */
+  for (int64_t k = 0; k < ns; ++k) {
+    if (!fr->onset[k]) continue;
+    double size = 0.0;
+    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
+      size += tangent_rate(fr, j, qd) * tangent_rate(fr, j, qd);
+    size = sqrt(size);
+    if (size > 0.0)
+      for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
+        w->direction[j] = tangent_rate(fr, j, qd) / size;
+  }
 }
 
 /* The onset search's last directions found kept at a stretch's step's start (restore

@@ -49,11 +49,20 @@ class OnsetSearch:
         The difference step of its accelerations' Jacobian.
     rounding
         Its residual within this many ulps of 0 is a solution.
+    smallest_step
+        The shortest fraction of a step its line search tries.
+    stalled
+        Where nothing lowers its residual, within this of 0 it is a solution.
+    free_steps
+        Whole steps it takes where no fraction of one lowers its residual (per solve).
     """
 
     iterations: int
     difference: float
     rounding: float
+    smallest_step: float
+    stalled: float
+    free_steps: int
 
 
 @dataclass(frozen=True)
@@ -103,7 +112,9 @@ class FrictionTable:
         num = native.num
         f = self.struct = library.Friction(
             n_sliding=len(contacts), dependent_rtol=RANK_RTOL, iterations=search.iterations,
-            difference=search.difference, rounding=search.rounding)
+            difference=search.difference, rounding=search.rounding,
+            smallest_step=search.smallest_step, stalled=search.stalled,
+            free_steps=search.free_steps)
         names = list(num.compiled.input_names)
         f.normal = pin.array([c.normal for c in contacts])
         f.mu = pin.array([c.mu for c in contacts], np.float64)
@@ -151,7 +162,7 @@ class FrictionTable:
             f.group_entry, f.group_col = pin.array(entry), pin.array(col)
         ns, nt, n, m = len(contacts), self.forces, num.n, num.m
         # friction.c's search_size
-        search_size = 2 * nt + nt * nt + 24 * ns + 8 * ns * ns
+        search_size = 2 * nt + nt * nt + 36 * ns + 8 * ns * ns
         f.work = pin.zeros(nt + 2 * n + nt * n + nt * ns + 3 * m + ns * ns + ns
                            + search_size + group_work_size(len(group), n))
         self.address = ctypes.addressof(f)

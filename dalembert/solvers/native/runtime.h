@@ -156,13 +156,14 @@ typedef struct {
    * stretch keeps at each step's start: keep_onset_memory); the tangent rows'
    * accelerations need the watched model's c (its KKT values, flat: c
    * from c_at, at each tangent's row tangent_row); Newton's method with iterations,
-   * difference and rounding as friction.py's onset_friction */
+   * difference, rounding, its line search's smallest_step, stalled and free_steps as
+   * friction.py's onset_friction */
   const int64_t *onset, *tangent_row;
   double *last_direction;
   dl_function kkt;
   double *kkt_values;
-  int64_t c_at, iterations;
-  double difference, rounding;
+  int64_t c_at, iterations, free_steps;
+  double difference, rounding, smallest_step, stalled;
   int64_t n_copy;
   const int64_t *copy_from, *copy_to;
   dl_function run_velocity;        /* the run's model's (set with a group) */
