@@ -83,9 +83,10 @@ STARTS_OPEN = 1e-300
 #: stop at every step (the C loop's solves leave some, the Python loop's may not).
 SPEED_ROUNDING = 16 * np.finfo(float).eps
 #: An open gap within this many ulps of the positions' scale (``1 + max |q|``) of where
-#: it closes, moving away, is not closing: its value's rounding, read as a fall through
-#: 0, closed a contact that had just opened (slowly) again at once, at every switch (a
-#: box rocking on an edge after landing).
+#: it closes, moving away or not moving (its rate within :data:`SPEED_ROUNDING`), is
+#: not closing: its value's rounding, read as a fall through 0, closed a contact that
+#: had just opened (slowly, or by a plastic impact that left its rate at rounding's)
+#: again at once, at every switch (a box rocking on an edge after landing).
 GAP_ROUNDING = 16 * np.finfo(float).eps
 
 
@@ -743,7 +744,8 @@ def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,
                 # 0, must not close again in the first tiny step
                 value = float(gaps.values(full, t, q)[k]) - start.floors.get(k, 0.0)
                 rounding = GAP_ROUNDING * (1.0 + np.abs(q).max(initial=0.0))
-                if value < rounding and gaps.rates(full, t, q, qd)[k] > 0.0:
+                still = SPEED_ROUNDING * (1.0 + np.abs(qd).max(initial=0.0))
+                if value < rounding and gaps.rates(full, t, q, qd)[k] > -still:
                     return rounding
                 return _open_at_start(start, t, value)
             add(closing, "closing", k, partial(_gap_screen, full, gap_at + k, start, k))
