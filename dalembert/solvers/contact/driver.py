@@ -614,9 +614,10 @@ def _switch(full: NumericModel, gaps: Gaps, history: ContactHistory, t: float,
         again = closed_gaps(full, gaps, t, q, qd, touching, exclude, friction, inputs_at)
         if again == closed:
             which = friction.of(closed)
-            qd = _held_still(full, gaps, t, q, qd, which)
-            return np.concatenate([q, _stopped(full, gaps, t, q, qd, which,
-                                               friction.directions)]), which, \
+            held = set(which.held) | set(_held_in_onset(full, gaps, t, q, qd, which,
+                                                        friction.directions))
+            still = ClosedGaps(which.closed, tuple(sorted(held)))
+            return np.concatenate([q, _held_still(full, gaps, t, q, qd, still)]), which, \
                 {k: friction.directions[k] for k in which.sliding}
         closed = again
     raise ContactError(f"at t={t:.6g} the closed contacts and their friction (sticking "
@@ -665,33 +666,32 @@ def _segment_rows(gaps: Gaps, which: ClosedGaps) -> np.ndarray:
 
 def _held_still(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
                 which: ClosedGaps) -> np.ndarray:
-    """``qd`` with the sliding velocities of the gaps that start sticking set to 0: a
-    stop is found where the sliding velocity along its direction is 0, which in space
-    leaves a rounding-level part across it (below the speed a contact counts as at
-    rest at, :data:`~dalembert.solvers.contact.gaps.TOUCH_RTOL`)."""
+    """``qd`` with the sliding velocities of the gaps ``which.held`` set to 0 (by the
+    plastic impact of their rows): those that start sticking (a stop is found where the
+    sliding velocity along its direction is 0, which in space leaves a rounding-level
+    part across it, below the speed a contact counts as at rest at,
+    :data:`~dalembert.solvers.contact.gaps.TOUCH_RTOL`), and those that the onset holds
+    while they still move (:func:`_held_in_onset`)."""
     rows = gaps.held_rows(which)
     if not len(rows) or not np.any(row_rates(full, t, q, qd)[rows]):
         return qd
     return impact(full, t, q, qd, acting_rows(full, gaps, t, q, which)).qd
 
 
-def _stopped(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: np.ndarray,
-             which: ClosedGaps, directions: dict[int, np.ndarray]) -> np.ndarray:
-    """``qd`` with the sliding velocities of the gaps of ``which`` that start an onset
-    (:func:`_onset`) and hold there (Coulomb's law at the level of accelerations:
-    :func:`~dalembert.solvers.contact.friction.onset_friction`) set to 0: a body coming
-    to rest slides ever slower, below the onset's speed, and its onset's friction, which
-    holds it (no acceleration), would keep that speed for ever."""
+def _held_in_onset(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
+                   qd: np.ndarray, which: ClosedGaps,
+                   directions: dict[int, np.ndarray]) -> tuple[int, ...]:
+    """The gaps of ``which`` that start an onset (:func:`_onset`), still move and hold
+    there (Coulomb's law at the level of accelerations:
+    :func:`~dalembert.solvers.contact.friction.onset_holding`): a body coming to rest
+    slides ever slower, below the onset's speed, and its onset's friction, which holds
+    it (no acceleration), would keep that speed for ever, so they are stopped."""
     onset = _onset(full, gaps, which, t, np.concatenate([q, qd]), ())
     moving = [k for k in onset if np.any(sliding_velocity(full, gaps, k, t, q, qd))]
     if not moving:
-        return qd
-    holding = [k for k in onset_holding(full, gaps, t, q, qd, which, directions, list(onset))
-               if k in moving]
-    if not holding:
-        return qd
-    stop = ClosedGaps(which.closed, tuple(sorted(set(which.held) | set(holding))))
-    return impact(full, t, q, qd, acting_rows(full, gaps, t, q, stop)).qd
+        return ()
+    return tuple(k for k in onset_holding(full, gaps, t, q, qd, which, directions,
+                                          list(onset)) if k in moving)
 
 
 def _contact_events(gaps: Gaps, which: ClosedGaps, full: NumericModel,

@@ -264,6 +264,10 @@ class _Responses:
         self.T = np.array([accelerations(x) for x in self.qdd_rows]).reshape(
             len(self.rows), len(self.rows)).T
 
+    def columns(self, k: int) -> np.ndarray:
+        """The places of sliding gap ``k``'s tangent rows among :attr:`rows`."""
+        return np.flatnonzero(self.owner == self.sliding.index(k))
+
     def normal_forces(self, u: np.ndarray) -> np.ndarray:
         """The sliding gaps' normal forces with friction ``-mu N u`` (``u`` by tangent
         row): ``(I - R) N = N_0``."""
@@ -482,8 +486,8 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         for k in group:  # from the share of its cone it held (onset_friction's start)
             cone = mu[k] * lam[gaps.first + k]
             chosen.held.discard(k)
-            chosen.directions[k] = -forces[k] / cone if k != worst and cone > 0.0 \
-                else -forces[k] / np.linalg.norm(forces[k])
+            chosen.directions[k] = -force / size if k == worst else \
+                -forces[k] / cone if cone > 0.0 else np.zeros(len(gaps.tangents[k]))
             resting.remove(k)
         slipping = None
     started = [k for k in chosen.directions
@@ -493,7 +497,8 @@ def choose_friction(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
         found = onset_friction(full, gaps, t, q, qd, chosen.of(closed), chosen.directions,
                                started, kkt)
         for k in started:  # its direction: where it slides, or where its force holds it
-            u = found[k] if np.linalg.norm(found[k]) > 0.0 else guesses[k]
+            u = next((d for d in (found[k], guesses[k]) if np.linalg.norm(d) > 0.0),
+                     np.eye(len(gaps.tangents[k]))[0])  # (no force: any direction)
             chosen.directions[k] = u / np.linalg.norm(u)
     return chosen
 
@@ -631,8 +636,7 @@ def _onset_solution(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray,
     planes = [sliding_plane(full, gaps, t, q, qd, k) for k in starting]
     if any(plane is None for plane in planes):
         return dict(directions)
-    place = {int(row): j for j, row in enumerate(problem.rows)}
-    cols = [np.array([place[int(r)] for r in gaps.tangents[k]]) for k in starting]
+    cols = [problem.columns(k) for k in starting]
     u = np.concatenate([directions[k] for k in which.sliding]).astype(float)
     found = _coulomb_onset(problem, [which.sliding.index(k) for k in starting], cols,
                            [E for E in planes if E is not None], u)
@@ -662,14 +666,35 @@ def onset_holding(full: NumericModel, gaps: Gaps, t: float, q: np.ndarray, qd: n
     ----------
     full, gaps, t, q, qd, which, directions, starting
         As :func:`onset_friction`'s.
+
+    Examples
+    --------
+    The cylinder of :func:`onset_friction`'s example rolls on its holding contact when
+    pushed by 2 N and slides when pushed by 12 N:
+
+    >>> from dalembert import System, Unilateral, coordinates
+    >>> x, y, z, th = coordinates("x y z theta")
+    >>> for push in (2.0, 12.0):
+    ...     push = push * np.array([np.cos(0.5), np.sin(0.5)])
+    ...     cylinder = System([x, y, z, th], kinetic=(x.diff()**2 + y.diff()**2
+    ...                       + z.diff()**2) / 2 + 0.02 / 2 * th.diff()**2,
+    ...                       potential=9.81 * z - push[0] * x - push[1] * y,
+    ...                       constraints=[Unilateral(z - 0.2, "floor", friction=0.3,
+    ...                           tangents=[x.diff() + 0.2 * th.diff(), y.diff()])])
+    ...     full = cylinder._closed(ClosedGaps((0,), held=(0,))).numeric()
+    ...     gaps = Gaps.of(cylinder.definition.unilateral, 0, [0.0])
+    ...     rest = np.zeros(4)
+    ...     print(onset_holding(full, gaps, 0.0, np.array([0.0, 0.0, 0.2, 0.0]), rest,
+    ...                         ClosedGaps((0,), sliding=(0,)), {0: np.zeros(2)}, [0]))
+    (0,)
+    ()
     """
     problem = _Responses(full, gaps, t, q, qd, which)
     found = _onset_solution(full, gaps, t, q, qd, which, directions, starting, problem)
     a, _ = problem.at(np.concatenate([found[k] for k in which.sliding]).astype(float))
-    place = {int(row): j for j, row in enumerate(problem.rows)}
     scale = 1.0 + float(np.abs(problem.a0).max(initial=0.0))
-    return tuple(k for k in starting if np.abs(a[[place[int(r)] for r in gaps.tangents[k]]])
-                 .max(initial=0.0) <= TOUCH_RTOL * scale)
+    return tuple(k for k in starting
+                 if np.abs(a[problem.columns(k)]).max(initial=0.0) <= TOUCH_RTOL * scale)
 
 
 def _coulomb_onset(problem: _Responses, contacts: list[int], cols: list[np.ndarray],

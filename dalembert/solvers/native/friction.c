@@ -200,7 +200,7 @@ static int normal_forces(const dl_friction *fr, const friction_work *w, const do
   return solve_small(w->R, N, ns);
 }
 
-/* ---- The onset: the directions of the contacts starting to slide from rest ---- */
+/* ---- The onset: the friction of the contacts starting to slide from rest ---- */
 
 /* The onset's arrays (search_size's layout). */
 typedef struct {
@@ -483,10 +483,11 @@ static void last_found(const dl_friction *fr, const friction_work *w, int rememb
  * w->direction: Coulomb's law at the level of accelerations (coulomb_onset), as
  * friction.py's onset_friction finds it, from the last found in the segment's steps
  * (last_direction), else from the start directions; where none is found, against the
- * sliding velocities (that start where one is 0). What is found is remembered (remember 1) at the steps' evaluations, not where
- * the screens or the outputs look (dl_data's looking), and a stretch puts the memory
- * back with a step it leaves to the caller (keep_onset_memory), so that the steps are
- * the same whether or not they are looked at and wherever they run. */
+ * sliding velocities (that start where one is 0). What is found is remembered
+ * (remember 1) at the steps' evaluations, not where the screens or the outputs look
+ * (dl_data's looking), and a stretch puts the memory back with a step it leaves to the
+ * caller (keep_onset_memory), so that the steps are the same whether or not they are
+ * looked at and wherever they run. */
 static void onset_directions(const dl_model *md, const dl_friction *fr,
                              const friction_work *w, double t, const double *q,
                              const double *qd, int remember) {
@@ -515,12 +516,14 @@ static void onset_directions(const dl_model *md, const dl_friction *fr,
   for (int64_t k = 0; k < ns; ++k) {
     if (!fr->onset[k]) continue;
     double size = 0.0;
-    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
-      size += tangent_rate(fr, j, qd) * tangent_rate(fr, j, qd);
+    for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j) {
+      s.trial[j] = tangent_rate(fr, j, qd);
+      size += s.trial[j] * s.trial[j];
+    }
     size = sqrt(size);
     if (size > 0.0)
       for (int64_t j = fr->start[k]; j < fr->start[k + 1]; ++j)
-        w->direction[j] = tangent_rate(fr, j, qd) / size;
+        w->direction[j] = s.trial[j] / size;
   }
 }
 

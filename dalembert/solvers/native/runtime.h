@@ -148,12 +148,12 @@ typedef struct {
   dl_function velocity;            /* the watched model's */
   double *p, *vel;
   /* the contacts starting to slide from rest in the segment (onset[k] 1, written by
-   * the caller): their directions are sought as the ones their contact points
-   * accelerate in (friction.c's onset_directions), from their start directions, and
-   * where that finds none, from the last ones found at the segment's steps
+   * the caller): their friction is Coulomb's law at the level of accelerations
+   * (friction.c's onset_directions), found from the last found at the segment's steps
    * (last_direction: n_tangent, by tangent row, NaN from the segment's start until
    * one is found, not written where dl_data's looking; then n_tangent more, the copy a
-   * stretch keeps at each step's start: keep_onset_memory); the tangent rows'
+   * stretch keeps at each step's start: keep_onset_memory), else from their start
+   * directions; the tangent rows'
    * accelerations need the watched model's c (its KKT values, flat: c
    * from c_at, at each tangent's row tangent_row); Newton's method with iterations,
    * difference, rounding, its line search's smallest_step, stalled and free_steps as
