@@ -86,10 +86,11 @@ def angle_record(phi: np.ndarray, ref: np.ndarray) -> dict:
 # ---------------------------------------------------------------- dalembert
 
 
-def prepare_dalembert(method: str, k: float, c: float, ref: np.ndarray) -> Prepared:
+def dalembert_chain(k: float, c: float):
+    """The stiff chain as a dalembert multibody, its code generated: ``(multibody,
+    q0, qd0, body names)``; ``phi = -theta`` of each body is the reference's angle."""
     from dalembert.multibody import JointSpring, Multibody, chain
 
-    start = time.perf_counter()
     base = chain(LINKS, sc.L, sc.M, sc.R, joint="revolute", planar=True)
     springs = [JointSpring(f"spring{i + 1}", base.joints[i], k, c) for i in range(1, LINKS)]
     mb = Multibody(base.bodies, base.joints, gravity=(0.0, -sc.G, 0.0),
@@ -102,6 +103,14 @@ def prepare_dalembert(method: str, k: float, c: float, ref: np.ndarray) -> Prepa
         q0, qd0 = mb.initial_state(
             positions={n: (j + 0.5) * down for j, n in enumerate(names)},
             orientations=dict.fromkeys(names, -sc.ANGLE))
+    return mb, q0, qd0, names
+
+
+def prepare_dalembert(method: str, k: float, c: float, ref: np.ndarray) -> Prepared:
+    start = time.perf_counter()
+    mb, q0, qd0, names = dalembert_chain(k, c)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
         # a short run first: the method's own code (the implicit methods' Jacobian, the C
         # loop's library) is generated and compiled at its first use, not in a timing
         mb.simulate((0.0, 1e-3), q0, qd0, method=method)

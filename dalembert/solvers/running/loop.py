@@ -490,14 +490,16 @@ class PythonLoop(SimulationLoop):
     def result(self, method_name: str) -> IntegrationResult:
         solver = self.solver
         n_state = solver.y.size
-        nfev = solver.nfev + self._careful_nfev + self._retired[0] + \
+        probed = self.switch.probe_work if self.switch is not None else (0, 0, 0)
+        nfev = solver.nfev + self._careful_nfev + self._retired[0] + probed[0] + \
             (self.native.nfev if solver is not self.native else 0)
-        njev, nlu = (None if v is None else v + r for v, r in
-                     zip((solver.njev, solver.nlu), self._retired[1:]))
+        njev, nlu = (None if v is None else v + r + p for v, r, p in
+                     zip((solver.njev, solver.nlu), self._retired[1:], probed[1:]))
         stats = {"nfev": nfev, "njev": njev, "nlu": nlu,
                  "n_steps": self.n_steps, "n_projections": self.n_projections}
         if self.switch is not None:
             stats["n_switches"] = len(self.switch.switches)
+            stats["n_probes"] = self.switch.probes
         stats = {k: int(v) for k, v in stats.items() if v is not None}
         y = np.array(self.ys) if self.ys else np.empty((0, n_state))
         return IntegrationResult(

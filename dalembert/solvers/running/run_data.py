@@ -142,11 +142,12 @@ class RunData:
             dense_output=out.dense_output, events=self.events, project=self.project,
             progress=progress, stretches=self.plan.stretches, diagnose=self.diagnose,
             singular=self.singular, careful=self.careful, runaway=self.runaway,
-            deadline=self.deadline, watchdog=self.watchdog, switch=self._switch(),
+            deadline=self.deadline, watchdog=self.watchdog, switch=self._switch(t_span[0]),
             **self.solver_options)
 
-    def _switch(self) -> StiffSwitch | None:
-        """``method="auto"``'s switching for one segment (its memory is the segment's)."""
+    def _switch(self, t0: float) -> StiffSwitch | None:
+        """``method="auto"``'s switching for the segment starting at ``t0`` (its memory
+        is the segment's)."""
         implicit, options = self.plan.implicit, self.implicit_options
         if implicit is None or options is None:
             return None
@@ -169,7 +170,7 @@ class RunData:
             return explicit_class(self.rhs, t, y, t_bound,
                                   **{**explicit_options, "first_step": first})
 
-        return StiffSwitch(make_implicit, make_explicit)
+        return StiffSwitch(make_implicit, make_explicit, t0=t0)
 
     def passages(self) -> str:
         """The warning naming the singular configurations the run passed (empty if none)."""

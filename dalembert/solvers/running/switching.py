@@ -35,6 +35,17 @@ Measured reasons:
   trials in ``N`` explicit steps, each about ``TRIAL_STEPS`` implicit steps, so its
   extra work is bounded and falls, relative to the run, as the run grows.
 
+Both tests see steps held at DOP853's stability limit. Where its steps are held shorter
+still, for accuracy, by a fast mode the motion excites (its default 1e-11 on a stiff
+spring chain: ``h |lambda|`` 0.007), neither fires, though Radau at its own tolerance may
+step many times longer. So an estimate that starts no trial may start a **probe**
+instead, where the run is long (:data:`PROBE_LEFT`) and its fastest mode fast
+(:data:`PROBE_SPAN`): Radau takes ``TRIAL_STEPS`` steps from the state reached, and if
+its step grows to :data:`PROBE_RATIO` times DOP853's the run switches to Radau there for
+good; otherwise the probe's steps are discarded (the run stays DOP853's, step for step)
+and the next probe waits ``max(n, SPECTRAL_FIRST) x shortfall`` explicit steps, ``n``
+the steps taken.
+
 A segment settled with Radau does not go back to DOP853 if the problem turns non-stiff
 later. A false alarm costs one trial (the detector's limit of 1 fires on some gallery
 models at rtol 1e-3; lowering its 15 steps to 8 or 5 to detect sooner made more of
@@ -53,7 +64,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import OdeSolver
 
-from ...errors import IntegrationWarning, ModelError
+from ...errors import DalembertError, IntegrationWarning, ModelError
 from ..steppers.scipy_ivp import ControlledSteps, step_size
 from ..steppers.stiffness import StiffnessDetector, StiffnessState, spectral_radius
 
@@ -97,6 +108,19 @@ SPECTRAL_LIMIT = 0.8
 #: the free chains 15-22 steps into runs of 130-340 steps, and on the gallery's short
 #: runs at rtol 1e-3, where every trial failed (bench/README.md).
 TRIAL_LEFT = 1000
+#: A probe (see the module) runs at a spectral estimate that did not start a trial, if
+#: at least this many explicit steps are left at the step reached: its cost, a Radau
+#: set-up and ``TRIAL_STEPS`` steps discarded, is then at most a few per cent of them.
+PROBE_LEFT = 10_000
+#: ... and if the time left spans at least this many time constants of the fastest mode
+#: (``|lambda| (t_bound - t)``): a problem without modes that fast is not stiff, and a
+#: long run of one pays no probe nor the implicit method's code generation.
+PROBE_SPAN = 1e3
+#: A probe pays where the implicit step grows to this many times the explicit one. At
+#: the default tolerances (DOP853 1e-11, Radau 1e-8) Radau took 2.3 to 7 times
+#: DOP853's steps on every gallery model that is not stiff, a fiftieth to a
+#: hundredth of them on the stiff ones (bench/README.md).
+PROBE_RATIO = 4.0
 
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
 #: (``h_abs``: its first step, or 0 to let it choose).
@@ -129,6 +153,8 @@ class StiffSwitch:
     implicit: SolverFactory
     explicit: SolverFactory
     implicit_name: str = "Radau"
+    #: the segment's start
+    t0: float = 0.0
     #: ``(t, method)`` of each switch made
     switches: list[tuple[float, str]] = field(default_factory=list)
     _trial: tuple[float, int, float] | None = None  # t, steps and explicit step at the switch
@@ -137,8 +163,12 @@ class StiffSwitch:
     _detector: StiffnessDetector | None = None  # the explicit solver's, kept while it waits
     _rearm_at: int | None = None  # the step count at which the detector is armed again
     _wait: int = field(default_factory=lambda: RETRY_WAIT)  # the next failed trial's wait
+    #: the probes run, and their work ``(nfev, njev, nlu)`` (discarded, not the run's)
+    probes: int = 0
+    probe_work: tuple[int, int, int] = (0, 0, 0)
     _estimate_at: int = SPECTRAL_FIRST  # the step count of the next spectral estimate
     _vector: np.ndarray | None = None  # the last estimate's vector
+    _probe_at: int = 0  # the step count before which no probe runs
 
     def steps_to_judgement(self, n_steps: int) -> int | None:
         """How many more steps before the switch is judged or the detector armed again
@@ -192,7 +222,8 @@ class StiffSwitch:
 
     def _explicit_after(self, solver: OdeSolver, n_steps: int) -> OdeSolver | None:
         """The explicit method's turn: arm its detector when the wait is over, switch
-        when the detector says stiff."""
+        when the detector or an estimate says stiff or a probe finds the implicit
+        method paying."""
         estimate = n_steps >= self._estimate_at
         if estimate:  # the next one after as many steps again (stretches in C end there)
             self._estimate_at = n_steps + max(SPECTRAL_FIRST, n_steps)
@@ -213,26 +244,78 @@ class StiffSwitch:
                 self._detector, solver.detector = solver.detector, None
                 self._rearm_at = n_steps + TRIAL_LEFT
             return None
-        if not solver.stiff and not (estimate and solver.detector is not None
-                                     and self._spectrally_stiff(solver)):
-            return None
+        if not solver.stiff:
+            if not estimate or solver.detector is None:
+                return None
+            rho = self._spectral_radius(solver)
+            if h_explicit * rho < SPECTRAL_LIMIT:
+                if not self._probe_due(solver, n_steps, rho) or \
+                        not self._probe_pays(solver, n_steps, h_explicit):
+                    return None
+                self._settled = True  # the probe has shown it: no trial to judge
         try:
             implicit = self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
         except ModelError as exc:  # its Jacobian cannot be made (a sign() in a force)
-            warnings.warn(f"method='auto' found the problem stiff at t={solver.t:.6g} but "
-                          f"cannot switch to {self.implicit_name}: {exc}; the run stays "
-                          "with DOP853", IntegrationWarning, stacklevel=2)
-            solver.detector, self._settled = None, True  # DOP853's for the rest
+            self._cannot_switch(solver, exc)
             return None
-        self._detector = solver.detector
-        self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
+        if not self._settled:
+            self._detector = solver.detector
+            self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
         self.switches.append((solver.t, self.implicit_name))
         return implicit
 
-    def _spectrally_stiff(self, solver: OdeSolver) -> bool:
-        """Whether an estimate puts the explicit step at ``SPECTRAL_LIMIT`` times the
-        Jacobian's largest ``|lambda|`` or above (see :data:`SPECTRAL_FIRST`)."""
+    def _cannot_switch(self, solver: OdeSolver, exc: ModelError) -> None:
+        """Leave the run with the explicit method: the implicit one cannot be made."""
+        warnings.warn(f"method='auto' found the problem stiff at t={solver.t:.6g} but "
+                      f"cannot switch to {self.implicit_name}: {exc}; the run stays "
+                      "with DOP853", IntegrationWarning, stacklevel=2)
+        solver.detector, self._settled = None, True  # DOP853's for the rest
+
+    def _spectral_radius(self, solver: OdeSolver) -> float:
+        """An estimate of the Jacobian's largest ``|lambda|`` at the state reached (see
+        :data:`SPECTRAL_FIRST`), started from the last estimate's vector."""
         start = self._vector if self._vector is not None else \
             np.random.default_rng(0).standard_normal(len(solver.y))
         rho, self._vector = spectral_radius(solver.fun, solver.t, solver.y, start)
-        return step_size(solver) * rho >= SPECTRAL_LIMIT
+        return rho
+
+    def _probe_due(self, solver: OdeSolver, n_steps: int, rho: float) -> bool:
+        """Whether a probe may run now (see :data:`PROBE_LEFT`, :data:`PROBE_SPAN`)."""
+        left = abs(solver.t_bound - solver.t)
+        return n_steps >= self._probe_at and rho * left >= PROBE_SPAN and \
+            left >= PROBE_LEFT * self._explicit_step(solver, n_steps)
+
+    def _explicit_step(self, solver: OdeSolver, n_steps: int) -> float:
+        """The explicit step to weigh the implicit one against: the longer of the next
+        one and the segment's mean (a step held short for a moment is not the run's)."""
+        return max(step_size(solver), abs(solver.t - self.t0) / max(n_steps, 1))
+
+    def _probe_pays(self, solver: OdeSolver, n_steps: int, h_explicit: float) -> bool:
+        """Whether the implicit method, ``TRIAL_STEPS`` steps from the state reached,
+        grows its step to ``PROBE_RATIO`` times the explicit one's (:meth:`_explicit_step`).
+        The probe's steps are not the run's: they are discarded, so a run the probe leaves
+        alone is the explicit method's, step for step. A probe that falls short sets the
+        next one's wait."""
+        h_ref = self._explicit_step(solver, n_steps)
+        try:
+            probe = self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
+        except ModelError as exc:
+            self._cannot_switch(solver, exc)
+            return False
+        with warnings.catch_warnings():  # a probe that fails is a probe that falls short
+            warnings.simplefilter("ignore")
+            try:
+                for _ in range(TRIAL_STEPS):
+                    if probe.status != "running" or probe.step() is not None:
+                        break
+            except (ArithmeticError, ValueError, DalembertError):
+                probe.status = "failed"
+        nfev, njev, nlu = self.probe_work
+        self.probe_work = (nfev + probe.nfev, njev + (probe.njev or 0), nlu + (probe.nlu or 0))
+        self.probes += 1
+        grown = step_size(probe) if probe.status in ("running", "finished") else 0.0
+        if grown >= PROBE_RATIO * h_ref:
+            return True
+        shortfall = PROBE_RATIO * h_ref / max(grown, 1e-300)
+        self._probe_at = n_steps + int(min(max(n_steps, SPECTRAL_FIRST) * shortfall, 1e12))
+        return False

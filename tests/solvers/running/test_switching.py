@@ -7,7 +7,8 @@ switch; DOP853's own run for one that does not; the detector's estimate against
 ``h |lambda|`` of a linear problem; the switch back, forced, against the same reference;
 a stiff spring chain whose first trial fails against DOP853 at rtol 1e-10 (its steps
 held at the stability limit, so the tight tolerance costs no more steps); the waits of
-the policy against the rule the module states.
+the policy against the rule the module states; a probe that falls short against
+DOP853's own run.
 """
 
 from __future__ import annotations
@@ -58,6 +59,37 @@ def test_a_stiff_run_switches_to_radau_and_meets_the_reference(elastic, backend)
     explicit = system.simulate((0.0, T_END), q0, method="DOP853", **{**options,
                                                                     "backend": "c"})
     assert auto.stats["n_steps"] < explicit.stats["n_steps"] / 3
+
+
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_at_the_default_tolerances_a_probe_finds_radau_paying(elastic, backend):
+    """At the defaults DOP853 (rtol 1e-11) resolves the spring's radial mode for
+    accuracy, far inside its stability limit, so neither test of stiffness fires. A probe
+    finds Radau at its own default (1e-8) stepping more than ``PROBE_RATIO`` times longer
+    and the run switches there: the end meets the reference to Radau's accuracy, in a
+    twentieth of DOP853's steps."""
+    system, q0, expected = elastic
+    auto = system.simulate((0.0, T_END), q0, t_eval=[T_END], backend=backend)  # defaults
+    assert auto.success and auto.stats["n_probes"] == 1 and auto.stats["n_switches"] == 1
+    assert np.abs(end_of(auto) - expected).max() < 1e-9
+    explicit = system.simulate((0.0, T_END), q0, method="DOP853", t_eval=[T_END])
+    assert auto.stats["n_steps"] < explicit.stats["n_steps"] / 20
+
+
+def test_a_probe_that_falls_short_leaves_the_run_dop853s():
+    """The slider-crank over 100 s is long enough, and its fastest mode fast enough, for
+    a probe at the defaults, but it is not stiff: Radau's step falls short, the probe's
+    steps are discarded and the run is DOP853's, step for step (the probe's evaluations
+    counted beside them)."""
+    from dalembert.examples import slider_crank
+
+    system = slider_crank.build()
+    span = (0.0, 10 * slider_crank.T_END)
+    auto = system.simulate(span, **slider_crank.INITIAL)
+    explicit = system.simulate(span, **slider_crank.INITIAL, method="DOP853")
+    assert auto.stats["n_probes"] >= 1 and auto.stats["n_switches"] == 0
+    assert np.array_equal(auto.t, explicit.t) and np.array_equal(auto.q, explicit.q)
+    assert auto.stats["nfev"] > explicit.stats["nfev"]
 
 
 def test_dense_output_runs_across_a_switch(elastic):
