@@ -118,8 +118,9 @@ PROBE_LEFT = 10_000
 PROBE_SPAN = 1e3
 #: A probe pays where the implicit step grows to this many times the explicit one. At
 #: the default tolerances (DOP853 1e-11, Radau 1e-8) Radau took 2.3 to 7 times
-#: DOP853's steps on every gallery model that is not stiff, a fiftieth to a
-#: hundredth of them on the stiff ones (bench/README.md).
+#: DOP853's steps on every gallery model that is not stiff, a thirtieth to a hundredth
+#: of them on the stiff ones (bench/README.md). Twice ``COST_RATIO``: a false switch
+#: would also loosen the run's accuracy to the implicit method's tolerance.
 PROBE_RATIO = 4.0
 
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
