@@ -27,6 +27,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 from dalembert import Holonomic, System, coordinates
+from dalembert.model.coordinates import t as time
 
 G, MASS, REST, TILT = 9.81, 1.0, 1.0, np.radians(60.0)
 G_PLANE = G * np.sin(TILT)
@@ -70,6 +71,20 @@ def build(k: float) -> System:
                   potential=MASS * G * z + k / 2 * (length - REST) ** 2,
                   constraints=[Holonomic(-np.sin(TILT) * y + np.cos(TILT) * z, name="plane")],
                   name="elastic pendulum")
+
+
+def softening(k: float, t_let_go: float = 1.0, soft: float = 50.0) -> System:
+    """The same pendulum whose spring softens from ``k`` to ``soft`` around
+    ``t_let_go`` (logistic, over about 0.05 s): stiff, then not (``method="auto"``'s
+    way back to DOP853)."""
+    x, y, z = coordinates("x y z")
+    length = sp.sqrt(x**2 + y**2 + z**2)
+    stiffness = soft + (k - soft) / (1 + sp.exp((time - t_let_go) / 0.05))
+    return System([x, y, z],
+                  kinetic=MASS / 2 * (x.diff() ** 2 + y.diff() ** 2 + z.diff() ** 2),
+                  potential=MASS * G * z + stiffness / 2 * (length - REST) ** 2,
+                  constraints=[Holonomic(-np.sin(TILT) * y + np.cos(TILT) * z, name="plane")],
+                  name="softening pendulum")
 
 
 @pytest.fixture(scope="module", params=[1e3, 1e6], ids=["k=1e3", "k=1e6"])

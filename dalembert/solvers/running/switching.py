@@ -41,15 +41,25 @@ spring chain: ``h |lambda|`` 0.007), neither fires, though Radau at its own tole
 step many times longer. So an estimate that starts no trial may start a **probe**
 instead, where the run is long (:data:`PROBE_LEFT`) and its fastest mode fast
 (:data:`PROBE_SPAN`): Radau takes ``TRIAL_STEPS`` steps from the state reached, and if
-its step grows to :data:`PROBE_RATIO` times DOP853's the run switches to Radau there for
-good; otherwise the probe's steps are discarded (the run stays DOP853's, step for step)
-and the next probe waits ``max(n, SPECTRAL_FIRST) x shortfall`` explicit steps, ``n``
-the steps taken.
+its step grows to :data:`PROBE_RATIO` times DOP853's the run switches to Radau there and
+keeps it (as after a trial that pays); otherwise the probe's steps are discarded (the
+run stays DOP853's, step for step) and the next probe waits
+``max(n, SPECTRAL_FIRST) x shortfall`` explicit steps, ``n`` the steps DOP853 has taken
+since it took the run. DOP853's step is taken as the longer of its next step and its
+mean since it took the run (a step held short for a moment is not the run's).
 
-A segment settled with Radau does not go back to DOP853 if the problem turns non-stiff
-later. A false alarm costs one trial (the detector's limit of 1 fires on some gallery
-models at rtol 1e-3; lowering its 15 steps to 8 or 5 to detect sooner made more of
-them fire, at rtol 1e-6 and 1e-8 too).
+Radau, once kept, looks back as LSODA does: every ``SPECTRAL_FIRST`` implicit steps an
+estimate of the Jacobian's largest ``|lambda|``; where DOP853 could take Radau's step
+(the longer of its next step and its mean since the last look: a Newton failure cuts
+single steps short) stably (``h |lambda|`` below ``SPECTRAL_LIMIT``: the problem has
+turned non-stiff, a stiff force let go), a probe of DOP853 from the state reached, and
+the run goes back to it where its step grows to ``BACK_RATIO`` times Radau's (its
+detector armed again after ``RETRY_WAIT`` steps); otherwise the next look waits
+``SPECTRAL_FIRST x shortfall`` steps.
+
+A false alarm costs one trial (the detector's limit of 1 fires on some gallery models at
+rtol 1e-3; lowering its 15 steps to 8 or 5 to detect sooner made more of them fire, at
+rtol 1e-6 and 1e-8 too).
 
 :class:`StiffSwitch` holds the policy and its memory for one run segment; the loops
 (:mod:`.loop`) call :meth:`StiffSwitch.after` after each unit of work.
@@ -122,6 +132,11 @@ PROBE_SPAN = 1e3
 #: of them on the stiff ones (bench/README.md). Twice ``COST_RATIO``: a false switch
 #: would also loosen the run's accuracy to the implicit method's tolerance.
 PROBE_RATIO = 4.0
+#: The kept implicit method hands the run back where a probe of the explicit one, at
+#: its own tolerance, steps at least this many times as long as the implicit step (a
+#: DOP853 step costs less than a Radau step, half by ``COST_RATIO``: the margin keeps a
+#: run from switching to and fro near the break-even).
+BACK_RATIO = 1.0
 
 #: ``make(t, y, t_bound, h_abs)``: a solver of the run's problem starting at ``(t, y)``
 #: (``h_abs``: its first step, or 0 to let it choose).
@@ -160,7 +175,10 @@ class StiffSwitch:
     switches: list[tuple[float, str]] = field(default_factory=list)
     _trial: tuple[float, int, float] | None = None  # t, steps and explicit step at the switch
     _judged: float = 0.0  # the implicit step at the last judgement (0: none yet)
-    _settled: bool = False  # one method kept for the rest of the segment (no more trials)
+    _settled: bool = False  # DOP853 kept for the rest of the segment (no more trials)
+    _kept_at: int | None = None  # the step count at which the implicit method was kept
+    _back_at: int = 0  # the step count of the next look back at the explicit method
+    _look: tuple[float, int] = (0.0, 0)  # t and steps at the kept method's last look back
     _detector: StiffnessDetector | None = None  # the explicit solver's, kept while it waits
     _rearm_at: int | None = None  # the step count at which the detector is armed again
     _wait: int = field(default_factory=lambda: RETRY_WAIT)  # the next failed trial's wait
@@ -170,10 +188,12 @@ class StiffSwitch:
     _estimate_at: int = SPECTRAL_FIRST  # the step count of the next spectral estimate
     _vector: np.ndarray | None = None  # the last estimate's vector
     _probe_at: int = 0  # the step count before which no probe runs
+    _explicit_since: tuple[float, int] | None = None  # t, steps: the explicit method's take-over
 
     def steps_to_judgement(self, n_steps: int) -> int | None:
-        """How many more steps before the switch is judged or the detector armed again
-        (``None``: neither is due), so that a stretch of steps in C ends there.
+        """How many more steps before the switch has something to decide (a trial to
+        judge, the detector to arm again, an estimate, a look back from the implicit
+        method; ``None``: nothing more), so that a stretch of steps in C ends there.
 
         Parameters
         ----------
@@ -182,6 +202,8 @@ class StiffSwitch:
         """
         if self._settled:
             return None
+        if self._kept_at is not None:
+            return max(1, self._back_at - n_steps)
         if self._trial is not None:
             return max(1, TRIAL_STEPS - (n_steps - self._trial[1]))
         if self._rearm_at is not None:
@@ -200,6 +222,8 @@ class StiffSwitch:
         """
         if self._settled:
             return None
+        if self._kept_at is not None:
+            return self._implicit_after(solver, n_steps)
         if self._trial is None:
             return self._explicit_after(solver, n_steps)
         _, steps0, h_explicit = self._trial
@@ -207,7 +231,7 @@ class StiffSwitch:
             return None
         h_implicit = step_size(solver)  # the step Radau has grown to
         if h_implicit >= COST_RATIO * h_explicit:
-            self._settled = True
+            self._keep(solver, n_steps)
             return None
         if h_implicit > GROWING * self._judged:  # still growing: another trial
             self._trial, self._judged = (solver.t, n_steps, h_explicit), h_implicit
@@ -215,7 +239,7 @@ class StiffSwitch:
         # back to the explicit method, its detector armed again after a wait that grows
         # with the failed trials and with how far the implicit step fell short
         shortfall = COST_RATIO * h_explicit / max(h_implicit, 1e-300)
-        self._trial = None
+        self._trial, self._explicit_since = None, (solver.t, n_steps)
         self._rearm_at = n_steps + int(min(self._wait * shortfall, 1e12))
         self._wait *= 2
         self.switches.append((solver.t, "DOP853"))
@@ -245,6 +269,7 @@ class StiffSwitch:
                 self._detector, solver.detector = solver.detector, None
                 self._rearm_at = n_steps + TRIAL_LEFT
             return None
+        probed = False
         if not solver.stiff:
             if not estimate or solver.detector is None:
                 return None
@@ -253,17 +278,51 @@ class StiffSwitch:
                 if not self._probe_due(solver, n_steps, rho) or \
                         not self._probe_pays(solver, n_steps, h_explicit):
                     return None
-                self._settled = True  # the probe has shown it: no trial to judge
+                probed = True
         try:
             implicit = self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
         except ModelError as exc:  # its Jacobian cannot be made (a sign() in a force)
             self._cannot_switch(solver, exc)
             return None
-        if not self._settled:
-            self._detector = solver.detector
+        self._detector = solver.detector
+        if probed:  # the probe has shown it: no trial to judge
+            self._keep(solver, n_steps)
+        else:
             self._trial, self._judged = (solver.t, n_steps, h_explicit), h_explicit
         self.switches.append((solver.t, self.implicit_name))
         return implicit
+
+    def _keep(self, solver: OdeSolver, n_steps: int) -> None:
+        """Keep the implicit method (a trial or a probe has shown it paying); look back at
+        the explicit one after ``SPECTRAL_FIRST`` steps."""
+        self._trial, self._kept_at = None, n_steps
+        self._back_at, self._look = n_steps + SPECTRAL_FIRST, (solver.t, n_steps)
+
+    def _implicit_after(self, solver: OdeSolver, n_steps: int) -> OdeSolver | None:
+        """The kept implicit method's turn: every ``SPECTRAL_FIRST`` steps an estimate of
+        the Jacobian's largest ``|lambda|`` (13 evaluations: under 1 % of the steps');
+        where the explicit method could take the implicit step stably, a probe of it, and
+        the run goes back to it where it steps at least ``BACK_RATIO`` times as long."""
+        if n_steps < self._back_at:
+            return None
+        # the implicit step to weigh: the longer of the next and the mean since the last
+        # look (a step cut short for a moment, by a Newton failure, is not the run's)
+        h_implicit = self._typical_step(solver, n_steps, self._look)
+        self._back_at, self._look = n_steps + SPECTRAL_FIRST, (solver.t, n_steps)
+        if not h_implicit > 0.0 or abs(solver.t_bound - solver.t) < TRIAL_LEFT * h_implicit:
+            return None
+        if h_implicit * self._spectral_radius(solver) >= SPECTRAL_LIMIT:
+            return None  # stiff still: the explicit method's steps would be held shorter
+        grown = self._probe(self.explicit, solver, step_size(solver))
+        if grown < BACK_RATIO * h_implicit:
+            shortfall = BACK_RATIO * h_implicit / max(grown, 1e-300)
+            self._back_at = n_steps + int(min(SPECTRAL_FIRST * shortfall, 1e12))
+            return None
+        # back to the explicit method, its detector armed again after the first wait
+        self._kept_at, self._wait = None, RETRY_WAIT
+        self._rearm_at, self._explicit_since = n_steps + RETRY_WAIT, (solver.t, n_steps)
+        self.switches.append((solver.t, "DOP853"))
+        return self.explicit(solver.t, solver.y, solver.t_bound, step_size(solver))
 
     def _cannot_switch(self, solver: OdeSolver, exc: ModelError) -> None:
         """Leave the run with the explicit method: the implicit one cannot be made."""
@@ -288,21 +347,38 @@ class StiffSwitch:
 
     def _explicit_step(self, solver: OdeSolver, n_steps: int) -> float:
         """The explicit step to weigh the implicit one against: the longer of the next
-        one and the segment's mean (a step held short for a moment is not the run's)."""
-        return max(step_size(solver), abs(solver.t - self.t0) / max(n_steps, 1))
+        one and the mean since the explicit method took the run (a step held short for a
+        moment is not the run's)."""
+        return self._typical_step(solver, n_steps, self._explicit_since or (self.t0, 0))
+
+    @staticmethod
+    def _typical_step(solver: OdeSolver, n_steps: int, since: tuple[float, int]) -> float:
+        """The longer of ``solver``'s next step and its mean since ``(t, steps)``."""
+        return max(step_size(solver), abs(solver.t - since[0]) / max(n_steps - since[1], 1))
 
     def _probe_pays(self, solver: OdeSolver, n_steps: int, h_explicit: float) -> bool:
         """Whether the implicit method, ``TRIAL_STEPS`` steps from the state reached,
         grows its step to ``PROBE_RATIO`` times the explicit one's (:meth:`_explicit_step`).
-        The probe's steps are not the run's: they are discarded, so a run the probe leaves
-        alone is the explicit method's, step for step. A probe that falls short sets the
-        next one's wait."""
+        A probe that falls short sets the next one's wait."""
         h_ref = self._explicit_step(solver, n_steps)
         try:
-            probe = self.implicit(solver.t, solver.y, solver.t_bound, h_explicit)
+            grown = self._probe(self.implicit, solver, h_explicit)
         except ModelError as exc:
             self._cannot_switch(solver, exc)
             return False
+        if grown >= PROBE_RATIO * h_ref:
+            return True
+        shortfall = PROBE_RATIO * h_ref / max(grown, 1e-300)
+        taken = n_steps - (self._explicit_since or (self.t0, 0))[1]
+        self._probe_at = n_steps + int(min(max(taken, SPECTRAL_FIRST) * shortfall, 1e12))
+        return False
+
+    def _probe(self, make: SolverFactory, solver: OdeSolver, h_first: float) -> float:
+        """The step the other method grows to in ``TRIAL_STEPS`` steps from the state
+        ``solver`` has reached (0 where it fails). Its steps are not the run's: they are
+        discarded, so a run a probe leaves alone goes on step for step as without it;
+        their work is counted in :attr:`probe_work`."""
+        probe = make(solver.t, solver.y, solver.t_bound, h_first)
         with warnings.catch_warnings():  # a probe that fails is a probe that falls short
             warnings.simplefilter("ignore")
             try:
@@ -314,9 +390,4 @@ class StiffSwitch:
         nfev, njev, nlu = self.probe_work
         self.probe_work = (nfev + probe.nfev, njev + (probe.njev or 0), nlu + (probe.nlu or 0))
         self.probes += 1
-        grown = step_size(probe) if probe.status in ("running", "finished") else 0.0
-        if grown >= PROBE_RATIO * h_ref:
-            return True
-        shortfall = PROBE_RATIO * h_ref / max(grown, 1e-300)
-        self._probe_at = n_steps + int(min(max(n_steps, SPECTRAL_FIRST) * shortfall, 1e12))
-        return False
+        return step_size(probe) if probe.status in ("running", "finished") else 0.0

@@ -21,7 +21,7 @@ import pytest
 from scipy.integrate import DOP853
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from test_elastic_pendulum import T_END, TH0, build, cartesian, r0
+from test_elastic_pendulum import T_END, TH0, build, cartesian, r0, softening
 
 from dalembert.examples import cartesian_pendulum, hanging_chain
 from dalembert.multibody import JointSpring, Multibody, chain
@@ -197,6 +197,24 @@ def test_going_back_when_radau_does_not_pay(elastic, monkeypatch):
     assert np.abs(end_of(traj) - expected).max() < 1e-8
 
 
+def test_radau_hands_the_run_back_where_the_problem_turns_non_stiff():
+    """The spring let go: ``auto`` switches to Radau in the stiff phase and, looking back
+    once the fastest mode has slowed (Radau's ``h |lambda|`` below the limit, then a
+    probe of DOP853 stepping longer), hands the run back to DOP853: two switches, the end
+    against DOP853 at rtol 1e-12, in fewer steps than either method alone."""
+    system = softening(K)
+    q0 = dict(zip(("x", "y", "z"), cartesian(r0(K), TH0)))
+    span, options = (0.0, 4.0), dict(rtol=1e-8, atol=1e-10, t_eval=[4.0])
+    auto = system.simulate(span, q0, method="auto", **options)
+    reference = system.simulate(span, q0, method="DOP853", rtol=1e-12, atol=1e-14,
+                                t_eval=[4.0])
+    alone = [system.simulate(span, q0, method=m, **options).stats["n_steps"]
+             for m in ("Radau", "DOP853")]
+    assert auto.success and auto.stats["n_switches"] == 2
+    assert np.abs(end_of(auto) - end_of(reference)).max() < 1e-8
+    assert auto.stats["n_steps"] < 0.8 * min(alone)
+
+
 class _Implicit:
     """A stand-in for the implicit solver of a trial: only its state and step are read."""
 
@@ -207,7 +225,8 @@ class _Implicit:
 def test_the_wait_grows_with_failed_trials_and_their_shortfall():
     """After a failed trial the detector is off for ``RETRY_WAIT x 2^(n-1) x shortfall``
     explicit steps (the module's rule), then armed with a fresh memory; a trial whose
-    implicit step reaches ``COST_RATIO`` times the explicit one settles the run."""
+    implicit step reaches ``COST_RATIO`` times the explicit one keeps the implicit method,
+    which looks back at the explicit one ``SPECTRAL_FIRST`` steps later."""
     detector = StiffnessDetector(limit=1.0)
     made: list[str] = []
 
@@ -245,13 +264,14 @@ def test_the_wait_grows_with_failed_trials_and_their_shortfall():
     assert made[-1] == "explicit"
     at = int(rearm) + 5 + switching.TRIAL_STEPS
     assert switch.steps_to_judgement(at) == 2 * switching.RETRY_WAIT * switching.COST_RATIO
-    # the third pays and settles: nothing is due any more
+    # the third pays and keeps the run: its first look back is due SPECTRAL_FIRST steps on
     switch.after(again, at + 2 * switching.RETRY_WAIT * int(switching.COST_RATIO))
     again.stiffness = StiffnessState(detector.stiff_after, 0)
     trial = switch.after(again, at + 1000)
     trial.h_abs = switching.COST_RATIO * switching.step_size(again)
-    assert switch.after(trial, at + 1000 + switching.TRIAL_STEPS) is None
-    assert switch.steps_to_judgement(at + 2000) is None
+    kept = at + 1000 + switching.TRIAL_STEPS
+    assert switch.after(trial, kept) is None
+    assert switch.steps_to_judgement(kept) == switching.SPECTRAL_FIRST
     assert [m for _, m in switch.switches] == ["Radau", "DOP853"] * 2 + ["Radau"]
 
 
