@@ -188,7 +188,10 @@ class StiffSwitch:
     _estimate_at: int = SPECTRAL_FIRST  # the step count of the next spectral estimate
     _vector: np.ndarray | None = None  # the last estimate's vector
     _probe_at: int = 0  # the step count before which no probe runs
-    _explicit_since: tuple[float, int] | None = None  # t, steps: the explicit method's take-over
+    _explicit_since: tuple[float, int] = (0.0, 0)  # t, steps: the explicit method's take-over
+
+    def __post_init__(self) -> None:
+        self._explicit_since = (self.t0, 0)
 
     def steps_to_judgement(self, n_steps: int) -> int | None:
         """How many more steps before the switch has something to decide (a trial to
@@ -349,7 +352,7 @@ class StiffSwitch:
         """The explicit step to weigh the implicit one against: the longer of the next
         one and the mean since the explicit method took the run (a step held short for a
         moment is not the run's)."""
-        return self._typical_step(solver, n_steps, self._explicit_since or (self.t0, 0))
+        return self._typical_step(solver, n_steps, self._explicit_since)
 
     @staticmethod
     def _typical_step(solver: OdeSolver, n_steps: int, since: tuple[float, int]) -> float:
@@ -369,7 +372,7 @@ class StiffSwitch:
         if grown >= PROBE_RATIO * h_ref:
             return True
         shortfall = PROBE_RATIO * h_ref / max(grown, 1e-300)
-        taken = n_steps - (self._explicit_since or (self.t0, 0))[1]
+        taken = n_steps - self._explicit_since[1]
         self._probe_at = n_steps + int(min(max(taken, SPECTRAL_FIRST) * shortfall, 1e12))
         return False
 
