@@ -312,8 +312,8 @@ class StiffSwitch:
         # look (a step cut short for a moment, by a Newton failure, is not the run's)
         h_implicit = self._typical_step(solver, n_steps, self._look)
         self._back_at, self._look = n_steps + SPECTRAL_FIRST, (solver.t, n_steps)
-        if not h_implicit > 0.0 or abs(solver.t_bound - solver.t) < TRIAL_LEFT * h_implicit:
-            return None
+        if not h_implicit > 0.0 or abs(solver.t_bound - solver.t) < SPECTRAL_FIRST * h_implicit:
+            return None  # a probe (20 explicit steps) is repaid in fewer steps than a look's
         if h_implicit * self._spectral_radius(solver) >= SPECTRAL_LIMIT:
             return None  # stiff still: the explicit method's steps would be held shorter
         grown = self._probe(self.explicit, solver, step_size(solver))

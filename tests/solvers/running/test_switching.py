@@ -197,7 +197,8 @@ def test_going_back_when_radau_does_not_pay(elastic, monkeypatch):
     assert np.abs(end_of(traj) - expected).max() < 1e-8
 
 
-def test_radau_hands_the_run_back_where_the_problem_turns_non_stiff():
+@pytest.mark.parametrize("backend", ["c", "python"])
+def test_radau_hands_the_run_back_where_the_problem_turns_non_stiff(backend):
     """The spring let go: ``auto`` switches to Radau in the stiff phase and, looking back
     once the fastest mode has slowed (Radau's ``h |lambda|`` below the limit, then a
     probe of DOP853 stepping longer), hands the run back to DOP853: two switches, the end
@@ -205,7 +206,7 @@ def test_radau_hands_the_run_back_where_the_problem_turns_non_stiff():
     system = softening(K)
     q0 = dict(zip(("x", "y", "z"), cartesian(r0(K), TH0)))
     span, options = (0.0, 4.0), dict(rtol=1e-8, atol=1e-10, t_eval=[4.0])
-    auto = system.simulate(span, q0, method="auto", **options)
+    auto = system.simulate(span, q0, method="auto", backend=backend, **options)
     reference = system.simulate(span, q0, method="DOP853", rtol=1e-12, atol=1e-14,
                                 t_eval=[4.0])
     alone = [system.simulate(span, q0, method=m, **options).stats["n_steps"]
