@@ -8,7 +8,8 @@ switch; DOP853's own run for one that does not; the detector's estimate against
 a stiff spring chain whose first trial fails against DOP853 at rtol 1e-10 (its steps
 held at the stability limit, so the tight tolerance costs no more steps); the waits of
 the policy against the rule the module states; a probe that falls short against
-DOP853's own run.
+DOP853's own run; the way back to DOP853, on the pendulum whose spring softens from
+stiff to soft, against DOP853 at rtol 1e-12.
 """
 
 from __future__ import annotations
