@@ -278,8 +278,9 @@ class StiffSwitch:
                 return None
             rho = self._spectral_radius(solver)
             if h_explicit * rho < SPECTRAL_LIMIT:
-                if not self._probe_due(solver, n_steps, rho) or \
-                        not self._probe_pays(solver, n_steps, h_explicit):
+                h_ref = self._explicit_step(solver, n_steps)
+                if not self._probe_due(solver, n_steps, rho, h_ref) or \
+                        not self._probe_pays(solver, n_steps, h_explicit, h_ref):
                     return None
                 probed = True
         try:
@@ -342,11 +343,12 @@ class StiffSwitch:
         rho, self._vector = spectral_radius(solver.fun, solver.t, solver.y, start)
         return rho
 
-    def _probe_due(self, solver: OdeSolver, n_steps: int, rho: float) -> bool:
-        """Whether a probe may run now (see :data:`PROBE_LEFT`, :data:`PROBE_SPAN`)."""
+    def _probe_due(self, solver: OdeSolver, n_steps: int, rho: float, h_ref: float) -> bool:
+        """Whether a probe may run now (see :data:`PROBE_LEFT`, :data:`PROBE_SPAN`;
+        ``h_ref``: :meth:`_explicit_step`)."""
         left = abs(solver.t_bound - solver.t)
         return n_steps >= self._probe_at and rho * left >= PROBE_SPAN and \
-            left >= PROBE_LEFT * self._explicit_step(solver, n_steps)
+            left >= PROBE_LEFT * h_ref
 
     def _explicit_step(self, solver: OdeSolver, n_steps: int) -> float:
         """The explicit step to weigh the implicit one against: the longer of the next
@@ -359,11 +361,12 @@ class StiffSwitch:
         """The longer of ``solver``'s next step and its mean since ``(t, steps)``."""
         return max(step_size(solver), abs(solver.t - since[0]) / max(n_steps - since[1], 1))
 
-    def _probe_pays(self, solver: OdeSolver, n_steps: int, h_explicit: float) -> bool:
+    def _probe_pays(self, solver: OdeSolver, n_steps: int, h_explicit: float,
+                    h_ref: float) -> bool:
         """Whether the implicit method, ``TRIAL_STEPS`` steps from the state reached,
-        grows its step to ``PROBE_RATIO`` times the explicit one's (:meth:`_explicit_step`).
-        A probe that falls short sets the next one's wait."""
-        h_ref = self._explicit_step(solver, n_steps)
+        grows its step to ``PROBE_RATIO`` times the explicit one's (``h_ref``:
+        :meth:`_explicit_step`; ``h_explicit``, the next, is the probe's first). A probe
+        that falls short sets the next one's wait."""
         try:
             grown = self._probe(self.implicit, solver, h_explicit)
         except ModelError as exc:
