@@ -63,28 +63,23 @@ def cartesian(r: float, th: float) -> np.ndarray:
     return r * np.sin(th) * e1 - r * np.cos(th) * e2
 
 
-def build(k: float) -> System:
+def build(k: float | sp.Expr, name: str = "elastic pendulum") -> System:
+    """The pendulum with spring stiffness ``k`` (a number, or an expression in time)."""
     x, y, z = coordinates("x y z")
     length = sp.sqrt(x**2 + y**2 + z**2)
     return System([x, y, z],
                   kinetic=MASS / 2 * (x.diff() ** 2 + y.diff() ** 2 + z.diff() ** 2),
                   potential=MASS * G * z + k / 2 * (length - REST) ** 2,
                   constraints=[Holonomic(-np.sin(TILT) * y + np.cos(TILT) * z, name="plane")],
-                  name="elastic pendulum")
+                  name=name)
 
 
 def softening(k: float, t_let_go: float = 1.0, soft: float = 50.0) -> System:
     """The same pendulum whose spring softens from ``k`` to ``soft`` around
     ``t_let_go`` (logistic, over about 0.05 s): stiff, then not (``method="auto"``'s
     way back to DOP853)."""
-    x, y, z = coordinates("x y z")
-    length = sp.sqrt(x**2 + y**2 + z**2)
-    stiffness = soft + (k - soft) / (1 + sp.exp((time - t_let_go) / 0.05))
-    return System([x, y, z],
-                  kinetic=MASS / 2 * (x.diff() ** 2 + y.diff() ** 2 + z.diff() ** 2),
-                  potential=MASS * G * z + stiffness / 2 * (length - REST) ** 2,
-                  constraints=[Holonomic(-np.sin(TILT) * y + np.cos(TILT) * z, name="plane")],
-                  name="softening pendulum")
+    return build(soft + (k - soft) / (1 + sp.exp((time - t_let_go) / 0.05)),
+                 "softening pendulum")
 
 
 @pytest.fixture(scope="module", params=[1e3, 1e6], ids=["k=1e3", "k=1e6"])
