@@ -35,6 +35,7 @@ import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -43,10 +44,11 @@ sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "tests" / "solvers"))
 
 from test_elastic_pendulum import T_END as ELASTIC_END  # noqa: E402
-from test_elastic_pendulum import TH0, cartesian, polar, r0, softening  # noqa: E402
+from test_elastic_pendulum import TH0, cartesian, r0, softening  # noqa: E402
 from test_elastic_pendulum import build as elastic_pendulum  # noqa: E402
 
 from bench import stiff_chain as sc  # noqa: E402
+from bench.elastic_auto import end_of, exact_end, reference_end  # noqa: E402
 from bench.stiff import dalembert_chain, reference_angles  # noqa: E402
 from bench.suite import machine  # noqa: E402
 
@@ -54,8 +56,9 @@ METHODS = ("auto", "DOP853", "Radau")
 OUT = HERE / "results" / "auto_defaults.json"
 SOFTENING_END = 10.0
 
-#: ``run(method, timeout) -> (trajectory, error)``: one workload's run to its end.
-Run = Callable[[str, float], tuple[object, float]]
+#: ``(run, error)``: ``run(method, timeout)`` one run of a workload to its end,
+#: ``error(traj)`` the error of one that got there.
+Run = tuple[Callable[[str, float], Any], Callable[[Any], float]]
 
 
 def flyball() -> Run:
@@ -64,33 +67,21 @@ def flyball() -> Run:
     system = ex.build()
 
     def run(method: str, timeout: float):
-        traj = system.simulate((0.0, ex.T_END), **ex.INITIAL, method=method,
+        return system.simulate((0.0, ex.T_END), **ex.INITIAL, method=method,
                                t_eval=[ex.T_END], timeout=timeout)
-        if not len(traj.t):  # stopped before the end
-            return traj, float("nan")
-        return traj, float(abs(traj["sleeve_z"][-1] - ex.S_REFERENCE))
-    return run
+    return run, lambda traj: float(abs(traj["sleeve_z"][-1] - ex.S_REFERENCE))
 
 
 def elastic(k: float, let_go: bool = False) -> Run:
     system = softening(k) if let_go else elastic_pendulum(k)
     t_end = SOFTENING_END if let_go else ELASTIC_END
     q0 = dict(zip(("x", "y", "z"), cartesian(r0(k), TH0)))
-    if k <= 1e6 and not let_go:
-        reference = cartesian(*polar(k))
-    else:
-        exact = system.simulate((0.0, t_end), q0, method="DOP853", rtol=1e-12, atol=1e-14,
-                                t_eval=[t_end])
-        reference = np.array([exact[c][-1] for c in "xyz"])
+    reference = exact_end(system, q0, t_end) if let_go else reference_end(k, system, q0)
 
     def run(method: str, timeout: float):
-        traj = system.simulate((0.0, t_end), q0, method=method, t_eval=[t_end],
+        return system.simulate((0.0, t_end), q0, method=method, t_eval=[t_end],
                                timeout=timeout)
-        if not len(traj.t):
-            return traj, float("nan")
-        end = np.array([traj[c][-1] for c in "xyz"])
-        return traj, float(np.abs(end - reference).max())
-    return run
+    return run, lambda traj: float(np.abs(end_of(traj) - reference).max())
 
 
 def spring_chain(k: float) -> Run:
@@ -98,13 +89,13 @@ def spring_chain(k: float) -> Run:
     reference = reference_angles(k)
 
     def run(method: str, timeout: float):
-        traj = mb.simulate((0.0, sc.T_END), q0, qd0, method=method, t_eval=[sc.T_END],
+        return mb.simulate((0.0, sc.T_END), q0, qd0, method=method, t_eval=[sc.T_END],
                            timeout=timeout)
-        if not len(traj.t):
-            return traj, float("nan")
+
+    def error(traj) -> float:
         phi = -np.array([traj[f"{n}_theta"][-1] for n in names])
-        return traj, float(np.abs(phi - reference).max())
-    return run
+        return float(np.abs(phi - reference).max())
+    return run, error
 
 
 def slider_crank() -> Run:
@@ -115,10 +106,12 @@ def slider_crank() -> Run:
     explicit = system.simulate(span, **ex.INITIAL, method="DOP853")
 
     def run(method: str, timeout: float):
-        traj = system.simulate(span, **ex.INITIAL, method=method, timeout=timeout)
+        return system.simulate(span, **ex.INITIAL, method=method, timeout=timeout)
+
+    def error(traj) -> float:  # 0 where the run is DOP853's, state for state
         same = traj.q.shape == explicit.q.shape and bool(np.array_equal(traj.q, explicit.q))
-        return traj, 0.0 if same else float("nan")
-    return run
+        return 0.0 if same else float("nan")
+    return run, error
 
 
 WORKLOADS: dict[str, Callable[[], Run]] = {
@@ -140,7 +133,8 @@ def record(traj, error: float, cpu: float, wall: float) -> dict:
                                                    "n_switches", "n_probes") if key in stats}}
 
 
-def measure(run: Run, rounds: int, cap: float, long: float) -> dict:
+def measure(workload: Run, rounds: int, cap: float, long: float) -> dict:
+    run, error = workload
     rows: dict[str, dict] = {}
     for method in METHODS:  # the method's own code generated and compiled (the run cut short)
         run(method, 2.0)
@@ -149,10 +143,12 @@ def measure(run: Run, rounds: int, cap: float, long: float) -> dict:
             if method in rows and (rows[method]["cpu_s"] > long or not rows[method]["finished"]):
                 continue
             cpu, wall = time.process_time(), time.perf_counter()
-            traj, error = run(method, cap)
+            traj = run(method, cap)
             cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
             if method not in rows or cpu < rows[method]["cpu_s"]:
-                rows[method] = record(traj, error, cpu, wall)
+                ended = traj.status == "finished"  # (else stopped at the cap)
+                rows[method] = record(traj, error(traj) if ended else float("nan"), cpu,
+                                      wall)
     better = min(rows["DOP853"]["cpu_s"], rows["Radau"]["cpu_s"])
     rows["auto_over_better"] = {"ratio": rows["auto"]["cpu_s"] / better}
     return rows
